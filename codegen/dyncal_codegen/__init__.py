@@ -1,0 +1,1 @@
+"""dyncal code generator: robot description -> fixed-size C++ dynamics headers."""

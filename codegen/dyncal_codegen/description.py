@@ -1,0 +1,178 @@
+"""Robot descriptions: URDF or modified DH (Khalil-Kleinfinger) -> a chain of revolute joints.
+
+Every joint i is reduced to a fixed transform followed by a rotation q_i about its own z axis:
+    T(i-1, i) = [R_fixed  p] * Rz(q_i)
+Link i's frame is the frame after that rotation. Angles within 1e-9 rad of a multiple of pi/2 are
+snapped to the exact value so that the generator folds the resulting zeros and ones.
+"""
+import json
+import math
+import os
+import xml.etree.ElementTree as ET
+
+import sympy as sp
+
+SNAP_TOLERANCE = 1e-9
+
+
+class DescriptionError(Exception):
+    pass
+
+
+def exact_angle(value):
+    """A float angle [rad] as a SymPy number, exact when it is a multiple of pi/2."""
+    quarter = value / (math.pi / 2)
+    k = round(quarter)
+    if abs(value - k * math.pi / 2) < SNAP_TOLERANCE:
+        return sp.Integer(k) * sp.pi / 2
+    return sp.Float(value)
+
+
+def exact_length(value):
+    if value == 0.0:
+        return sp.Integer(0)
+    return sp.Float(value)
+
+
+def rot_x(a):
+    c, s = sp.cos(a), sp.sin(a)
+    return sp.Matrix([[1, 0, 0], [0, c, -s], [0, s, c]])
+
+
+def rot_y(a):
+    c, s = sp.cos(a), sp.sin(a)
+    return sp.Matrix([[c, 0, s], [0, 1, 0], [-s, 0, c]])
+
+
+def rot_z(a):
+    c, s = sp.cos(a), sp.sin(a)
+    return sp.Matrix([[c, -s, 0], [s, c, 0], [0, 0, 1]])
+
+
+def rpy_matrix(rpy):
+    """URDF fixed-axis roll-pitch-yaw: R = Rz(yaw) Ry(pitch) Rx(roll)."""
+    return rot_z(exact_angle(rpy[2])) * rot_y(exact_angle(rpy[1])) * rot_x(exact_angle(rpy[0]))
+
+
+class Joint:
+    """One revolute joint: fixed rotation R (3x3 SymPy), fixed offset p (3x1, in the parent frame),
+    and the link it carries, as 10 standard parameters about the link frame origin."""
+
+    def __init__(self, name, R, p, origin_xyz, origin_rpy, standard):
+        self.name = name
+        self.R = R
+        self.p = p
+        self.origin_xyz = origin_xyz
+        self.origin_rpy = origin_rpy
+        self.standard = standard
+
+
+STANDARD_NAMES = ["XX", "XY", "XZ", "YY", "YZ", "ZZ", "MX", "MY", "MZ", "M"]
+
+
+def standard_from_com(mass, com, inertia_com, R_com=None):
+    """Standard parameters [XX XY XZ YY YZ ZZ MX MY MZ M] about the link origin (link axes) from
+    mass [kg], centre of mass [m] and inertia about it [kg m^2] (ixx ixy ixz iyy iyz izz, axes R_com)."""
+    import numpy as np
+
+    ixx, ixy, ixz, iyy, iyz, izz = inertia_com
+    Ic = np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]], dtype=float)
+    if R_com is not None:
+        Rn = np.array(R_com.evalf(), dtype=float)
+        Ic = Rn @ Ic @ Rn.T
+    c = np.array(com, dtype=float)
+    Io = Ic + mass * (c @ c * np.eye(3) - np.outer(c, c))
+    return [Io[0, 0], Io[0, 1], Io[0, 2], Io[1, 1], Io[1, 2], Io[2, 2],
+            mass * c[0], mass * c[1], mass * c[2], mass]
+
+
+def load_mdh(desc):
+    joints = []
+    links = desc.get("links")
+    rows = desc["kinematics"]["joints"]
+    if links is None or len(links) != len(rows):
+        raise DescriptionError("an mdh description needs one 'links' entry per joint")
+    for i, (row, link) in enumerate(zip(rows, links)):
+        alpha = exact_angle(float(row["alpha"]))
+        theta = exact_angle(float(row["theta"]))
+        a = exact_length(float(row["a"]))
+        d = exact_length(float(row["d"]))
+        # Rx(alpha) Tx(a) Rz(theta) Tz(d) Rz(q)
+        R = rot_x(alpha) * rot_z(theta)
+        p = sp.Matrix([a, 0, 0]) + rot_x(alpha) * sp.Matrix([0, 0, d])
+        standard = standard_from_com(float(link["mass"]), link["com"], link["inertia"])
+        xyz = [float(v) for v in p.evalf()]
+        joints.append(Joint(f"joint_{i + 1}", sp.simplify(R), p, xyz, None, standard))
+    return joints
+
+
+def _floats(text, n):
+    vals = [float(v) for v in (text or " ".join(["0"] * n)).split()]
+    if len(vals) != n:
+        raise DescriptionError(f"expected {n} numbers, got '{text}'")
+    return vals
+
+
+def load_urdf(path):
+    root = ET.parse(path).getroot()
+    links = {l.get("name"): l for l in root.findall("link")}
+    by_parent = {}
+    for j in root.findall("joint"):
+        by_parent.setdefault(j.find("parent").get("link"), []).append(j)
+    children = {j.find("child").get("link") for j in root.findall("joint")}
+    roots = [n for n in links if n not in children]
+    if len(roots) != 1:
+        raise DescriptionError(f"URDF must have one root link, found {roots}")
+    joints = []
+    current = roots[0]
+    while current in by_parent:
+        nxt = by_parent[current]
+        if len(nxt) != 1:
+            raise DescriptionError(f"URDF is not a serial chain at link '{current}'")
+        j = nxt[0]
+        child = j.find("child").get("link")
+        jtype = j.get("type")
+        origin = j.find("origin")
+        xyz = _floats(origin.get("xyz") if origin is not None else None, 3)
+        rpy = _floats(origin.get("rpy") if origin is not None else None, 3)
+        inertial = links[child].find("inertial")
+        mass = float(inertial.find("mass").get("value")) if inertial is not None else 0.0
+        if jtype == "fixed":
+            if mass != 0.0:
+                raise DescriptionError(f"fixed joint '{j.get('name')}' carries mass; merge it first")
+            current = child
+            continue
+        if jtype not in ("revolute", "continuous"):
+            raise DescriptionError(f"joint '{j.get('name')}': only revolute joints are supported")
+        axis = _floats(j.find("axis").get("xyz") if j.find("axis") is not None else "1 0 0", 3)
+        if axis != [0.0, 0.0, 1.0]:
+            raise DescriptionError(f"joint '{j.get('name')}': axis must be 0 0 1 (got {axis})")
+        R = rpy_matrix(rpy)
+        p = sp.Matrix([exact_length(v) for v in xyz])
+        if inertial is None:
+            standard = [0.0] * 10
+        else:
+            io = inertial.find("origin")
+            cxyz = _floats(io.get("xyz") if io is not None else None, 3)
+            crpy = _floats(io.get("rpy") if io is not None else None, 3)
+            t = inertial.find("inertia")
+            inertia = [float(t.get(k)) for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")]
+            standard = standard_from_com(mass, cxyz, inertia, rpy_matrix(crpy))
+        joints.append(Joint(j.get("name"), sp.simplify(R), p, xyz, rpy, standard))
+        current = child
+    return joints
+
+
+def load(robot_dir):
+    """Load robots/<name>/robot.json and its kinematics. Returns (description dict, joints)."""
+    path = os.path.join(robot_dir, "robot.json")
+    with open(path) as f:
+        desc = json.load(f)
+    kin = desc["kinematics"]
+    if kin["format"] == "mdh":
+        joints = load_mdh(desc)
+    elif kin["format"] == "urdf":
+        joints = load_urdf(os.path.join(robot_dir, kin["file"]))
+    else:
+        raise DescriptionError(f"unknown kinematics format '{kin['format']}'")
+    return desc, joints

@@ -1,0 +1,391 @@
+#!/usr/bin/python3
+"""dyncal code generator.
+
+Usage: generate.py ROBOT_DIR OUT_DIR
+Reads ROBOT_DIR/robot.json (and the URDF it names), writes OUT_DIR/{parameters,regressor,
+dynamics,robot}.hpp: fixed-size, allocation-free C++17 templated on Scalar.
+Output is byte-for-byte deterministic for given inputs.
+"""
+import hashlib
+import os
+import sys
+import time
+
+import sympy as sp
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+from dyncal_codegen import base_parameters, description, dynamics  # noqa: E402
+from dyncal_codegen.description import STANDARD_NAMES  # noqa: E402
+from dyncal_codegen.emit_cpp import CppPrinter  # noqa: E402
+from dyncal_codegen.tracer import live_program  # noqa: E402
+
+GENERATOR_VERSION = "1"
+
+
+def input_digest(robot_dir, desc):
+    files = ["robot.json"]
+    if desc["kinematics"]["format"] == "urdf":
+        files.append(desc["kinematics"]["file"])
+    h = hashlib.sha256()
+    parts = []
+    for f in files:
+        data = open(os.path.join(robot_dir, f), "rb").read()
+        h.update(data)
+        parts.append(f"{f} (sha256 {hashlib.sha256(data).hexdigest()[:16]})")
+    return parts
+
+
+def banner(name, inputs, what, counts):
+    lines = [
+        "// GENERATED FILE - DO NOT EDIT.",
+        f"// Generator: codegen/generate.py (dyncal codegen {GENERATOR_VERSION}, SymPy {sp.__version__})",
+        f"// Robot: {name}; inputs: robots/{name}/" + f", robots/{name}/".join(inputs),
+        f"// Contents: {what}",
+    ]
+    for fn, (m, a) in counts.items():
+        lines.append(f"// Operation count {fn}: {m} multiplications, {a} additions (plus sin/cos of q)")
+    lines.append("// Regenerate: cmake --build <build> --target regenerate (or scripts/codegen).")
+    return "\n".join(lines) + "\n"
+
+
+def preamble(used, n, with_q=True, with_qd=True, with_qdd=True, indent="  "):
+    out = []
+    for i in range(n):
+        if sp.Symbol(f"c{i + 1}") in used:
+            out.append(f"{indent}const Scalar c{i + 1} = cos(q[{i}]);")
+        if sp.Symbol(f"s{i + 1}") in used:
+            out.append(f"{indent}const Scalar s{i + 1} = sin(q[{i}]);")
+    for i in range(n):
+        if sp.Symbol(f"qd{i + 1}") in used:
+            out.append(f"{indent}const Scalar qd{i + 1} = qd[{i}];")
+        if sp.Symbol(f"qdd{i + 1}") in used:
+            out.append(f"{indent}const Scalar qdd{i + 1} = qdd[{i}];")
+    for k in range(10 * n):
+        if sp.Symbol(f"phi{k}") in used:
+            out.append(f"{indent}const Scalar phi{k} = phi[{k}];")
+    return "\n".join(out)
+
+
+def used_symbols(defs, outputs):
+    used = set()
+    for _, e in defs:
+        used |= e.free_symbols
+    for e in outputs:
+        used |= sp.sympify(e).free_symbols
+    return used
+
+
+def body(defs, assignments):
+    """Straight-line body: the live program, then `target = expr;` lines. Returns (text, muls, adds)."""
+    printer = CppPrinter()
+    lines = [printer.program(defs)]
+    for target, e in assignments:
+        lines.append(f"  {target} = {printer.expr(sp.sympify(e))};")
+    return "\n".join(l for l in lines if l), printer.muls, printer.adds
+
+
+def std_name(k):
+    return f"link{k // 10 + 1}_{STANDARD_NAMES[k % 10]}"
+
+
+def fmt(x):
+    return repr(float(x))
+
+
+def main():
+    if len(sys.argv) != 3:
+        print(__doc__, file=sys.stderr)
+        return 2
+    robot_dir, out_dir = sys.argv[1], sys.argv[2]
+    t0 = time.time()
+    desc, joints = description.load(robot_dir)
+    name = desc["name"]
+    n = len(joints)
+    n_std = 10 * n
+    gravity = [sp.Float(g) if g != 0 else sp.Integer(0) for g in desc["gravity"]]
+    inputs = input_digest(robot_dir, desc)
+    ns = f"dyncal::generated::{name}"
+
+    # --- regressors and base parameters
+    tr, Y, sym = dynamics.standard_regressor(joints, gravity)
+    flat = [Y[i][k] for i in range(n) for k in range(n_std)]
+    Yfun = base_parameters.compile_program(live_program(tr.defs, flat), flat, sym)
+    bp = base_parameters.compute(Yfun, n, bool(desc.get("rotor_inertia", False)))
+    nb = len(bp.independent)
+
+    vec = f"Eigen::Matrix<Scalar, {n}, 1>"
+    args = f"const {vec}& q, const {vec}& qd, const {vec}& qdd"
+
+    std_assign = [(f"Y({i}, {k})", Y[i][k]) for i in range(n) for k in range(n_std) if Y[i][k] != 0]
+    std_defs = live_program(tr.defs, [e for _, e in std_assign])
+    std_text, std_m, std_a = body(std_defs, std_assign)
+    base_assign = [(f"Yb({i}, {b})", Y[i][k]) for i in range(n) for b, k in enumerate(bp.independent) if Y[i][k] != 0]
+    base_defs = live_program(tr.defs, [e for _, e in base_assign])
+    base_text, base_m, base_a = body(base_defs, base_assign)
+
+    regressor_hpp = banner(name, inputs, "standard regressor Y and base regressor Y_b",
+                           {"standard_regressor": (std_m, std_a), "base_regressor": (base_m, base_a)})
+    regressor_hpp += f"""#pragma once
+
+#include <Eigen/Core>
+#include <cmath>
+
+#include "parameters.hpp"
+
+namespace {ns} {{
+
+/// Standard regressor Y ({n} x {n_std}): tau = Y(q, qd, qdd) * phi, phi the standard parameters
+/// (StandardParam order; 10 per link about the link frame origin, link axes, Khalil-Kleinfinger).
+/// q [rad], qd [rad/s], qdd [rad/s^2]; Y row i gives joint i+1's torque [Nm]. Gravity included.
+/// Allocation-free; every entry of Y is written.
+template <typename Scalar>
+inline void standard_regressor({args}, Eigen::Matrix<Scalar, {n}, {n_std}>& Y) noexcept {{
+  using std::cos;
+  using std::sin;
+{preamble(used_symbols(std_defs, [e for _, e in std_assign]), n)}
+{std_text.replace("  Y(", "  Y(", 0)}
+}}
+
+/// Base regressor Y_b ({n} x {nb}) = the independent columns of Y (BaseParam order), so that
+/// tau = Y_b * phi_b with phi_b = standard_to_base(phi) (Gautier 1990). Same inputs as above.
+template <typename Scalar>
+inline void base_regressor({args}, Eigen::Matrix<Scalar, {n}, {nb}>& Yb) noexcept {{
+  using std::cos;
+  using std::sin;
+{preamble(used_symbols(base_defs, [e for _, e in base_assign]), n)}
+{base_text}
+}}
+
+}}  // namespace {ns}
+"""
+    # zero entries: emit setZero before the assignments
+    regressor_hpp = regressor_hpp.replace(
+        f"Eigen::Matrix<Scalar, {n}, {n_std}>& Y) noexcept {{\n", f"Eigen::Matrix<Scalar, {n}, {n_std}>& Y) noexcept {{\n  Y.setZero();\n")
+    regressor_hpp = regressor_hpp.replace(
+        f"Eigen::Matrix<Scalar, {n}, {nb}>& Yb) noexcept {{\n", f"Eigen::Matrix<Scalar, {n}, {nb}>& Yb) noexcept {{\n  Yb.setZero();\n")
+
+    # --- inverse dynamics and mass matrix
+    trd, tau, _ = dynamics.inverse_dynamics(joints, gravity)
+    id_assign = [(f"tau[{i}]", tau[i]) for i in range(n)]
+    id_defs = live_program(trd.defs, tau)
+    id_text, id_m, id_a = body(id_defs, id_assign)
+    trm, M, _ = dynamics.mass_matrix(joints)
+    mm_assign = []
+    for (i, j), e in sorted(M.items(), key=lambda kv: (kv[0][1], kv[0][0])):
+        mm_assign.append((f"M({i}, {j})", e))
+    mm_defs = live_program(trm.defs, [e for _, e in mm_assign])
+    mm_text, mm_m, mm_a = body(mm_defs, mm_assign)
+    mirror = "\n".join(f"  M({j}, {i}) = M({i}, {j});" for j in range(n) for i in range(j + 1, n))
+    pvec = f"Eigen::Matrix<Scalar, {n_std}, 1>"
+    dynamics_hpp = banner(name, inputs, "inverse dynamics tau(q, qd, qdd, phi) and mass matrix M(q, phi)",
+                          {"inverse_dynamics": (id_m, id_a), "mass_matrix": (mm_m, mm_a)})
+    dynamics_hpp += f"""#pragma once
+
+#include <Eigen/Core>
+#include <cmath>
+
+#include "parameters.hpp"
+
+namespace {ns} {{
+
+/// Inverse dynamics by recursive Newton-Euler: tau [Nm] ({n}) from q [rad], qd [rad/s],
+/// qdd [rad/s^2] and the standard parameters phi ({n_std}, StandardParam order). Gravity included.
+template <typename Scalar>
+inline void inverse_dynamics({args}, const {pvec}& phi, {vec}& tau) noexcept {{
+  using std::cos;
+  using std::sin;
+{preamble(used_symbols(id_defs, tau), n)}
+{id_text}
+}}
+
+/// Joint-space mass matrix M(q) [kg m^2] ({n} x {n}, symmetric) for standard parameters phi:
+/// tau = M(q) qdd + c(q, qd) + g(q). Only the lower triangle is derived; the upper one is mirrored.
+template <typename Scalar>
+inline void mass_matrix(const {vec}& q, const {pvec}& phi, Eigen::Matrix<Scalar, {n}, {n}>& M) noexcept {{
+  using std::cos;
+  using std::sin;
+{preamble(used_symbols(mm_defs, [e for _, e in mm_assign]), n)}
+{mm_text}
+{mirror}
+}}
+
+}}  // namespace {ns}
+"""
+
+    # --- parameters header
+    base_names = []
+    groupings = []
+    for b, k in enumerate(bp.independent):
+        terms = [(bp.dependent[d], bp.beta[b, d]) for d in range(len(bp.dependent)) if bp.beta[b, d] != 0.0]
+        grouped = bool(terms) or any(any(bi == b for bi, _ in g) for g in bp.rotor_grouping.values())
+        base_names.append(std_name(k) + ("_R" if grouped else ""))
+        expr = std_name(k) + "".join(f" {'+' if c > 0 else '-'} {abs(c):.12g}*{std_name(d)}" for d, c in terms)
+        for j, g in sorted(bp.rotor_grouping.items()):
+            for bi, c in g:
+                if bi == b:
+                    expr += f" {'+' if c > 0 else '-'} {abs(c):.12g}*Ia{j + 1}"
+        groupings.append(f"//   {base_names[-1]} = {expr}")
+    map_lines = []
+    for b, k in enumerate(bp.independent):
+        terms = [f" + Scalar({fmt(bp.beta[b, d])}) * phi[{bp.dependent[d]}]" for d in range(len(bp.dependent)) if bp.beta[b, d] != 0.0]
+        map_lines.append(f"  phi_b[{b}] = phi[{k}]" + "".join(terms) + ";")
+    rotor_sep = ", ".join("true" if x else "false" for x in bp.rotor_independent)
+    absorbed = []
+    absorbed_coeff = []
+    for j in range(n):
+        g = bp.rotor_grouping.get(j, [])
+        if len(g) > 1:
+            raise RuntimeError(f"rotor inertia of joint {j + 1} spreads over several base parameters")
+        absorbed.append(str(g[0][0]) if g else "-1")
+        absorbed_coeff.append(f"{fmt(g[0][1])}" if g else "0.0")
+    declared_ia = bool(desc.get("rotor_inertia", False))
+    origins = []
+    for j in joints:
+        Rn = [[float(j.R[r, c].evalf()) for c in range(3)] for r in range(3)]
+        pn = [float(x) for x in j.p.evalf()]
+        origins.append("    {{" + ", ".join(fmt(x) for row in Rn for x in row) + "}, {" + ", ".join(fmt(x) for x in pn) + "}}")
+    nominal = ", ".join(fmt(x) for j in joints for x in j.standard)
+    std_enum = ",\n".join(f"  {std_name(k)} = {k}" for k in range(n_std))
+    base_enum = ",\n".join(f"  {nm} = {b}" for b, nm in enumerate(base_names))
+    zero_list = ", ".join(std_name(k) for k in bp.zero_columns if k < n_std)
+    params_hpp = banner(name, inputs, "parameter index names, standard->base map, kinematic data", {})
+    params_hpp += f"""#pragma once
+
+#include <Eigen/Core>
+
+namespace {ns} {{
+
+inline constexpr const char* kRobotName = "{name}";
+inline constexpr int kNumJoints = {n};
+/// Standard parameters: 10 per link, [XX XY XZ YY YZ ZZ] [kg m^2] about the link frame origin,
+/// [MX MY MZ] [kg m], M [kg] (Khalil-Kleinfinger order).
+inline constexpr int kNumStandard = {n_std};
+/// Base parameters: independent combinations of the standard ones (Gautier 1990).
+inline constexpr int kNumBase = {nb};
+
+enum class StandardParam : int {{
+{std_enum}
+}};
+
+inline constexpr const char* kStandardParamNames[kNumStandard] = {{
+{", ".join('"' + std_name(k) + '"' for k in range(n_std))}}};
+
+/// Base parameter names: the standard parameter each one is anchored on, with suffix _R where
+/// other parameters are regrouped onto it. The groupings (numeric QR, tolerance
+/// {base_parameters.RANK_TOLERANCE:g}, {base_parameters.NUM_SAMPLES} random states):
+{chr(10).join(groupings)}
+/// Standard parameters with no effect on the torques: {zero_list or "none"}.
+enum class BaseParam : int {{
+{base_enum}
+}};
+
+inline constexpr const char* kBaseParamNames[kNumBase] = {{
+{", ".join('"' + nm + '"' for nm in base_names)}}};
+
+/// Standard index each base parameter is anchored on.
+inline constexpr int kBaseAnchor[kNumBase] = {{{", ".join(str(k) for k in bp.independent)}}};
+
+/// Rotor inertia Ia_j (q_dd_j column, reflected to the joint side): true where it is identifiable
+/// as a parameter of its own; otherwise it is absorbed into base parameter
+/// kRotorInertiaAbsorbedInto[j] with coefficient kRotorInertiaAbsorbedCoefficient[j].
+/// Computed only when the description declares rotor inertia ({"yes" if declared_ia else "no"}).
+inline constexpr bool kRotorInertiaSeparate[kNumJoints] = {{{rotor_sep}}};
+inline constexpr int kRotorInertiaAbsorbedInto[kNumJoints] = {{{", ".join(absorbed)}}};
+inline constexpr double kRotorInertiaAbsorbedCoefficient[kNumJoints] = {{{", ".join(absorbed_coeff)}}};
+
+/// Gravity [m/s^2] in the base frame.
+inline constexpr double kGravity[3] = {{{", ".join(fmt(g) for g in desc["gravity"])}}};
+
+/// Joint i's fixed transform before its rotation about z: rotation (row-major) and offset [m]
+/// in the parent frame, T(i-1, i) = [R p] * Rz(q_i).
+struct JointOrigin {{
+  double R[9];
+  double p[3];
+}};
+inline constexpr JointOrigin kJointOrigins[kNumJoints] = {{
+{("," + chr(10)).join(origins)}}};
+
+/// Nominal standard parameters from the description (CAD / URDF values), StandardParam order.
+inline constexpr double kNominalStandard[kNumStandard] = {{{nominal}}};
+
+/// Standard -> base parameters: phi_b ({nb}) from phi ({n_std}). Rotor inertia is not included.
+template <typename Scalar>
+inline void standard_to_base(const Eigen::Matrix<Scalar, {n_std}, 1>& phi, Eigen::Matrix<Scalar, {nb}, 1>& phi_b) noexcept {{
+{chr(10).join(map_lines)}
+}}
+
+}}  // namespace {ns}
+"""
+
+    robot_hpp = banner(name, inputs, "the Robot traits type gathering the generated model", {})
+    robot_hpp += f"""#pragma once
+
+#include "dynamics.hpp"
+#include "parameters.hpp"
+#include "regressor.hpp"
+
+namespace {ns} {{
+
+/// The generated {name} model as one type, for templates in lib/ (see dyncal/robot_model.hpp).
+struct Robot {{
+  static constexpr const char* kName = kRobotName;
+  static constexpr int kNumJoints = {ns}::kNumJoints;
+  static constexpr int kNumStandard = {ns}::kNumStandard;
+  static constexpr int kNumBase = {ns}::kNumBase;
+
+  template <typename Scalar>
+  using JointVector = Eigen::Matrix<Scalar, kNumJoints, 1>;
+
+  /// Whether joint j's (0-based) rotor inertia is a base parameter of its own.
+  static constexpr bool rotor_inertia_separate(int j) {{ return kRotorInertiaSeparate[j]; }}
+  /// Base parameter that absorbs joint j's rotor inertia when it is not separate (else -1).
+  static constexpr int rotor_inertia_absorbed_into(int j) {{ return kRotorInertiaAbsorbedInto[j]; }}
+  static constexpr const char* base_param_name(int i) {{ return kBaseParamNames[i]; }}
+  static constexpr const char* standard_param_name(int i) {{ return kStandardParamNames[i]; }}
+
+  template <typename Scalar>
+  static void standard_regressor(const JointVector<Scalar>& q, const JointVector<Scalar>& qd,
+                                 const JointVector<Scalar>& qdd,
+                                 Eigen::Matrix<Scalar, kNumJoints, kNumStandard>& Y) noexcept {{
+    {ns}::standard_regressor(q, qd, qdd, Y);
+  }}
+  template <typename Scalar>
+  static void base_regressor(const JointVector<Scalar>& q, const JointVector<Scalar>& qd,
+                             const JointVector<Scalar>& qdd,
+                             Eigen::Matrix<Scalar, kNumJoints, kNumBase>& Yb) noexcept {{
+    {ns}::base_regressor(q, qd, qdd, Yb);
+  }}
+  template <typename Scalar>
+  static void inverse_dynamics(const JointVector<Scalar>& q, const JointVector<Scalar>& qd,
+                               const JointVector<Scalar>& qdd,
+                               const Eigen::Matrix<Scalar, kNumStandard, 1>& phi,
+                               JointVector<Scalar>& tau) noexcept {{
+    {ns}::inverse_dynamics(q, qd, qdd, phi, tau);
+  }}
+  template <typename Scalar>
+  static void mass_matrix(const JointVector<Scalar>& q, const Eigen::Matrix<Scalar, kNumStandard, 1>& phi,
+                          Eigen::Matrix<Scalar, kNumJoints, kNumJoints>& M) noexcept {{
+    {ns}::mass_matrix(q, phi, M);
+  }}
+  template <typename Scalar>
+  static void standard_to_base(const Eigen::Matrix<Scalar, kNumStandard, 1>& phi,
+                               Eigen::Matrix<Scalar, kNumBase, 1>& phi_b) noexcept {{
+    {ns}::standard_to_base(phi, phi_b);
+  }}
+}};
+
+}}  // namespace {ns}
+"""
+    os.makedirs(out_dir, exist_ok=True)
+    for fname, text in (("parameters.hpp", params_hpp), ("regressor.hpp", regressor_hpp),
+                        ("dynamics.hpp", dynamics_hpp), ("robot.hpp", robot_hpp)):
+        with open(os.path.join(out_dir, fname), "w") as f:
+            f.write(text)
+    print(f"{name}: {n} joints, {nb} base parameters; Y {std_m}*/{std_a}+, Y_b {base_m}*/{base_a}+, "
+          f"ID {id_m}*/{id_a}+, M {mm_m}*/{mm_a}+; {time.time() - t0:.1f} s", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

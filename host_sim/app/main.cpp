@@ -1,0 +1,83 @@
+// dyncal: the command-line tool.
+#include <CLI/CLI.hpp>
+#include <fstream>
+#include <iostream>
+
+#include "dyncal_host/identify.hpp"
+#include "dyncal_host/identify_report.hpp"
+#include "dyncal_host/input_error.hpp"
+#include "dyncal_host/joint_log.hpp"
+#include "dyncal_host/robot_description.hpp"
+
+namespace {
+
+void write_json(const std::string& path, const nlohmann::json& j) {
+  std::ofstream out(path);
+  if (!out) throw dyncal::host::InputError("cannot write '" + path + "'");
+  out << j.dump(2) << "\n";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"dyncal: dynamic calibration of six-axis robot arms"};
+  app.require_subcommand(1);
+
+  std::string robot_name, format = "csv", data, model = "eq7,rotor_inertia,offset", report, params;
+  std::string robots_dir = dyncal::host::default_robots_dir();
+  dyncal::host::IdentifyOptions opt;
+  auto* identify = app.add_subcommand("identify", "identify base parameters and friction from a measured log");
+  identify->add_option("--robot", robot_name, "robot name (robots/<name>/); tx40 by default with --format tx40");
+  identify->add_option("--robots-dir", robots_dir, "directory holding the robot descriptions");
+  identify->add_option("--format", format, "log format: csv (t,q1..qN,[qd..],[qdd..],tau1..tauN) or tx40")
+      ->check(CLI::IsMember({"csv", "tx40"}));
+  identify->add_option("--data", data, "CSV log file, or the folder of the TX40 files")->required();
+  identify
+      ->add_option("--model", model,
+                   "terms besides the rigid body: eq7|eq8|coulomb|viscous|power|rotor_inertia|offset, comma-separated")
+      ->capture_default_str();
+  identify->add_option("--method", opt.method, "ols | wls | kf | rls")
+      ->check(CLI::IsMember({"ols", "wls", "kf", "rls"}))
+      ->capture_default_str();
+  identify->add_option("--cutoff", opt.cutoff_hz, "zero-phase Butterworth cut-off [Hz]")->capture_default_str();
+  identify->add_option("--filter-order", opt.filter_order, "Butterworth order (even)")->capture_default_str();
+  identify->add_option("--decimate", opt.decimate, "decimation factor (0: automatic, about 25 x cut-off)")
+      ->capture_default_str();
+  identify->add_option("--folds", opt.folds, "folds of the blocked cross-validation")->capture_default_str();
+  identify->add_option("--block", opt.block_seconds, "cross-validation block length [s]")->capture_default_str();
+  identify->add_option("--validate-last", opt.validate_last, "validate on this final fraction instead (time split)");
+  identify->add_option("--mu", opt.rls_mu, "RLS forgetting factor mu (survey Eq. 23)")->capture_default_str();
+  identify->add_option("--p0", opt.p0, "KF/RLS initial covariance diagonal")->capture_default_str();
+  identify->add_option("--report", report, "write the report as JSON");
+  identify->add_option("--params", params, "write the identified parameter table as JSON");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  }
+
+  try {
+    if (app.got_subcommand(identify)) {
+      if (robot_name.empty()) {
+        if (format != "tx40") throw dyncal::host::InputError("--robot is required for --format csv");
+        robot_name = "tx40";
+      }
+      const auto robot = dyncal::host::load_robot(robots_dir, robot_name);
+      opt.terms = dyncal::host::parse_model(model);
+      const auto log = format == "tx40" ? dyncal::host::read_tx40_log(data, robot.transmission, robot.joint_offsets)
+                                        : dyncal::host::read_csv_log(data, robot.num_joints);
+      const auto result = dyncal::host::identify(robot, log, opt);
+      dyncal::host::print_identify_report(std::cout, result);
+      if (!report.empty()) write_json(report, dyncal::host::identify_report_json(result));
+      if (!params.empty()) write_json(params, dyncal::host::parameter_table_json(result));
+    }
+  } catch (const dyncal::host::InputError& e) {
+    std::cerr << "dyncal: error: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "dyncal: internal error: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,20 @@
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+namespace dyncal::host {
+
+/// A CSV file of numbers with one header line.
+struct NumericCsv {
+  std::vector<std::string> header;  ///< column names, surrounding spaces removed
+  Eigen::MatrixXd values;           ///< rows = data lines
+};
+
+/// Reads `path`. Throws InputError on: unreadable file, empty file, a line with a different number
+/// of fields than the header, a field that is not a number or is NaN/infinite (message names the
+/// file, line and column).
+NumericCsv read_numeric_csv(const std::string& path);
+
+}  // namespace dyncal::host

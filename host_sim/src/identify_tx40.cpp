@@ -1,0 +1,10 @@
+#include "dyncal_host/identify_dispatch.hpp"
+#include "tx40/robot.hpp"
+
+namespace dyncal::host {
+
+IdentifyResult identify_tx40(const RobotDescription& robot, const JointLog& log, const IdentifyOptions& options) {
+  return dispatch_identify<dyncal::generated::tx40::Robot>(robot, log, options);
+}
+
+}  // namespace dyncal::host

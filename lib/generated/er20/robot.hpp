@@ -1,0 +1,62 @@
+// GENERATED FILE - DO NOT EDIT.
+// Generator: codegen/generate.py (dyncal codegen 1, SymPy 1.11.1)
+// Robot: er20; inputs: robots/er20/robot.json (sha256 adc9ac3b5cfbe7b3)
+// Contents: the Robot traits type gathering the generated model
+// Regenerate: cmake --build <build> --target regenerate (or scripts/codegen).
+#pragma once
+
+#include "dynamics.hpp"
+#include "parameters.hpp"
+#include "regressor.hpp"
+
+namespace dyncal::generated::er20 {
+
+/// The generated er20 model as one type, for templates in lib/ (see dyncal/robot_model.hpp).
+struct Robot {
+  static constexpr const char* kName = kRobotName;
+  static constexpr int kNumJoints = dyncal::generated::er20::kNumJoints;
+  static constexpr int kNumStandard = dyncal::generated::er20::kNumStandard;
+  static constexpr int kNumBase = dyncal::generated::er20::kNumBase;
+
+  template <typename Scalar>
+  using JointVector = Eigen::Matrix<Scalar, kNumJoints, 1>;
+
+  /// Whether joint j's (0-based) rotor inertia is a base parameter of its own.
+  static constexpr bool rotor_inertia_separate(int j) { return kRotorInertiaSeparate[j]; }
+  /// Base parameter that absorbs joint j's rotor inertia when it is not separate (else -1).
+  static constexpr int rotor_inertia_absorbed_into(int j) { return kRotorInertiaAbsorbedInto[j]; }
+  static constexpr const char* base_param_name(int i) { return kBaseParamNames[i]; }
+  static constexpr const char* standard_param_name(int i) { return kStandardParamNames[i]; }
+
+  template <typename Scalar>
+  static void standard_regressor(const JointVector<Scalar>& q, const JointVector<Scalar>& qd,
+                                 const JointVector<Scalar>& qdd,
+                                 Eigen::Matrix<Scalar, kNumJoints, kNumStandard>& Y) noexcept {
+    dyncal::generated::er20::standard_regressor(q, qd, qdd, Y);
+  }
+  template <typename Scalar>
+  static void base_regressor(const JointVector<Scalar>& q, const JointVector<Scalar>& qd,
+                             const JointVector<Scalar>& qdd,
+                             Eigen::Matrix<Scalar, kNumJoints, kNumBase>& Yb) noexcept {
+    dyncal::generated::er20::base_regressor(q, qd, qdd, Yb);
+  }
+  template <typename Scalar>
+  static void inverse_dynamics(const JointVector<Scalar>& q, const JointVector<Scalar>& qd,
+                               const JointVector<Scalar>& qdd,
+                               const Eigen::Matrix<Scalar, kNumStandard, 1>& phi,
+                               JointVector<Scalar>& tau) noexcept {
+    dyncal::generated::er20::inverse_dynamics(q, qd, qdd, phi, tau);
+  }
+  template <typename Scalar>
+  static void mass_matrix(const JointVector<Scalar>& q, const Eigen::Matrix<Scalar, kNumStandard, 1>& phi,
+                          Eigen::Matrix<Scalar, kNumJoints, kNumJoints>& M) noexcept {
+    dyncal::generated::er20::mass_matrix(q, phi, M);
+  }
+  template <typename Scalar>
+  static void standard_to_base(const Eigen::Matrix<Scalar, kNumStandard, 1>& phi,
+                               Eigen::Matrix<Scalar, kNumBase, 1>& phi_b) noexcept {
+    dyncal::generated::er20::standard_to_base(phi, phi_b);
+  }
+};
+
+}  // namespace dyncal::generated::er20
