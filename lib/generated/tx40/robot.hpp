@@ -26,6 +26,8 @@ struct Robot {
   /// Base parameter that absorbs joint j's rotor inertia when it is not separate (else -1).
   static constexpr int rotor_inertia_absorbed_into(int j) { return kRotorInertiaAbsorbedInto[j]; }
   static constexpr const char* base_param_name(int i) { return kBaseParamNames[i]; }
+  /// Gravity [m/s^2] along base axis i.
+  static constexpr double gravity(int i) { return kGravity[i]; }
   static constexpr const char* standard_param_name(int i) { return kStandardParamNames[i]; }
 
   template <typename Scalar>

@@ -63,7 +63,8 @@ class StreamingLeastSquares {
   /// Unweighted form of update().
   template <int N>
   UpdateStatus update(const Eigen::Matrix<Scalar, N, P>& K, const Eigen::Matrix<Scalar, N, 1>& tau) noexcept {
-    return update(K, tau, Eigen::Matrix<Scalar, N, 1>::Ones());
+    const Eigen::Matrix<Scalar, N, 1> ones = Eigen::Matrix<Scalar, N, 1>::Ones();
+    return update(K, tau, ones);
   }
 
   /// Folds another accumulator's rows into this one (for example to combine cross-validation

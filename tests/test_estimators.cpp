@@ -1,0 +1,193 @@
+// lib/ estimators against batch references on exact synthetic er20 data.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <memory>
+#include <random>
+
+#include "dyncal/kalman_filter.hpp"
+#include "dyncal/rls_forgetting.hpp"
+#include "dyncal/streaming_least_squares.hpp"
+#include "support/synthetic.hpp"
+
+namespace {
+
+using dyncal::UpdateStatus;
+using dyncal::test::Er20;
+constexpr unsigned kTerms = dyncal::kFrictionEq7 | dyncal::term::offset;
+using Model = dyncal::IdentificationModel<Er20, kTerms>;
+constexpr int P = Model::kNumParams;
+constexpr int N = 6;
+using ParamVec = Eigen::Matrix<double, P, 1>;
+using JointVec = Eigen::Matrix<double, N, 1>;
+const JointVec kZero = JointVec::Zero();
+
+struct Samples {
+  std::vector<Eigen::Matrix<double, N, P>> K;
+  std::vector<JointVec> tau;
+};
+
+Samples make_samples(int count, double dt, const ParamVec& phi, double noise = 0.0, unsigned seed = 1) {
+  Samples s;
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  Eigen::Matrix<double, N, Er20::kNumBase> scratch;
+  JointVec q, qd, qdd;
+  for (int i = 0; i < count; ++i) {
+    dyncal::test::fourier_state(i * dt, q, qd, qdd);
+    Eigen::Matrix<double, N, P> K;
+    Model::regressor(q, qd, qdd, kZero, scratch, K);
+    JointVec tau = K * phi;
+    for (int j = 0; j < N; ++j) tau[j] += noise * gauss(rng);
+    s.K.push_back(K);
+    s.tau.push_back(tau);
+  }
+  return s;
+}
+
+TEST(StreamingLeastSquares, EqualsDenseQrSolve) {
+  const ParamVec truth = dyncal::test::er20_truth<kTerms>();
+  const Samples s = make_samples(2000, 0.01, truth, 1.0);
+  auto ls = std::make_unique<dyncal::StreamingLeastSquares<double, P>>();
+  Eigen::MatrixXd W(2000 * N, P);
+  Eigen::VectorXd y(2000 * N);
+  for (size_t i = 0; i < s.K.size(); ++i) {
+    ASSERT_EQ(ls->update(s.K[i], s.tau[i]), UpdateStatus::ok);
+    W.middleRows(static_cast<Eigen::Index>(i) * N, N) = s.K[i];
+    y.segment(static_cast<Eigen::Index>(i) * N, N) = s.tau[i];
+  }
+  ParamVec phi;
+  ASSERT_EQ(ls->solve(phi), UpdateStatus::ok);
+  const Eigen::VectorXd dense = W.colPivHouseholderQr().solve(y);
+  EXPECT_LE((phi - dense).norm(), 1e-9 * dense.norm());
+  const double rss = (y - W * dense).squaredNorm();
+  EXPECT_NEAR(ls->residual_sum_of_squares(), rss, 1e-9 * rss);
+}
+
+TEST(StreamingLeastSquares, MergeEqualsSingleAccumulator) {
+  const Samples s = make_samples(600, 0.02, dyncal::test::er20_truth<kTerms>(), 0.5);
+  auto all = std::make_unique<dyncal::StreamingLeastSquares<double, P>>();
+  auto a = std::make_unique<dyncal::StreamingLeastSquares<double, P>>();
+  auto b = std::make_unique<dyncal::StreamingLeastSquares<double, P>>();
+  for (size_t i = 0; i < s.K.size(); ++i) {
+    all->update(s.K[i], s.tau[i]);
+    (i % 3 == 0 ? *a : *b).update(s.K[i], s.tau[i]);
+  }
+  a->merge(*b);
+  ParamVec p1, p2;
+  ASSERT_EQ(all->solve(p1), UpdateStatus::ok);
+  ASSERT_EQ(a->solve(p2), UpdateStatus::ok);
+  EXPECT_LE((p1 - p2).norm(), 1e-9 * p1.norm());
+  EXPECT_NEAR(a->residual_sum_of_squares(), all->residual_sum_of_squares(), 1e-9 * all->residual_sum_of_squares());
+}
+
+TEST(StreamingLeastSquares, RejectsNonFiniteAndReportsRankDeficiency) {
+  auto ls = std::make_unique<dyncal::StreamingLeastSquares<double, P>>();
+  ParamVec phi = ParamVec::Constant(7.0);
+  EXPECT_EQ(ls->solve(phi), UpdateStatus::rank_deficient);
+  EXPECT_EQ(phi[0], 7.0);
+  Eigen::Matrix<double, N, P> K = Eigen::Matrix<double, N, P>::Ones();
+  JointVec tau = JointVec::Ones();
+  tau[2] = std::nan("");
+  EXPECT_EQ(ls->update(K, tau), UpdateStatus::rejected_non_finite);
+  EXPECT_EQ(ls->rows(), 0);
+}
+
+TEST(KalmanFilter, ConvergesToBatchOlsOnNoiseFreeData) {
+  const ParamVec truth = dyncal::test::er20_truth<kTerms>();
+  const Samples s = make_samples(3000, 0.01, truth);
+  auto kf = std::make_unique<dyncal::KalmanFilter<double, P, N>>();
+  ASSERT_EQ(kf->reset(ParamVec::Zero(), ParamVec::Constant(1e8)), UpdateStatus::ok);
+  auto ls = std::make_unique<dyncal::StreamingLeastSquares<double, P>>();
+  for (size_t i = 0; i < s.K.size(); ++i) {
+    ASSERT_EQ(kf->update(s.K[i], s.tau[i], JointVec::Ones()), UpdateStatus::ok);
+    ls->update(s.K[i], s.tau[i]);
+  }
+  ParamVec ols;
+  ASSERT_EQ(ls->solve(ols), UpdateStatus::ok);
+  EXPECT_LE((ols - truth).norm(), 1e-8 * truth.norm());
+  EXPECT_LE((kf->estimate() - ols).norm(), 1e-5 * ols.norm());
+  // The prior covariance P0 is the only difference; it vanishes as P0 grows.
+  Eigen::Matrix<double, P, P> Pd;
+  kf->covariance().to_dense(Pd);
+  EXPECT_LE((Pd - Pd.transpose()).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_GT(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(Pd).eigenvalues().minCoeff(), 0.0);
+}
+
+TEST(KalmanFilter, NonFiniteAndOutlierSamplesLeaveStateUntouched) {
+  const ParamVec truth = dyncal::test::er20_truth<kTerms>();
+  const Samples s = make_samples(500, 0.01, truth, 0.1);
+  auto kf = std::make_unique<dyncal::KalmanFilter<double, P, N>>();
+  ASSERT_EQ(kf->reset(ParamVec::Zero(), ParamVec::Constant(1e6)), UpdateStatus::ok);
+  for (size_t i = 0; i < s.K.size(); ++i) ASSERT_EQ(kf->update(s.K[i], s.tau[i], JointVec::Constant(0.01)), UpdateStatus::ok);
+  ASSERT_EQ(kf->set_gate(5.0), UpdateStatus::ok);
+  const ParamVec before = kf->estimate();
+  const Eigen::Matrix<double, P, 1> d_before = kf->covariance().d();
+  JointVec bad = s.tau[10];
+  bad[3] = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(kf->update(s.K[10], bad, JointVec::Constant(0.01)), UpdateStatus::rejected_non_finite);
+  JointVec outlier = s.tau[10];
+  outlier[1] += 1000.0;
+  EXPECT_EQ(kf->update(s.K[10], outlier, JointVec::Constant(0.01)), UpdateStatus::rejected_outlier);
+  EXPECT_EQ(kf->update(s.K[10], s.tau[10], JointVec::Zero()), UpdateStatus::not_positive_definite);
+  EXPECT_EQ((kf->estimate() - before).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ((kf->covariance().d() - d_before).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ(kf->update(s.K[10], s.tau[10], JointVec::Constant(0.01)), UpdateStatus::ok);
+}
+
+// Survey Fig. 4: beta of joint 3 changes as a ramp or as a second-order function of the
+// iteration; forgetting RLS must track it more closely than the Kalman filter.
+double tracking_error(bool use_rls, bool second_order) {
+  const ParamVec truth = dyncal::test::er20_truth<kTerms>();
+  const int beta3 = Model::column(dyncal::term::viscous, 2);
+  const int count = 6000;
+  auto kf = std::make_unique<dyncal::KalmanFilter<double, P, N>>();
+  auto rls = std::make_unique<dyncal::RlsForgetting<double, P, N>>();
+  kf->reset(ParamVec::Zero(), ParamVec::Constant(1e6));
+  rls->reset(ParamVec::Zero(), ParamVec::Constant(1e6), 0.995);
+  Eigen::Matrix<double, N, Er20::kNumBase> scratch;
+  JointVec q, qd, qdd;
+  double se = 0.0;
+  int n = 0;
+  for (int i = 0; i < count; ++i) {
+    const double x = static_cast<double>(i) / count;
+    ParamVec phi = truth;
+    phi[beta3] = truth[beta3] * (second_order ? 1.0 + 0.5 * x * x : 1.0 + 0.5 * x);
+    dyncal::test::fourier_state(i * 0.01, q, qd, qdd);
+    Eigen::Matrix<double, N, P> K;
+    Model::regressor(q, qd, qdd, kZero, scratch, K);
+    const JointVec tau = K * phi;
+    const UpdateStatus st = use_rls ? rls->update(K, tau) : kf->update(K, tau, JointVec::Ones());
+    EXPECT_EQ(st, UpdateStatus::ok);
+    if (i >= count / 2) {
+      const double e = (use_rls ? rls->estimate() : kf->estimate())[beta3] - phi[beta3];
+      se += e * e;
+      ++n;
+    }
+  }
+  return std::sqrt(se / n);
+}
+
+TEST(RlsForgetting, TracksRampBetterThanKalman) {
+  const double kf = tracking_error(false, false), rls = tracking_error(true, false);
+  EXPECT_LT(rls, kf);
+  EXPECT_LT(rls, 0.25 * kf);
+}
+
+TEST(RlsForgetting, TracksSecondOrderChangeBetterThanKalman) {
+  const double kf = tracking_error(false, true), rls = tracking_error(true, true);
+  EXPECT_LT(rls, kf);
+  EXPECT_LT(rls, 0.25 * kf);
+}
+
+TEST(RlsForgetting, CovarianceStaysBoundedWithoutExcitation) {
+  auto rls = std::make_unique<dyncal::RlsForgetting<double, P, N>>();
+  ASSERT_EQ(rls->reset(ParamVec::Zero(), ParamVec::Constant(1.0), 0.98), UpdateStatus::ok);
+  const double trace0 = rls->covariance().trace();
+  Eigen::Matrix<double, N, P> K = Eigen::Matrix<double, N, P>::Zero();  // no excitation at all
+  for (int i = 0; i < 5000; ++i) ASSERT_EQ(rls->update(K, JointVec::Zero()), UpdateStatus::ok);
+  EXPECT_LE(rls->covariance().trace(), trace0 / 0.98 + 1e-9);
+  EXPECT_EQ(rls->update(K, JointVec::Zero(), JointVec::Zero()), UpdateStatus::invalid_argument);
+}
+
+}  // namespace

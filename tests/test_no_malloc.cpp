@@ -1,0 +1,121 @@
+// The lib/ updaters and generated regressors allocate nothing: Eigen's runtime no-malloc check is
+// on (this target compiles with assertions), and malloc/calloc/realloc and operator new are
+// counted while the updaters run.
+#define EIGEN_RUNTIME_NO_MALLOC
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstdlib>
+#include <new>
+
+#include "dyncal/kalman_filter.hpp"
+#include "dyncal/rls_forgetting.hpp"
+#include "dyncal/streaming_least_squares.hpp"
+#include "support/synthetic.hpp"
+
+namespace {
+std::atomic<long> g_allocations{0};
+std::atomic<bool> g_counting{false};
+}  // namespace
+
+extern "C" {
+void* __real_malloc(size_t);
+void* __real_calloc(size_t, size_t);
+void* __real_realloc(void*, size_t);
+void* __wrap_malloc(size_t n) {
+  if (g_counting) ++g_allocations;
+  return __real_malloc(n);
+}
+void* __wrap_calloc(size_t a, size_t b) {
+  if (g_counting) ++g_allocations;
+  return __real_calloc(a, b);
+}
+void* __wrap_realloc(void* p, size_t n) {
+  if (g_counting) ++g_allocations;
+  return __real_realloc(p, n);
+}
+}
+
+void* operator new(size_t n) {
+  if (g_counting) ++g_allocations;
+  if (void* p = __real_malloc(n)) return p;
+  throw std::bad_alloc();
+}
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, size_t) noexcept { std::free(p); }
+
+namespace {
+
+using dyncal::test::Er20;
+constexpr unsigned kTerms = dyncal::kFrictionEq8 | dyncal::term::rotor_inertia | dyncal::term::offset;
+using Model = dyncal::IdentificationModel<Er20, kTerms>;
+constexpr int P = Model::kNumParams;
+using JointVec = Eigen::Matrix<double, 6, 1>;
+using ParamVec = Eigen::Matrix<double, P, 1>;
+
+template <typename Scalar>
+struct Workspace {
+  dyncal::StreamingLeastSquares<Scalar, P> ls;
+  dyncal::KalmanFilter<Scalar, P, 6> kf;
+  dyncal::RlsForgetting<Scalar, P, 6> rls;
+  Eigen::Matrix<Scalar, 6, Er20::kNumBase> scratch;
+  Eigen::Matrix<Scalar, 6, P> K;
+  Eigen::Matrix<Scalar, 6, Er20::kNumStandard> Y;
+  Eigen::Matrix<Scalar, Er20::kNumStandard, 1> phi_std;
+  Eigen::Matrix<Scalar, 6, 6> M;
+  Eigen::Matrix<Scalar, P, 1> phi, diag;
+};
+
+template <typename Scalar>
+void run_updaters(Workspace<Scalar>& w) {
+  using V = Eigen::Matrix<Scalar, 6, 1>;
+  using PV = Eigen::Matrix<Scalar, P, 1>;
+  const PV truth = dyncal::test::er20_truth<kTerms>().template cast<Scalar>();
+  for (int i = 0; i < Er20::kNumStandard; ++i) w.phi_std[i] = Scalar(dyncal::generated::er20::kNominalStandard[i]);
+  ASSERT_EQ(w.kf.reset(PV::Zero(), PV::Constant(Scalar(1e4))), dyncal::UpdateStatus::ok);
+  ASSERT_EQ(w.kf.set_gate(Scalar(100)), dyncal::UpdateStatus::ok);
+  ASSERT_EQ(w.rls.reset(PV::Zero(), PV::Constant(Scalar(1e4)), Scalar(0.999)), dyncal::UpdateStatus::ok);
+  JointVec qd_, q_, qdd_;
+  for (int i = 0; i < 300; ++i) {
+    dyncal::test::fourier_state(0.01 * i, q_, qd_, qdd_);
+    const V q = q_.cast<Scalar>(), qd = qd_.cast<Scalar>(), qdd = qdd_.cast<Scalar>();
+    const V zero = V::Zero();
+    Model::regressor(q, qd, qdd, zero, w.scratch, w.K);
+    Er20::standard_regressor(q, qd, qdd, w.Y);
+    Er20::mass_matrix(q, w.phi_std, w.M);
+    V tau;
+    Er20::inverse_dynamics(q, qd, qdd, w.phi_std, tau);
+    tau.noalias() = w.K * truth;
+    ASSERT_EQ(w.ls.update(w.K, tau), dyncal::UpdateStatus::ok);
+    ASSERT_EQ(w.kf.update(w.K, tau, V::Ones()), dyncal::UpdateStatus::ok);
+    ASSERT_EQ(w.rls.update(w.K, tau), dyncal::UpdateStatus::ok);
+  }
+  ASSERT_EQ(w.ls.solve(w.phi), dyncal::UpdateStatus::ok);
+  ASSERT_EQ(w.ls.inverse_gram_diagonal(w.diag), dyncal::UpdateStatus::ok);
+  w.kf.covariance().diagonal(w.diag);
+}
+
+TEST(NoMalloc, UpdatersAndGeneratedCodeAllocateNothing) {
+  auto wd = std::make_unique<Workspace<double>>();
+  auto wf = std::make_unique<Workspace<float>>();
+  Eigen::internal::set_is_malloc_allowed(false);
+  g_allocations = 0;
+  g_counting = true;
+  run_updaters(*wd);
+  run_updaters(*wf);
+  g_counting = false;
+  Eigen::internal::set_is_malloc_allowed(true);
+  EXPECT_EQ(g_allocations.load(), 0);
+}
+
+TEST(NoMalloc, TheCheckItselfWorks) {
+  // A dynamic-size Eigen object must trip the counter: the test above can fail.
+  g_allocations = 0;
+  g_counting = true;
+  Eigen::VectorXd v(1000);
+  v.setZero();
+  g_counting = false;
+  EXPECT_GT(g_allocations.load(), 0);
+}
+
+}  // namespace
