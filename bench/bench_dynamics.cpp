@@ -1,0 +1,183 @@
+// Generated er20 regressors against orocos-kdl's RNE on the same arm, and lib/ updater costs.
+#include <benchmark/benchmark.h>
+
+#include <kdl/chain.hpp>
+#include <kdl/chainidsolver_recursive_newton_euler.hpp>
+#include <memory>
+#include <random>
+
+#include "dyncal/identification_model.hpp"
+#include "dyncal/kalman_filter.hpp"
+#include "dyncal/rls_forgetting.hpp"
+#include "dyncal/streaming_least_squares.hpp"
+#include "er20/robot.hpp"
+
+namespace {
+
+using Robot = dyncal::generated::er20::Robot;
+using Vec = Eigen::Matrix<double, 6, 1>;
+constexpr unsigned kTerms = dyncal::kFrictionEq7 | dyncal::term::rotor_inertia | dyncal::term::offset;
+using Model = dyncal::IdentificationModel<Robot, kTerms>;
+constexpr int P = Model::kNumParams;
+
+struct States {
+  std::vector<Vec> q, qd, qdd;
+  States() {
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> u(-2.0, 2.0);
+    for (int i = 0; i < 64; ++i) {
+      Vec a, b, c;
+      for (int j = 0; j < 6; ++j) {
+        a[j] = u(rng);
+        b[j] = u(rng);
+        c[j] = u(rng);
+      }
+      q.push_back(a);
+      qd.push_back(b);
+      qdd.push_back(c);
+    }
+  }
+};
+const States kStates;
+
+void BM_StandardRegressor(benchmark::State& state) {
+  Eigen::Matrix<double, 6, 60> Y;
+  size_t i = 0;
+  for (auto _ : state) {
+    Robot::standard_regressor(kStates.q[i & 63], kStates.qd[i & 63], kStates.qdd[i & 63], Y);
+    benchmark::DoNotOptimize(Y.data());
+    ++i;
+  }
+}
+BENCHMARK(BM_StandardRegressor);
+
+void BM_BaseRegressor(benchmark::State& state) {
+  Eigen::Matrix<double, 6, Robot::kNumBase> Yb;
+  size_t i = 0;
+  for (auto _ : state) {
+    Robot::base_regressor(kStates.q[i & 63], kStates.qd[i & 63], kStates.qdd[i & 63], Yb);
+    benchmark::DoNotOptimize(Yb.data());
+    ++i;
+  }
+}
+BENCHMARK(BM_BaseRegressor);
+
+void BM_BaseRegressorWithFriction(benchmark::State& state) {
+  Model::Regressor<double> K;
+  Eigen::Matrix<double, 6, Robot::kNumBase> scratch;
+  const Vec zero = Vec::Zero();
+  size_t i = 0;
+  for (auto _ : state) {
+    Model::regressor(kStates.q[i & 63], kStates.qd[i & 63], kStates.qdd[i & 63], zero, scratch, K);
+    benchmark::DoNotOptimize(K.data());
+    ++i;
+  }
+}
+BENCHMARK(BM_BaseRegressorWithFriction);
+
+void BM_InverseDynamics(benchmark::State& state) {
+  Eigen::Matrix<double, 60, 1> phi;
+  for (int k = 0; k < 60; ++k) phi[k] = dyncal::generated::er20::kNominalStandard[k];
+  Vec tau;
+  size_t i = 0;
+  for (auto _ : state) {
+    Robot::inverse_dynamics(kStates.q[i & 63], kStates.qd[i & 63], kStates.qdd[i & 63], phi, tau);
+    benchmark::DoNotOptimize(tau.data());
+    ++i;
+  }
+}
+BENCHMARK(BM_InverseDynamics);
+
+void BM_MassMatrix(benchmark::State& state) {
+  Eigen::Matrix<double, 60, 1> phi;
+  for (int k = 0; k < 60; ++k) phi[k] = dyncal::generated::er20::kNominalStandard[k];
+  Eigen::Matrix<double, 6, 6> M;
+  size_t i = 0;
+  for (auto _ : state) {
+    Robot::mass_matrix(kStates.q[i & 63], phi, M);
+    benchmark::DoNotOptimize(M.data());
+    ++i;
+  }
+}
+BENCHMARK(BM_MassMatrix);
+
+void BM_KdlRne(benchmark::State& state) {
+  KDL::Chain chain;
+  for (int k = 0; k < 6; ++k) {
+    const auto& o = dyncal::generated::er20::kJointOrigins[k];
+    const KDL::Rotation R(o.R[0], o.R[1], o.R[2], o.R[3], o.R[4], o.R[5], o.R[6], o.R[7], o.R[8]);
+    const KDL::Vector p(o.p[0], o.p[1], o.p[2]);
+    const double* s = &dyncal::generated::er20::kNominalStandard[10 * k];
+    const double m = s[9];
+    const KDL::Vector c(s[6] / m, s[7] / m, s[8] / m);
+    // rotational inertia about the origin -> about the centre of mass: Ic = Io - m (|c|^2 1 - c c^T)
+    const double cc = dot(c, c);
+    const KDL::RotationalInertia Ic(s[0] - m * (cc - c.x() * c.x()), s[3] - m * (cc - c.y() * c.y()),
+                                    s[5] - m * (cc - c.z() * c.z()), s[1] + m * c.x() * c.y(), s[2] + m * c.x() * c.z(),
+                                    s[4] + m * c.y() * c.z());
+    const KDL::RigidBodyInertia I(m, c, Ic);
+    chain.addSegment(KDL::Segment(KDL::Joint("j", p, R * KDL::Vector(0, 0, 1), KDL::Joint::RotAxis), KDL::Frame(R, p), I));
+  }
+  KDL::ChainIdSolver_RNE rne(chain, KDL::Vector(0, 0, -9.81));
+  KDL::JntArray q(6), qd(6), qdd(6), tau(6);
+  KDL::Wrenches f(6, KDL::Wrench::Zero());
+  size_t i = 0;
+  for (auto _ : state) {
+    for (int j = 0; j < 6; ++j) {
+      q(j) = kStates.q[i & 63][j];
+      qd(j) = kStates.qd[i & 63][j];
+      qdd(j) = kStates.qdd[i & 63][j];
+    }
+    rne.CartToJnt(q, qd, qdd, f, tau);
+    benchmark::DoNotOptimize(tau.data.data());
+    ++i;
+  }
+}
+BENCHMARK(BM_KdlRne);
+
+template <typename Scalar>
+void BM_KalmanUpdate(benchmark::State& state) {
+  using PV = Eigen::Matrix<Scalar, P, 1>;
+  using V = Eigen::Matrix<Scalar, 6, 1>;
+  auto kf = std::make_unique<dyncal::KalmanFilter<Scalar, P, 6>>();
+  kf->reset(PV::Zero(), PV::Constant(Scalar(1e3)));
+  Eigen::Matrix<Scalar, 6, P> K;
+  Eigen::Matrix<Scalar, 6, Robot::kNumBase> scratch;
+  const V zero = V::Zero(), r = V::Ones();
+  Model::regressor<Scalar>(kStates.q[0].cast<Scalar>(), kStates.qd[0].cast<Scalar>(), kStates.qdd[0].cast<Scalar>(), zero,
+                           scratch, K);
+  const V tau = V::Ones();
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(kf->update(K, tau, r));
+  }
+}
+BENCHMARK_TEMPLATE(BM_KalmanUpdate, double);
+BENCHMARK_TEMPLATE(BM_KalmanUpdate, float);
+
+void BM_RlsUpdate(benchmark::State& state) {
+  using PV = Eigen::Matrix<double, P, 1>;
+  auto rls = std::make_unique<dyncal::RlsForgetting<double, P, 6>>();
+  rls->reset(PV::Zero(), PV::Constant(1e3), 0.999);
+  Eigen::Matrix<double, 6, P> K;
+  Eigen::Matrix<double, 6, Robot::kNumBase> scratch;
+  const Vec zero = Vec::Zero();
+  Model::regressor(kStates.q[0], kStates.qd[0], kStates.qdd[0], zero, scratch, K);
+  const Vec tau = Vec::Ones();
+  for (auto _ : state) benchmark::DoNotOptimize(rls->update(K, tau));
+}
+BENCHMARK(BM_RlsUpdate);
+
+void BM_StreamingLeastSquaresSample(benchmark::State& state) {
+  auto ls = std::make_unique<dyncal::StreamingLeastSquares<double, P>>();
+  Eigen::Matrix<double, 6, P> K;
+  Eigen::Matrix<double, 6, Robot::kNumBase> scratch;
+  const Vec zero = Vec::Zero();
+  Model::regressor(kStates.q[0], kStates.qd[0], kStates.qdd[0], zero, scratch, K);
+  const Vec tau = Vec::Ones();
+  for (auto _ : state) benchmark::DoNotOptimize(ls->update(K, tau));
+}
+BENCHMARK(BM_StreamingLeastSquaresSample);
+
+}  // namespace
+
+BENCHMARK_MAIN();
