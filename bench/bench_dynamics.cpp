@@ -116,7 +116,8 @@ void BM_KdlRne(benchmark::State& state) {
                                     s[5] - m * (cc - c.z() * c.z()), s[1] + m * c.x() * c.y(), s[2] + m * c.x() * c.z(),
                                     s[4] + m * c.y() * c.z());
     const KDL::RigidBodyInertia I(m, c, Ic);
-    chain.addSegment(KDL::Segment(KDL::Joint("j", p, R * KDL::Vector(0, 0, 1), KDL::Joint::RotAxis), KDL::Frame(R, p), I));
+    chain.addSegment(
+        KDL::Segment(KDL::Joint("j", p, R * KDL::Vector(0, 0, 1), KDL::Joint::RotAxis), KDL::Frame(R, p), I));
   }
   KDL::ChainIdSolver_RNE rne(chain, KDL::Vector(0, 0, -9.81));
   KDL::JntArray q(6), qd(6), qdd(6), tau(6);
@@ -144,8 +145,8 @@ void BM_KalmanUpdate(benchmark::State& state) {
   Eigen::Matrix<Scalar, 6, P> K;
   Eigen::Matrix<Scalar, 6, Robot::kNumBase> scratch;
   const V zero = V::Zero(), r = V::Ones();
-  Model::regressor<Scalar>(kStates.q[0].cast<Scalar>(), kStates.qd[0].cast<Scalar>(), kStates.qdd[0].cast<Scalar>(), zero,
-                           scratch, K);
+  Model::regressor<Scalar>(kStates.q[0].cast<Scalar>(), kStates.qd[0].cast<Scalar>(), kStates.qdd[0].cast<Scalar>(),
+                           zero, scratch, K);
   const V tau = V::Ones();
   for (auto _ : state) {
     benchmark::DoNotOptimize(kf->update(K, tau, r));

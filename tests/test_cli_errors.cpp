@@ -1,15 +1,15 @@
 // `dyncal identify` on malformed input: one clear line on stderr naming the problem, exit code 2.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
-#include <unistd.h>
-#include <algorithm>
 
 namespace {
 
@@ -84,13 +84,17 @@ TEST(CliErrors, WrongJointCount) {
 }
 
 TEST(CliErrors, UnknownRobot) {
-  expect_error("identify --robot nosuch --data " + write_csv("robot", header(6) + rows(6, 10)), "unknown robot 'nosuch'");
+  expect_error("identify --robot nosuch --data " + write_csv("robot", header(6) + rows(6, 10)),
+               "unknown robot 'nosuch'");
 }
 
 TEST(CliErrors, MissingTimeColumn) {
-  expect_error("identify --robot er20 --data " + write_csv("not", header(6, false) + rows(6, 10)), "missing column 't'");
+  expect_error("identify --robot er20 --data " + write_csv("not", header(6, false) + rows(6, 10)),
+               "missing column 't'");
 }
 
-TEST(CliErrors, MissingFile) { expect_error("identify --robot er20 --data /nonexistent/log.csv", "cannot read"); }
+TEST(CliErrors, MissingFile) {
+  expect_error("identify --robot er20 --data /nonexistent/log.csv", "cannot read");
+}
 
 }  // namespace

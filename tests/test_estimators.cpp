@@ -119,7 +119,8 @@ TEST(KalmanFilter, NonFiniteAndOutlierSamplesLeaveStateUntouched) {
   const Samples s = make_samples(500, 0.01, truth, 0.1);
   auto kf = std::make_unique<dyncal::KalmanFilter<double, P, N>>();
   ASSERT_EQ(kf->reset(ParamVec::Zero(), ParamVec::Constant(1e6)), UpdateStatus::ok);
-  for (size_t i = 0; i < s.K.size(); ++i) ASSERT_EQ(kf->update(s.K[i], s.tau[i], JointVec::Constant(0.01)), UpdateStatus::ok);
+  for (size_t i = 0; i < s.K.size(); ++i)
+    ASSERT_EQ(kf->update(s.K[i], s.tau[i], JointVec::Constant(0.01)), UpdateStatus::ok);
   ASSERT_EQ(kf->set_gate(5.0), UpdateStatus::ok);
   const ParamVec before = kf->estimate();
   const Eigen::Matrix<double, P, 1> d_before = kf->covariance().d();

@@ -19,8 +19,9 @@ namespace {
 using dyncal::test::Body;
 
 KDL::RigidBodyInertia kdl_inertia(const Body& b) {
-  return KDL::RigidBodyInertia(b.m, KDL::Vector(b.c.x(), b.c.y(), b.c.z()),
-                               KDL::RotationalInertia(b.Ic(0, 0), b.Ic(1, 1), b.Ic(2, 2), b.Ic(0, 1), b.Ic(0, 2), b.Ic(1, 2)));
+  return KDL::RigidBodyInertia(
+      b.m, KDL::Vector(b.c.x(), b.c.y(), b.c.z()),
+      KDL::RotationalInertia(b.Ic(0, 0), b.Ic(1, 1), b.Ic(2, 2), b.Ic(0, 1), b.Ic(0, 2), b.Ic(1, 2)));
 }
 
 // Chain from the generated joint origins: joint i rotates about R_i z through p_i (parent frame),
@@ -46,8 +47,8 @@ KDL::Chain er20_chain_from_mdh(const std::vector<Body>& bodies) {
   for (size_t i = 0; i < bodies.size(); ++i) {
     const auto& j = desc["kinematics"]["joints"][i];
     chain.addSegment(KDL::Segment(KDL::Joint(KDL::Joint::None),
-                                  KDL::Frame::DH_Craig1989(j["a"].get<double>(), j["alpha"].get<double>(), j["d"].get<double>(),
-                                                           j["theta"].get<double>())));
+                                  KDL::Frame::DH_Craig1989(j["a"].get<double>(), j["alpha"].get<double>(),
+                                                           j["d"].get<double>(), j["theta"].get<double>())));
     chain.addSegment(KDL::Segment(KDL::Joint(KDL::Joint::RotZ), KDL::Frame::Identity(), kdl_inertia(bodies[i])));
   }
   return chain;
@@ -110,7 +111,8 @@ void check_against_kdl(const Origins& origins, bool also_mdh) {
     Eigen::Matrix<double, Robot::kNumBase, 1> phi_b;
     Robot::standard_to_base(phi, phi_b);
     const Vec tau_base = Yb * phi_b;
-    EXPECT_LE((tau_base - tau_regressor).cwiseAbs().maxCoeff(), 1e-9 * std::max(1.0, tau_regressor.cwiseAbs().maxCoeff()));
+    EXPECT_LE((tau_base - tau_regressor).cwiseAbs().maxCoeff(),
+              1e-9 * std::max(1.0, tau_regressor.cwiseAbs().maxCoeff()));
   }
 }
 
@@ -118,7 +120,9 @@ TEST(KdlOracle, Er20MatchesKdlFromGeneratedOriginsAndFromMdh) {
   check_against_kdl<dyncal::generated::er20::Robot>(dyncal::generated::er20::kJointOrigins, true);
 }
 
-TEST(KdlOracle, Tx40MatchesKdl) { check_against_kdl<dyncal::generated::tx40::Robot>(dyncal::generated::tx40::kJointOrigins, false); }
+TEST(KdlOracle, Tx40MatchesKdl) {
+  check_against_kdl<dyncal::generated::tx40::Robot>(dyncal::generated::tx40::kJointOrigins, false);
+}
 
 TEST(KdlOracle, BaseParametersAreFewerAndTheMapDropsNoEffect) {
   // A parameter change along an unidentifiable direction (link 1's XX) changes no torque and no

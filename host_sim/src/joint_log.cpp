@@ -18,8 +18,8 @@ void check_time(const Eigen::VectorXd& t, const std::string& path) {
   const double dt = (t[t.size() - 1] - t[0]) / static_cast<double>(t.size() - 1);
   for (Eigen::Index i = 1; i < t.size(); ++i) {
     if (!(t[i] > t[i - 1])) {
-      throw InputError(path + ": time is not strictly increasing at data row " + std::to_string(i + 1) + " (t = " +
-                       std::to_string(t[i]) + " s after " + std::to_string(t[i - 1]) + " s)");
+      throw InputError(path + ": time is not strictly increasing at data row " + std::to_string(i + 1) +
+                       " (t = " + std::to_string(t[i]) + " s after " + std::to_string(t[i - 1]) + " s)");
     }
   }
   for (Eigen::Index i = 1; i < t.size(); ++i) {

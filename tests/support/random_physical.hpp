@@ -23,7 +23,8 @@ inline Body random_body(std::mt19937& rng) {
   // Second moments of a mass distribution: J = diag(j) >= 0, I = tr(J) - J.
   const Eigen::Vector3d j(0.01 + 0.2 * u(rng), 0.01 + 0.2 * u(rng), 0.01 + 0.2 * u(rng));
   const Eigen::Matrix3d principal = (Eigen::Vector3d::Constant(j.sum()) - j).asDiagonal();
-  const Eigen::Matrix3d R = Eigen::Quaterniond(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5).normalized().toRotationMatrix();
+  const Eigen::Matrix3d R =
+      Eigen::Quaterniond(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5).normalized().toRotationMatrix();
   b.Ic = R * principal * R.transpose();
   return b;
 }
