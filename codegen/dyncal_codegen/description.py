@@ -86,12 +86,21 @@ def standard_from_com(mass, com, inertia_com, R_com=None):
             mass * c[0], mass * c[1], mass * c[2], mass]
 
 
+def load_mdh_kinematics(desc):
+    """Joints of a modified-DH description without inertials (standard = None)."""
+    return _mdh_joints(desc["kinematics"]["joints"], [None] * len(desc["kinematics"]["joints"]))
+
+
 def load_mdh(desc):
-    joints = []
     links = desc.get("links")
     rows = desc["kinematics"]["joints"]
     if links is None or len(links) != len(rows):
         raise DescriptionError("an mdh description needs one 'links' entry per joint")
+    return _mdh_joints(rows, links)
+
+
+def _mdh_joints(rows, links):
+    joints = []
     for i, (row, link) in enumerate(zip(rows, links)):
         alpha = exact_angle(float(row["alpha"]))
         theta = exact_angle(float(row["theta"]))
@@ -100,7 +109,7 @@ def load_mdh(desc):
         # Rx(alpha) Tx(a) Rz(theta) Tz(d) Rz(q)
         R = rot_x(alpha) * rot_z(theta)
         p = sp.Matrix([a, 0, 0]) + rot_x(alpha) * sp.Matrix([0, 0, d])
-        standard = standard_from_com(float(link["mass"]), link["com"], link["inertia"])
+        standard = None if link is None else standard_from_com(float(link["mass"]), link["com"], link["inertia"])
         xyz = [float(v) for v in p.evalf()]
         joints.append(Joint(f"joint_{i + 1}", sp.simplify(R), p, xyz, None, standard))
     return joints
@@ -168,6 +177,11 @@ def load(robot_dir):
     path = os.path.join(robot_dir, "robot.json")
     with open(path) as f:
         desc = json.load(f)
+    return desc, load_description(robot_dir, desc)
+
+
+def load_description(robot_dir, desc):
+    """Joints of the description's "kinematics" entry (MDH with "links", or a URDF file)."""
     kin = desc["kinematics"]
     if kin["format"] == "mdh":
         joints = load_mdh(desc)
@@ -175,4 +189,4 @@ def load(robot_dir):
         joints = load_urdf(os.path.join(robot_dir, kin["file"]))
     else:
         raise DescriptionError(f"unknown kinematics format '{kin['format']}'")
-    return desc, joints
+    return joints

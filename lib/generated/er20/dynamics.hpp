@@ -1,6 +1,6 @@
 // GENERATED FILE - DO NOT EDIT.
 // Generator: codegen/generate.py (dyncal codegen 1, SymPy 1.11.1)
-// Robot: er20; inputs: robots/er20/robot.json (sha256 adc9ac3b5cfbe7b3)
+// Robot: er20; inputs: robots/er20/robot.json (sha256 2ed936baf54754ce)
 // Contents: inverse dynamics tau(q, qd, qdd, phi) and mass matrix M(q, phi)
 // Operation count inverse_dynamics: 372 multiplications, 309 additions (plus sin/cos of q)
 // Operation count mass_matrix: 401 multiplications, 312 additions (plus sin/cos of q)

@@ -1,6 +1,6 @@
 // GENERATED FILE - DO NOT EDIT.
 // Generator: codegen/generate.py (dyncal codegen 1, SymPy 1.11.1)
-// Robot: er20; inputs: robots/er20/robot.json (sha256 adc9ac3b5cfbe7b3)
+// Robot: er20; inputs: robots/er20/robot.json (sha256 2ed936baf54754ce)
 // Contents: the Robot traits type gathering the generated model
 // Regenerate: cmake --build <build> --target regenerate (or scripts/codegen).
 #pragma once
