@@ -121,7 +121,7 @@ class IdentifyPipeline {
     const JointVec sigma = (ss / dof).cwiseSqrt().cwiseMax(1e-12);
     const std::string& m = opt_.method;
     if (m == "ols") {
-      finish_ls(*ls, phi, stdev, cond);
+      ls_statistics(*ls, stdev, cond);
     } else if (m == "wls") {
       ls->reset();
       for (Eigen::Index s = 0; s < S; ++s) {
@@ -130,7 +130,7 @@ class IdentifyPipeline {
           check(ls->add_row(data.W.row(s * N + j).transpose(), data.y[s * N + j], 1.0 / sigma[j]));
       }
       if (ls->solve(phi) != UpdateStatus::ok) throw InputError("weighted regressor rank deficient");
-      finish_ls(*ls, phi, stdev, cond);
+      ls_statistics(*ls, stdev, cond);
     } else if (m == "kf") {
       auto kf = std::make_unique<KalmanFilter<double, P, N>>();
       check(kf->reset(ParamVec::Zero(), ParamVec::Constant(opt_.p0)));
@@ -139,7 +139,7 @@ class IdentifyPipeline {
       phi = kf->estimate();
       kf->covariance().diagonal(stdev);
       stdev = stdev.cwiseSqrt();
-      if (cond) finish_ls(*ls, phi, stdev, cond, /*keep=*/true);
+      if (cond) *cond = condition_number(*ls);
     } else if (m == "rls") {
       auto rls = std::make_unique<RlsForgetting<double, P, N>>();
       check(rls->reset(ParamVec::Zero(), ParamVec::Constant(opt_.p0), opt_.rls_mu));
@@ -148,7 +148,7 @@ class IdentifyPipeline {
       phi = rls->estimate();
       rls->covariance().diagonal(stdev);
       stdev = stdev.cwiseSqrt();
-      if (cond) finish_ls(*ls, phi, stdev, cond, /*keep=*/true);
+      if (cond) *cond = condition_number(*ls);
     } else {
       throw InputError("unknown method '" + m + "' (expected ols, wls, kf or rls)");
     }
@@ -177,20 +177,20 @@ class IdentifyPipeline {
     }
   }
 
-  static void finish_ls(const StreamingLeastSquares<double, P>& ls, const ParamVec& phi, ParamVec& stdev, double* cond,
-                        bool keep = false) {
-    (void)phi;
-    if (!keep) {
-      ParamVec g;
-      if (ls.inverse_gram_diagonal(g) != UpdateStatus::ok) throw InputError("regressor rank deficient");
-      const double sigma2 = ls.residual_sum_of_squares() / std::max(1.0, static_cast<double>(ls.rows() - P));
-      stdev = (g * sigma2).cwiseSqrt();
-    }
-    if (cond) {
-      Eigen::JacobiSVD<Eigen::MatrixXd> svd(Eigen::MatrixXd(ls.r_factor()));
-      const auto& sv = svd.singularValues();
-      *cond = sv[0] / sv[sv.size() - 1];
-    }
+  // Parameter standard deviations sigma^2 diag((W^T W)^-1), sigma^2 = RSS / (rows - P), and cond(W).
+  static void ls_statistics(const StreamingLeastSquares<double, P>& ls, ParamVec& stdev, double* cond) {
+    ParamVec g;
+    if (ls.inverse_gram_diagonal(g) != UpdateStatus::ok) throw InputError("regressor rank deficient");
+    const double sigma2 = ls.residual_sum_of_squares() / std::max(1.0, static_cast<double>(ls.rows() - P));
+    stdev = (g * sigma2).cwiseSqrt();
+    if (cond) *cond = condition_number(ls);
+  }
+
+  // cond(W) = cond(R): the triangular factor has the singular values of the stacked regressor.
+  static double condition_number(const StreamingLeastSquares<double, P>& ls) {
+    Eigen::JacobiSVD<Eigen::MatrixXd> svd(Eigen::MatrixXd(ls.r_factor()));
+    const auto& sv = svd.singularValues();
+    return sv[0] / sv[sv.size() - 1];
   }
 
   const RobotDescription& robot_;

@@ -33,13 +33,18 @@ class IdentificationModel {
   static constexpr int kNumJoints = Robot::kNumJoints;
   static constexpr int kNumBase = Robot::kNumBase;
 
+  /// Whether term `t` has a column for joint j (0-based): it is in Terms and, for rotor inertia,
+  /// separately identifiable on that joint.
+  static constexpr bool has_column(unsigned t, int j) {
+    return (Terms & t) != 0u && (t != term::rotor_inertia || Robot::rotor_inertia_separate(j));
+  }
+
   /// Number of columns joint j (0-based) contributes.
   static constexpr int joint_columns(int j) {
     int count = 0;
     for (int i = 0; i < kNumTerms; ++i) {
       const unsigned t = term_bit(i);
-      if ((Terms & t) == 0u) continue;
-      if (t == term::rotor_inertia && !Robot::rotor_inertia_separate(j)) continue;
+      if (!has_column(t, j)) continue;
       ++count;
     }
     return count;
@@ -65,8 +70,7 @@ class IdentificationModel {
     for (int j = 0; j < kNumJoints; ++j) {
       for (int i = 0; i < kNumTerms; ++i) {
         const unsigned b = term_bit(i);
-        if ((Terms & b) == 0u) continue;
-        if (b == term::rotor_inertia && !Robot::rotor_inertia_separate(j)) continue;
+        if (!has_column(b, j)) continue;
         if (j == joint0 && b == t) return col;
         ++col;
       }
@@ -81,8 +85,7 @@ class IdentificationModel {
     for (int j = 0; j < kNumJoints; ++j) {
       for (int i = 0; i < kNumTerms; ++i) {
         const unsigned b = term_bit(i);
-        if ((Terms & b) == 0u) continue;
-        if (b == term::rotor_inertia && !Robot::rotor_inertia_separate(j)) continue;
+        if (!has_column(b, j)) continue;
         if (col == index) return ParamInfo{ParamKind::term, -1, b, j + 1};
         ++col;
       }
@@ -104,8 +107,7 @@ class IdentificationModel {
     for (int j = 0; j < kNumJoints; ++j) {
       for (int i = 0; i < kNumTerms; ++i) {
         const unsigned b = term_bit(i);
-        if ((Terms & b) == 0u) continue;
-        if (b == term::rotor_inertia && !Robot::rotor_inertia_separate(j)) continue;
+        if (!has_column(b, j)) continue;
         K(j, col++) = term_column(b, qd[j], qdd[j], tau_load[j]);
       }
     }
