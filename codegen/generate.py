@@ -141,16 +141,18 @@ namespace {ns} {{
 /// Allocation-free; every entry of Y is written.
 template <typename Scalar>
 inline void standard_regressor({args}, Eigen::Matrix<Scalar, {n}, {n_std}>& Y) noexcept {{
+  Y.setZero();
   using std::cos;
   using std::sin;
 {preamble(used_symbols(std_defs, [e for _, e in std_assign]), n)}
-{std_text.replace("  Y(", "  Y(", 0)}
+{std_text}
 }}
 
 /// Base regressor Y_b ({n} x {nb}) = the independent columns of Y (BaseParam order), so that
 /// tau = Y_b * phi_b with phi_b = standard_to_base(phi) (Gautier 1990). Same inputs as above.
 template <typename Scalar>
 inline void base_regressor({args}, Eigen::Matrix<Scalar, {n}, {nb}>& Yb) noexcept {{
+  Yb.setZero();
   using std::cos;
   using std::sin;
 {preamble(used_symbols(base_defs, [e for _, e in base_assign]), n)}
@@ -159,11 +161,6 @@ inline void base_regressor({args}, Eigen::Matrix<Scalar, {n}, {nb}>& Yb) noexcep
 
 }}  // namespace {ns}
 """
-    # zero entries: emit setZero before the assignments
-    regressor_hpp = regressor_hpp.replace(
-        f"Eigen::Matrix<Scalar, {n}, {n_std}>& Y) noexcept {{\n", f"Eigen::Matrix<Scalar, {n}, {n_std}>& Y) noexcept {{\n  Y.setZero();\n")
-    regressor_hpp = regressor_hpp.replace(
-        f"Eigen::Matrix<Scalar, {n}, {nb}>& Yb) noexcept {{\n", f"Eigen::Matrix<Scalar, {n}, {nb}>& Yb) noexcept {{\n  Yb.setZero();\n")
 
     # --- inverse dynamics and mass matrix
     trd, tau, _ = dynamics.inverse_dynamics(joints, gravity)

@@ -136,19 +136,13 @@ class IdentifyPipeline {
       check(kf->reset(ParamVec::Zero(), ParamVec::Constant(opt_.p0)));
       const JointVec r = sigma.cwiseAbs2();
       run_recursive(*kf, data, train, [&](auto& f, const auto& K, const auto& tau) { return f.update(K, tau, r); });
-      phi = kf->estimate();
-      kf->covariance().diagonal(stdev);
-      stdev = stdev.cwiseSqrt();
-      if (cond) *cond = condition_number(*ls);
+      recursive_result(*kf, *ls, phi, stdev, cond);
     } else if (m == "rls") {
       auto rls = std::make_unique<RlsForgetting<double, P, N>>();
       check(rls->reset(ParamVec::Zero(), ParamVec::Constant(opt_.p0), opt_.rls_mu));
       const JointVec w = sigma.cwiseInverse();
       run_recursive(*rls, data, train, [&](auto& f, const auto& K, const auto& tau) { return f.update(K, tau, w); });
-      phi = rls->estimate();
-      rls->covariance().diagonal(stdev);
-      stdev = stdev.cwiseSqrt();
-      if (cond) *cond = condition_number(*ls);
+      recursive_result(*rls, *ls, phi, stdev, cond);
     } else {
       throw InputError("unknown method '" + m + "' (expected ols, wls, kf or rls)");
     }
@@ -175,6 +169,16 @@ class IdentifyPipeline {
       tau = data.y.segment(s * N, N);
       check(update(f, K, tau));
     }
+  }
+
+  // Estimate and sqrt(diag P) of a recursive filter; cond(W) from the OLS factor of the same data.
+  template <class Filter>
+  static void recursive_result(const Filter& f, const StreamingLeastSquares<double, P>& ls, ParamVec& phi,
+                               ParamVec& stdev, double* cond) {
+    phi = f.estimate();
+    f.covariance().diagonal(stdev);
+    stdev = stdev.cwiseSqrt();
+    if (cond) *cond = condition_number(ls);
   }
 
   // Parameter standard deviations sigma^2 diag((W^T W)^-1), sigma^2 = RSS / (rows - P), and cond(W).

@@ -61,13 +61,10 @@ class KalmanFilter {
     }
     for (int j = 0; j < N; ++j) {
       h_ = K.row(j).transpose();
-      const Scalar e = tau[j] - h_.dot(phi_);
-      Scalar alpha;
-      const UpdateStatus s = cov_.update(h_, r[j], gain_, alpha);
       // Cannot fail for r > 0, finite inputs and a positive D; a failure here (overflow) would
       // leave the rows before it applied, and is reported.
+      const UpdateStatus s = cov_.assimilate(h_, tau[j], r[j], phi_);
       if (s != UpdateStatus::ok) return s;
-      phi_.noalias() += gain_ * e;
     }
     return UpdateStatus::ok;
   }
@@ -78,7 +75,7 @@ class KalmanFilter {
  private:
   UdCovariance<Scalar, P> cov_;
   ParamVector phi_ = ParamVector::Zero();
-  ParamVector h_, gain_;
+  ParamVector h_;
   Scalar gate_ = Scalar(0);
 };
 

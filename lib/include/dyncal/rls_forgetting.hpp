@@ -48,11 +48,8 @@ class RlsForgetting {
     }
     for (int j = 0; j < N; ++j) {
       h_ = K.row(j).transpose();
-      const Scalar e = tau[j] - h_.dot(phi_);
-      Scalar alpha;
-      const UpdateStatus s = cov_.update(h_, mu_ / (w[j] * w[j]), gain_, alpha);
+      const UpdateStatus s = cov_.assimilate(h_, tau[j], mu_ / (w[j] * w[j]), phi_);
       if (s != UpdateStatus::ok) return s;
-      phi_.noalias() += gain_ * e;
     }
     if (cov_.trace() < trace_max_) cov_.scale(Scalar(1) / mu_);
     return UpdateStatus::ok;
@@ -68,7 +65,7 @@ class RlsForgetting {
  private:
   UdCovariance<Scalar, P> cov_;
   ParamVector phi_ = ParamVector::Zero();
-  ParamVector h_, gain_;
+  ParamVector h_;
   Scalar mu_ = Scalar(1);
   Scalar trace_max_ = Scalar(0);
 };

@@ -75,6 +75,17 @@ class UdCovariance {
     return UpdateStatus::ok;
   }
 
+  /// Folds the scalar measurement y = h^T phi + v, var(v) = r, into the estimate `phi` and P:
+  /// phi += gain * (y - h^T phi). Errors as update(); phi and P unchanged on error.
+  UpdateStatus assimilate(const Vector& h, Scalar y, Scalar r, Vector& phi) noexcept {
+    const Scalar e = y - h.dot(phi);
+    Scalar alpha;
+    const UpdateStatus s = update(h, r, gain_, alpha);
+    if (s != UpdateStatus::ok) return s;
+    phi.noalias() += gain_ * e;
+    return UpdateStatus::ok;
+  }
+
   /// P <- P / mu (exponential forgetting, survey Eq. 23), mu in (0, 1].
   void scale(Scalar inverse_mu) noexcept { d_ *= inverse_mu; }
 
@@ -115,7 +126,7 @@ class UdCovariance {
  private:
   Eigen::Matrix<Scalar, P, P> U_;
   Vector d_;
-  Vector f_, g_, b_;
+  Vector f_, g_, b_, gain_;
 };
 
 }  // namespace dyncal
