@@ -64,11 +64,10 @@ BENCHMARK(BM_BaseRegressor);
 
 void BM_BaseRegressorWithFriction(benchmark::State& state) {
   Model::Regressor<double> K;
-  Eigen::Matrix<double, 6, Robot::kNumBase> scratch;
   const Vec zero = Vec::Zero();
   size_t i = 0;
   for (auto _ : state) {
-    Model::regressor(kStates.q[i & 63], kStates.qd[i & 63], kStates.qdd[i & 63], zero, scratch, K);
+    Model::regressor(kStates.q[i & 63], kStates.qd[i & 63], kStates.qdd[i & 63], zero, K);
     benchmark::DoNotOptimize(K.data());
     ++i;
   }
@@ -143,10 +142,9 @@ void BM_KalmanUpdate(benchmark::State& state) {
   auto kf = std::make_unique<dyncal::KalmanFilter<Scalar, P, 6>>();
   kf->reset(PV::Zero(), PV::Constant(Scalar(1e3)));
   Eigen::Matrix<Scalar, 6, P> K;
-  Eigen::Matrix<Scalar, 6, Robot::kNumBase> scratch;
   const V zero = V::Zero(), r = V::Ones();
   Model::regressor<Scalar>(kStates.q[0].cast<Scalar>(), kStates.qd[0].cast<Scalar>(), kStates.qdd[0].cast<Scalar>(),
-                           zero, scratch, K);
+                           zero, K);
   const V tau = V::Ones();
   for (auto _ : state) {
     benchmark::DoNotOptimize(kf->update(K, tau, r));
@@ -160,9 +158,8 @@ void BM_RlsUpdate(benchmark::State& state) {
   auto rls = std::make_unique<dyncal::RlsForgetting<double, P, 6>>();
   rls->reset(PV::Zero(), PV::Constant(1e3), 0.999);
   Eigen::Matrix<double, 6, P> K;
-  Eigen::Matrix<double, 6, Robot::kNumBase> scratch;
   const Vec zero = Vec::Zero();
-  Model::regressor(kStates.q[0], kStates.qd[0], kStates.qdd[0], zero, scratch, K);
+  Model::regressor(kStates.q[0], kStates.qd[0], kStates.qdd[0], zero, K);
   const Vec tau = Vec::Ones();
   for (auto _ : state) benchmark::DoNotOptimize(rls->update(K, tau));
 }
@@ -171,9 +168,8 @@ BENCHMARK(BM_RlsUpdate);
 void BM_StreamingLeastSquaresSample(benchmark::State& state) {
   auto ls = std::make_unique<dyncal::StreamingLeastSquares<double, P>>();
   Eigen::Matrix<double, 6, P> K;
-  Eigen::Matrix<double, 6, Robot::kNumBase> scratch;
   const Vec zero = Vec::Zero();
-  Model::regressor(kStates.q[0], kStates.qd[0], kStates.qdd[0], zero, scratch, K);
+  Model::regressor(kStates.q[0], kStates.qd[0], kStates.qdd[0], zero, K);
   const Vec tau = Vec::Ones();
   for (auto _ : state) benchmark::DoNotOptimize(ls->update(K, tau));
 }

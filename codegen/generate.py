@@ -20,7 +20,7 @@ from dyncal_codegen.description import STANDARD_NAMES  # noqa: E402
 from dyncal_codegen.emit_cpp import CppPrinter  # noqa: E402
 from dyncal_codegen.tracer import live_program  # noqa: E402
 
-GENERATOR_VERSION = "1"
+GENERATOR_VERSION = "2"
 
 
 def input_digest(robot_dir, desc):
@@ -44,7 +44,7 @@ def banner(name, inputs, what, counts):
         f"// Contents: {what}",
     ]
     for fn, (m, a) in counts.items():
-        lines.append(f"// Operation count {fn}: {m} multiplications, {a} additions (plus sin/cos of q)")
+        lines.append(f"// Operation count {fn}: {m} multiplications, {a} additions (plus dyncal::sin_cos of q)")
     lines.append("// Regenerate: cmake --build <build> --target regenerate (or scripts/codegen).")
     return "\n".join(lines) + "\n"
 
@@ -52,10 +52,13 @@ def banner(name, inputs, what, counts):
 def preamble(used, n, with_q=True, with_qd=True, with_qdd=True, indent="  "):
     out = []
     for i in range(n):
-        if sp.Symbol(f"c{i + 1}") in used:
-            out.append(f"{indent}const Scalar c{i + 1} = cos(q[{i}]);")
-        if sp.Symbol(f"s{i + 1}") in used:
-            out.append(f"{indent}const Scalar s{i + 1} = sin(q[{i}]);")
+        has_c, has_s = sp.Symbol(f"c{i + 1}") in used, sp.Symbol(f"s{i + 1}") in used
+        if has_c or has_s:
+            out.append(f"{indent}const SinCos<Scalar> sc{i + 1} = sin_cos(q[{i}]);")
+        if has_c:
+            out.append(f"{indent}const Scalar c{i + 1} = sc{i + 1}.cos;")
+        if has_s:
+            out.append(f"{indent}const Scalar s{i + 1} = sc{i + 1}.sin;")
     for i in range(n):
         if sp.Symbol(f"qd{i + 1}") in used:
             out.append(f"{indent}const Scalar qd{i + 1} = qd[{i}];")
@@ -76,12 +79,25 @@ def used_symbols(defs, outputs):
     return used
 
 
-def body(defs, assignments):
-    """Straight-line body: the live program, then `target = expr;` lines. Returns (text, muls, adds)."""
+def body(defs, assignments, zeros=()):
+    """Straight-line body: the live program with each `target = expr;` placed right after the last
+    definition it reads (short live ranges: fewer register spills), then `target = 0;` for the
+    structurally zero entries (cheaper than clearing the whole output first). Returns (text, muls, adds)."""
     printer = CppPrinter()
-    lines = [printer.program(defs)]
+    position = {s: i for i, (s, _) in enumerate(defs)}
+    after = [[] for _ in range(len(defs) + 1)]
     for target, e in assignments:
-        lines.append(f"  {target} = {printer.expr(sp.sympify(e))};")
+        e = sp.sympify(e)
+        last = max((position[x] for x in e.free_symbols if x in position), default=-1)
+        after[last + 1].append((target, e))
+    lines = []
+    for i in range(len(defs) + 1):
+        if i > 0:
+            lines.append(printer.program([defs[i - 1]]))
+        for target, e in after[i]:
+            lines.append(f"  {target} = {printer.expr(e)};")
+    for target in zeros:
+        lines.append(f"  {target} = Scalar(0);")
     return "\n".join(l for l in lines if l), printer.muls, printer.adds
 
 
@@ -119,18 +135,20 @@ def main():
 
     std_assign = [(f"Y({i}, {k})", Y[i][k]) for i in range(n) for k in range(n_std) if Y[i][k] != 0]
     std_defs = live_program(tr.defs, [e for _, e in std_assign])
-    std_text, std_m, std_a = body(std_defs, std_assign)
+    std_zeros = [f"Y({i}, {k})" for i in range(n) for k in range(n_std) if Y[i][k] == 0]
+    std_text, std_m, std_a = body(std_defs, std_assign, std_zeros)
     base_assign = [(f"Yb({i}, {b})", Y[i][k]) for i in range(n) for b, k in enumerate(bp.independent) if Y[i][k] != 0]
     base_defs = live_program(tr.defs, [e for _, e in base_assign])
-    base_text, base_m, base_a = body(base_defs, base_assign)
+    base_zeros = [f"Yb({i}, {b})" for i in range(n) for b, k in enumerate(bp.independent) if Y[i][k] == 0]
+    base_text, base_m, base_a = body(base_defs, base_assign, base_zeros)
 
     regressor_hpp = banner(name, inputs, "standard regressor Y and base regressor Y_b",
                            {"standard_regressor": (std_m, std_a), "base_regressor": (base_m, base_a)})
     regressor_hpp += f"""#pragma once
 
 #include <Eigen/Core>
-#include <cmath>
 
+#include "dyncal/sin_cos.hpp"
 #include "parameters.hpp"
 
 namespace {ns} {{
@@ -141,20 +159,16 @@ namespace {ns} {{
 /// Allocation-free; every entry of Y is written.
 template <typename Scalar>
 inline void standard_regressor({args}, Eigen::Matrix<Scalar, {n}, {n_std}>& Y) noexcept {{
-  Y.setZero();
-  using std::cos;
-  using std::sin;
 {preamble(used_symbols(std_defs, [e for _, e in std_assign]), n)}
 {std_text}
 }}
 
 /// Base regressor Y_b ({n} x {nb}) = the independent columns of Y (BaseParam order), so that
 /// tau = Y_b * phi_b with phi_b = standard_to_base(phi) (Gautier 1990). Same inputs as above.
-template <typename Scalar>
-inline void base_regressor({args}, Eigen::Matrix<Scalar, {n}, {nb}>& Yb) noexcept {{
-  Yb.setZero();
-  using std::cos;
-  using std::sin;
+/// Writes columns 0..{nb - 1} of Yb; further columns (Cols > {nb}, e.g. friction terms) are untouched.
+template <typename Scalar, int Cols>
+inline void base_regressor({args}, Eigen::Matrix<Scalar, {n}, Cols>& Yb) noexcept {{
+  static_assert(Cols >= {nb}, "Yb needs at least {nb} columns");
 {preamble(used_symbols(base_defs, [e for _, e in base_assign]), n)}
 {base_text}
 }}
@@ -180,8 +194,8 @@ inline void base_regressor({args}, Eigen::Matrix<Scalar, {n}, {nb}>& Yb) noexcep
     dynamics_hpp += f"""#pragma once
 
 #include <Eigen/Core>
-#include <cmath>
 
+#include "dyncal/sin_cos.hpp"
 #include "parameters.hpp"
 
 namespace {ns} {{
@@ -190,8 +204,6 @@ namespace {ns} {{
 /// qdd [rad/s^2] and the standard parameters phi ({n_std}, StandardParam order). Gravity included.
 template <typename Scalar>
 inline void inverse_dynamics({args}, const {pvec}& phi, {vec}& tau) noexcept {{
-  using std::cos;
-  using std::sin;
 {preamble(used_symbols(id_defs, tau), n)}
 {id_text}
 }}
@@ -200,8 +212,6 @@ inline void inverse_dynamics({args}, const {pvec}& phi, {vec}& tau) noexcept {{
 /// tau = M(q) qdd + c(q, qd) + g(q). Only the lower triangle is derived; the upper one is mirrored.
 template <typename Scalar>
 inline void mass_matrix(const {vec}& q, const {pvec}& phi, Eigen::Matrix<Scalar, {n}, {n}>& M) noexcept {{
-  using std::cos;
-  using std::sin;
 {preamble(used_symbols(mm_defs, [e for _, e in mm_assign]), n)}
 {mm_text}
 {mirror}
@@ -349,10 +359,10 @@ struct Robot {{
                                  Eigen::Matrix<Scalar, kNumJoints, kNumStandard>& Y) noexcept {{
     {ns}::standard_regressor(q, qd, qdd, Y);
   }}
-  template <typename Scalar>
+  /// Writes Y_b into the first kNumBase columns of Yb (Cols >= kNumBase; the rest is untouched).
+  template <typename Scalar, int Cols>
   static void base_regressor(const JointVector<Scalar>& q, const JointVector<Scalar>& qd,
-                             const JointVector<Scalar>& qdd,
-                             Eigen::Matrix<Scalar, kNumJoints, kNumBase>& Yb) noexcept {{
+                             const JointVector<Scalar>& qdd, Eigen::Matrix<Scalar, kNumJoints, Cols>& Yb) noexcept {{
     {ns}::base_regressor(q, qd, qdd, Yb);
   }}
   template <typename Scalar>

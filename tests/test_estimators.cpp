@@ -31,12 +31,11 @@ Samples make_samples(int count, double dt, const ParamVec& phi, double noise = 0
   Samples s;
   std::mt19937 rng(seed);
   std::normal_distribution<double> gauss(0.0, 1.0);
-  Eigen::Matrix<double, N, Er20::kNumBase> scratch;
   JointVec q, qd, qdd;
   for (int i = 0; i < count; ++i) {
     dyncal::test::fourier_state(i * dt, q, qd, qdd);
     Eigen::Matrix<double, N, P> K;
-    Model::regressor(q, qd, qdd, kZero, scratch, K);
+    Model::regressor(q, qd, qdd, kZero, K);
     JointVec tau = K * phi;
     for (int j = 0; j < N; ++j) tau[j] += noise * gauss(rng);
     s.K.push_back(K);
@@ -146,7 +145,6 @@ double tracking_error(bool use_rls, bool second_order) {
   auto rls = std::make_unique<dyncal::RlsForgetting<double, P, N>>();
   kf->reset(ParamVec::Zero(), ParamVec::Constant(1e6));
   rls->reset(ParamVec::Zero(), ParamVec::Constant(1e6), 0.995);
-  Eigen::Matrix<double, N, Er20::kNumBase> scratch;
   JointVec q, qd, qdd;
   double se = 0.0;
   int n = 0;
@@ -156,7 +154,7 @@ double tracking_error(bool use_rls, bool second_order) {
     phi[beta3] = truth[beta3] * (second_order ? 1.0 + 0.5 * x * x : 1.0 + 0.5 * x);
     dyncal::test::fourier_state(i * 0.01, q, qd, qdd);
     Eigen::Matrix<double, N, P> K;
-    Model::regressor(q, qd, qdd, kZero, scratch, K);
+    Model::regressor(q, qd, qdd, kZero, K);
     const JointVec tau = K * phi;
     const UpdateStatus st = use_rls ? rls->update(K, tau) : kf->update(K, tau, JointVec::Ones());
     EXPECT_EQ(st, UpdateStatus::ok);

@@ -62,7 +62,6 @@ struct Workspace {
   dyncal::StreamingLeastSquares<Scalar, P> ls;
   dyncal::KalmanFilter<Scalar, P, 6> kf;
   dyncal::RlsForgetting<Scalar, P, 6> rls;
-  Eigen::Matrix<Scalar, 6, Er20::kNumBase> scratch;
   Eigen::Matrix<Scalar, 6, P> K;
   Eigen::Matrix<Scalar, 6, Er20::kNumStandard> Y;
   Eigen::Matrix<Scalar, Er20::kNumStandard, 1> phi_std;
@@ -84,7 +83,7 @@ void run_updaters(Workspace<Scalar>& w) {
     dyncal::test::fourier_state(0.01 * i, q_, qd_, qdd_);
     const V q = q_.cast<Scalar>(), qd = qd_.cast<Scalar>(), qdd = qdd_.cast<Scalar>();
     const V zero = V::Zero();
-    Model::regressor(q, qd, qdd, zero, w.scratch, w.K);
+    Model::regressor(q, qd, qdd, zero, w.K);
     Er20::standard_regressor(q, qd, qdd, w.Y);
     Er20::mass_matrix(q, w.phi_std, w.M);
     V tau;

@@ -61,11 +61,10 @@ class IdentifyPipeline {
     // Regressor columns over time: column (j * P + c) holds K(j, c) at every sample.
     Eigen::MatrixXd Kt(S, N * P);
     typename Model::template Regressor<double> K;
-    Eigen::Matrix<double, N, Robot::kNumBase> scratch;
     const JointVec zero = JointVec::Zero();
     for (Eigen::Index s = 0; s < S; ++s) {
       Model::regressor(JointVec(q.row(s).transpose()), JointVec(qd.row(s).transpose()),
-                       JointVec(qdd.row(s).transpose()), zero, scratch, K);
+                       JointVec(qdd.row(s).transpose()), zero, K);
       for (int j = 0; j < N; ++j) Kt.row(s).segment(j * P, P) = K.row(j);
     }
     filter.filtfilt(Kt);

@@ -1,15 +1,15 @@
 // GENERATED FILE - DO NOT EDIT.
-// Generator: codegen/generate.py (dyncal codegen 1, SymPy 1.11.1)
+// Generator: codegen/generate.py (dyncal codegen 2, SymPy 1.11.1)
 // Robot: er20; inputs: robots/er20/robot.json (sha256 2ed936baf54754ce)
 // Contents: inverse dynamics tau(q, qd, qdd, phi) and mass matrix M(q, phi)
-// Operation count inverse_dynamics: 372 multiplications, 309 additions (plus sin/cos of q)
-// Operation count mass_matrix: 401 multiplications, 312 additions (plus sin/cos of q)
+// Operation count inverse_dynamics: 372 multiplications, 309 additions (plus dyncal::sin_cos of q)
+// Operation count mass_matrix: 401 multiplications, 312 additions (plus dyncal::sin_cos of q)
 // Regenerate: cmake --build <build> --target regenerate (or scripts/codegen).
 #pragma once
 
 #include <Eigen/Core>
-#include <cmath>
 
+#include "dyncal/sin_cos.hpp"
 #include "parameters.hpp"
 
 namespace dyncal::generated::er20 {
@@ -18,18 +18,21 @@ namespace dyncal::generated::er20 {
 /// qdd [rad/s^2] and the standard parameters phi (60, StandardParam order). Gravity included.
 template <typename Scalar>
 inline void inverse_dynamics(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matrix<Scalar, 6, 1>& qd, const Eigen::Matrix<Scalar, 6, 1>& qdd, const Eigen::Matrix<Scalar, 60, 1>& phi, Eigen::Matrix<Scalar, 6, 1>& tau) noexcept {
-  using std::cos;
-  using std::sin;
-  const Scalar c2 = cos(q[1]);
-  const Scalar s2 = sin(q[1]);
-  const Scalar c3 = cos(q[2]);
-  const Scalar s3 = sin(q[2]);
-  const Scalar c4 = cos(q[3]);
-  const Scalar s4 = sin(q[3]);
-  const Scalar c5 = cos(q[4]);
-  const Scalar s5 = sin(q[4]);
-  const Scalar c6 = cos(q[5]);
-  const Scalar s6 = sin(q[5]);
+  const SinCos<Scalar> sc2 = sin_cos(q[1]);
+  const Scalar c2 = sc2.cos;
+  const Scalar s2 = sc2.sin;
+  const SinCos<Scalar> sc3 = sin_cos(q[2]);
+  const Scalar c3 = sc3.cos;
+  const Scalar s3 = sc3.sin;
+  const SinCos<Scalar> sc4 = sin_cos(q[3]);
+  const Scalar c4 = sc4.cos;
+  const Scalar s4 = sc4.sin;
+  const SinCos<Scalar> sc5 = sin_cos(q[4]);
+  const Scalar c5 = sc5.cos;
+  const Scalar s5 = sc5.sin;
+  const SinCos<Scalar> sc6 = sin_cos(q[5]);
+  const Scalar c6 = sc6.cos;
+  const Scalar s6 = sc6.sin;
   const Scalar qd1 = qd[0];
   const Scalar qdd1 = qdd[0];
   const Scalar qd2 = qd[1];
@@ -281,6 +284,7 @@ inline void inverse_dynamics(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::
   const Scalar x195 = phi50*x85 + phi51*x181 + phi52*x184 - phi53*x179 + phi54*x186 + phi55*x179 + phi57*x65 - phi58*x77;
   const Scalar x196 = phi50*x177 + phi51*x182 + phi52*x183 + phi53*x86 + phi54*x187 - phi55*x177 - phi56*x65 + phi58*x76;
   const Scalar x197 = phi50*x178 + phi51*x180 + phi52*x185 - phi53*x178 + phi54*x188 + phi55*x87 + phi56*x77 - phi57*x76;
+  tau[5] = x197;
   const Scalar x198 = c6*x192 - s6*x193;
   const Scalar x199 = -c6*x193 - s6*x192;
   const Scalar x200 = c6*x195 - s6*x196;
@@ -288,6 +292,7 @@ inline void inverse_dynamics(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::
   const Scalar x202 = x174 + x200;
   const Scalar x203 = x175 + x197;
   const Scalar x204 = x176 + x201;
+  tau[4] = x204;
   const Scalar x205 = x171 + x198;
   const Scalar x206 = x172 + x194;
   const Scalar x207 = x173 + x199;
@@ -298,6 +303,7 @@ inline void inverse_dynamics(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::
   const Scalar x212 = x153 + x210;
   const Scalar x213 = x154 - x204;
   const Scalar x214 = x155 + x211;
+  tau[3] = x214;
   const Scalar x215 = x150 + x208;
   const Scalar x216 = x151 - x207;
   const Scalar x217 = x152 + x209;
@@ -314,6 +320,7 @@ inline void inverse_dynamics(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::
   const Scalar x228 = x132 + x225;
   const Scalar x229 = x133 + x226;
   const Scalar x230 = x134 + x227;
+  tau[2] = x230;
   const Scalar x231 = x129 + x218;
   const Scalar x232 = x130 + x217;
   const Scalar x233 = x131 + x219;
@@ -327,35 +334,34 @@ inline void inverse_dynamics(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::
   const Scalar x242 = x111 + x236;
   const Scalar x243 = x112 + x240;
   const Scalar x244 = x113 + x241;
+  tau[1] = x244;
   const Scalar x247 = x110 + x233;
   const Scalar x251 = c2*x242 - s2*x243;
   const Scalar x253 = Scalar(0.17)*x247;
   const Scalar x255 = x251 + x253;
   const Scalar x258 = x255 + x94;
   tau[0] = x258;
-  tau[1] = x244;
-  tau[2] = x230;
-  tau[3] = x214;
-  tau[4] = x204;
-  tau[5] = x197;
 }
 
 /// Joint-space mass matrix M(q) [kg m^2] (6 x 6, symmetric) for standard parameters phi:
 /// tau = M(q) qdd + c(q, qd) + g(q). Only the lower triangle is derived; the upper one is mirrored.
 template <typename Scalar>
 inline void mass_matrix(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matrix<Scalar, 60, 1>& phi, Eigen::Matrix<Scalar, 6, 6>& M) noexcept {
-  using std::cos;
-  using std::sin;
-  const Scalar c2 = cos(q[1]);
-  const Scalar s2 = sin(q[1]);
-  const Scalar c3 = cos(q[2]);
-  const Scalar s3 = sin(q[2]);
-  const Scalar c4 = cos(q[3]);
-  const Scalar s4 = sin(q[3]);
-  const Scalar c5 = cos(q[4]);
-  const Scalar s5 = sin(q[4]);
-  const Scalar c6 = cos(q[5]);
-  const Scalar s6 = sin(q[5]);
+  const SinCos<Scalar> sc2 = sin_cos(q[1]);
+  const Scalar c2 = sc2.cos;
+  const Scalar s2 = sc2.sin;
+  const SinCos<Scalar> sc3 = sin_cos(q[2]);
+  const Scalar c3 = sc3.cos;
+  const Scalar s3 = sc3.sin;
+  const SinCos<Scalar> sc4 = sin_cos(q[3]);
+  const Scalar c4 = sc4.cos;
+  const Scalar s4 = sc4.sin;
+  const SinCos<Scalar> sc5 = sin_cos(q[4]);
+  const Scalar c5 = sc5.cos;
+  const Scalar s5 = sc5.sin;
+  const SinCos<Scalar> sc6 = sin_cos(q[5]);
+  const Scalar c6 = sc6.cos;
+  const Scalar s6 = sc6.sin;
   const Scalar phi5 = phi[5];
   const Scalar phi10 = phi[10];
   const Scalar phi11 = phi[11];
@@ -406,6 +412,7 @@ inline void mass_matrix(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matri
   const Scalar phi57 = phi[57];
   const Scalar phi58 = phi[58];
   const Scalar phi59 = phi[59];
+  M(5, 5) = phi55;
   const Scalar x0 = Scalar(0.78)*s2;
   const Scalar x1 = x0 + Scalar(0.17);
   const Scalar x2 = c2*c3 - s2*s3;
@@ -452,6 +459,7 @@ inline void mass_matrix(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matri
   const Scalar x45 = phi50*x16 + phi51*x17 + phi52*x13 + phi57*x11 - phi58*x15;
   const Scalar x46 = phi51*x16 + phi53*x17 + phi54*x13 - phi56*x11 + phi58*x14;
   const Scalar x47 = phi52*x16 + phi54*x17 + phi55*x13 + phi56*x15 - phi57*x14;
+  M(5, 0) = x47;
   const Scalar x48 = c6*x42 - s6*x43;
   const Scalar x49 = -c6*x43 - s6*x42;
   const Scalar x50 = c6*x45 - s6*x46;
@@ -459,6 +467,7 @@ inline void mass_matrix(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matri
   const Scalar x52 = x39 + x50;
   const Scalar x53 = x40 + x47;
   const Scalar x54 = x41 + x51;
+  M(4, 0) = x54;
   const Scalar x55 = x36 + x48;
   const Scalar x56 = x37 + x44;
   const Scalar x57 = x38 + x49;
@@ -469,6 +478,7 @@ inline void mass_matrix(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matri
   const Scalar x62 = x33 + x60;
   const Scalar x63 = x34 - x54;
   const Scalar x64 = x35 + x61;
+  M(3, 0) = x64;
   const Scalar x65 = x30 + x58;
   const Scalar x66 = x31 - x57;
   const Scalar x67 = x32 + x59;
@@ -485,6 +495,7 @@ inline void mass_matrix(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matri
   const Scalar x78 = x27 + x75;
   const Scalar x79 = x28 + x76;
   const Scalar x80 = x29 + x77;
+  M(2, 0) = x80;
   const Scalar x81 = x24 + x68;
   const Scalar x82 = x25 + x67;
   const Scalar x83 = x26 + x69;
@@ -498,11 +509,13 @@ inline void mass_matrix(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matri
   const Scalar x92 = x21 + x86;
   const Scalar x93 = x22 + x90;
   const Scalar x94 = x23 + x91;
+  M(1, 0) = x94;
   const Scalar x97 = x20 + x83;
   const Scalar x101 = c2*x92 - s2*x93;
   const Scalar x103 = Scalar(0.17)*x97;
   const Scalar x105 = x101 + x103;
   const Scalar x108 = phi5 + x105;
+  M(0, 0) = x108;
   const Scalar x111 = Scalar(0.78)*s3;
   const Scalar x112 = Scalar(0.78)*c3;
   const Scalar x113 = x111 - Scalar(0.76);
@@ -538,6 +551,7 @@ inline void mass_matrix(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matri
   const Scalar x145 = phi50*x123 + phi51*x124 + phi52*x120 + phi57*x118 - phi58*x122;
   const Scalar x146 = phi51*x123 + phi53*x124 + phi54*x120 - phi56*x118 + phi58*x121;
   const Scalar x147 = phi52*x123 + phi54*x124 + phi55*x120 + phi56*x122 - phi57*x121;
+  M(5, 1) = x147;
   const Scalar x148 = c6*x142 - s6*x143;
   const Scalar x149 = -c6*x143 - s6*x142;
   const Scalar x150 = c6*x145 - s6*x146;
@@ -545,6 +559,7 @@ inline void mass_matrix(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matri
   const Scalar x152 = x139 + x150;
   const Scalar x153 = x140 + x147;
   const Scalar x154 = x141 + x151;
+  M(4, 1) = x154;
   const Scalar x155 = x136 + x148;
   const Scalar x156 = x137 + x144;
   const Scalar x157 = x138 + x149;
@@ -555,6 +570,7 @@ inline void mass_matrix(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matri
   const Scalar x162 = x133 + x160;
   const Scalar x163 = x134 - x154;
   const Scalar x164 = x135 + x161;
+  M(3, 1) = x164;
   const Scalar x165 = x130 + x158;
   const Scalar x166 = x131 - x157;
   const Scalar x167 = x132 + x159;
@@ -563,12 +579,14 @@ inline void mass_matrix(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matri
   const Scalar x174 = Scalar(0.14)*x167 - Scalar(0.76)*x168;
   const Scalar x177 = x171 + x174;
   const Scalar x180 = x129 + x177;
+  M(2, 1) = x180;
   const Scalar x181 = x125 + x168;
   const Scalar x182 = x126 + x167;
   const Scalar x184 = c3*x182 + s3*x181;
   const Scalar x188 = Scalar(0.78)*x184;
   const Scalar x190 = x180 + x188;
   const Scalar x193 = phi15 + x190;
+  M(1, 1) = x193;
   const Scalar x204 = -Scalar(0.76)*c4;
   const Scalar x205 = Scalar(0.76)*s4;
   const Scalar x206 = c5*x204 + Scalar(0.14)*s5;
@@ -593,6 +611,7 @@ inline void mass_matrix(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matri
   const Scalar x225 = phi50*x123 + phi51*x124 + phi52*x120 + phi57*x207 - phi58*x209;
   const Scalar x226 = phi51*x123 + phi53*x124 + phi54*x120 - phi56*x207 + phi58*x208;
   const Scalar x227 = phi52*x123 + phi54*x124 + phi55*x120 + phi56*x209 - phi57*x208;
+  M(5, 2) = x227;
   const Scalar x228 = c6*x222 - s6*x223;
   const Scalar x229 = -c6*x223 - s6*x222;
   const Scalar x230 = c6*x225 - s6*x226;
@@ -600,6 +619,7 @@ inline void mass_matrix(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matri
   const Scalar x232 = x219 + x230;
   const Scalar x233 = x220 + x227;
   const Scalar x234 = x221 + x231;
+  M(4, 2) = x234;
   const Scalar x235 = x216 + x228;
   const Scalar x236 = x217 + x224;
   const Scalar x237 = x218 + x229;
@@ -610,6 +630,7 @@ inline void mass_matrix(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matri
   const Scalar x242 = x213 + x240;
   const Scalar x243 = x214 - x234;
   const Scalar x244 = x215 + x241;
+  M(3, 2) = x244;
   const Scalar x245 = x210 + x238;
   const Scalar x246 = x211 - x237;
   const Scalar x247 = x212 + x239;
@@ -618,6 +639,7 @@ inline void mass_matrix(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matri
   const Scalar x254 = Scalar(0.14)*x247 - Scalar(0.76)*x248;
   const Scalar x257 = x251 + x254;
   const Scalar x260 = phi25 + x257;
+  M(2, 2) = x260;
   const Scalar x279 = c6*s5;
   const Scalar x280 = -s5*s6;
   const Scalar x284 = c5*phi41 + phi40*s5;
@@ -626,39 +648,23 @@ inline void mass_matrix(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matri
   const Scalar x290 = c5*phi52 + phi50*x279 + phi51*x280;
   const Scalar x291 = c5*phi54 + phi51*x279 + phi53*x280;
   const Scalar x292 = c5*phi55 + phi52*x279 + phi54*x280;
+  M(5, 3) = x292;
   const Scalar x295 = c6*x290 - s6*x291;
   const Scalar x296 = -c6*x291 - s6*x290;
   const Scalar x297 = x284 + x295;
   const Scalar x298 = x285 + x292;
   const Scalar x299 = x286 + x296;
+  M(4, 3) = x299;
   const Scalar x306 = c5*x298 + s5*x297;
   const Scalar x309 = phi35 + x306;
+  M(3, 3) = x309;
   const Scalar x341 = -c6*phi51 - phi50*s6;
   const Scalar x342 = -c6*phi53 - phi51*s6;
   const Scalar x343 = -c6*phi54 - phi52*s6;
+  M(5, 4) = x343;
   const Scalar x347 = -c6*x342 - s6*x341;
   const Scalar x350 = phi45 + x347;
-  M(0, 0) = x108;
-  M(1, 0) = x94;
-  M(2, 0) = x80;
-  M(3, 0) = x64;
-  M(4, 0) = x54;
-  M(5, 0) = x47;
-  M(1, 1) = x193;
-  M(2, 1) = x180;
-  M(3, 1) = x164;
-  M(4, 1) = x154;
-  M(5, 1) = x147;
-  M(2, 2) = x260;
-  M(3, 2) = x244;
-  M(4, 2) = x234;
-  M(5, 2) = x227;
-  M(3, 3) = x309;
-  M(4, 3) = x299;
-  M(5, 3) = x292;
   M(4, 4) = x350;
-  M(5, 4) = x343;
-  M(5, 5) = phi55;
   M(0, 1) = M(1, 0);
   M(0, 2) = M(2, 0);
   M(0, 3) = M(3, 0);

@@ -1,5 +1,5 @@
 // GENERATED FILE - DO NOT EDIT.
-// Generator: codegen/generate.py (dyncal codegen 1, SymPy 1.11.1)
+// Generator: codegen/generate.py (dyncal codegen 2, SymPy 1.11.1)
 // Robot: er20; inputs: robots/er20/robot.json (sha256 2ed936baf54754ce)
 // Contents: parameter index names, standard->base map, kinematic data
 // Regenerate: cmake --build <build> --target regenerate (or scripts/codegen).

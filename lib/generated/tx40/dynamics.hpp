@@ -1,15 +1,15 @@
 // GENERATED FILE - DO NOT EDIT.
-// Generator: codegen/generate.py (dyncal codegen 1, SymPy 1.11.1)
+// Generator: codegen/generate.py (dyncal codegen 2, SymPy 1.11.1)
 // Robot: tx40; inputs: robots/tx40/robot.json (sha256 14380c70690bae49), robots/tx40/tx40.urdf (sha256 3d00cbd46279c915)
 // Contents: inverse dynamics tau(q, qd, qdd, phi) and mass matrix M(q, phi)
-// Operation count inverse_dynamics: 360 multiplications, 299 additions (plus sin/cos of q)
-// Operation count mass_matrix: 404 multiplications, 309 additions (plus sin/cos of q)
+// Operation count inverse_dynamics: 360 multiplications, 299 additions (plus dyncal::sin_cos of q)
+// Operation count mass_matrix: 404 multiplications, 309 additions (plus dyncal::sin_cos of q)
 // Regenerate: cmake --build <build> --target regenerate (or scripts/codegen).
 #pragma once
 
 #include <Eigen/Core>
-#include <cmath>
 
+#include "dyncal/sin_cos.hpp"
 #include "parameters.hpp"
 
 namespace dyncal::generated::tx40 {
@@ -18,18 +18,21 @@ namespace dyncal::generated::tx40 {
 /// qdd [rad/s^2] and the standard parameters phi (60, StandardParam order). Gravity included.
 template <typename Scalar>
 inline void inverse_dynamics(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matrix<Scalar, 6, 1>& qd, const Eigen::Matrix<Scalar, 6, 1>& qdd, const Eigen::Matrix<Scalar, 60, 1>& phi, Eigen::Matrix<Scalar, 6, 1>& tau) noexcept {
-  using std::cos;
-  using std::sin;
-  const Scalar c2 = cos(q[1]);
-  const Scalar s2 = sin(q[1]);
-  const Scalar c3 = cos(q[2]);
-  const Scalar s3 = sin(q[2]);
-  const Scalar c4 = cos(q[3]);
-  const Scalar s4 = sin(q[3]);
-  const Scalar c5 = cos(q[4]);
-  const Scalar s5 = sin(q[4]);
-  const Scalar c6 = cos(q[5]);
-  const Scalar s6 = sin(q[5]);
+  const SinCos<Scalar> sc2 = sin_cos(q[1]);
+  const Scalar c2 = sc2.cos;
+  const Scalar s2 = sc2.sin;
+  const SinCos<Scalar> sc3 = sin_cos(q[2]);
+  const Scalar c3 = sc3.cos;
+  const Scalar s3 = sc3.sin;
+  const SinCos<Scalar> sc4 = sin_cos(q[3]);
+  const Scalar c4 = sc4.cos;
+  const Scalar s4 = sc4.sin;
+  const SinCos<Scalar> sc5 = sin_cos(q[4]);
+  const Scalar c5 = sc5.cos;
+  const Scalar s5 = sc5.sin;
+  const SinCos<Scalar> sc6 = sin_cos(q[5]);
+  const Scalar c6 = sc6.cos;
+  const Scalar s6 = sc6.sin;
   const Scalar qd1 = qd[0];
   const Scalar qdd1 = qdd[0];
   const Scalar qd2 = qd[1];
@@ -274,6 +277,7 @@ inline void inverse_dynamics(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::
   const Scalar x191 = phi50*x81 + phi51*x177 + phi52*x180 - phi53*x175 + phi54*x182 + phi55*x175 - phi57*x61 - phi58*x73;
   const Scalar x192 = phi50*x173 + phi51*x178 + phi52*x179 + phi53*x82 + phi54*x183 - phi55*x173 + phi56*x61 + phi58*x72;
   const Scalar x193 = phi50*x174 + phi51*x176 + phi52*x181 - phi53*x174 + phi54*x184 + phi55*x83 + phi56*x73 - phi57*x72;
+  tau[5] = x193;
   const Scalar x194 = -c6*x188 + s6*x189;
   const Scalar x195 = -c6*x189 - s6*x188;
   const Scalar x196 = -c6*x191 + s6*x192;
@@ -281,6 +285,7 @@ inline void inverse_dynamics(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::
   const Scalar x198 = x170 + x196;
   const Scalar x199 = x171 - x193;
   const Scalar x200 = x172 + x197;
+  tau[4] = x200;
   const Scalar x201 = x167 + x194;
   const Scalar x202 = x168 - x190;
   const Scalar x203 = x169 + x195;
@@ -291,6 +296,7 @@ inline void inverse_dynamics(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::
   const Scalar x208 = x149 + x206;
   const Scalar x209 = x150 + x200;
   const Scalar x210 = x151 + x207;
+  tau[3] = x210;
   const Scalar x211 = x146 + x204;
   const Scalar x212 = x147 + x203;
   const Scalar x213 = x148 + x205;
@@ -305,6 +311,7 @@ inline void inverse_dynamics(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::
   const Scalar x222 = x128 + x220;
   const Scalar x223 = x129 - x210;
   const Scalar x224 = x130 + x221;
+  tau[2] = x224;
   const Scalar x225 = x125 + x214;
   const Scalar x226 = x126 - x213;
   const Scalar x227 = x127 + x215;
@@ -321,32 +328,31 @@ inline void inverse_dynamics(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::
   const Scalar x238 = x107 + x235;
   const Scalar x239 = x108 + x236;
   const Scalar x240 = x109 + x237;
+  tau[1] = x240;
   const Scalar x247 = -c2*x239 - s2*x238;
   const Scalar x250 = x247 + x90;
   tau[0] = x250;
-  tau[1] = x240;
-  tau[2] = x224;
-  tau[3] = x210;
-  tau[4] = x200;
-  tau[5] = x193;
 }
 
 /// Joint-space mass matrix M(q) [kg m^2] (6 x 6, symmetric) for standard parameters phi:
 /// tau = M(q) qdd + c(q, qd) + g(q). Only the lower triangle is derived; the upper one is mirrored.
 template <typename Scalar>
 inline void mass_matrix(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matrix<Scalar, 60, 1>& phi, Eigen::Matrix<Scalar, 6, 6>& M) noexcept {
-  using std::cos;
-  using std::sin;
-  const Scalar c2 = cos(q[1]);
-  const Scalar s2 = sin(q[1]);
-  const Scalar c3 = cos(q[2]);
-  const Scalar s3 = sin(q[2]);
-  const Scalar c4 = cos(q[3]);
-  const Scalar s4 = sin(q[3]);
-  const Scalar c5 = cos(q[4]);
-  const Scalar s5 = sin(q[4]);
-  const Scalar c6 = cos(q[5]);
-  const Scalar s6 = sin(q[5]);
+  const SinCos<Scalar> sc2 = sin_cos(q[1]);
+  const Scalar c2 = sc2.cos;
+  const Scalar s2 = sc2.sin;
+  const SinCos<Scalar> sc3 = sin_cos(q[2]);
+  const Scalar c3 = sc3.cos;
+  const Scalar s3 = sc3.sin;
+  const SinCos<Scalar> sc4 = sin_cos(q[3]);
+  const Scalar c4 = sc4.cos;
+  const Scalar s4 = sc4.sin;
+  const SinCos<Scalar> sc5 = sin_cos(q[4]);
+  const Scalar c5 = sc5.cos;
+  const Scalar s5 = sc5.sin;
+  const SinCos<Scalar> sc6 = sin_cos(q[5]);
+  const Scalar c6 = sc6.cos;
+  const Scalar s6 = sc6.sin;
   const Scalar phi5 = phi[5];
   const Scalar phi10 = phi[10];
   const Scalar phi11 = phi[11];
@@ -394,6 +400,7 @@ inline void mass_matrix(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matri
   const Scalar phi57 = phi[57];
   const Scalar phi58 = phi[58];
   const Scalar phi59 = phi[59];
+  M(5, 5) = phi55;
   const Scalar x0 = -Scalar(0.035)*c2;
   const Scalar x1 = Scalar(0.035)*s2;
   const Scalar x2 = Scalar(0.225)*c2;
@@ -442,6 +449,7 @@ inline void mass_matrix(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matri
   const Scalar x48 = phi50*x19 + phi51*x20 - phi52*x16 - phi57*x14 - phi58*x18;
   const Scalar x49 = phi51*x19 + phi53*x20 - phi54*x16 + phi56*x14 + phi58*x17;
   const Scalar x50 = phi52*x19 + phi54*x20 - phi55*x16 + phi56*x18 - phi57*x17;
+  M(5, 0) = x50;
   const Scalar x51 = -c6*x45 + s6*x46;
   const Scalar x52 = -c6*x46 - s6*x45;
   const Scalar x53 = -c6*x48 + s6*x49;
@@ -449,6 +457,7 @@ inline void mass_matrix(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matri
   const Scalar x55 = x42 + x53;
   const Scalar x56 = x43 - x50;
   const Scalar x57 = x44 + x54;
+  M(4, 0) = x57;
   const Scalar x58 = x39 + x51;
   const Scalar x59 = x40 - x47;
   const Scalar x60 = x41 + x52;
@@ -459,6 +468,7 @@ inline void mass_matrix(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matri
   const Scalar x65 = x36 + x63;
   const Scalar x66 = x37 + x57;
   const Scalar x67 = x38 + x64;
+  M(3, 0) = x67;
   const Scalar x68 = x33 + x61;
   const Scalar x69 = x34 + x60;
   const Scalar x70 = x35 + x62;
@@ -473,6 +483,7 @@ inline void mass_matrix(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matri
   const Scalar x79 = x30 + x77;
   const Scalar x80 = x31 - x67;
   const Scalar x81 = x32 + x78;
+  M(2, 0) = x81;
   const Scalar x82 = x27 + x71;
   const Scalar x83 = x28 - x70;
   const Scalar x84 = x29 + x72;
@@ -489,8 +500,10 @@ inline void mass_matrix(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matri
   const Scalar x95 = x24 + x92;
   const Scalar x96 = x25 + x93;
   const Scalar x97 = x26 + x94;
+  M(1, 0) = x97;
   const Scalar x104 = -c2*x96 - s2*x95;
   const Scalar x107 = phi5 + x104;
+  M(0, 0) = x107;
   const Scalar x110 = Scalar(0.225)*s3;
   const Scalar x111 = Scalar(0.225)*c3;
   const Scalar x112 = x110 + Scalar(0.225);
@@ -525,6 +538,7 @@ inline void mass_matrix(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matri
   const Scalar x143 = phi50*x121 + phi51*x122 - phi52*x118 - phi57*x116 - phi58*x120;
   const Scalar x144 = phi51*x121 + phi53*x122 - phi54*x118 + phi56*x116 + phi58*x119;
   const Scalar x145 = phi52*x121 + phi54*x122 - phi55*x118 + phi56*x120 - phi57*x119;
+  M(5, 1) = x145;
   const Scalar x146 = -c6*x140 + s6*x141;
   const Scalar x147 = -c6*x141 - s6*x140;
   const Scalar x148 = -c6*x143 + s6*x144;
@@ -532,6 +546,7 @@ inline void mass_matrix(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matri
   const Scalar x150 = x137 + x148;
   const Scalar x151 = x138 - x145;
   const Scalar x152 = x139 + x149;
+  M(4, 1) = x152;
   const Scalar x153 = x134 + x146;
   const Scalar x154 = x135 - x142;
   const Scalar x155 = x136 + x147;
@@ -542,6 +557,7 @@ inline void mass_matrix(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matri
   const Scalar x160 = x131 + x158;
   const Scalar x161 = x132 + x152;
   const Scalar x162 = x133 + x159;
+  M(3, 1) = x162;
   const Scalar x163 = x128 + x156;
   const Scalar x164 = x129 + x155;
   const Scalar x165 = x130 + x157;
@@ -550,12 +566,14 @@ inline void mass_matrix(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matri
   const Scalar x171 = Scalar(0.225)*x166;
   const Scalar x173 = x169 + x171;
   const Scalar x176 = x127 + x173;
+  M(2, 1) = x176;
   const Scalar x177 = x123 + x166;
   const Scalar x178 = x124 - x165;
   const Scalar x180 = c3*x178 + s3*x177;
   const Scalar x185 = Scalar(0.225)*x180;
   const Scalar x188 = x176 + x185;
   const Scalar x191 = phi15 + x188;
+  M(1, 1) = x191;
   const Scalar x198 = Scalar(0.225)*c4;
   const Scalar x199 = -Scalar(0.225)*s4;
   const Scalar x200 = c5*x198;
@@ -579,6 +597,7 @@ inline void mass_matrix(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matri
   const Scalar x219 = phi50*x121 + phi51*x122 - phi52*x118 - phi57*x201 - phi58*x203;
   const Scalar x220 = phi51*x121 + phi53*x122 - phi54*x118 + phi56*x201 + phi58*x202;
   const Scalar x221 = phi52*x121 + phi54*x122 - phi55*x118 + phi56*x203 - phi57*x202;
+  M(5, 2) = x221;
   const Scalar x222 = -c6*x216 + s6*x217;
   const Scalar x223 = -c6*x217 - s6*x216;
   const Scalar x224 = -c6*x219 + s6*x220;
@@ -586,6 +605,7 @@ inline void mass_matrix(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matri
   const Scalar x226 = x213 + x224;
   const Scalar x227 = x214 - x221;
   const Scalar x228 = x215 + x225;
+  M(4, 2) = x228;
   const Scalar x229 = x210 + x222;
   const Scalar x230 = x211 - x218;
   const Scalar x231 = x212 + x223;
@@ -595,6 +615,7 @@ inline void mass_matrix(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matri
   const Scalar x236 = x207 + x234;
   const Scalar x237 = x208 + x228;
   const Scalar x238 = x209 + x235;
+  M(3, 2) = x238;
   const Scalar x239 = x204 + x232;
   const Scalar x240 = x205 + x231;
   const Scalar x242 = c4*x239 - s4*x240;
@@ -602,6 +623,7 @@ inline void mass_matrix(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matri
   const Scalar x247 = Scalar(0.225)*x242;
   const Scalar x249 = x245 + x247;
   const Scalar x252 = phi25 + x249;
+  M(2, 2) = x252;
   const Scalar x269 = c6*s5;
   const Scalar x270 = -s5*s6;
   const Scalar x274 = -c5*phi41 - phi40*s5;
@@ -610,39 +632,23 @@ inline void mass_matrix(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matri
   const Scalar x280 = c5*phi52 + phi50*x269 + phi51*x270;
   const Scalar x281 = c5*phi54 + phi51*x269 + phi53*x270;
   const Scalar x282 = c5*phi55 + phi52*x269 + phi54*x270;
+  M(5, 3) = x282;
   const Scalar x285 = -c6*x280 + s6*x281;
   const Scalar x286 = -c6*x281 - s6*x280;
   const Scalar x287 = x274 + x285;
   const Scalar x288 = x275 - x282;
   const Scalar x289 = x276 + x286;
+  M(4, 3) = x289;
   const Scalar x296 = -c5*x288 - s5*x287;
   const Scalar x299 = phi35 + x296;
+  M(3, 3) = x299;
   const Scalar x327 = -c6*phi51 - phi50*s6;
   const Scalar x328 = -c6*phi53 - phi51*s6;
   const Scalar x329 = -c6*phi54 - phi52*s6;
+  M(5, 4) = x329;
   const Scalar x333 = -c6*x328 - s6*x327;
   const Scalar x336 = phi45 + x333;
-  M(0, 0) = x107;
-  M(1, 0) = x97;
-  M(2, 0) = x81;
-  M(3, 0) = x67;
-  M(4, 0) = x57;
-  M(5, 0) = x50;
-  M(1, 1) = x191;
-  M(2, 1) = x176;
-  M(3, 1) = x162;
-  M(4, 1) = x152;
-  M(5, 1) = x145;
-  M(2, 2) = x252;
-  M(3, 2) = x238;
-  M(4, 2) = x228;
-  M(5, 2) = x221;
-  M(3, 3) = x299;
-  M(4, 3) = x289;
-  M(5, 3) = x282;
   M(4, 4) = x336;
-  M(5, 4) = x329;
-  M(5, 5) = phi55;
   M(0, 1) = M(1, 0);
   M(0, 2) = M(2, 0);
   M(0, 3) = M(3, 0);

@@ -1,5 +1,5 @@
 // GENERATED FILE - DO NOT EDIT.
-// Generator: codegen/generate.py (dyncal codegen 1, SymPy 1.11.1)
+// Generator: codegen/generate.py (dyncal codegen 2, SymPy 1.11.1)
 // Robot: tx40; inputs: robots/tx40/robot.json (sha256 14380c70690bae49), robots/tx40/tx40.urdf (sha256 3d00cbd46279c915)
 // Contents: the Robot traits type gathering the generated model
 // Regenerate: cmake --build <build> --target regenerate (or scripts/codegen).
@@ -36,10 +36,10 @@ struct Robot {
                                  Eigen::Matrix<Scalar, kNumJoints, kNumStandard>& Y) noexcept {
     dyncal::generated::tx40::standard_regressor(q, qd, qdd, Y);
   }
-  template <typename Scalar>
+  /// Writes Y_b into the first kNumBase columns of Yb (Cols >= kNumBase; the rest is untouched).
+  template <typename Scalar, int Cols>
   static void base_regressor(const JointVector<Scalar>& q, const JointVector<Scalar>& qd,
-                             const JointVector<Scalar>& qdd,
-                             Eigen::Matrix<Scalar, kNumJoints, kNumBase>& Yb) noexcept {
+                             const JointVector<Scalar>& qdd, Eigen::Matrix<Scalar, kNumJoints, Cols>& Yb) noexcept {
     dyncal::generated::tx40::base_regressor(q, qd, qdd, Yb);
   }
   template <typename Scalar>

@@ -95,13 +95,11 @@ class IdentificationModel {
 
   /// Fills K (kNumJoints x kNumParams) at one sample. q [rad], qd [rad/s], qdd [rad/s^2];
   /// tau_load [Nm] is only read by the Eq. 9 term (pass zeros otherwise). Joint-side quantities.
-  /// Allocation-free; `scratch` holds the base regressor.
+  /// Allocation-free; the generated base regressor writes straight into K's first kNumBase columns.
   template <typename Scalar>
   static void regressor(const JointVector<Scalar>& q, const JointVector<Scalar>& qd, const JointVector<Scalar>& qdd,
-                        const JointVector<Scalar>& tau_load, Eigen::Matrix<Scalar, kNumJoints, kNumBase>& scratch,
-                        Regressor<Scalar>& K) noexcept {
-    Robot::base_regressor(q, qd, qdd, scratch);
-    K.template leftCols<kNumBase>() = scratch;
+                        const JointVector<Scalar>& tau_load, Regressor<Scalar>& K) noexcept {
+    Robot::base_regressor(q, qd, qdd, K);
     K.template rightCols<kNumTermColumns>().setZero();
     int col = kNumBase;
     for (int j = 0; j < kNumJoints; ++j) {
