@@ -101,6 +101,13 @@ def body(defs, assignments, zeros=()):
     return "\n".join(l for l in lines if l), printer.muls, printer.adds
 
 
+def fnv1a32(text):
+    h = 0x811C9DC5
+    for b in text.encode():
+        h = ((h ^ b) * 0x01000193) & 0xFFFFFFFF
+    return h
+
+
 def std_name(k):
     return f"link{k // 10 + 1}_{STANDARD_NAMES[k % 10]}"
 
@@ -252,6 +259,7 @@ inline void mass_matrix(const {vec}& q, const {pvec}& phi, Eigen::Matrix<Scalar,
         Rn = [[float(j.R[r, c].evalf()) for c in range(3)] for r in range(3)]
         pn = [float(x) for x in j.p.evalf()]
         origins.append("    {{" + ", ".join(fmt(x) for row in Rn for x in row) + "}, {" + ", ".join(fmt(x) for x in pn) + "}}")
+    robot_id = fnv1a32("\n".join([name] + groupings + origins))
     nominal = ", ".join(fmt(x) for j in joints for x in j.standard)
     std_enum = ",\n".join(f"  {std_name(k)} = {k}" for k in range(n_std))
     base_enum = ",\n".join(f"  {nm} = {b}" for b, nm in enumerate(base_names))
@@ -260,10 +268,14 @@ inline void mass_matrix(const {vec}& q, const {pvec}& phi, Eigen::Matrix<Scalar,
     params_hpp += f"""#pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
 
 namespace {ns} {{
 
 inline constexpr const char* kRobotName = "{name}";
+/// Robot id of parameter tables (dyncal/parameter_table.hpp): FNV-1a 32 of the robot name, the
+/// base-parameter groupings and the joint origins, i.e. of what a base-parameter value means.
+inline constexpr std::uint32_t kRobotId = 0x{robot_id:08x}u;
 inline constexpr int kNumJoints = {n};
 /// Standard parameters: 10 per link, [XX XY XZ YY YZ ZZ] [kg m^2] about the link frame origin,
 /// [MX MY MZ] [kg m], M [kg] (Khalil-Kleinfinger order).
@@ -337,6 +349,7 @@ namespace {ns} {{
 /// The generated {name} model as one type, for templates in lib/ (see dyncal/robot_model.hpp).
 struct Robot {{
   static constexpr const char* kName = kRobotName;
+  static constexpr std::uint32_t kRobotId = {ns}::kRobotId;
   static constexpr int kNumJoints = {ns}::kNumJoints;
   static constexpr int kNumStandard = {ns}::kNumStandard;
   static constexpr int kNumBase = {ns}::kNumBase;

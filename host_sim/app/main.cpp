@@ -1,8 +1,10 @@
 // dyncal: the command-line tool.
 #include <CLI/CLI.hpp>
 #include <fstream>
+#include <functional>
 #include <iostream>
 
+#include "drive_commands.hpp"
 #include "dyncal_host/identify.hpp"
 #include "dyncal_host/identify_report.hpp"
 #include "dyncal_host/input_error.hpp"
@@ -48,8 +50,15 @@ int main(int argc, char** argv) {
   identify->add_option("--validate-last", opt.validate_last, "validate on this final fraction instead (time split)");
   identify->add_option("--mu", opt.rls_mu, "RLS forgetting factor mu (survey Eq. 23)")->capture_default_str();
   identify->add_option("--p0", opt.p0, "KF/RLS initial covariance diagonal")->capture_default_str();
+  identify
+      ->add_option("--min-speed", opt.min_speed_fraction,
+                   "fit only rows where |qd_j| >= this fraction of joint j's top speed (stiction)")
+      ->capture_default_str();
   identify->add_option("--report", report, "write the report as JSON");
   identify->add_option("--params", params, "write the identified parameter table as JSON");
+
+  std::function<int()> run;
+  add_drive_commands(app, run, robots_dir);
 
   try {
     app.parse(argc, argv);
@@ -58,6 +67,7 @@ int main(int argc, char** argv) {
   }
 
   try {
+    if (run) return run();
     if (app.got_subcommand(identify)) {
       if (robot_name.empty()) {
         if (format != "tx40") throw dyncal::host::InputError("--robot is required for --format csv");

@@ -10,16 +10,17 @@ namespace dyncal::host {
 
 /// Options of `dyncal identify` (defaults follow the survey and Gautier's practice).
 struct IdentifyOptions {
-  std::string method = "ols";  ///< ols | wls | kf | rls
-  unsigned terms = 0;          ///< dyncal::term bits (rigid body always included)
-  int filter_order = 4;        ///< Butterworth order (zero-phase: twice the attenuation)
-  double cutoff_hz = 20.0;     ///< low-pass cut-off for q, tau and the regressor columns
-  int decimate = 0;            ///< decimation factor; 0: floor(fs / (25 * cutoff)), at least 1
-  int folds = 5;               ///< blocked k-fold cross-validation
-  double block_seconds = 0.5;  ///< length of the contiguous blocks dealt to the folds in turn
-  double validate_last = 0.0;  ///< > 0: plain time split, this fraction at the end validates
-  double rls_mu = 0.9999;      ///< forgetting factor of RLS (survey Eq. 23)
-  double p0 = 1e6;             ///< initial covariance diag of KF and RLS (prior ignorance)
+  std::string method = "ols";       ///< ols | wls | kf | rls
+  unsigned terms = 0;               ///< dyncal::term bits (rigid body always included)
+  int filter_order = 4;             ///< Butterworth order (zero-phase: twice the attenuation)
+  double cutoff_hz = 20.0;          ///< low-pass cut-off for q, tau and the regressor columns
+  int decimate = 0;                 ///< decimation factor; 0: floor(fs / (25 * cutoff)), at least 1
+  int folds = 5;                    ///< blocked k-fold cross-validation
+  double block_seconds = 0.5;       ///< length of the contiguous blocks dealt to the folds in turn
+  double validate_last = 0.0;       ///< > 0: plain time split, this fraction at the end validates
+  double rls_mu = 0.9999;           ///< forgetting factor of RLS (survey Eq. 23)
+  double p0 = 1e6;                  ///< initial covariance diag of KF and RLS (prior ignorance)
+  double min_speed_fraction = 0.0;  ///< fit only rows with |qd_j| >= this fraction of joint j's top speed
 };
 
 struct JointMetrics {

@@ -19,10 +19,11 @@ namespace dyncal::host {
 
 /// Stacked, filtered and decimated identification data: row s * N + j is joint j at sample s.
 struct StackedData {
-  Eigen::MatrixXd W;   ///< (S N) x P regressor
-  Eigen::VectorXd y;   ///< (S N) torques [Nm]
-  Eigen::VectorXd t;   ///< S sample times [s]
-  double rate_hz = 0;  ///< after decimation
+  Eigen::MatrixXd W;          ///< (S N) x P regressor
+  Eigen::VectorXd y;          ///< (S N) torques [Nm]
+  Eigen::VectorXd t;          ///< S sample times [s]
+  double rate_hz = 0;         ///< after decimation
+  std::vector<char> fit_row;  ///< (S N): 1 where row s * N + j enters the fit (see min_speed_fraction)
 };
 
 template <class Robot, unsigned Terms>
@@ -81,12 +82,21 @@ class IdentifyPipeline {
     out.y.resize(kept * N);
     out.t.resize(kept);
     out.rate_hz = fs / d;
+    // Rows of a joint moving slower than min_speed_fraction of its top speed stay out of the fit:
+    // there a real joint sticks and Coulomb friction takes any value in [-Fc, Fc], which sgn(qd)
+    // cannot represent. They still count in the validation metrics.
+    JointVec threshold = JointVec::Zero();
+    for (Eigen::Index s = edge; s < S - edge; ++s)
+      threshold = threshold.cwiseMax(JointVec(qd.row(s).transpose()).cwiseAbs());
+    threshold *= opt_.min_speed_fraction;
+    out.fit_row.assign(static_cast<size_t>(kept * N), 1);
     for (Eigen::Index k = 0; k < kept; ++k) {
       const Eigen::Index s = edge + k * d;
       out.t[k] = log.t[s];
       for (int j = 0; j < N; ++j) {
         out.W.row(k * N + j) = Kt.row(s).segment(j * P, P);
         out.y[k * N + j] = tau(s, j);
+        if (std::abs(qd(s, j)) < threshold[j]) out.fit_row[static_cast<size_t>(k * N + j)] = 0;
       }
     }
     return out;
@@ -99,25 +109,27 @@ class IdentifyPipeline {
     auto ls = std::make_unique<StreamingLeastSquares<double, P>>();
     for (Eigen::Index s = 0; s < S; ++s) {
       if (!train[s]) continue;
-      for (int j = 0; j < N; ++j) check(ls->add_row(data.W.row(s * N + j).transpose(), data.y[s * N + j]));
+      for (int j = 0; j < N; ++j) {
+        if (data.fit_row[s * N + j]) check(ls->add_row(data.W.row(s * N + j).transpose(), data.y[s * N + j]));
+      }
     }
     if (ls->solve(phi) != UpdateStatus::ok) {
       throw InputError("the data do not excite every parameter of the model (regressor rank deficient): " +
                        std::string("use richer excitation or a smaller model"));
     }
     // Per-joint residual variance of the OLS fit (Gautier's WLS weights; KF/RLS noise).
-    JointVec ss = JointVec::Zero();
-    long n = 0;
+    JointVec ss = JointVec::Zero(), n = JointVec::Zero();
     for (Eigen::Index s = 0; s < S; ++s) {
       if (!train[s]) continue;
-      ++n;
       for (int j = 0; j < N; ++j) {
+        if (!data.fit_row[s * N + j]) continue;
         const double e = data.y[s * N + j] - data.W.row(s * N + j).dot(phi);
         ss[j] += e * e;
+        n[j] += 1;
       }
     }
-    const double dof = std::max(1.0, static_cast<double>(n) - static_cast<double>(P) / N);
-    const JointVec sigma = (ss / dof).cwiseSqrt().cwiseMax(1e-12);
+    const JointVec dof = (n.array() - static_cast<double>(P) / N).max(1.0).matrix();
+    const JointVec sigma = ss.cwiseQuotient(dof).cwiseSqrt().cwiseMax(1e-12);
     const std::string& m = opt_.method;
     if (m == "ols") {
       ls_statistics(*ls, stdev, cond);
@@ -125,8 +137,10 @@ class IdentifyPipeline {
       ls->reset();
       for (Eigen::Index s = 0; s < S; ++s) {
         if (!train[s]) continue;
-        for (int j = 0; j < N; ++j)
-          check(ls->add_row(data.W.row(s * N + j).transpose(), data.y[s * N + j], 1.0 / sigma[j]));
+        for (int j = 0; j < N; ++j) {
+          if (data.fit_row[s * N + j])
+            check(ls->add_row(data.W.row(s * N + j).transpose(), data.y[s * N + j], 1.0 / sigma[j]));
+        }
       }
       if (ls->solve(phi) != UpdateStatus::ok) throw InputError("weighted regressor rank deficient");
       ls_statistics(*ls, stdev, cond);
@@ -166,6 +180,11 @@ class IdentifyPipeline {
       if (!train[s]) continue;
       K = data.W.block(s * N, 0, N, P);
       tau = data.y.segment(s * N, N);
+      for (int j = 0; j < N; ++j) {  // an excluded row carries no information: zero it
+        if (data.fit_row[s * N + j]) continue;
+        K.row(j).setZero();
+        tau[j] = 0.0;
+      }
       check(update(f, K, tau));
     }
   }

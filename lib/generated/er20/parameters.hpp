@@ -6,10 +6,14 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
 
 namespace dyncal::generated::er20 {
 
 inline constexpr const char* kRobotName = "er20";
+/// Robot id of parameter tables (dyncal/parameter_table.hpp): FNV-1a 32 of the robot name, the
+/// base-parameter groupings and the joint origins, i.e. of what a base-parameter value means.
+inline constexpr std::uint32_t kRobotId = 0x63a66428u;
 inline constexpr int kNumJoints = 6;
 /// Standard parameters: 10 per link, [XX XY XZ YY YZ ZZ] [kg m^2] about the link frame origin,
 /// [MX MY MZ] [kg m], M [kg] (Khalil-Kleinfinger order).

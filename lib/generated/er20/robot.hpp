@@ -14,6 +14,7 @@ namespace dyncal::generated::er20 {
 /// The generated er20 model as one type, for templates in lib/ (see dyncal/robot_model.hpp).
 struct Robot {
   static constexpr const char* kName = kRobotName;
+  static constexpr std::uint32_t kRobotId = dyncal::generated::er20::kRobotId;
   static constexpr int kNumJoints = dyncal::generated::er20::kNumJoints;
   static constexpr int kNumStandard = dyncal::generated::er20::kNumStandard;
   static constexpr int kNumBase = dyncal::generated::er20::kNumBase;

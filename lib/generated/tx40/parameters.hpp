@@ -6,10 +6,14 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cstdint>
 
 namespace dyncal::generated::tx40 {
 
 inline constexpr const char* kRobotName = "tx40";
+/// Robot id of parameter tables (dyncal/parameter_table.hpp): FNV-1a 32 of the robot name, the
+/// base-parameter groupings and the joint origins, i.e. of what a base-parameter value means.
+inline constexpr std::uint32_t kRobotId = 0xd3cba20bu;
 inline constexpr int kNumJoints = 6;
 /// Standard parameters: 10 per link, [XX XY XZ YY YZ ZZ] [kg m^2] about the link frame origin,
 /// [MX MY MZ] [kg m], M [kg] (Khalil-Kleinfinger order).

@@ -14,6 +14,7 @@ namespace dyncal::generated::tx40 {
 /// The generated tx40 model as one type, for templates in lib/ (see dyncal/robot_model.hpp).
 struct Robot {
   static constexpr const char* kName = kRobotName;
+  static constexpr std::uint32_t kRobotId = dyncal::generated::tx40::kRobotId;
   static constexpr int kNumJoints = dyncal::generated::tx40::kNumJoints;
   static constexpr int kNumStandard = dyncal::generated::tx40::kNumStandard;
   static constexpr int kNumBase = dyncal::generated::tx40::kNumBase;

@@ -30,6 +30,8 @@ struct ParamInfo {
 template <class Robot, unsigned Terms>
 class IdentificationModel {
  public:
+  using RobotType = Robot;
+  static constexpr unsigned kTerms = Terms;
   static constexpr int kNumJoints = Robot::kNumJoints;
   static constexpr int kNumBase = Robot::kNumBase;
 

@@ -11,6 +11,7 @@ enum class UpdateStatus {
   not_positive_definite,  ///< a variance or innovation variance was <= 0
   rank_deficient,         ///< the accumulated regressor does not determine every parameter
   invalid_argument,       ///< a configuration value out of its documented range
+  not_ready,              ///< accepted, but no output yet (a filter still filling its history)
 };
 
 /// Stable lower-case name of a status, for logs and reports.
@@ -28,6 +29,8 @@ constexpr const char* to_string(UpdateStatus s) noexcept {
       return "rank_deficient";
     case UpdateStatus::invalid_argument:
       return "invalid_argument";
+    case UpdateStatus::not_ready:
+      return "not_ready";
   }
   return "unknown";
 }

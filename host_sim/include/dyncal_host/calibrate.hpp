@@ -1,0 +1,83 @@
+#pragma once
+// `dyncal calibrate`: excitation on a drive over Modbus, online estimators (lib/ KF and RLS with
+// forgetting, sample by sample through port/linux), batch fit, table flash, before/after check.
+
+#include <array>
+#include <cstdint>
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+#include "dyncal/parameter_table.hpp"
+#include "dyncal_host/identify.hpp"
+#include "dyncal_port/modbus_drive.hpp"
+
+namespace dyncal::host {
+
+struct CalibrateOptions {
+  std::string uri = "tcp://127.0.0.1:1502";
+  unsigned terms = 0;  ///< identification model (dyncal::term bits)
+  double sample_rate_hz = 1000;
+  double f_f = 0.1;        ///< Fourier fundamental frequency [Hz] (Eq. 27)
+  int harmonics = 5;       ///< L
+  int periods = 2;         ///< excitation periods streamed and identified
+  int verify_periods = 1;  ///< periods of the fresh verification trajectory
+  int candidates = 16;     ///< random trajectories tried; the one with the smallest cond(K) plays
+  std::uint64_t seed = 1;
+  double online_cutoff_hz = 20;  ///< causal low-pass of the online path
+  double rls_mu = 0.9999;
+  bool flash = true;
+  bool progress = true;                            ///< progress bar on the progress stream
+  IdentifyOptions identify = stiction_excluded();  ///< batch fit settings (terms copied from above)
+
+  /// Batch defaults for drive data: rows of a joint below 2 % of its top speed are left out of the
+  /// fit, because the excitation reverses every joint several times per period and a joint with
+  /// Coulomb friction sticks at reversals (see IdentifyOptions::min_speed_fraction).
+  static IdentifyOptions stiction_excluded() {
+    IdentifyOptions o;
+    o.min_speed_fraction = 0.02;
+    return o;
+  }
+};
+
+struct VerificationErrors {
+  std::array<double, 6> rms{};      ///< per joint RMS of tau - K phi on the fresh trajectory [Nm]
+  std::array<double, 6> rms_tau{};  ///< per joint RMS of tau [Nm]
+};
+
+struct CalibrateResult {
+  IdentifyResult batch;            ///< OLS fit of the excitation run, with cross-validation
+  std::vector<std::string> names;  ///< parameter names, model order
+  std::vector<double> phi_batch, phi_kf, phi_rls;
+  double trajectory_cond = 0;     ///< cond(K) of the chosen excitation (Eq. 26, columns unit-scaled)
+  long samples = 0;               ///< excitation samples streamed
+  std::uint32_t lost = 0;         ///< samples lost to drive overruns (all runs)
+  double stream_seconds = 0;      ///< wall time of the excitation stream
+  double samples_per_second = 0;  ///< streamed samples per wall second
+  long online_updates = 0, online_rejected = 0;
+  VerificationErrors verify_batch, verify_kf, verify_rls;           ///< fresh trajectory, identified models
+  std::array<double, 6> drive_error_before{}, drive_error_after{};  ///< drive's own RMS(tau - tau_ff)
+  bool flashed = false;
+  TableStatus flash_status = TableStatus::ok;
+  std::string flash_message;
+  double total_seconds = 0;
+};
+
+/// Runs the whole loop on the drive at options.uri. Throws InputError (bad options, wrong robot,
+/// lost samples, transport failure) with a message in words.
+CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions& options, std::ostream& progress);
+
+void print_calibrate_report(std::ostream& out, const CalibrateResult& r);
+
+/// Streams one run of `trajectory` from the drive into a log (q and tau; t from seq). Throws
+/// InputError on transport errors or lost samples.
+JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory& trajectory, int periods,
+                    double sample_rate_hz, std::ostream* progress, std::uint32_t* lost, double* seconds);
+
+/// A Fourier excitation (Eq. 27) inside the robot's position, velocity and acceleration limits
+/// (80 % of each), the best of `candidates` seeded random ones by cond(K) of the base-parameter
+/// regressor with Eq. 7 friction. Deterministic for a seed.
+linux_port::Trajectory default_excitation(const RobotDescription& robot, double f_f, int harmonics, int candidates,
+                                          std::uint64_t seed, double* cond);
+
+}  // namespace dyncal::host

@@ -1,0 +1,24 @@
+#pragma once
+// The parameters a simulated drive really has, in the order of an identification model: what a
+// calibration on noise-free data with declared effects only must recover.
+
+#include <string>
+#include <vector>
+
+#include "dyncal_host/drive/scenario.hpp"
+
+namespace dyncal::host {
+
+struct TrueParameter {
+  std::string name;
+  double value = 0;
+};
+
+/// True base parameters (nominal standard parameters mapped to the base set, rotor inertia of
+/// joints whose Ia is not separable added to the base parameter that absorbs it) followed by the
+/// true term values (Fc, beta, Ia, offset ...) of `scenario`, for the er20 model with `terms`.
+/// Throws InputError for a term set that is not built, or a scenario whose friction is not the
+/// model's (Eq. 7, or Eq. 8 for the power term).
+std::vector<TrueParameter> true_parameters(const Scenario& scenario, unsigned terms);
+
+}  // namespace dyncal::host

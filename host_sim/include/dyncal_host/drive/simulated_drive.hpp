@@ -1,0 +1,98 @@
+#pragma once
+// The simulated six-axis drive without its transport: plant (forward dynamics of the generated
+// model, RK4), control law (PD + inverse-dynamics feed-forward from the active parameter table,
+// survey Fig. 3), friction and effects from the scenario, measurement (encoder quantisation, torque
+// noise), recording into a ring buffer, and the parameter table (checked, persisted atomically).
+
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "dyncal/fourier_trajectory.hpp"
+#include "dyncal/modbus_map.hpp"
+#include "dyncal/parameter_table.hpp"
+#include "dyncal/port.hpp"
+#include "dyncal_host/drive/scenario.hpp"
+#include "dyncal_host/robot_description.hpp"
+
+namespace dyncal::host {
+
+using DriveTrajectory = FourierTrajectory<double, kDriveJoints, modbus_map::kMaxHarmonics>;
+
+class SimulatedDrive {
+ public:
+  static constexpr int kRingCapacity = 16384;
+
+  /// `table_path`: the simulated flash. Its table becomes active if valid; otherwise (missing or
+  /// invalid, reason in startup_note()) the factory table: nominal base parameters, no friction.
+  SimulatedDrive(const RobotDescription& robot, const Scenario& scenario, std::string table_path);
+  ~SimulatedDrive();
+
+  std::uint32_t robot_id() const;
+  /// Trajectory and recording settings; only while not playing.
+  DriveTrajectory trajectory;
+  int periods = 2;
+  double sample_rate_hz = 1000;
+
+  void start();
+  void stop();
+  modbus_map::DriveState state() const { return state_; }
+  /// Advances one control period (no-op unless playing).
+  void step();
+  double time() const { return time_; }
+  double control_period() const { return 1.0 / scenario_.control_rate_hz; }
+  /// Seconds of simulated time until the trajectory ends.
+  double remaining() const;
+
+  /// Ring buffer: samples with seq >= acked() not yet freed, oldest first.
+  const std::deque<port::DriveSample>& ring() const { return ring_; }
+  std::uint32_t acked() const { return acked_; }
+  /// Frees samples with seq < seq_end (ignored if it would skip unrecorded samples).
+  void ack(std::uint32_t seq_end);
+  bool ring_full() const { return static_cast<int>(ring_.size()) >= kRingCapacity; }
+  /// Lockstep mode: the drive waits for the host instead of dropping samples when the ring is full.
+  bool lockstep = true;
+  std::uint32_t produced() const { return produced_; }
+  std::uint32_t overruns() const { return overruns_; }
+
+  /// Checks the encoded table (format, CRC, robot, model, value ranges), then persists it (write a
+  /// temporary file, fsync, rename over the flash file, fsync the directory) and makes it active.
+  /// On any failure the active table and the file stay as they were.
+  TableStatus commit(const std::uint8_t* bytes, int size);
+  const std::vector<std::uint8_t>& active_table_bytes() const { return active_bytes_; }
+  const ParameterTable& active_table() const { return active_; }
+  const std::string& startup_note() const { return startup_note_; }
+  /// Milliseconds to sleep after each 64-byte chunk written to the flash file (0: none); lets tests
+  /// kill the drive in the middle of a flash.
+  int flash_chunk_delay_ms = 0;
+
+  /// Per joint RMS of tau_cmd - tau_ff [Nm] since start(): the drive's own model error.
+  std::array<double, kDriveJoints> model_error_rms() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  Scenario scenario_;
+  std::string table_path_;
+  modbus_map::DriveState state_ = modbus_map::DriveState::idle;
+  double time_ = 0, clock_ = 0;
+  long steps_ = 0, steps_per_sample_ = 1, total_steps_ = 0;
+  std::deque<port::DriveSample> ring_;
+  std::uint32_t acked_ = 0, produced_ = 0, overruns_ = 0;
+  ParameterTable active_;
+  std::vector<std::uint8_t> active_bytes_;
+  std::string startup_note_;
+  std::array<double, kDriveJoints> error_sq_{};
+  long error_n_ = 0;
+  std::mt19937_64 rng_;
+};
+
+/// Writes `bytes` to `path` atomically (temporary file in the same directory, fsync, rename, fsync
+/// of the directory): a crash at any moment leaves the old or the new content. Throws
+/// std::runtime_error on I/O failure.
+void write_file_atomically(const std::string& path, const std::vector<std::uint8_t>& bytes, int chunk_delay_ms = 0);
+
+}  // namespace dyncal::host

@@ -1,0 +1,356 @@
+#include "dyncal_host/calibrate.hpp"
+
+#include <Eigen/SVD>
+#include <chrono>
+#include <cmath>
+#include <iomanip>
+#include <memory>
+#include <ostream>
+#include <random>
+
+#include "dyncal/causal_differentiator.hpp"
+#include "dyncal/identification_model.hpp"
+#include "dyncal/kalman_filter.hpp"
+#include "dyncal/rls_forgetting.hpp"
+#include "dyncal_host/input_error.hpp"
+#include "er20/robot.hpp"
+
+namespace dyncal::host {
+namespace {
+
+using Robot = dyncal::generated::er20::Robot;
+using Vec = Eigen::Matrix<double, 6, 1>;
+using SteadyClock = std::chrono::steady_clock;
+namespace mm = dyncal::modbus_map;
+
+double seconds_since(SteadyClock::time_point t0) {
+  return std::chrono::duration<double>(SteadyClock::now() - t0).count();
+}
+
+void progress_bar(std::ostream& out, double fraction, long samples, const char* what) {
+  const int width = 30;
+  const int filled = static_cast<int>(std::lround(std::min(1.0, fraction) * width));
+  out << "\r" << what << " [" << std::string(static_cast<size_t>(filled), '#')
+      << std::string(static_cast<size_t>(width - filled), '.') << "] " << std::setw(3)
+      << static_cast<int>(std::lround(100 * std::min(1.0, fraction))) << "% " << samples << " samples" << std::flush;
+}
+
+/// Online path and verification for one compiled model.
+template <unsigned Terms>
+struct ModelRun {
+  using Model = IdentificationModel<Robot, Terms>;
+  static constexpr int P = Model::kNumParams;
+  using ParamVec = Eigen::Matrix<double, P, 1>;
+
+  static void online(const JointLog& log, const CalibrateOptions& o, CalibrateResult& r) {
+    auto kf = std::make_unique<KalmanFilter<double, P, 6>>();
+    auto rls = std::make_unique<RlsForgetting<double, P, 6>>();
+    const ParamVec p0 = ParamVec::Constant(o.identify.p0);
+    kf->reset(ParamVec::Zero(), p0);
+    rls->reset(ParamVec::Zero(), p0, o.rls_mu);
+    CausalDifferentiator<double, 6> diff;
+    if (diff.reset(log.sample_period(), o.online_cutoff_hz) != UpdateStatus::ok) {
+      throw InputError("online cut-off must be below half the sample rate");
+    }
+    typename Model::template Regressor<double> K;
+    const Vec ones = Vec::Ones(), zero = Vec::Zero();
+    for (Eigen::Index s = 0; s < log.samples(); ++s) {
+      Vec q, qd, qdd, tau;
+      if (diff.update(log.q.row(s).transpose(), log.tau.row(s).transpose(), q, qd, qdd, tau) != UpdateStatus::ok)
+        continue;
+      Model::regressor(q, qd, qdd, zero, K);
+      const UpdateStatus a = kf->update(K, tau, ones);
+      const UpdateStatus b = rls->update(K, tau);
+      ++r.online_updates;
+      if (a != UpdateStatus::ok || b != UpdateStatus::ok) ++r.online_rejected;
+    }
+    r.phi_kf.assign(kf->estimate().data(), kf->estimate().data() + P);
+    r.phi_rls.assign(rls->estimate().data(), rls->estimate().data() + P);
+  }
+
+  static VerificationErrors verify(const JointLog& log, const std::vector<double>& phi_v, double cutoff) {
+    ParamVec phi;
+    for (int i = 0; i < P; ++i) phi[i] = phi_v[static_cast<size_t>(i)];
+    CausalDifferentiator<double, 6> diff;
+    diff.reset(log.sample_period(), cutoff);
+    typename Model::template Regressor<double> K;
+    Vec se = Vec::Zero(), st = Vec::Zero();
+    long n = 0;
+    for (Eigen::Index s = 0; s < log.samples(); ++s) {
+      Vec q, qd, qdd, tau;
+      if (diff.update(log.q.row(s).transpose(), log.tau.row(s).transpose(), q, qd, qdd, tau) != UpdateStatus::ok)
+        continue;
+      Model::regressor(q, qd, qdd, Vec::Zero().eval(), K);
+      se += (tau - K * phi).cwiseAbs2();
+      st += tau.cwiseAbs2();
+      ++n;
+    }
+    VerificationErrors e;
+    for (int j = 0; j < 6; ++j) {
+      e.rms[j] = std::sqrt(se[j] / static_cast<double>(std::max(1L, n)));
+      e.rms_tau[j] = std::sqrt(st[j] / static_cast<double>(std::max(1L, n)));
+    }
+    return e;
+  }
+};
+
+template <template <unsigned> class F, typename... Args>
+void dispatch(unsigned terms, Args&&... args) {
+  constexpr unsigned ia = term::rotor_inertia, off = term::offset;
+  switch (terms) {
+    case kFrictionEq7:
+      return F<kFrictionEq7>::run(args...);
+    case kFrictionEq7 | ia:
+      return F<kFrictionEq7 | ia>::run(args...);
+    case kFrictionEq7 | off:
+      return F<kFrictionEq7 | off>::run(args...);
+    case kFrictionEq7 | ia | off:
+      return F<kFrictionEq7 | ia | off>::run(args...);
+    case kFrictionEq8:
+      return F<kFrictionEq8>::run(args...);
+    case kFrictionEq8 | ia:
+      return F<kFrictionEq8 | ia>::run(args...);
+    case kFrictionEq8 | off:
+      return F<kFrictionEq8 | off>::run(args...);
+    case kFrictionEq8 | ia | off:
+      return F<kFrictionEq8 | ia | off>::run(args...);
+    default:
+      throw InputError("model '" + model_name(terms) +
+                       "' is not built for calibration (eq7 or eq8, optionally with "
+                       "rotor_inertia and offset)");
+  }
+}
+
+template <unsigned Terms>
+struct Online {
+  static void run(const JointLog& log, const CalibrateOptions& o, CalibrateResult& r) {
+    ModelRun<Terms>::online(log, o, r);
+  }
+};
+template <unsigned Terms>
+struct Verify {
+  static void run(const JointLog& log, const CalibrateOptions& o, CalibrateResult& r) {
+    r.verify_batch = ModelRun<Terms>::verify(log, r.phi_batch, o.online_cutoff_hz);
+    r.verify_kf = ModelRun<Terms>::verify(log, r.phi_kf, o.online_cutoff_hz);
+    r.verify_rls = ModelRun<Terms>::verify(log, r.phi_rls, o.online_cutoff_hz);
+  }
+};
+
+/// Verification run: stream a fresh trajectory and read the drive's model error.
+JointLog verification_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory& t, const CalibrateOptions& o,
+                          std::ostream* progress, std::uint32_t* lost, std::array<double, 6>& drive_error) {
+  double secs = 0;
+  JointLog log = stream_run(drive, t, o.verify_periods, o.sample_rate_hz, progress, lost, &secs);
+  linux_port::DriveInfo info;
+  if (!drive.read_info(info)) throw InputError("drive: " + drive.error());
+  drive_error = info.model_error_rms;
+  return log;
+}
+
+}  // namespace
+
+linux_port::Trajectory default_excitation(const RobotDescription& robot, double f_f, int harmonics, int candidates,
+                                          std::uint64_t seed, double* cond) {
+  if (robot.num_joints != 6) throw InputError("calibration needs a six-axis robot");
+  if (!(f_f > 0) || harmonics < 1 || harmonics > mm::kMaxHarmonics || candidates < 1) {
+    throw InputError("excitation: f_f must be > 0, harmonics 1..8, candidates >= 1");
+  }
+  using Model = IdentificationModel<Robot, kFrictionEq7>;
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  linux_port::Trajectory best;
+  double best_cond = std::numeric_limits<double>::infinity();
+  const int grid = 400;  // samples per period for limits and cond(K)
+  for (int c = 0; c < candidates; ++c) {
+    linux_port::Trajectory t;
+    t.f_f = f_f;
+    t.harmonics = harmonics;
+    for (int j = 0; j < 6; ++j) {
+      for (int l = 0; l < harmonics; ++l) {
+        t.a(j, l) = u(rng) / (l + 1);
+        t.b(j, l) = u(rng) / (l + 1);
+      }
+    }
+    // Scale each joint to 80 % of its tightest limit (position half-range, velocity, acceleration).
+    Vec qmin = Vec::Constant(1e300), qmax = Vec::Constant(-1e300), vmax = Vec::Zero(), amax = Vec::Zero();
+    for (int k = 0; k < grid; ++k) {
+      Vec q, qd, qdd;
+      t.evaluate(t.period() * k / grid, q, qd, qdd);
+      qmin = qmin.cwiseMin(q);
+      qmax = qmax.cwiseMax(q);
+      vmax = vmax.cwiseMax(qd.cwiseAbs());
+      amax = amax.cwiseMax(qdd.cwiseAbs());
+    }
+    for (int j = 0; j < 6; ++j) {
+      const double half_range = 0.5 * (robot.q_max[j] - robot.q_min[j]);
+      const double s = 0.8 * std::min({half_range / (0.5 * (qmax[j] - qmin[j])), robot.qd_max[j] / vmax[j],
+                                       robot.qdd_max[j] / amax[j]});
+      t.a.row(j) *= s;
+      t.b.row(j) *= s;
+      // Centre the motion in the joint range.
+      t.q0[j] = 0.5 * (robot.q_max[j] + robot.q_min[j]) - s * 0.5 * (qmax[j] + qmin[j]);
+    }
+    Eigen::MatrixXd W(6 * grid, Model::kNumParams);
+    Model::Regressor<double> K;
+    for (int k = 0; k < grid; ++k) {
+      Vec q, qd, qdd;
+      t.evaluate(t.period() * k / grid, q, qd, qdd);
+      Model::regressor(q, qd, qdd, Vec::Zero().eval(), K);
+      W.middleRows(6 * k, 6) = K;
+    }
+    for (Eigen::Index i = 0; i < W.cols(); ++i) W.col(i).normalize();
+    const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(W).singularValues();
+    const double cnd = sv[0] / sv[sv.size() - 1];
+    if (cnd < best_cond) {
+      best_cond = cnd;
+      best = t;
+    }
+  }
+  if (cond) *cond = best_cond;
+  return best;
+}
+
+JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory& trajectory, int periods,
+                    double sample_rate_hz, std::ostream* progress, std::uint32_t* lost, double* seconds) {
+  if (!drive.write_trajectory(trajectory, periods, sample_rate_hz)) throw InputError("drive: " + drive.error());
+  const auto t0 = SteadyClock::now();
+  if (!drive.start()) throw InputError("drive: " + drive.error());
+  const long expected = std::lround(periods * trajectory.period() * sample_rate_hz);
+  std::vector<port::DriveSample> samples;
+  samples.reserve(static_cast<size_t>(expected));
+  port::DriveSample block[mm::kSamplesPerBlock];
+  long last_shown = -1;
+  for (;;) {
+    int n = 0;
+    const port::PortStatus st = drive.read(block, mm::kSamplesPerBlock, &n);
+    if (st == port::PortStatus::end_of_stream) break;
+    if (st == port::PortStatus::transport_error) throw InputError("drive: " + drive.error());
+    if (st == port::PortStatus::sequence_gap) {
+      throw InputError(
+          "drive overrun: " + std::to_string(drive.lost()) +
+          " samples lost (the host read too slowly; use --lockstep on the simulated drive or a lower --rate)");
+    }
+    samples.insert(samples.end(), block, block + n);
+    if (progress && static_cast<long>(samples.size()) / 500 != last_shown) {
+      last_shown = static_cast<long>(samples.size()) / 500;
+      progress_bar(*progress, static_cast<double>(samples.size()) / static_cast<double>(expected),
+                   static_cast<long>(samples.size()), "streaming");
+    }
+  }
+  if (progress) {
+    progress_bar(*progress, 1.0, static_cast<long>(samples.size()), "streaming");
+    *progress << "\n";
+  }
+  if (seconds) *seconds = seconds_since(t0);
+  if (lost) *lost += drive.lost();
+  const Eigen::Index S = static_cast<Eigen::Index>(samples.size());
+  if (S < 10) throw InputError("drive delivered only " + std::to_string(S) + " samples");
+  JointLog log;
+  log.t.resize(S);
+  log.q.resize(S, 6);
+  log.tau.resize(S, 6);
+  for (Eigen::Index s = 0; s < S; ++s) {
+    const auto& d = samples[static_cast<size_t>(s)];
+    log.t[s] = static_cast<double>(d.seq) / sample_rate_hz;
+    for (int j = 0; j < 6; ++j) {
+      log.q(s, j) = d.q[j];
+      log.tau(s, j) = d.tau[j];
+    }
+  }
+  log.source = "drive";
+  return log;
+}
+
+CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions& o, std::ostream& progress) {
+  const auto t0 = SteadyClock::now();
+  if (robot.name != Robot::kName)
+    throw InputError("calibration over Modbus runs the er20 model, not '" + robot.name + "'");
+  std::string error;
+  auto drive = linux_port::ModbusDrive::connect(o.uri, &error);
+  if (!drive) throw InputError(error);
+  linux_port::DriveInfo info;
+  if (!drive->read_info(info)) throw InputError("drive: " + drive->error());
+  if (info.map_version != mm::kMapVersion || info.num_joints != 6)
+    throw InputError("drive speaks another register map");
+  if (info.robot_id != Robot::kRobotId)
+    throw InputError("the drive's robot id does not match robot '" + robot.name + "'");
+
+  CalibrateResult r;
+  std::ostream* prog = o.progress ? &progress : nullptr;
+  // 1. Excitation: stream, then online estimators sample by sample and the batch fit.
+  const auto excitation = default_excitation(robot, o.f_f, o.harmonics, o.candidates, o.seed, &r.trajectory_cond);
+  progress << "excitation: Fourier series (Eq. 27), L = " << o.harmonics << ", f_f = " << o.f_f << " Hz, " << o.periods
+           << " periods at " << o.sample_rate_hz << " Hz, cond(K) = " << std::setprecision(3) << r.trajectory_cond
+           << "\n";
+  const JointLog log = stream_run(*drive, excitation, o.periods, o.sample_rate_hz, prog, &r.lost, &r.stream_seconds);
+  r.samples = static_cast<long>(log.samples());
+  r.samples_per_second = static_cast<double>(r.samples) / std::max(1e-9, r.stream_seconds);
+  dispatch<Online>(o.terms, log, o, r);
+  IdentifyOptions io = o.identify;
+  io.terms = o.terms;
+  r.batch = identify(robot, log, io);
+  for (const auto& p : r.batch.params) {
+    r.names.push_back(p.name);
+    r.phi_batch.push_back(p.value);
+  }
+  // 2. Fresh trajectory with the drive's current table, flash, same trajectory again.
+  const auto fresh = default_excitation(robot, o.f_f, o.harmonics, 1, o.seed + 1000, nullptr);
+  progress << "verification run with the drive's current table\n";
+  const JointLog vlog = verification_run(*drive, fresh, o, prog, &r.lost, r.drive_error_before);
+  dispatch<Verify>(o.terms, vlog, o, r);
+  if (o.flash) {
+    ParameterTable table;
+    table.robot_id = Robot::kRobotId;
+    table.model_id = o.terms;
+    table.count = static_cast<std::uint16_t>(r.phi_batch.size());
+    for (size_t i = 0; i < r.phi_batch.size(); ++i) table.values[i] = static_cast<float>(r.phi_batch[i]);
+    const port::PortStatus st = drive->write(table, &r.flash_status);
+    r.flashed = st == port::PortStatus::ok;
+    r.flash_message = st == port::PortStatus::rejected
+                          ? std::string("drive rejected the table: ") + to_string(r.flash_status)
+                      : st == port::PortStatus::ok ? "flashed, read back and compared: identical"
+                                                   : "flash failed: " + drive->error();
+    if (st == port::PortStatus::transport_error) throw InputError(r.flash_message);
+    progress << r.flash_message << "\n";
+    if (r.flashed) {
+      progress << "verification run with the new table\n";
+      verification_run(*drive, fresh, o, prog, &r.lost, r.drive_error_after);
+    }
+  }
+  r.total_seconds = seconds_since(t0);
+  return r;
+}
+
+void print_calibrate_report(std::ostream& out, const CalibrateResult& r) {
+  out << std::fixed;
+  out << "\ncalibration: " << r.samples << " samples streamed in " << std::setprecision(1) << r.stream_seconds << " s ("
+      << std::setprecision(0) << r.samples_per_second << " samples/s), " << r.lost << " lost; online updates "
+      << r.online_updates << " (" << r.online_rejected << " rejected)\n";
+  out << "batch fit (" << r.batch.method << ", " << r.batch.model << "), cross-validated on the excitation run:\n";
+  out << "  joint    RMS [Nm]   rel. RMS      R2     e_T\n";
+  for (const auto& j : r.batch.joints) {
+    out << "  " << std::setw(5) << j.joint << std::setprecision(3) << std::setw(11) << j.rms << std::setw(11)
+        << j.relative_rms << std::setprecision(4) << std::setw(8) << j.r2 << std::setw(8) << j.e_T << "\n";
+  }
+  out << "fresh trajectory, prediction RMS [Nm] of each estimate (online path, causal filter):\n";
+  out << "  joint     RMS tau       batch          KF         RLS\n";
+  for (int j = 0; j < 6; ++j) {
+    out << "  " << std::setw(5) << j + 1 << std::setprecision(3) << std::setw(12) << r.verify_batch.rms_tau[j]
+        << std::setw(12) << r.verify_batch.rms[j] << std::setw(12) << r.verify_kf.rms[j] << std::setw(12)
+        << r.verify_rls.rms[j] << "\n";
+  }
+  out << "flash: " << r.flash_message << "\n";
+  if (r.flashed) {
+    out << "drive model error RMS(tau - tau_ff) [Nm] on the fresh trajectory, before -> after the flash:\n";
+    out << "  joint      before       after   reduction\n";
+    for (int j = 0; j < 6; ++j) {
+      const double b = r.drive_error_before[j], a = r.drive_error_after[j];
+      out << "  " << std::setw(5) << j + 1 << std::setprecision(3) << std::setw(12) << b << std::setw(12) << a
+          << std::setprecision(1) << std::setw(11) << (b > 0 ? 100.0 * (1.0 - a / b) : 0.0) << "%\n";
+    }
+  }
+  out << "total wall time " << std::setprecision(1) << r.total_seconds << " s\n";
+  out << std::defaultfloat;
+}
+
+}  // namespace dyncal::host

@@ -1,0 +1,156 @@
+// The drive's Modbus register map: the one definition used by the drive (simulated or firmware)
+// and the host client. docs/modbus.md's table is printed from kRegisterMap (`dyncal registers`)
+// and a test fails when the two differ.
+#pragma once
+
+#include <cstdint>
+
+#include "dyncal/parameter_table.hpp"
+
+namespace dyncal::modbus_map {
+
+/// Register words are 16-bit. 32-bit values (u32, f32) take two consecutive registers, most
+/// significant word first (big-endian words, "ABCD"; libmodbus modbus_get_float_abcd).
+enum class Bank : std::uint8_t { input, holding };
+enum class Type : std::uint8_t { u16, u32, f32, bytes };
+enum class Access : std::uint8_t { read, read_write };
+
+struct Field {
+  const char* name;
+  Bank bank;
+  std::uint16_t address;
+  std::uint16_t words;  ///< registers in all (count * words per element)
+  Type type;
+  const char* unit;
+  const char* description;
+};
+
+inline constexpr int kMaxJoints = 6;
+inline constexpr int kMaxHarmonics = 8;
+inline constexpr std::uint16_t kMapVersion = 1;
+
+/// Drive states (input register `state`).
+enum class DriveState : std::uint16_t { idle = 0, playing = 1, finished = 2 };
+
+/// Commands (holding register `command`). Any other value is answered with ILLEGAL DATA VALUE.
+enum class Command : std::uint16_t {
+  none = 0,
+  start = 1,         ///< play the Fourier trajectory from its start; clears the ring and the statistics
+  stop = 2,          ///< stop playing and hold the current position
+  commit_table = 3,  ///< check the staging table and make it active (see docs/modbus.md)
+};
+
+// --- input registers (function code 04), read-only
+inline constexpr std::uint16_t kMapVersionReg = 0;        // u16
+inline constexpr std::uint16_t kNumJointsReg = 1;         // u16
+inline constexpr std::uint16_t kRobotIdReg = 2;           // u32
+inline constexpr std::uint16_t kActiveModelIdReg = 4;     // u32
+inline constexpr std::uint16_t kActiveCountReg = 6;       // u16
+inline constexpr std::uint16_t kStateReg = 7;             // u16 DriveState
+inline constexpr std::uint16_t kCommitResultReg = 8;      // u16 TableStatus of the last commit
+inline constexpr std::uint16_t kCommitCounterReg = 9;     // u16, +1 per commit command
+inline constexpr std::uint16_t kSimTimeReg = 10;          // f32
+inline constexpr std::uint16_t kProducedReg = 12;         // u32 samples recorded so far (next seq)
+inline constexpr std::uint16_t kOverrunReg = 14;          // u32 samples dropped (ring full)
+inline constexpr std::uint16_t kActiveCrcReg = 16;        // u32 CRC-32 field of the active table
+inline constexpr std::uint16_t kModelErrorReg = 18;       // f32[6]
+inline constexpr std::uint16_t kActiveTableSizeReg = 30;  // u16 bytes
+inline constexpr std::uint16_t kActiveTableReg = 31;      // bytes, kTableMaxBytes
+inline constexpr std::uint16_t kTableWords = kTableMaxBytes / 2;
+inline constexpr std::uint16_t kRingReg = 400;               // u32 first seq, u16 count, samples
+inline constexpr int kSampleWords = 2 + 3 * 2 * kMaxJoints;  // seq u32, q, qd, tau f32[6]
+inline constexpr int kSamplesPerBlock = 3;                   // 3 + 3 * 38 = 117 words <= 125 per read
+inline constexpr std::uint16_t kRingWords = 3 + kSamplesPerBlock * kSampleWords;
+inline constexpr std::uint16_t kInputWords = kRingReg + kRingWords;
+
+// --- holding registers (function codes 03, 06, 16, 23)
+inline constexpr std::uint16_t kCommandReg = 0;        // u16 Command
+inline constexpr std::uint16_t kAckReg = 2;            // u32 host consumed all samples with seq < ack
+inline constexpr std::uint16_t kSampleRateReg = 4;     // f32 [Hz], 100..1000, divides 1000
+inline constexpr std::uint16_t kOmegaFReg = 6;         // f32 [Hz] fundamental frequency, (0, 10]
+inline constexpr std::uint16_t kHarmonicsReg = 8;      // u16 L, 1..kMaxHarmonics
+inline constexpr std::uint16_t kPeriodsReg = 9;        // u16 periods to play, 1..100
+inline constexpr std::uint16_t kCoefficientsReg = 10;  // f32[6][1 + 2 * 8]: q0, a_1..a_8, b_1..b_8
+inline constexpr int kCoefficientsPerJoint = 1 + 2 * kMaxHarmonics;
+inline constexpr std::uint16_t kCoefficientWords = 2 * kMaxJoints * kCoefficientsPerJoint;
+inline constexpr std::uint16_t kStagingSizeReg = 300;   // u16 bytes of the staged table
+inline constexpr std::uint16_t kStagingTableReg = 301;  // bytes, kTableMaxBytes
+inline constexpr std::uint16_t kHoldingWords = kStagingTableReg + kTableWords;
+
+static_assert(kCoefficientsReg + kCoefficientWords <= kStagingSizeReg, "holding fields overlap");
+static_assert(kActiveTableReg + kTableWords <= kRingReg, "input fields overlap");
+static_assert(kRingWords <= 125, "one ring block must fit one Modbus read");
+
+inline constexpr Field kRegisterMap[] = {
+    {"map_version", Bank::input, kMapVersionReg, 1, Type::u16, "-", "register map version (1)"},
+    {"num_joints", Bank::input, kNumJointsReg, 1, Type::u16, "-", "joints of the arm"},
+    {"robot_id", Bank::input, kRobotIdReg, 2, Type::u32, "-", "generated kRobotId of the drive's robot"},
+    {"active_model_id", Bank::input, kActiveModelIdReg, 2, Type::u32, "-", "model id of the active table"},
+    {"active_count", Bank::input, kActiveCountReg, 1, Type::u16, "-", "parameters in the active table"},
+    {"state", Bank::input, kStateReg, 1, Type::u16, "-", "0 idle, 1 playing, 2 finished"},
+    {"commit_result", Bank::input, kCommitResultReg, 1, Type::u16, "-", "TableStatus of the last commit (0 ok)"},
+    {"commit_counter", Bank::input, kCommitCounterReg, 1, Type::u16, "-", "incremented when a commit completes"},
+    {"sim_time", Bank::input, kSimTimeReg, 2, Type::f32, "s", "drive time since the trajectory started"},
+    {"produced", Bank::input, kProducedReg, 2, Type::u32, "-", "samples recorded since start (next seq)"},
+    {"overruns", Bank::input, kOverrunReg, 2, Type::u32, "-", "samples dropped because the ring was full"},
+    {"active_crc", Bank::input, kActiveCrcReg, 2, Type::u32, "-", "CRC-32 field of the active table"},
+    {"model_error_rms", Bank::input, kModelErrorReg, 12, Type::f32, "Nm",
+     "per joint: RMS of tau - tau_ff (drive's model error) since start"},
+    {"active_table_size", Bank::input, kActiveTableSizeReg, 1, Type::u16, "bytes", "size of the active table"},
+    {"active_table", Bank::input, kActiveTableReg, kTableWords, Type::bytes, "-",
+     "active parameter table, 2 bytes per register (first byte high)"},
+    {"ring", Bank::input, kRingReg, kRingWords, Type::bytes, "-",
+     "u32 first seq, u16 count n <= 3, then n samples: u32 seq, f32 q[6] rad, qd[6] rad/s, tau[6] Nm"},
+    {"command", Bank::holding, kCommandReg, 1, Type::u16, "-", "1 start, 2 stop, 3 commit table; reads 0"},
+    {"ack", Bank::holding, kAckReg, 2, Type::u32, "-", "samples with seq < ack are consumed and freed"},
+    {"sample_rate", Bank::holding, kSampleRateReg, 2, Type::f32, "Hz", "recording rate, 100..1000, divides 1000"},
+    {"omega_f", Bank::holding, kOmegaFReg, 2, Type::f32, "Hz", "Fourier fundamental frequency (Eq. 27), (0, 10]"},
+    {"harmonics", Bank::holding, kHarmonicsReg, 1, Type::u16, "-", "L, number of harmonics, 1..8"},
+    {"periods", Bank::holding, kPeriodsReg, 1, Type::u16, "-", "trajectory periods to play, 1..100"},
+    {"coefficients", Bank::holding, kCoefficientsReg, kCoefficientWords, Type::f32, "rad, rad/s",
+     "per joint: q0, a_1..a_8, b_1..b_8 of Eq. 27 (17 f32 per joint)"},
+    {"staging_size", Bank::holding, kStagingSizeReg, 1, Type::u16, "bytes", "size of the staged table"},
+    {"staging_table", Bank::holding, kStagingTableReg, kTableWords, Type::bytes, "-",
+     "staging bank for the next table, 2 bytes per register (first byte high)"},
+};
+
+/// The field that contains register `address` of `bank`, or nullptr (an illegal address).
+inline const Field* find_field(Bank bank, int address) noexcept {
+  for (const Field& f : kRegisterMap) {
+    if (f.bank == bank && address >= f.address && address < f.address + f.words) return &f;
+  }
+  return nullptr;
+}
+
+inline std::uint32_t get_u32(const std::uint16_t* regs) noexcept {
+  return (static_cast<std::uint32_t>(regs[0]) << 16) | regs[1];
+}
+inline void set_u32(std::uint16_t* regs, std::uint32_t v) noexcept {
+  regs[0] = static_cast<std::uint16_t>(v >> 16);
+  regs[1] = static_cast<std::uint16_t>(v);
+}
+inline float get_f32(const std::uint16_t* regs) noexcept {
+  const std::uint32_t u = get_u32(regs);
+  float f;
+  std::memcpy(&f, &u, 4);
+  return f;
+}
+inline void set_f32(std::uint16_t* regs, float f) noexcept {
+  std::uint32_t u;
+  std::memcpy(&u, &f, 4);
+  set_u32(regs, u);
+}
+/// Bytes <-> registers: byte 2k is the high half of register k.
+inline void bytes_to_regs(const std::uint8_t* bytes, int size, std::uint16_t* regs) noexcept {
+  for (int k = 0; k < (size + 1) / 2; ++k) {
+    const std::uint8_t lo = 2 * k + 1 < size ? bytes[2 * k + 1] : 0;
+    regs[k] = static_cast<std::uint16_t>((bytes[2 * k] << 8) | lo);
+  }
+}
+inline void regs_to_bytes(const std::uint16_t* regs, int size, std::uint8_t* bytes) noexcept {
+  for (int i = 0; i < size; ++i) {
+    bytes[i] = static_cast<std::uint8_t>(i % 2 == 0 ? regs[i / 2] >> 8 : regs[i / 2] & 0xFF);
+  }
+}
+
+}  // namespace dyncal::modbus_map

@@ -1,0 +1,83 @@
+// The port surface: what lib/ code needs from a platform (time, a sample source, a parameter
+// store). Implemented per target: port/linux (Modbus client of a drive), port/cortex_m (firmware).
+#pragma once
+
+#include <cstdint>
+
+#include "dyncal/parameter_table.hpp"
+
+namespace dyncal::port {
+
+inline constexpr int kMaxJoints = 6;
+
+/// One sample as a drive records it, joint side: q [rad], qd [rad/s], tau [Nm] (motor torque
+/// reflected to the joint), float32 as on the wire. `seq` counts samples from the trajectory start.
+struct DriveSample {
+  std::uint32_t seq;
+  float q[kMaxJoints];
+  float qd[kMaxJoints];
+  float tau[kMaxJoints];
+};
+
+enum class PortStatus : std::uint8_t {
+  ok = 0,
+  no_data,          ///< nothing new yet; try again
+  end_of_stream,    ///< the source finished and every sample has been delivered
+  transport_error,  ///< the link failed (details from the port's own error text)
+  sequence_gap,     ///< samples were lost (drive overrun): the block starts after a gap
+  rejected,         ///< the other side refused the request (e.g. a table failed its checks)
+};
+
+constexpr const char* to_string(PortStatus s) noexcept {
+  switch (s) {
+    case PortStatus::ok:
+      return "ok";
+    case PortStatus::no_data:
+      return "no data";
+    case PortStatus::end_of_stream:
+      return "end of stream";
+    case PortStatus::transport_error:
+      return "transport error";
+    case PortStatus::sequence_gap:
+      return "sequence gap: samples lost";
+    case PortStatus::rejected:
+      return "rejected";
+  }
+  return "unknown";
+}
+
+/// Delivers samples in order, each exactly once.
+class SampleSource {
+ public:
+  /// Copies up to `capacity` new samples into `out`, sets *count. ok with *count > 0, no_data,
+  /// end_of_stream, sequence_gap (the samples returned follow a gap; the gap size is the jump in
+  /// seq) or transport_error.
+  virtual PortStatus read(DriveSample* out, int capacity, int* count) noexcept = 0;
+
+ protected:
+  ~SampleSource() = default;
+};
+
+/// Holds the drive's active parameter table.
+class ParameterStore {
+ public:
+  /// Stages and commits `table`. ok when the drive made it active; rejected with *reason set when
+  /// the drive refused it (the active table is unchanged); transport_error otherwise.
+  virtual PortStatus write(const ParameterTable& table, TableStatus* reason) noexcept = 0;
+  /// Reads the active table back (decoded and CRC-checked; *reason says why if not ok).
+  virtual PortStatus read(ParameterTable& table, TableStatus* reason) noexcept = 0;
+
+ protected:
+  ~ParameterStore() = default;
+};
+
+/// Monotonic time.
+class Clock {
+ public:
+  virtual std::uint64_t now_us() noexcept = 0;
+
+ protected:
+  ~Clock() = default;
+};
+
+}  // namespace dyncal::port

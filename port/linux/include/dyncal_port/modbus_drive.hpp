@@ -1,0 +1,80 @@
+#pragma once
+// port/linux: a drive reached over Modbus (libmodbus client), TCP or RTU. Implements the lib/
+// port surface (dyncal/port.hpp): sample source (the drive's ring buffer, in order, each sample
+// once), parameter store (staging bank + commit + read-back) and a monotonic clock.
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "dyncal/fourier_trajectory.hpp"
+#include "dyncal/modbus_map.hpp"
+#include "dyncal/port.hpp"
+
+typedef struct _modbus modbus_t;
+
+namespace dyncal::linux_port {
+
+using Trajectory = FourierTrajectory<double, modbus_map::kMaxJoints, modbus_map::kMaxHarmonics>;
+
+struct DriveInfo {
+  int map_version = 0;
+  int num_joints = 0;
+  std::uint32_t robot_id = 0;
+  std::uint32_t active_model_id = 0;
+  int active_count = 0;
+  modbus_map::DriveState state = modbus_map::DriveState::idle;
+  double sim_time = 0;
+  std::uint32_t produced = 0;
+  std::uint32_t overruns = 0;
+  std::array<double, modbus_map::kMaxJoints> model_error_rms{};
+};
+
+class ModbusDrive final : public port::SampleSource, public port::ParameterStore, public port::Clock {
+ public:
+  /// Connects to `uri`: tcp://HOST:PORT or rtu:DEVICE (115200 8N1, slave 1). nullptr on failure,
+  /// with the reason in *error.
+  static std::unique_ptr<ModbusDrive> connect(const std::string& uri, std::string* error);
+  ~ModbusDrive();
+  ModbusDrive(const ModbusDrive&) = delete;
+  ModbusDrive& operator=(const ModbusDrive&) = delete;
+
+  /// Last failure in words (libmodbus's text, or the drive's exception).
+  const std::string& error() const { return error_; }
+
+  bool read_info(DriveInfo& info);
+  /// Writes the trajectory (Eq. 27 coefficients), periods and sample rate. The drive must be idle.
+  bool write_trajectory(const Trajectory& trajectory, int periods, double sample_rate_hz);
+  bool start();
+  bool stop();
+
+  // port::SampleSource
+  port::PortStatus read(port::DriveSample* out, int capacity, int* count) noexcept override;
+  /// Samples lost to drive overruns so far (gaps in seq).
+  std::uint32_t lost() const { return lost_; }
+
+  // port::ParameterStore
+  port::PortStatus write(const ParameterTable& table, TableStatus* reason) noexcept override;
+  port::PortStatus read(ParameterTable& table, TableStatus* reason) noexcept override;
+  /// Raw bytes of the active table (for comparison with what was sent).
+  bool read_active_bytes(std::uint8_t* bytes, int capacity, int* size);
+
+  // port::Clock
+  std::uint64_t now_us() noexcept override;
+
+  /// Low-level register access (tests): false with error() on failure or a Modbus exception.
+  bool read_input(int address, int count, std::uint16_t* regs);
+  bool read_holding(int address, int count, std::uint16_t* regs);
+  bool write_holding(int address, int count, const std::uint16_t* regs);
+
+ private:
+  explicit ModbusDrive(modbus_t* ctx) : ctx_(ctx) {}
+  bool fail(const char* what);
+  modbus_t* ctx_;
+  std::string error_;
+  std::uint32_t next_seq_ = 0;
+  std::uint32_t lost_ = 0;
+};
+
+}  // namespace dyncal::linux_port

@@ -1,0 +1,239 @@
+#include "dyncal_port/modbus_drive.hpp"
+
+#include <modbus/modbus.h>
+
+#include <cerrno>
+#include <chrono>
+#include <cstring>
+#include <vector>
+
+namespace dyncal::linux_port {
+namespace mm = dyncal::modbus_map;
+
+std::unique_ptr<ModbusDrive> ModbusDrive::connect(const std::string& uri, std::string* error) {
+  modbus_t* ctx = nullptr;
+  if (uri.rfind("tcp://", 0) == 0) {
+    const std::string rest = uri.substr(6);
+    const size_t colon = rest.rfind(':');
+    if (colon == std::string::npos) {
+      *error = "drive URI '" + uri + "' lacks a port (tcp://HOST:PORT)";
+      return nullptr;
+    }
+    int port = 0;
+    try {
+      port = std::stoi(rest.substr(colon + 1));
+    } catch (const std::exception&) {
+      port = -1;
+    }
+    if (port <= 0 || port > 65535) {
+      *error = "drive URI '" + uri + "' has an invalid port";
+      return nullptr;
+    }
+    ctx = modbus_new_tcp(rest.substr(0, colon).c_str(), port);
+  } else if (uri.rfind("rtu:", 0) == 0) {
+    ctx = modbus_new_rtu(uri.substr(4).c_str(), 115200, 'N', 8, 1);
+    if (ctx) modbus_set_slave(ctx, 1);
+  } else {
+    *error = "drive URI '" + uri + "' is neither tcp://HOST:PORT nor rtu:DEVICE";
+    return nullptr;
+  }
+  if (!ctx) {
+    *error = std::string("cannot create a Modbus context for ") + uri + ": " + modbus_strerror(errno);
+    return nullptr;
+  }
+  modbus_set_response_timeout(ctx, 2, 0);
+  if (modbus_connect(ctx) != 0) {
+    *error = "cannot connect to the drive at " + uri + ": " + modbus_strerror(errno);
+    modbus_free(ctx);
+    return nullptr;
+  }
+  return std::unique_ptr<ModbusDrive>(new ModbusDrive(ctx));
+}
+
+ModbusDrive::~ModbusDrive() {
+  modbus_close(ctx_);
+  modbus_free(ctx_);
+}
+
+bool ModbusDrive::fail(const char* what) {
+  error_ = std::string(what) + ": " + modbus_strerror(errno);
+  return false;
+}
+
+bool ModbusDrive::read_input(int address, int count, std::uint16_t* regs) {
+  return modbus_read_input_registers(ctx_, address, count, regs) == count || fail("reading input registers");
+}
+bool ModbusDrive::read_holding(int address, int count, std::uint16_t* regs) {
+  return modbus_read_registers(ctx_, address, count, regs) == count || fail("reading holding registers");
+}
+bool ModbusDrive::write_holding(int address, int count, const std::uint16_t* regs) {
+  for (int done = 0; done < count;) {
+    const int n = std::min(count - done, MODBUS_MAX_WRITE_REGISTERS / 2 * 2);  // never split a 32-bit value
+    if (modbus_write_registers(ctx_, address + done, n, regs + done) != n) return fail("writing holding registers");
+    done += n;
+  }
+  return true;
+}
+
+bool ModbusDrive::read_info(DriveInfo& info) {
+  std::uint16_t r[mm::kModelErrorReg + 12];
+  if (!read_input(0, mm::kModelErrorReg + 12, r)) return false;
+  info.map_version = r[mm::kMapVersionReg];
+  info.num_joints = r[mm::kNumJointsReg];
+  info.robot_id = mm::get_u32(r + mm::kRobotIdReg);
+  info.active_model_id = mm::get_u32(r + mm::kActiveModelIdReg);
+  info.active_count = r[mm::kActiveCountReg];
+  info.state = static_cast<mm::DriveState>(r[mm::kStateReg]);
+  info.sim_time = mm::get_f32(r + mm::kSimTimeReg);
+  info.produced = mm::get_u32(r + mm::kProducedReg);
+  info.overruns = mm::get_u32(r + mm::kOverrunReg);
+  for (int j = 0; j < mm::kMaxJoints; ++j) info.model_error_rms[j] = mm::get_f32(r + mm::kModelErrorReg + 2 * j);
+  return true;
+}
+
+bool ModbusDrive::write_trajectory(const Trajectory& t, int periods, double sample_rate_hz) {
+  std::uint16_t settings[6];
+  mm::set_f32(settings, static_cast<float>(sample_rate_hz));
+  mm::set_f32(settings + 2, static_cast<float>(t.f_f));
+  settings[4] = static_cast<std::uint16_t>(t.harmonics);
+  settings[5] = static_cast<std::uint16_t>(periods);
+  std::vector<std::uint16_t> c(mm::kCoefficientWords, 0);
+  for (int j = 0; j < mm::kMaxJoints; ++j) {
+    std::uint16_t* p = c.data() + 2 * mm::kCoefficientsPerJoint * j;
+    mm::set_f32(p, static_cast<float>(t.q0[j]));
+    for (int l = 0; l < mm::kMaxHarmonics; ++l) {
+      mm::set_f32(p + 2 + 2 * l, static_cast<float>(t.a(j, l)));
+      mm::set_f32(p + 2 + 2 * mm::kMaxHarmonics + 2 * l, static_cast<float>(t.b(j, l)));
+    }
+  }
+  return write_holding(mm::kSampleRateReg, 6, settings) &&
+         write_holding(mm::kCoefficientsReg, mm::kCoefficientWords, c.data());
+}
+
+bool ModbusDrive::start() {
+  const std::uint16_t cmd = static_cast<std::uint16_t>(mm::Command::start);
+  next_seq_ = 0;
+  lost_ = 0;
+  return write_holding(mm::kCommandReg, 1, &cmd);
+}
+
+bool ModbusDrive::stop() {
+  const std::uint16_t cmd = static_cast<std::uint16_t>(mm::Command::stop);
+  return write_holding(mm::kCommandReg, 1, &cmd);
+}
+
+port::PortStatus ModbusDrive::read(port::DriveSample* out, int capacity, int* count) noexcept {
+  *count = 0;
+  std::uint16_t w[mm::kRingWords];
+  if (!read_input(mm::kRingReg, mm::kRingWords, w)) return port::PortStatus::transport_error;
+  const std::uint32_t first = mm::get_u32(w);
+  const int n = std::min<int>(w[2], capacity);
+  if (n == 0) {
+    DriveInfo info;
+    if (!read_info(info)) return port::PortStatus::transport_error;
+    const bool done = info.state != mm::DriveState::playing;
+    if (done && info.produced > next_seq_) {  // dropped at the end of the run
+      lost_ += info.produced - next_seq_;
+      next_seq_ = info.produced;
+      return port::PortStatus::sequence_gap;
+    }
+    return done && info.produced == next_seq_ ? port::PortStatus::end_of_stream : port::PortStatus::no_data;
+  }
+  const std::uint16_t* p = w + 3;
+  for (int k = 0; k < n; ++k, p += mm::kSampleWords) {
+    port::DriveSample& s = out[k];
+    s.seq = mm::get_u32(p);
+    for (int j = 0; j < mm::kMaxJoints; ++j) {
+      s.q[j] = mm::get_f32(p + 2 + 2 * j);
+      s.qd[j] = mm::get_f32(p + 2 + 12 + 2 * j);
+      s.tau[j] = mm::get_f32(p + 2 + 24 + 2 * j);
+    }
+  }
+  port::PortStatus status = port::PortStatus::ok;
+  if (first != next_seq_ || out[0].seq != first) {
+    if (first < next_seq_) {
+      error_ = "drive repeated samples already received (seq " + std::to_string(first) + ")";
+      return port::PortStatus::transport_error;
+    }
+    lost_ += first - next_seq_;
+    status = port::PortStatus::sequence_gap;
+  }
+  for (int k = 1; k < n; ++k) {
+    if (out[k].seq != out[k - 1].seq + 1) {
+      error_ = "samples out of order in one block";
+      return port::PortStatus::transport_error;
+    }
+  }
+  next_seq_ = out[n - 1].seq + 1;
+  std::uint16_t ack[2];
+  mm::set_u32(ack, next_seq_);
+  if (!write_holding(mm::kAckReg, 2, ack)) return port::PortStatus::transport_error;
+  *count = n;
+  return status;
+}
+
+port::PortStatus ModbusDrive::write(const ParameterTable& table, TableStatus* reason) noexcept {
+  std::uint8_t bytes[kTableMaxBytes];
+  int size = 0;
+  *reason = encode_table(table, bytes, kTableMaxBytes, &size);
+  if (*reason != TableStatus::ok) return port::PortStatus::rejected;
+  std::uint16_t regs[mm::kTableWords + 1] = {};
+  regs[0] = static_cast<std::uint16_t>(size);
+  mm::bytes_to_regs(bytes, size, regs + 1);
+  std::uint16_t counter_before = 0;
+  if (!read_input(mm::kCommitCounterReg, 1, &counter_before)) return port::PortStatus::transport_error;
+  if (!write_holding(mm::kStagingSizeReg, 1 + (size + 1) / 2, regs)) return port::PortStatus::transport_error;
+  const std::uint16_t cmd = static_cast<std::uint16_t>(mm::Command::commit_table);
+  if (!write_holding(mm::kCommandReg, 1, &cmd)) return port::PortStatus::transport_error;
+  // The drive answers the command at once and flashes afterwards; requests wait until it is done.
+  for (;;) {
+    std::uint16_t r[2];
+    if (!read_input(mm::kCommitResultReg, 2, r)) return port::PortStatus::transport_error;
+    if (r[1] != counter_before) {
+      *reason = static_cast<TableStatus>(r[0]);
+      break;
+    }
+  }
+  if (*reason != TableStatus::ok) return port::PortStatus::rejected;
+  // Read back and compare byte for byte.
+  std::uint8_t back[kTableMaxBytes];
+  int back_size = 0;
+  if (!read_active_bytes(back, kTableMaxBytes, &back_size)) return port::PortStatus::transport_error;
+  if (back_size != size || std::memcmp(back, bytes, static_cast<size_t>(size)) != 0) {
+    error_ = "the drive's active table differs from the table sent";
+    return port::PortStatus::transport_error;
+  }
+  return port::PortStatus::ok;
+}
+
+bool ModbusDrive::read_active_bytes(std::uint8_t* bytes, int capacity, int* size) {
+  std::uint16_t regs[mm::kTableWords + 1];
+  for (int done = 0; done < mm::kTableWords + 1;) {
+    const int n = std::min(mm::kTableWords + 1 - done, MODBUS_MAX_READ_REGISTERS);
+    if (!read_input(mm::kActiveTableSizeReg + done, n, regs + done)) return false;
+    done += n;
+  }
+  *size = regs[0];
+  if (*size > capacity) {
+    error_ = "active table larger than the buffer";
+    return false;
+  }
+  mm::regs_to_bytes(regs + 1, *size, bytes);
+  return true;
+}
+
+port::PortStatus ModbusDrive::read(ParameterTable& table, TableStatus* reason) noexcept {
+  std::uint8_t bytes[kTableMaxBytes];
+  int size = 0;
+  if (!read_active_bytes(bytes, kTableMaxBytes, &size)) return port::PortStatus::transport_error;
+  *reason = decode_table(bytes, size, table);
+  return *reason == TableStatus::ok ? port::PortStatus::ok : port::PortStatus::rejected;
+}
+
+std::uint64_t ModbusDrive::now_us() noexcept {
+  return static_cast<std::uint64_t>(
+      std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now().time_since_epoch())
+          .count());
+}
+
+}  // namespace dyncal::linux_port
