@@ -42,7 +42,7 @@ struct ModelRun {
   static constexpr int P = Model::kNumParams;
   using ParamVec = Eigen::Matrix<double, P, 1>;
 
-  static void online(const JointLog& log, const CalibrateOptions& o, CalibrateResult& r) {
+  static void online(const JointLog& log, const Vec& qd_max, const CalibrateOptions& o, CalibrateResult& r) {
     auto kf = std::make_unique<KalmanFilter<double, P, 6>>();
     auto rls = std::make_unique<RlsForgetting<double, P, 6>>();
     const ParamVec p0 = ParamVec::Constant(o.identify.p0);
@@ -59,6 +59,11 @@ struct ModelRun {
       if (diff.update(log.q.row(s).transpose(), log.tau.row(s).transpose(), q, qd, qdd, tau) != UpdateStatus::ok)
         continue;
       Model::regressor(q, qd, qdd, zero, K);
+      for (int j = 0; j < 6; ++j) {  // stiction band: as the batch fit, relative to the joint's speed limit
+        if (std::abs(qd[j]) >= o.identify.min_speed_fraction * qd_max[j]) continue;
+        K.row(j).setZero();
+        tau[j] = 0.0;
+      }
       const UpdateStatus a = kf->update(K, tau, ones);
       const UpdateStatus b = rls->update(K, tau);
       ++r.online_updates;
@@ -123,8 +128,8 @@ void dispatch(unsigned terms, Args&&... args) {
 
 template <unsigned Terms>
 struct Online {
-  static void run(const JointLog& log, const CalibrateOptions& o, CalibrateResult& r) {
-    ModelRun<Terms>::online(log, o, r);
+  static void run(const JointLog& log, const Vec& qd_max, const CalibrateOptions& o, CalibrateResult& r) {
+    ModelRun<Terms>::online(log, qd_max, o, r);
   }
 };
 template <unsigned Terms>
@@ -285,7 +290,7 @@ CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions&
   const JointLog log = stream_run(*drive, excitation, o.periods, o.sample_rate_hz, prog, &r.lost, &r.stream_seconds);
   r.samples = static_cast<long>(log.samples());
   r.samples_per_second = static_cast<double>(r.samples) / std::max(1e-9, r.stream_seconds);
-  dispatch<Online>(o.terms, log, o, r);
+  dispatch<Online>(o.terms, log, Vec(robot.qd_max), o, r);
   IdentifyOptions io = o.identify;
   io.terms = o.terms;
   r.batch = identify(robot, log, io);

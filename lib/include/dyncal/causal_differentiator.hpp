@@ -3,6 +3,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cmath>
 
 #include "dyncal/finite.hpp"
 #include "dyncal/status.hpp"
@@ -30,12 +31,15 @@ class CausalDifferentiator {
     b1_ = Scalar(2) * b0_;
     a1_ = Scalar(2) * (k * k - Scalar(1)) * norm;
     a2_ = (Scalar(1) - Scalar(1.41421356237309504880) * k + k * k) * norm;
+    // Outputs wait until the start transient has decayed: 3 / f_c seconds (the filter's step
+    // response is within 0.1 % of its final value after about 2.5 / f_c).
+    warmup_ = static_cast<long>(std::ceil(Scalar(3) / (f_c * h)));
     count_ = 0;
     return UpdateStatus::ok;
   }
 
-  /// Feeds sample k. Returns ok when (q, qd, qdd, tau) of sample k-1 are ready (from the third
-  /// sample on), not_ready before, rejected_non_finite for NaN/inf input (state unchanged).
+  /// Feeds sample k. Returns ok when (q, qd, qdd, tau) of sample k-1 are ready (after the warm-up
+  /// of 3 / f_c seconds), not_ready before, rejected_non_finite for NaN/inf input (state unchanged).
   UpdateStatus update(const Vec& q_in, const Vec& tau_in, Vec& q, Vec& qd, Vec& qdd, Vec& tau) noexcept {
     if (!all_finite(q_in) || !all_finite(tau_in)) return UpdateStatus::rejected_non_finite;
     if (count_ == 0) {  // start the filter in steady state at the first sample
@@ -51,8 +55,8 @@ class CausalDifferentiator {
     qf0_ = qf;
     tf1_ = tf0_;
     tf0_ = tf;
-    if (++count_ < 3) return UpdateStatus::not_ready;
-    count_ = 3;
+    if (++count_ < warmup_ + 3) return UpdateStatus::not_ready;
+    count_ = warmup_ + 3;
     q = qf1_;
     qd = (qf0_ - qf2_) / (Scalar(2) * h_);
     qdd = (qf0_ - Scalar(2) * qf1_ + qf2_) / (h_ * h_);
@@ -71,7 +75,7 @@ class CausalDifferentiator {
   Scalar h_ = Scalar(1), b0_ = Scalar(0), b1_ = Scalar(0), a1_ = Scalar(0), a2_ = Scalar(0);
   Vec zq1_ = Vec::Zero(), zq2_ = Vec::Zero(), zt1_ = Vec::Zero(), zt2_ = Vec::Zero();
   Vec qf0_ = Vec::Zero(), qf1_ = Vec::Zero(), qf2_ = Vec::Zero(), tf0_ = Vec::Zero(), tf1_ = Vec::Zero();
-  int count_ = 0;
+  long count_ = 0, warmup_ = 0;
 };
 
 }  // namespace dyncal
