@@ -1,5 +1,7 @@
 #include "drive_commands.hpp"
 
+#include <unistd.h>
+
 #include <csignal>
 #include <fstream>
 #include <iomanip>
@@ -79,7 +81,7 @@ int run_calibrate(Settings& s) {
   s.cal.uri = s.uri;
   s.cal.terms = dyncal::host::parse_model(s.model);
   s.cal.flash = !s.no_flash;
-  s.cal.progress = !s.quiet;
+  s.cal.progress = !s.quiet && isatty(2);  // the bar redraws with \r: only on a terminal
   const auto r = dyncal::host::calibrate(robot, s.cal, std::cerr);
   dyncal::host::print_calibrate_report(std::cout, r);
   if (!s.report.empty()) {

@@ -191,39 +191,30 @@ class Server {
   }
 
   void run(const std::atomic<bool>& stop) {
-    auto wall_start = Clock::now();
-    double sim_at_start = 0;
-    bool was_playing = false;
     while (!stop.load()) {
-      const bool playing = drive_.state() == mm::DriveState::playing;
-      if (playing && !was_playing) {
-        wall_start = Clock::now();
-        sim_at_start = drive_.time();
-      }
-      was_playing = playing;
       long timeout_us = 50000;
-      if (playing) {
+      if (drive_.state() == mm::DriveState::playing) {
         if (drive_.lockstep) {
           timeout_us = drive_.ring_full() ? 50000 : 0;
         } else {
-          const double lag =
-              drive_.time() - sim_at_start - std::chrono::duration<double>(Clock::now() - wall_start).count();
+          const double lag = drive_.time() - std::chrono::duration<double>(Clock::now() - wall_start_).count();
           timeout_us = std::max(0L, std::lround(lag * 1e6));
         }
       }
       poll_requests(timeout_us);
-      advance(wall_start, sim_at_start);
+      advance();
     }
   }
 
  private:
-  void advance(Clock::time_point wall_start, double sim_at_start) {
+  // Real time: simulated time since start() follows the wall clock since the start command.
+  void advance() {
     if (drive_.state() != mm::DriveState::playing) return;
     if (drive_.lockstep) {
       for (int k = 0; k < 200 && !drive_.ring_full() && drive_.state() == mm::DriveState::playing; ++k) drive_.step();
     } else {
-      const double wall = std::chrono::duration<double>(Clock::now() - wall_start).count();
-      while (drive_.state() == mm::DriveState::playing && drive_.time() - sim_at_start < wall) drive_.step();
+      const double wall = std::chrono::duration<double>(Clock::now() - wall_start_).count();
+      while (drive_.state() == mm::DriveState::playing && drive_.time() < wall) drive_.step();
     }
   }
 
@@ -344,6 +335,7 @@ class Server {
       case mm::Command::start:
         load_trajectory(drive_, h);
         drive_.start();
+        wall_start_ = Clock::now();
         mm::set_u32(h + mm::kAckReg, 0);
         break;
       case mm::Command::stop:
@@ -378,6 +370,7 @@ class Server {
   modbus_mapping_t* map_ = nullptr;
   int listen_fd_ = -1;
   std::vector<int> clients_;
+  Clock::time_point wall_start_ = Clock::now();
 };
 
 }  // namespace
