@@ -1,0 +1,10 @@
+# Fails when docs/modbus.md's register table differs from `dyncal registers` (the header's map).
+execute_process(COMMAND ${DYNCAL} registers OUTPUT_VARIABLE generated RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "dyncal registers failed")
+endif()
+file(READ ${DOC} doc)
+string(REGEX MATCH "<!-- BEGIN REGISTER MAP \\(dyncal registers\\) -->\n(.*)<!-- END REGISTER MAP -->" _ "${doc}")
+if(NOT CMAKE_MATCH_1 STREQUAL generated)
+  message(FATAL_ERROR "docs/modbus.md register table is out of date: paste the output of `dyncal registers`")
+endif()
