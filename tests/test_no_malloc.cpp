@@ -8,9 +8,11 @@
 #include <cstdlib>
 #include <new>
 
+#include "dyncal/causal_differentiator.hpp"
 #include "dyncal/kalman_filter.hpp"
 #include "dyncal/rls_forgetting.hpp"
 #include "dyncal/streaming_least_squares.hpp"
+#include "dyncal/table_check.hpp"
 #include "support/synthetic.hpp"
 
 namespace {
@@ -67,6 +69,9 @@ struct Workspace {
   Eigen::Matrix<Scalar, Er20::kNumStandard, 1> phi_std;
   Eigen::Matrix<Scalar, 6, 6> M;
   Eigen::Matrix<Scalar, P, 1> phi, diag;
+  dyncal::CausalDifferentiator<Scalar, 6> diff;
+  dyncal::ParameterTable table;
+  std::uint8_t table_bytes[dyncal::kTableMaxBytes];
 };
 
 template <typename Scalar>
@@ -78,6 +83,7 @@ void run_updaters(Workspace<Scalar>& w) {
   ASSERT_EQ(w.kf.reset(PV::Zero(), PV::Constant(Scalar(1e4))), dyncal::UpdateStatus::ok);
   ASSERT_EQ(w.kf.set_gate(Scalar(100)), dyncal::UpdateStatus::ok);
   ASSERT_EQ(w.rls.reset(PV::Zero(), PV::Constant(Scalar(1e4)), Scalar(0.999)), dyncal::UpdateStatus::ok);
+  ASSERT_EQ(w.diff.reset(Scalar(0.01), Scalar(20)), dyncal::UpdateStatus::ok);
   JointVec qd_, q_, qdd_;
   for (int i = 0; i < 300; ++i) {
     dyncal::test::fourier_state(0.01 * i, q_, qd_, qdd_);
@@ -92,7 +98,16 @@ void run_updaters(Workspace<Scalar>& w) {
     ASSERT_EQ(w.ls.update(w.K, tau), dyncal::UpdateStatus::ok);
     ASSERT_EQ(w.kf.update(w.K, tau, V::Ones()), dyncal::UpdateStatus::ok);
     ASSERT_EQ(w.rls.update(w.K, tau), dyncal::UpdateStatus::ok);
+    V fq, fqd, fqdd, ftau;
+    const auto ds = w.diff.update(q, tau, fq, fqd, fqdd, ftau);
+    ASSERT_TRUE(ds == dyncal::UpdateStatus::ok || ds == dyncal::UpdateStatus::not_ready);
   }
+  // Parameter table: build, encode, decode, check (what a drive does on a flash).
+  dyncal::make_table<Model>(truth, w.table);
+  int size = 0;
+  ASSERT_EQ(dyncal::encode_table(w.table, w.table_bytes, dyncal::kTableMaxBytes, &size), dyncal::TableStatus::ok);
+  ASSERT_EQ(dyncal::decode_table(w.table_bytes, size, w.table), dyncal::TableStatus::ok);
+  ASSERT_EQ(dyncal::check_table<Model>(w.table), dyncal::TableStatus::ok);
   ASSERT_EQ(w.ls.solve(w.phi), dyncal::UpdateStatus::ok);
   ASSERT_EQ(w.ls.inverse_gram_diagonal(w.diag), dyncal::UpdateStatus::ok);
   w.kf.covariance().diagonal(w.diag);
