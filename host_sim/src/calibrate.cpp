@@ -3,6 +3,7 @@
 #include <Eigen/SVD>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <iomanip>
 #include <memory>
 #include <ostream>
@@ -35,6 +36,12 @@ void progress_bar(std::ostream& out, double fraction, long samples, const char* 
       << static_cast<int>(std::lround(100 * std::min(1.0, fraction))) << "% " << samples << " samples" << std::flush;
 }
 
+/// Per-sample consumer of a stream (the online estimators) and its wrap-up.
+struct SampleSink {
+  std::function<void(const port::DriveSample&)> push;
+  std::function<void(CalibrateResult&)> finish;
+};
+
 /// Online path and verification for one compiled model.
 template <unsigned Terms>
 struct ModelRun {
@@ -42,35 +49,54 @@ struct ModelRun {
   static constexpr int P = Model::kNumParams;
   using ParamVec = Eigen::Matrix<double, P, 1>;
 
-  static void online(const JointLog& log, const Vec& qd_max, const CalibrateOptions& o, CalibrateResult& r) {
-    auto kf = std::make_unique<KalmanFilter<double, P, 6>>();
-    auto rls = std::make_unique<RlsForgetting<double, P, 6>>();
-    const ParamVec p0 = ParamVec::Constant(o.identify.p0);
-    kf->reset(ParamVec::Zero(), p0);
-    rls->reset(ParamVec::Zero(), p0, o.rls_mu);
+  /// The online path: lib/ KF and RLS updated with each sample as it arrives from the drive.
+  struct Online {
+    std::unique_ptr<KalmanFilter<double, P, 6>> kf = std::make_unique<KalmanFilter<double, P, 6>>();
+    std::unique_ptr<RlsForgetting<double, P, 6>> rls = std::make_unique<RlsForgetting<double, P, 6>>();
     CausalDifferentiator<double, 6> diff;
-    if (diff.reset(log.sample_period(), o.online_cutoff_hz) != UpdateStatus::ok) {
-      throw InputError("online cut-off must be below half the sample rate");
-    }
     typename Model::template Regressor<double> K;
-    const Vec ones = Vec::Ones(), zero = Vec::Zero();
-    for (Eigen::Index s = 0; s < log.samples(); ++s) {
-      Vec q, qd, qdd, tau;
-      if (diff.update(log.q.row(s).transpose(), log.tau.row(s).transpose(), q, qd, qdd, tau) != UpdateStatus::ok)
-        continue;
-      Model::regressor(q, qd, qdd, zero, K);
+    Vec qd_max;
+    double min_speed = 0;
+    long updates = 0, rejected = 0;
+
+    void push(const port::DriveSample& sample) {
+      Vec q_in, tau_in, q, qd, qdd, tau;
+      for (int j = 0; j < 6; ++j) {
+        q_in[j] = sample.q[j];
+        tau_in[j] = sample.tau[j];
+      }
+      if (diff.update(q_in, tau_in, q, qd, qdd, tau) != UpdateStatus::ok) return;
+      Model::regressor(q, qd, qdd, Vec::Zero().eval(), K);
       for (int j = 0; j < 6; ++j) {  // stiction band: as the batch fit, relative to the joint's speed limit
-        if (std::abs(qd[j]) >= o.identify.min_speed_fraction * qd_max[j]) continue;
+        if (std::abs(qd[j]) >= min_speed * qd_max[j]) continue;
         K.row(j).setZero();
         tau[j] = 0.0;
       }
-      const UpdateStatus a = kf->update(K, tau, ones);
+      const UpdateStatus a = kf->update(K, tau, Vec::Ones());
       const UpdateStatus b = rls->update(K, tau);
-      ++r.online_updates;
-      if (a != UpdateStatus::ok || b != UpdateStatus::ok) ++r.online_rejected;
+      ++updates;
+      if (a != UpdateStatus::ok || b != UpdateStatus::ok) ++rejected;
     }
-    r.phi_kf.assign(kf->estimate().data(), kf->estimate().data() + P);
-    r.phi_rls.assign(rls->estimate().data(), rls->estimate().data() + P);
+    void finish(CalibrateResult& r) const {
+      r.phi_kf.assign(kf->estimate().data(), kf->estimate().data() + P);
+      r.phi_rls.assign(rls->estimate().data(), rls->estimate().data() + P);
+      r.online_updates = updates;
+      r.online_rejected = rejected;
+    }
+  };
+
+  static void online(const Vec& qd_max, const CalibrateOptions& o, SampleSink& sink) {
+    auto st = std::make_shared<Online>();
+    const ParamVec p0 = ParamVec::Constant(o.identify.p0);
+    st->kf->reset(ParamVec::Zero(), p0);
+    st->rls->reset(ParamVec::Zero(), p0, o.rls_mu);
+    if (st->diff.reset(1.0 / o.sample_rate_hz, o.online_cutoff_hz) != UpdateStatus::ok) {
+      throw InputError("online cut-off must be below half the sample rate");
+    }
+    st->qd_max = qd_max;
+    st->min_speed = o.identify.min_speed_fraction;
+    sink.push = [st](const port::DriveSample& s) { st->push(s); };
+    sink.finish = [st](CalibrateResult& r) { st->finish(r); };
   }
 
   static VerificationErrors verify(const JointLog& log, const std::vector<double>& phi_v, double cutoff) {
@@ -128,8 +154,8 @@ void dispatch(unsigned terms, Args&&... args) {
 
 template <unsigned Terms>
 struct Online {
-  static void run(const JointLog& log, const Vec& qd_max, const CalibrateOptions& o, CalibrateResult& r) {
-    ModelRun<Terms>::online(log, qd_max, o, r);
+  static void run(const Vec& qd_max, const CalibrateOptions& o, SampleSink& sink) {
+    ModelRun<Terms>::online(qd_max, o, sink);
   }
 };
 template <unsigned Terms>
@@ -145,7 +171,7 @@ struct Verify {
 JointLog verification_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory& t, const CalibrateOptions& o,
                           std::ostream* progress, std::uint32_t* lost, std::array<double, 6>& drive_error) {
   double secs = 0;
-  JointLog log = stream_run(drive, t, o.verify_periods, o.sample_rate_hz, progress, lost, &secs);
+  JointLog log = stream_run(drive, t, o.verify_periods, o.sample_rate_hz, progress, lost, &secs, nullptr);
   linux_port::DriveInfo info;
   if (!drive.read_info(info)) throw InputError("drive: " + drive.error());
   drive_error = info.model_error_rms;
@@ -216,7 +242,8 @@ linux_port::Trajectory default_excitation(const RobotDescription& robot, double 
 }
 
 JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory& trajectory, int periods,
-                    double sample_rate_hz, std::ostream* progress, std::uint32_t* lost, double* seconds) {
+                    double sample_rate_hz, std::ostream* progress, std::uint32_t* lost, double* seconds,
+                    const std::function<void(const port::DriveSample&)>& on_sample) {
   if (!drive.write_trajectory(trajectory, periods, sample_rate_hz)) throw InputError("drive: " + drive.error());
   const auto t0 = SteadyClock::now();
   if (!drive.start()) throw InputError("drive: " + drive.error());
@@ -236,6 +263,9 @@ JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory
           " samples lost (the host read too slowly; use --lockstep on the simulated drive or a lower --rate)");
     }
     samples.insert(samples.end(), block, block + n);
+    if (on_sample) {
+      for (int k = 0; k < n; ++k) on_sample(block[k]);
+    }
     if (progress && static_cast<long>(samples.size()) / 500 != last_shown) {
       last_shown = static_cast<long>(samples.size()) / 500;
       progress_bar(*progress, static_cast<double>(samples.size()) / static_cast<double>(expected),
@@ -287,10 +317,13 @@ CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions&
   progress << "excitation: Fourier series (Eq. 27), L = " << o.harmonics << ", f_f = " << o.f_f << " Hz, " << o.periods
            << " periods at " << o.sample_rate_hz << " Hz, cond(K) = " << std::setprecision(3) << r.trajectory_cond
            << "\n";
-  const JointLog log = stream_run(*drive, excitation, o.periods, o.sample_rate_hz, prog, &r.lost, &r.stream_seconds);
+  SampleSink sink;
+  dispatch<Online>(o.terms, Vec(robot.qd_max), o, sink);
+  const JointLog log =
+      stream_run(*drive, excitation, o.periods, o.sample_rate_hz, prog, &r.lost, &r.stream_seconds, sink.push);
+  sink.finish(r);
   r.samples = static_cast<long>(log.samples());
   r.samples_per_second = static_cast<double>(r.samples) / std::max(1e-9, r.stream_seconds);
-  dispatch<Online>(o.terms, log, Vec(robot.qd_max), o, r);
   IdentifyOptions io = o.identify;
   io.terms = o.terms;
   r.batch = identify(robot, log, io);

@@ -4,6 +4,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <iosfwd>
 #include <string>
 #include <vector>
@@ -69,10 +70,11 @@ CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions&
 
 void print_calibrate_report(std::ostream& out, const CalibrateResult& r);
 
-/// Streams one run of `trajectory` from the drive into a log (q and tau; t from seq). Throws
-/// InputError on transport errors or lost samples.
+/// Streams one run of `trajectory` from the drive into a log (q and tau; t from seq), handing each
+/// sample to `on_sample` (if set) as it arrives. Throws InputError on transport errors or lost samples.
 JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory& trajectory, int periods,
-                    double sample_rate_hz, std::ostream* progress, std::uint32_t* lost, double* seconds);
+                    double sample_rate_hz, std::ostream* progress, std::uint32_t* lost, double* seconds,
+                    const std::function<void(const port::DriveSample&)>& on_sample);
 
 /// A Fourier excitation (Eq. 27) inside the robot's position, velocity and acceleration limits
 /// (80 % of each), the best of `candidates` seeded random ones by cond(K) of the base-parameter
