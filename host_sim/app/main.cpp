@@ -5,6 +5,7 @@
 #include <iostream>
 
 #include "drive_commands.hpp"
+#include "dyncal_host/diagnose.hpp"
 #include "dyncal_host/identify.hpp"
 #include "dyncal_host/identify_report.hpp"
 #include "dyncal_host/input_error.hpp"
@@ -57,6 +58,22 @@ int main(int argc, char** argv) {
   identify->add_option("--report", report, "write the report as JSON");
   identify->add_option("--params", params, "write the identified parameter table as JSON");
 
+  std::string diag_model = "eq7", diag_report;
+  dyncal::host::DiagnoseOptions dopt;
+  auto* diagnose =
+      app.add_subcommand("diagnose", "find what the declared model lacks in a measured log, add it, report");
+  diagnose->add_option("--robot", robot_name, "robot name; tx40 by default with --format tx40");
+  diagnose->add_option("--robots-dir", robots_dir, "directory holding the robot descriptions");
+  diagnose->add_option("--format", format, "log format: csv or tx40")->check(CLI::IsMember({"csv", "tx40"}));
+  diagnose->add_option("--data", data, "CSV log file, or the folder of the TX40 files")->required();
+  diagnose->add_option("--model", diag_model, "declared model: eq7, optionally with rotor_inertia and offset")
+      ->capture_default_str();
+  diagnose->add_option("--cutoff", dopt.identify.cutoff_hz, "zero-phase Butterworth cut-off [Hz]")
+      ->capture_default_str();
+  diagnose->add_option("--max-effects", dopt.max_effects, "greedy steps at most")->capture_default_str();
+  diagnose->add_option("--bic", dopt.bic_threshold, "BIC drop an effect needs")->capture_default_str();
+  diagnose->add_option("--report", diag_report, "write the report as JSON");
+
   std::function<int()> run;
   add_drive_commands(app, run, robots_dir);
 
@@ -68,6 +85,20 @@ int main(int argc, char** argv) {
 
   try {
     if (run) return run();
+    if (app.got_subcommand(diagnose)) {
+      if (robot_name.empty()) {
+        if (format != "tx40") throw dyncal::host::InputError("--robot is required for --format csv");
+        robot_name = "tx40";
+      }
+      const auto robot = dyncal::host::load_robot(robots_dir, robot_name);
+      dopt.identify.terms = dyncal::host::parse_model(diag_model);
+      const auto log = format == "tx40" ? dyncal::host::read_tx40_log(data, robot.transmission, robot.joint_offsets)
+                                        : dyncal::host::read_csv_log(data, robot.num_joints);
+      const auto result = dyncal::host::diagnose(robot, log, dopt);
+      dyncal::host::print_diagnose_report(std::cout, result);
+      if (!diag_report.empty()) write_json(diag_report, dyncal::host::diagnose_report_json(result));
+      return 0;
+    }
     if (app.got_subcommand(identify)) {
       if (robot_name.empty()) {
         if (format != "tx40") throw dyncal::host::InputError("--robot is required for --format csv");

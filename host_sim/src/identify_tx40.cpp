@@ -7,4 +7,10 @@ IdentifyResult identify_tx40(const RobotDescription& robot, const JointLog& log,
   return dispatch_identify<dyncal::generated::tx40::Robot>(robot, log, options);
 }
 
+StackedData prepare_tx40(const RobotDescription& robot, const JointLog& log, const IdentifyOptions& options) {
+  if (log.joints() != dyncal::generated::tx40::Robot::kNumJoints)
+    throw InputError("log joint count does not match the robot");
+  return dispatch_prepare<dyncal::generated::tx40::Robot>(robot, log, options);
+}
+
 }  // namespace dyncal::host

@@ -34,4 +34,23 @@ IdentifyResult dispatch_identify(const RobotDescription& robot, const JointLog& 
   }
 }
 
+/// The stacked data (filtered, decimated regressor of the declared model) for the same term sets.
+template <class Robot>
+StackedData dispatch_prepare(const RobotDescription& robot, const JointLog& log, const IdentifyOptions& o) {
+  constexpr unsigned ia = term::rotor_inertia, off = term::offset;
+  switch (o.terms) {
+    case kFrictionEq7:
+      return IdentifyPipeline<Robot, kFrictionEq7>(robot, o).prepare(log);
+    case kFrictionEq7 | ia:
+      return IdentifyPipeline<Robot, kFrictionEq7 | ia>(robot, o).prepare(log);
+    case kFrictionEq7 | off:
+      return IdentifyPipeline<Robot, kFrictionEq7 | off>(robot, o).prepare(log);
+    case kFrictionEq7 | ia | off:
+      return IdentifyPipeline<Robot, kFrictionEq7 | ia | off>(robot, o).prepare(log);
+    default:
+      throw InputError("declared model '" + model_name(o.terms) +
+                       "' is not built for diagnosis: use eq7, optionally with rotor_inertia and offset");
+  }
+}
+
 }  // namespace dyncal::host

@@ -14,17 +14,9 @@
 #include "dyncal_host/identify.hpp"
 #include "dyncal_host/input_error.hpp"
 #include "dyncal_host/signal.hpp"
+#include "dyncal_host/stacked_data.hpp"
 
 namespace dyncal::host {
-
-/// Stacked, filtered and decimated identification data: row s * N + j is joint j at sample s.
-struct StackedData {
-  Eigen::MatrixXd W;          ///< (S N) x P regressor
-  Eigen::VectorXd y;          ///< (S N) torques [Nm]
-  Eigen::VectorXd t;          ///< S sample times [s]
-  double rate_hz = 0;         ///< after decimation
-  std::vector<char> fit_row;  ///< (S N): 1 where row s * N + j enters the fit (see min_speed_fraction)
-};
 
 template <class Robot, unsigned Terms>
 class IdentifyPipeline {
@@ -90,9 +82,17 @@ class IdentifyPipeline {
       threshold = threshold.cwiseMax(JointVec(qd.row(s).transpose()).cwiseAbs());
     threshold *= opt_.min_speed_fraction;
     out.fit_row.assign(static_cast<size_t>(kept * N), 1);
+    out.q.resize(kept, N);
+    out.qd.resize(kept, N);
+    out.qdd.resize(kept, N);
+    out.cutoff_hz = opt_.cutoff_hz;
+    for (int i = 0; i < P; ++i) out.names.push_back(param_name(i));
     for (Eigen::Index k = 0; k < kept; ++k) {
       const Eigen::Index s = edge + k * d;
       out.t[k] = log.t[s];
+      out.q.row(k) = q.row(s);
+      out.qd.row(k) = qd.row(s);
+      out.qdd.row(k) = qdd.row(s);
       for (int j = 0; j < N; ++j) {
         out.W.row(k * N + j) = Kt.row(s).segment(j * P, P);
         out.y[k * N + j] = tau(s, j);

@@ -1,0 +1,66 @@
+#pragma once
+// `dyncal diagnose`: fit the declared model, then test a library of candidate effects against the
+// residual, add the significant ones greedily (validation error and BIC), and report before/after.
+
+#include <nlohmann/json.hpp>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "dyncal_host/identify.hpp"
+
+namespace dyncal::host {
+
+struct DiagnoseOptions {
+  IdentifyOptions identify;   ///< filtering, declared model (terms), folds, block length
+  int max_effects = 8;        ///< greedy steps at most
+  int max_cycles = 64;        ///< position-periodic search: 1..max_cycles cycles per revolution
+  double bic_threshold = 10;  ///< accept when BIC falls by more than this (Kass-Raftery "very strong")
+};
+
+/// One effect added to the model.
+struct DiagnosedEffect {
+  std::string kind;         ///< stribeck, asymmetric_friction, velocity_power, load_friction,
+                            ///< rotor_inertia, offset, position_periodic, coupling, drift
+  std::vector<int> joints;  ///< 1-based
+  std::vector<std::string> param_names;
+  std::vector<double> params;
+  double delta_bic = 0;        ///< BIC change on the affected joints (negative: evidence for)
+  double validation_gain = 0;  ///< relative drop of the affected joints' validation RSS
+  std::string explanation;
+};
+
+struct RejectedCandidate {
+  std::string kind;
+  std::vector<int> joints;
+  double delta_bic = 0, validation_gain = 0;
+  std::string reason;
+};
+
+struct DiagnoseJoint {
+  int joint = 0;
+  double rms_train_before = 0, rms_train_after = 0;
+  double rms_validation_before = 0, rms_validation_after = 0;
+  double rms_tau = 0;
+  double r2_validation_before = 0, r2_validation_after = 0;
+  double e_T_before = 0, e_T_after = 0, e_T_std_before = 0, e_T_std_after = 0;
+};
+
+struct DiagnoseResult {
+  std::string robot, declared_model, validation;
+  long samples = 0;
+  double effective_samples_per_joint = 0;  ///< n_eff used by BIC: duration x 2 f_c
+  std::vector<DiagnoseJoint> joints;
+  std::vector<DiagnosedEffect> effects;
+  std::vector<RejectedCandidate> rejected;  ///< best candidate per kind and joint of the last round
+  std::vector<std::string> notes;
+};
+
+/// Runs the diagnosis. Throws InputError on bad input (too few samples, a joint that does not
+/// move, constant velocity on every joint).
+DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, const DiagnoseOptions& options);
+
+void print_diagnose_report(std::ostream& out, const DiagnoseResult& r);
+nlohmann::json diagnose_report_json(const DiagnoseResult& r);
+
+}  // namespace dyncal::host

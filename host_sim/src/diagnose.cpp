@@ -1,0 +1,478 @@
+#include "dyncal_host/diagnose.hpp"
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstring>
+#include <functional>
+#include <iomanip>
+#include <sstream>
+
+#include "dyncal/friction.hpp"
+#include "dyncal_host/input_error.hpp"
+#include "dyncal_host/stacked_data.hpp"
+
+namespace dyncal::host {
+namespace {
+
+using Eigen::Index;
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+
+/// A candidate effect: extra columns over the stacked rows (row s * N + j).
+struct Candidate {
+  std::string kind;
+  std::vector<int> joints;  // 0-based
+  std::vector<std::string> names;
+  MatrixXd columns;    // (S N) x m
+  std::string detail;  // e.g. "36 cycles per revolution"
+  int searched = 1;    // alternatives the search chose among (frequencies, velocity scales, signs)
+};
+
+/// Per-fold, per-joint cross products of the design [X C] and y: validation by blocked
+/// cross-validation from Gram matrices (no refactorisation of the rows per candidate).
+class CrossValidator {
+ public:
+  CrossValidator(const StackedData& d, int N, const std::vector<int>& fold, int folds)
+      : d_(d), N_(N), fold_(fold), folds_(folds) {}
+
+  /// Validation RSS per joint and training RSS per joint (fit on all rows) of design A.
+  void evaluate(const MatrixXd& A, VectorXd& val_rss, VectorXd& train_rss, VectorXd* phi_out = nullptr) const {
+    const Index p = A.cols(), S = d_.t.size();
+    // Column scaling for conditioning.
+    VectorXd scale = A.colwise().norm().transpose();
+    for (Index i = 0; i < p; ++i) scale[i] = scale[i] > 0 ? 1.0 / scale[i] : 1.0;
+    std::vector<MatrixXd> G_fit(folds_, MatrixXd::Zero(p, p));
+    std::vector<VectorXd> g_fit(folds_, VectorXd::Zero(p));
+    std::vector<std::vector<MatrixXd>> G_all(folds_, std::vector<MatrixXd>(N_, MatrixXd::Zero(p, p)));
+    std::vector<std::vector<VectorXd>> g_all(folds_, std::vector<VectorXd>(N_, VectorXd::Zero(p)));
+    std::vector<VectorXd> yy(folds_, VectorXd::Zero(N_));
+    for (Index s = 0; s < S; ++s) {
+      const int f = fold_[s];
+      for (int j = 0; j < N_; ++j) {
+        const Index r = s * N_ + j;
+        const VectorXd a = A.row(r).transpose().cwiseProduct(scale);
+        const double y = d_.y[r];
+        G_all[f][j].selfadjointView<Eigen::Lower>().rankUpdate(a);
+        g_all[f][j] += a * y;
+        yy[f][j] += y * y;
+        if (d_.fit_row[r]) {
+          G_fit[f].selfadjointView<Eigen::Lower>().rankUpdate(a);
+          g_fit[f] += a * y;
+        }
+      }
+    }
+    MatrixXd G_total = MatrixXd::Zero(p, p);
+    VectorXd g_total = VectorXd::Zero(p);
+    for (int f = 0; f < folds_; ++f) {
+      G_total += G_fit[f];
+      g_total += g_fit[f];
+    }
+    const double ridge = 1e-12 * std::max(1.0, G_total.diagonal().maxCoeff());
+    auto solve = [&](const MatrixXd& G, const VectorXd& g) {
+      MatrixXd Gs = G.selfadjointView<Eigen::Lower>();
+      Gs.diagonal().array() += ridge;
+      return VectorXd(Gs.ldlt().solve(g));
+    };
+    auto rss = [&](const VectorXd& beta, int f, int j) {
+      const MatrixXd Gs = G_all[f][j].selfadjointView<Eigen::Lower>();
+      return std::max(0.0, yy[f][j] - 2.0 * beta.dot(g_all[f][j]) + beta.dot(Gs * beta));
+    };
+    val_rss = VectorXd::Zero(N_);
+    for (int f = 0; f < folds_; ++f) {
+      const VectorXd beta = solve(G_total - G_fit[f], g_total - g_fit[f]);
+      for (int j = 0; j < N_; ++j) val_rss[j] += rss(beta, f, j);
+    }
+    const VectorXd beta = solve(G_total, g_total);
+    train_rss = VectorXd::Zero(N_);
+    for (int f = 0; f < folds_; ++f)
+      for (int j = 0; j < N_; ++j) train_rss[j] += rss(beta, f, j);
+    if (phi_out) *phi_out = beta.cwiseProduct(scale);
+  }
+
+ private:
+  const StackedData& d_;
+  int N_;
+  const std::vector<int>& fold_;
+  int folds_;
+};
+
+double sgn(double x) {
+  return x > 0 ? 1.0 : (x < 0 ? -1.0 : 0.0);
+}
+
+std::string joint_list(const std::vector<int>& joints) {
+  std::string s;
+  for (size_t i = 0; i < joints.size(); ++i)
+    s += (i ? (i + 1 == joints.size() ? " and " : ", ") : "") + std::to_string(joints[i] + 1);
+  return s;
+}
+
+}  // namespace
+
+DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, const DiagnoseOptions& o) {
+  IdentifyOptions io = o.identify;
+  if (io.terms == 0) io.terms = kFrictionEq7;
+  const StackedData d = prepare_stacked(robot, log, io);
+  const int N = robot.num_joints;
+  const Index S = d.t.size(), R = S * N;
+  DiagnoseResult res;
+  res.robot = robot.name;
+  res.declared_model = model_name(io.terms);
+  res.samples = static_cast<long>(S);
+  // Bad input: a joint that does not move, or moves at constant velocity, carries no information.
+  for (int j = 0; j < N; ++j) {
+    const double range = d.q.col(j).maxCoeff() - d.q.col(j).minCoeff();
+    const double qd_var = (d.qd.col(j).array() - d.qd.col(j).mean()).square().mean();
+    if (range < 1e-3)
+      throw InputError("joint " + std::to_string(j + 1) + " does not move (range < 1 mrad): nothing to diagnose");
+    if (std::sqrt(qd_var) < 1e-3 * std::max(1e-9, d.qd.col(j).cwiseAbs().maxCoeff()) || std::sqrt(qd_var) < 1e-4) {
+      throw InputError("joint " + std::to_string(j + 1) +
+                       " moves at constant velocity: inertia and friction cannot be told apart");
+    }
+  }
+  // Folds as in identify (blocked).
+  const Index block = std::max<Index>(1, std::lround(io.block_seconds * d.rate_hz));
+  const int folds = io.folds;
+  if (S < block * folds * 2) throw InputError("too few samples for a diagnosis (" + std::to_string(S) + ")");
+  std::vector<int> fold(static_cast<size_t>(S));
+  for (Index s = 0; s < S; ++s) fold[s] = static_cast<int>((s / block) % folds);
+  res.validation = "blocked " + std::to_string(folds) + "-fold cross-validation";
+  // Effective independent samples per joint: the residual is low-passed at f_c, so samples closer
+  // than 1 / (2 f_c) are not independent (duration x 2 f_c).
+  const double duration = static_cast<double>(S) / d.rate_hz;
+  const double n_eff = std::min(static_cast<double>(S), duration * 2.0 * d.cutoff_hz);
+  res.effective_samples_per_joint = n_eff;
+
+  CrossValidator cv(d, N, fold, folds);
+  MatrixXd X = d.W;
+  VectorXd val0, train0;
+  VectorXd phi;
+  cv.evaluate(X, val0, train0, &phi);
+  const VectorXd val_before = val0, train_before = train0;
+  std::vector<std::string> names = d.names;
+
+  // Rigid-body part of the prediction (load torque proxy for load-dependent friction).
+  auto is_term = [](const std::string& n) {
+    for (const char* p : {"Fc", "Fv", "Fp", "Ia", "offset"})
+      if (n.rfind(p, 0) == 0 && n.size() > std::strlen(p) &&
+          std::isdigit(static_cast<unsigned char>(n[std::strlen(p)])))
+        return true;
+    return false;
+  };
+  VectorXd phi_rb = phi;
+  for (size_t i = 0; i < names.size(); ++i)
+    if (is_term(names[i])) phi_rb[static_cast<Index>(i)] = 0;
+  const VectorXd tau_rb = d.W * phi_rb;
+  auto has = [&](const std::string& n) { return std::find(names.begin(), names.end(), n) != names.end(); };
+
+  // The candidate library.
+  auto make = [&](const std::string& kind, std::vector<int> joints, std::vector<std::string> nm,
+                  const std::function<void(Index s, MatrixXd & cols)>& fill, std::string detail = "") {
+    Candidate c{kind, std::move(joints), std::move(nm), MatrixXd::Zero(R, static_cast<Index>(nm.size())),
+                std::move(detail)};
+    c.columns = MatrixXd::Zero(R, static_cast<Index>(c.names.size()));
+    for (Index s = 0; s < S; ++s) fill(s, c.columns);
+    return c;
+  };
+  auto library = [&](const VectorXd& residual) {
+    std::vector<Candidate> out;
+    for (int j = 0; j < N; ++j) {
+      const std::string J = std::to_string(j + 1);
+      const double vmax = d.qd.col(j).cwiseAbs().maxCoeff();
+      // Stribeck / static friction: best velocity scale of a small grid.
+      Candidate best_stribeck;
+      double best_gain = -1;
+      for (double frac : {0.02, 0.05, 0.1, 0.2}) {
+        const double qds = frac * vmax;
+        Candidate c = make(
+            "stribeck", {j}, {"Fs" + J},
+            [&](Index s, MatrixXd& m) {
+              const double v = d.qd(s, j);
+              m(s * N + j, 0) = sgn(v) * std::exp(-(v / qds) * (v / qds));
+            },
+            "velocity scale " + std::to_string(qds).substr(0, 5) + " rad/s");
+        const VectorXd col = c.columns.col(0);
+        const double gain = std::pow(col.dot(residual), 2) / std::max(1e-300, col.squaredNorm());
+        if (gain > best_gain) {
+          best_gain = gain;
+          best_stribeck = c;
+        }
+      }
+      best_stribeck.searched = 4;
+      out.push_back(best_stribeck);
+      out.push_back(make("asymmetric_friction", {j}, {"Fc+" + J, "Fv+" + J}, [&](Index s, MatrixXd& m) {
+        const double v = d.qd(s, j);
+        m(s * N + j, 0) = v > 0 ? 1.0 : 0.0;
+        m(s * N + j, 1) = v > 0 ? v : 0.0;
+      }));
+      out.push_back(make("velocity_power", {j}, {"Fp" + J},
+                         [&](Index s, MatrixXd& m) { m(s * N + j, 0) = std::cbrt(d.qd(s, j)); }));
+      out.push_back(make("load_friction", {j}, {"Fl" + J}, [&](Index s, MatrixXd& m) {
+        m(s * N + j, 0) = std::abs(tau_rb[s * N + j]) * sgn(d.qd(s, j));
+      }));
+      if (!has("Ia" + J))
+        out.push_back(
+            make("rotor_inertia", {j}, {"Ia" + J}, [&](Index s, MatrixXd& m) { m(s * N + j, 0) = d.qdd(s, j); }));
+      if (!has("offset" + J))
+        out.push_back(make("offset", {j}, {"offset" + J}, [&](Index s, MatrixXd& m) { m(s * N + j, 0) = 1.0; }));
+      // Position-periodic torque: spectral search of the residual over q_j (integer cycles/rev).
+      int best_k = 0;
+      double best_power = -1;
+      for (int k = 1; k <= o.max_cycles; ++k) {
+        double ss = 0, cc = 0, sc = 0, sr = 0, cr = 0;
+        for (Index s = 0; s < S; ++s) {
+          const double a = std::sin(k * d.q(s, j)), b = std::cos(k * d.q(s, j)), r = residual[s * N + j];
+          ss += a * a;
+          cc += b * b;
+          sc += a * b;
+          sr += a * r;
+          cr += b * r;
+        }
+        const double det = ss * cc - sc * sc;
+        if (det <= 1e-12 * ss * cc) continue;
+        const double power = (cc * sr * sr - 2 * sc * sr * cr + ss * cr * cr) / det;  // RSS reduction
+        if (power > best_power) {
+          best_power = power;
+          best_k = k;
+        }
+      }
+      if (best_k > 0) {
+        out.push_back(make(
+            "position_periodic", {j}, {"A" + J + "_sin", "A" + J + "_cos"},
+            [&](Index s, MatrixXd& m) {
+              m(s * N + j, 0) = std::sin(best_k * d.q(s, j));
+              m(s * N + j, 1) = std::cos(best_k * d.q(s, j));
+            },
+            std::to_string(best_k) + " cycles per revolution"));
+        out.back().searched = o.max_cycles;
+      }
+      out.push_back(make("drift", {j}, {"dFv" + J, "doffset" + J}, [&](Index s, MatrixXd& m) {
+        const double tau_t = (d.t[s] - d.t[0]) / duration;  // 0..1 over the log
+        m(s * N + j, 0) = tau_t * d.qd(s, j);
+        m(s * N + j, 1) = tau_t;
+      }));
+    }
+    // Transmission coupling: a motor turning with q_i +/- q_j whose friction and inertia act on both.
+    for (int i = 0; i < N; ++i) {
+      for (int j = i + 1; j < N; ++j) {
+        for (double sign : {1.0, -1.0}) {
+          const std::string tag = std::to_string(i + 1) + (sign > 0 ? "+" : "-") + std::to_string(j + 1);
+          out.push_back(make(
+              "coupling", {i, j}, {"Fc" + tag, "Fv" + tag, "Ia" + tag},
+              [&](Index s, MatrixXd& m) {
+                const double v = d.qd(s, i) + sign * d.qd(s, j), a = d.qdd(s, i) + sign * d.qdd(s, j);
+                const double row_i = 1.0, row_j = sign;  // torque on joint j carries the motor's sign
+                m(s * N + i, 0) = row_i * sgn(v);
+                m(s * N + i, 1) = row_i * v;
+                m(s * N + i, 2) = row_i * a;
+                m(s * N + j, 0) = row_j * sgn(v);
+                m(s * N + j, 1) = row_j * v;
+                m(s * N + j, 2) = row_j * a;
+              },
+              sign > 0 ? "motor turning with q" + std::to_string(i + 1) + " + q" + std::to_string(j + 1)
+                       : "motor turning with q" + std::to_string(i + 1) + " - q" + std::to_string(j + 1)));
+          out.back().searched = 2;
+        }
+      }
+    }
+    return out;
+  };
+
+  for (int step = 0; step < o.max_effects; ++step) {
+    const VectorXd residual = d.y - X * phi;
+    std::vector<Candidate> cands = library(residual);
+    int best = -1;
+    double best_score = 0;
+    std::vector<double> bic(cands.size()), gain(cands.size());
+    std::vector<char> physical(cands.size(), 1);
+    std::vector<VectorXd> vals(cands.size()), trains(cands.size());
+    for (size_t c = 0; c < cands.size(); ++c) {
+      MatrixXd A(R, X.cols() + cands[c].columns.cols());
+      A << X, cands[c].columns;
+      VectorXd phi_c;
+      cv.evaluate(A, vals[c], trains[c], &phi_c);
+      double dbic = 0, v0 = 0, v1 = 0;
+      for (int j : cands[c].joints) {
+        dbic += n_eff * std::log(std::max(1e-300, trains[c][j]) / std::max(1e-300, train0[j]));
+        v0 += val0[j] / std::max(1e-300, val_before[j]);  // joints weighted by their own scale
+        v1 += vals[c][j] / std::max(1e-300, val_before[j]);
+      }
+      dbic +=
+          static_cast<double>(cands[c].columns.cols()) * std::log(n_eff * static_cast<double>(cands[c].joints.size()));
+      // A candidate picked among several alternatives (the best frequency of a spectral search, ...)
+      // pays for the look-elsewhere effect: 2 ln(alternatives), a Bonferroni factor in BIC units.
+      dbic += 2.0 * std::log(static_cast<double>(cands[c].searched));
+      bic[c] = dbic;
+      gain[c] = v0 > 0 ? (v0 - v1) / v0 : 0;
+      // Physical signs: static friction exceeds Coulomb friction (Eq. 4), inertia and the friction
+      // of a coupled motor are positive, load-dependent friction opposes motion.
+      const VectorXd added = phi_c.tail(cands[c].columns.cols());
+      const std::string& k = cands[c].kind;
+      physical[c] = !((k == "stribeck" || k == "rotor_inertia" || k == "load_friction") && added[0] <= 0) &&
+                    !(k == "coupling" && (added[0] < 0 || added[1] < 0 || added[2] < 0));
+      // Selection on validation error only: the largest relative validation gain among candidates
+      // whose BIC evidence is very strong and whose parameters are physical.
+      if (physical[c] && dbic < -o.bic_threshold && gain[c] > 0 && gain[c] > best_score) {
+        best_score = gain[c];
+        best = static_cast<int>(c);
+      }
+    }
+    if (best < 0) {
+      // Report the strongest rejected candidate of each kind.
+      for (const char* kind : {"stribeck", "asymmetric_friction", "velocity_power", "load_friction", "rotor_inertia",
+                               "offset", "position_periodic", "coupling", "drift"}) {
+        int top = -1;
+        for (size_t c = 0; c < cands.size(); ++c)
+          if (cands[c].kind == kind && (top < 0 || bic[c] < bic[static_cast<size_t>(top)])) top = static_cast<int>(c);
+        if (top < 0) continue;
+        const auto& c = cands[static_cast<size_t>(top)];
+        RejectedCandidate rc{c.kind, {}, bic[static_cast<size_t>(top)], gain[static_cast<size_t>(top)], ""};
+        for (int j : c.joints) rc.joints.push_back(j + 1);
+        std::ostringstream why;
+        why << std::setprecision(3);
+        if (!physical[static_cast<size_t>(top)])
+          why << "unphysical sign of its parameter (BIC change " << rc.delta_bic << ")";
+        else if (rc.delta_bic >= -o.bic_threshold)
+          why << "BIC change " << rc.delta_bic << " (needs < " << -o.bic_threshold << ")";
+        else
+          why << "validation RSS does not drop (gain " << 100 * rc.validation_gain << " %)";
+        rc.reason = why.str();
+        res.rejected.push_back(rc);
+      }
+      break;
+    }
+    const Candidate& c = cands[static_cast<size_t>(best)];
+    MatrixXd A(R, X.cols() + c.columns.cols());
+    A << X, c.columns;
+    X = A;
+    for (const auto& n : c.names) names.push_back(n);
+    cv.evaluate(X, val0, train0, &phi);
+    DiagnosedEffect e;
+    e.kind = c.kind;
+    for (int j : c.joints) e.joints.push_back(j + 1);
+    e.param_names = c.names;
+    for (Index k = 0; k < c.columns.cols(); ++k) e.params.push_back(phi[X.cols() - c.columns.cols() + k]);
+    e.delta_bic = bic[static_cast<size_t>(best)];
+    e.validation_gain = gain[static_cast<size_t>(best)];
+    std::ostringstream ex;
+    ex << std::setprecision(3) << "joint" << (c.joints.size() > 1 ? "s " : " ") << joint_list(c.joints) << ": ";
+    if (c.kind == "position_periodic") {
+      ex << "residual periodic in q" << c.joints[0] + 1 << " with " << c.detail << ", amplitude "
+         << std::hypot(e.params[0], e.params[1]) << " Nm - cogging or gear ripple";
+    } else if (c.kind == "coupling") {
+      ex << "a " << c.detail << " adds friction Fc " << e.params[0] << " Nm, Fv " << e.params[1]
+         << " Nm s/rad and inertia " << e.params[2] << " kg m^2 shared by both joints - transmission coupling";
+    } else if (c.kind == "stribeck") {
+      ex << "extra torque at low speed with the sign of q_dot (" << c.detail << "), Fs - Fc = " << e.params[0]
+         << " Nm - static friction / Stribeck";
+    } else if (c.kind == "asymmetric_friction") {
+      ex << "friction differs with the direction of motion: +" << e.params[0] << " Nm, +" << e.params[1]
+         << " Nm s/rad for q_dot > 0 - asymmetric friction";
+    } else if (c.kind == "velocity_power") {
+      ex << "friction grows with q_dot^(1/3), f1 = " << e.params[0] << " - velocity-power friction (Eq. 8)";
+    } else if (c.kind == "load_friction") {
+      ex << "friction grows with the load torque, f1 = " << e.params[0] << " - load-dependent friction (Eq. 9)";
+    } else if (c.kind == "rotor_inertia") {
+      ex << "residual follows q_ddot, Ia = " << e.params[0] << " kg m^2 - rotor inertia";
+    } else if (c.kind == "offset") {
+      ex << "constant torque " << e.params[0] << " Nm - torque offset";
+    } else if (c.kind == "drift") {
+      ex << "viscous friction changes by " << e.params[0] << " Nm s/rad and the offset by " << e.params[1]
+         << " Nm over the log - drift (temperature)";
+    }
+    e.explanation = ex.str();
+    res.effects.push_back(e);
+  }
+
+  // Metrics before/after.
+  VectorXd val_after, train_after;
+  cv.evaluate(X, val_after, train_after);
+  for (int j = 0; j < N; ++j) {
+    DiagnoseJoint m;
+    m.joint = j + 1;
+    double sy = 0, syy = 0;
+    for (Index s = 0; s < S; ++s) {
+      sy += d.y[s * N + j];
+      syy += d.y[s * N + j] * d.y[s * N + j];
+    }
+    const double n = static_cast<double>(S), ss_tot = syy - sy * sy / n;
+    m.rms_tau = std::sqrt(syy / n);
+    m.rms_train_before = std::sqrt(train_before[j] / n);
+    m.rms_train_after = std::sqrt(train_after[j] / n);
+    m.rms_validation_before = std::sqrt(val_before[j] / n);
+    m.rms_validation_after = std::sqrt(val_after[j] / n);
+    m.r2_validation_before = 1 - val_before[j] / ss_tot;
+    m.r2_validation_after = 1 - val_after[j] / ss_tot;
+    // e_T uses RMS / tau_max here (mean |e| needs the residual samples; RMS bounds it from above).
+    m.e_T_before = m.rms_validation_before / robot.tau_max[j];
+    m.e_T_after = m.rms_validation_after / robot.tau_max[j];
+    res.joints.push_back(m);
+  }
+  return res;
+}
+
+void print_diagnose_report(std::ostream& out, const DiagnoseResult& r) {
+  out << "dyncal diagnose: robot " << r.robot << ", declared model " << r.declared_model << ", " << r.samples
+      << " samples, " << r.validation << ", BIC with n_eff = " << std::lround(r.effective_samples_per_joint)
+      << " per joint\n\n";
+  out << "effects added (greedy, by validation gain, each with BIC evidence):\n";
+  if (r.effects.empty()) out << "  none: nothing significant is left in the residual\n";
+  for (const auto& e : r.effects) {
+    out << "  " << std::left << std::setw(20) << e.kind << std::right << " dBIC " << std::setw(8)
+        << std::setprecision(4) << e.delta_bic << ", validation RSS -" << std::setprecision(3)
+        << 100 * e.validation_gain << " %\n    " << e.explanation << "\n";
+  }
+  out << "\nstrongest rejected candidates:\n";
+  for (const auto& c : r.rejected) {
+    out << "  " << std::left << std::setw(20) << c.kind << std::right << " joint";
+    for (int j : c.joints) out << " " << j;
+    out << ": " << c.reason << "\n";
+  }
+  out << "\njoint   RMS val before   after [Nm]   R2 before   after   rel. RMS after\n" << std::fixed;
+  for (const auto& j : r.joints) {
+    out << std::setw(5) << j.joint << std::setprecision(4) << std::setw(17) << j.rms_validation_before << std::setw(12)
+        << j.rms_validation_after << std::setw(12) << j.r2_validation_before << std::setw(8) << j.r2_validation_after
+        << std::setw(17) << j.rms_validation_after / j.rms_tau << "\n";
+  }
+  out << std::defaultfloat;
+}
+
+nlohmann::json diagnose_report_json(const DiagnoseResult& r) {
+  nlohmann::json j;
+  j["robot"] = r.robot;
+  j["declared_model"] = r.declared_model;
+  j["samples"] = r.samples;
+  j["validation"] = r.validation;
+  j["effective_samples_per_joint"] = r.effective_samples_per_joint;
+  j["effects"] = nlohmann::json::array();
+  for (const auto& e : r.effects) {
+    nlohmann::json p = nlohmann::json::object();
+    for (size_t i = 0; i < e.params.size(); ++i) p[e.param_names[i]] = e.params[i];
+    j["effects"].push_back({{"kind", e.kind},
+                            {"joint", e.joints.front()},
+                            {"joints", e.joints},
+                            {"parameters", p},
+                            {"evidence", {{"delta_bic", e.delta_bic}, {"validation_gain", e.validation_gain}}},
+                            {"explanation", e.explanation}});
+  }
+  j["rejected"] = nlohmann::json::array();
+  for (const auto& c : r.rejected)
+    j["rejected"].push_back({{"kind", c.kind}, {"joints", c.joints}, {"delta_bic", c.delta_bic}, {"reason", c.reason}});
+  j["joints"] = nlohmann::json::array();
+  for (const auto& m : r.joints) {
+    j["joints"].push_back({{"joint", m.joint},
+                           {"rms_train_before", m.rms_train_before},
+                           {"rms_train_after", m.rms_train_after},
+                           {"rms_validation_before", m.rms_validation_before},
+                           {"rms_validation_after", m.rms_validation_after},
+                           {"relative_rms_validation_before", m.rms_validation_before / m.rms_tau},
+                           {"relative_rms_validation_after", m.rms_validation_after / m.rms_tau},
+                           {"r2_validation_before", m.r2_validation_before},
+                           {"r2_validation_after", m.r2_validation_after}});
+  }
+  return j;
+}
+
+}  // namespace dyncal::host
