@@ -30,54 +30,102 @@ struct Candidate {
   int searched = 1;    // alternatives the search chose among (frequencies, velocity scales, signs)
 };
 
-/// Per-fold, per-joint cross products of the design [X C] and y: validation by blocked
-/// cross-validation from Gram matrices (no refactorisation of the rows per candidate).
+/// Blocked cross-validation from per-fold, per-joint Gram matrices of the design [X C] and y. The
+/// base design X is fixed for a greedy step (set_base), so each candidate C only costs its cross
+/// products with X over the rows where C is not zero.
 class CrossValidator {
  public:
   CrossValidator(const StackedData& d, int N, const std::vector<int>& fold, int folds)
       : d_(d), N_(N), fold_(fold), folds_(folds) {}
 
-  /// Validation RSS per joint and training RSS per joint (fit on all rows) of design A.
-  void evaluate(const MatrixXd& A, VectorXd& val_rss, VectorXd& train_rss, VectorXd* phi_out = nullptr) const {
-    const Index p = A.cols(), S = d_.t.size();
-    // Column scaling for conditioning.
-    VectorXd scale = A.colwise().norm().transpose();
-    for (Index i = 0; i < p; ++i) scale[i] = scale[i] > 0 ? 1.0 / scale[i] : 1.0;
-    std::vector<MatrixXd> G_fit(folds_, MatrixXd::Zero(p, p));
-    std::vector<VectorXd> g_fit(folds_, VectorXd::Zero(p));
-    std::vector<std::vector<MatrixXd>> G_all(folds_, std::vector<MatrixXd>(N_, MatrixXd::Zero(p, p)));
-    std::vector<std::vector<VectorXd>> g_all(folds_, std::vector<VectorXd>(N_, VectorXd::Zero(p)));
-    std::vector<VectorXd> yy(folds_, VectorXd::Zero(N_));
+  void set_base(const MatrixXd& X) {
+    X_ = &X;
+    const Index p = X.cols(), S = d_.t.size();
+    sx_ = X.colwise().norm().transpose();
+    for (Index i = 0; i < p; ++i) sx_[i] = sx_[i] > 0 ? 1.0 / sx_[i] : 1.0;
+    Gxx_fit_.assign(folds_, MatrixXd::Zero(p, p));
+    gx_fit_.assign(folds_, VectorXd::Zero(p));
+    Gxx_all_.assign(folds_, std::vector<MatrixXd>(N_, MatrixXd::Zero(p, p)));
+    gx_all_.assign(folds_, std::vector<VectorXd>(N_, VectorXd::Zero(p)));
+    yy_.assign(folds_, VectorXd::Zero(N_));
     for (Index s = 0; s < S; ++s) {
       const int f = fold_[s];
       for (int j = 0; j < N_; ++j) {
         const Index r = s * N_ + j;
-        const VectorXd a = A.row(r).transpose().cwiseProduct(scale);
+        const VectorXd x = X.row(r).transpose().cwiseProduct(sx_);
         const double y = d_.y[r];
-        G_all[f][j].selfadjointView<Eigen::Lower>().rankUpdate(a);
-        g_all[f][j] += a * y;
-        yy[f][j] += y * y;
+        Gxx_all_[f][j].selfadjointView<Eigen::Lower>().rankUpdate(x);
+        gx_all_[f][j] += x * y;
+        yy_[f][j] += y * y;
         if (d_.fit_row[r]) {
-          G_fit[f].selfadjointView<Eigen::Lower>().rankUpdate(a);
-          g_fit[f] += a * y;
+          Gxx_fit_[f].selfadjointView<Eigen::Lower>().rankUpdate(x);
+          gx_fit_[f] += x * y;
         }
       }
     }
-    MatrixXd G_total = MatrixXd::Zero(p, p);
-    VectorXd g_total = VectorXd::Zero(p);
+    for (auto& G : Gxx_fit_) G = MatrixXd(G.selfadjointView<Eigen::Lower>());
+    for (auto& v : Gxx_all_)
+      for (auto& G : v) G = MatrixXd(G.selfadjointView<Eigen::Lower>());
+  }
+
+  /// Validation and training RSS per joint of [X C] (C may have no columns); phi_out: the
+  /// coefficients of the fit on all rows, X's first.
+  void evaluate(const MatrixXd& C, VectorXd& val_rss, VectorXd& train_rss, VectorXd* phi_out = nullptr) const {
+    const MatrixXd& X = *X_;
+    const Index p = X.cols(), m = C.cols(), q = p + m, S = d_.t.size();
+    VectorXd sc = C.colwise().norm().transpose();
+    for (Index i = 0; i < m; ++i) sc[i] = sc[i] > 0 ? 1.0 / sc[i] : 1.0;
+    std::vector<MatrixXd> G_fit(folds_);
+    std::vector<VectorXd> g_fit(folds_);
+    std::vector<std::vector<MatrixXd>> G_all(folds_, std::vector<MatrixXd>(N_));
+    std::vector<std::vector<VectorXd>> g_all(folds_, std::vector<VectorXd>(N_));
+    for (int f = 0; f < folds_; ++f) {
+      G_fit[f] = MatrixXd::Zero(q, q);
+      G_fit[f].topLeftCorner(p, p) = Gxx_fit_[f];
+      g_fit[f] = VectorXd::Zero(q);
+      g_fit[f].head(p) = gx_fit_[f];
+      for (int j = 0; j < N_; ++j) {
+        G_all[f][j] = MatrixXd::Zero(q, q);
+        G_all[f][j].topLeftCorner(p, p) = Gxx_all_[f][j];
+        g_all[f][j] = VectorXd::Zero(q);
+        g_all[f][j].head(p) = gx_all_[f][j];
+      }
+    }
+    if (m > 0) {
+      for (Index s = 0; s < S; ++s) {
+        const int f = fold_[s];
+        for (int j = 0; j < N_; ++j) {
+          const Index r = s * N_ + j;
+          const VectorXd c = C.row(r).transpose().cwiseProduct(sc);
+          if (c.isZero(0.0)) continue;
+          const VectorXd x = X.row(r).transpose().cwiseProduct(sx_);
+          const double y = d_.y[r];
+          const MatrixXd xc = x * c.transpose();
+          const MatrixXd cc = c * c.transpose();
+          auto add = [&](MatrixXd& G, VectorXd& g) {
+            G.topRightCorner(p, m) += xc;
+            G.bottomLeftCorner(m, p) += xc.transpose();
+            G.bottomRightCorner(m, m) += cc;
+            g.tail(m) += c * y;
+          };
+          add(G_all[f][j], g_all[f][j]);
+          if (d_.fit_row[r]) add(G_fit[f], g_fit[f]);
+        }
+      }
+    }
+    MatrixXd G_total = MatrixXd::Zero(q, q);
+    VectorXd g_total = VectorXd::Zero(q);
     for (int f = 0; f < folds_; ++f) {
       G_total += G_fit[f];
       g_total += g_fit[f];
     }
     const double ridge = 1e-12 * std::max(1.0, G_total.diagonal().maxCoeff());
-    auto solve = [&](const MatrixXd& G, const VectorXd& g) {
-      MatrixXd Gs = G.selfadjointView<Eigen::Lower>();
-      Gs.diagonal().array() += ridge;
-      return VectorXd(Gs.ldlt().solve(g));
+    auto solve = [&](MatrixXd G, const VectorXd& g) {
+      G.diagonal().array() += ridge;
+      return VectorXd(G.ldlt().solve(g));
     };
     auto rss = [&](const VectorXd& beta, int f, int j) {
-      const MatrixXd Gs = G_all[f][j].selfadjointView<Eigen::Lower>();
-      return std::max(0.0, yy[f][j] - 2.0 * beta.dot(g_all[f][j]) + beta.dot(Gs * beta));
+      return std::max(0.0, yy_[f][j] - 2.0 * beta.dot(g_all[f][j]) + beta.dot(G_all[f][j] * beta));
     };
     val_rss = VectorXd::Zero(N_);
     for (int f = 0; f < folds_; ++f) {
@@ -88,7 +136,11 @@ class CrossValidator {
     train_rss = VectorXd::Zero(N_);
     for (int f = 0; f < folds_; ++f)
       for (int j = 0; j < N_; ++j) train_rss[j] += rss(beta, f, j);
-    if (phi_out) *phi_out = beta.cwiseProduct(scale);
+    if (phi_out) {
+      phi_out->resize(q);
+      phi_out->head(p) = beta.head(p).cwiseProduct(sx_);
+      phi_out->tail(m) = beta.tail(m).cwiseProduct(sc);
+    }
   }
 
  private:
@@ -96,6 +148,13 @@ class CrossValidator {
   int N_;
   const std::vector<int>& fold_;
   int folds_;
+  const MatrixXd* X_ = nullptr;
+  VectorXd sx_;
+  std::vector<MatrixXd> Gxx_fit_;
+  std::vector<VectorXd> gx_fit_;
+  std::vector<std::vector<MatrixXd>> Gxx_all_;
+  std::vector<std::vector<VectorXd>> gx_all_;
+  std::vector<VectorXd> yy_;
 };
 
 double sgn(double x) {
@@ -149,7 +208,9 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
   MatrixXd X = d.W;
   VectorXd val0, train0;
   VectorXd phi;
-  cv.evaluate(X, val0, train0, &phi);
+  const MatrixXd none(R, 0);
+  cv.set_base(X);
+  cv.evaluate(none, val0, train0, &phi);
   const VectorXd val_before = val0, train_before = train0;
   std::vector<std::string> names = d.names;
 
@@ -289,10 +350,8 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
     std::vector<char> physical(cands.size(), 1);
     std::vector<VectorXd> vals(cands.size()), trains(cands.size());
     for (size_t c = 0; c < cands.size(); ++c) {
-      MatrixXd A(R, X.cols() + cands[c].columns.cols());
-      A << X, cands[c].columns;
       VectorXd phi_c;
-      cv.evaluate(A, vals[c], trains[c], &phi_c);
+      cv.evaluate(cands[c].columns, vals[c], trains[c], &phi_c);
       double dbic = 0, v0 = 0, v1 = 0;
       for (int j : cands[c].joints) {
         dbic += n_eff * std::log(std::max(1e-300, trains[c][j]) / std::max(1e-300, train0[j]));
@@ -348,7 +407,8 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
     A << X, c.columns;
     X = A;
     for (const auto& n : c.names) names.push_back(n);
-    cv.evaluate(X, val0, train0, &phi);
+    cv.set_base(X);
+    cv.evaluate(none, val0, train0, &phi);
     DiagnosedEffect e;
     e.kind = c.kind;
     for (int j : c.joints) e.joints.push_back(j + 1);
@@ -388,7 +448,7 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
 
   // Metrics before/after.
   VectorXd val_after, train_after;
-  cv.evaluate(X, val_after, train_after);
+  cv.evaluate(none, val_after, train_after);
   for (int j = 0; j < N; ++j) {
     DiagnoseJoint m;
     m.joint = j + 1;
