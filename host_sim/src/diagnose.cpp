@@ -54,13 +54,12 @@ class CrossValidator {
         const Index r = s * N_ + j;
         const VectorXd x = X.row(r).transpose().cwiseProduct(sx_);
         const double y = d_.y[r];
+        if (!d_.fit_row[r]) continue;  // rows left out of the fit (stiction band) are not judged either
         Gxx_all_[f][j].selfadjointView<Eigen::Lower>().rankUpdate(x);
         gx_all_[f][j] += x * y;
         yy_[f][j] += y * y;
-        if (d_.fit_row[r]) {
-          Gxx_fit_[f].selfadjointView<Eigen::Lower>().rankUpdate(x);
-          gx_fit_[f] += x * y;
-        }
+        Gxx_fit_[f].selfadjointView<Eigen::Lower>().rankUpdate(x);
+        gx_fit_[f] += x * y;
       }
     }
     for (auto& G : Gxx_fit_) G = MatrixXd(G.selfadjointView<Eigen::Lower>());
@@ -70,7 +69,10 @@ class CrossValidator {
 
   /// Validation and training RSS per joint of [X C] (C may have no columns); phi_out: the
   /// coefficients of the fit on all rows, X's first.
-  void evaluate(const MatrixXd& C, VectorXd& val_rss, VectorXd& train_rss, VectorXd* phi_out = nullptr) const {
+  /// *novelty: the smallest fraction of a (unit-scaled) candidate column not explained by X (1 if C
+  /// is empty); near 0 means the candidate is collinear with the model and not identifiable.
+  void evaluate(const MatrixXd& C, VectorXd& val_rss, VectorXd& train_rss, VectorXd* phi_out = nullptr,
+                double* novelty = nullptr) const {
     const MatrixXd& X = *X_;
     const Index p = X.cols(), m = C.cols(), q = p + m, S = d_.t.size();
     VectorXd sc = C.colwise().norm().transpose();
@@ -96,6 +98,7 @@ class CrossValidator {
         const int f = fold_[s];
         for (int j = 0; j < N_; ++j) {
           const Index r = s * N_ + j;
+          if (!d_.fit_row[r]) continue;
           const VectorXd c = C.row(r).transpose().cwiseProduct(sc);
           if (c.isZero(0.0)) continue;
           const VectorXd x = X.row(r).transpose().cwiseProduct(sx_);
@@ -109,7 +112,7 @@ class CrossValidator {
             g.tail(m) += c * y;
           };
           add(G_all[f][j], g_all[f][j]);
-          if (d_.fit_row[r]) add(G_fit[f], g_fit[f]);
+          add(G_fit[f], g_fit[f]);
         }
       }
     }
@@ -120,6 +123,17 @@ class CrossValidator {
       g_total += g_fit[f];
     }
     const double ridge = 1e-12 * std::max(1.0, G_total.diagonal().maxCoeff());
+    if (novelty) {
+      *novelty = 1.0;
+      if (m > 0) {
+        MatrixXd Gxx = G_total.topLeftCorner(p, p);
+        Gxx.diagonal().array() += ridge;
+        const MatrixXd Gxc = G_total.topRightCorner(p, m);
+        const MatrixXd schur = G_total.bottomRightCorner(m, m) - Gxc.transpose() * Gxx.ldlt().solve(Gxc);
+        for (Index i = 0; i < m; ++i)
+          *novelty = std::min(*novelty, schur(i, i) / std::max(1e-300, G_total(p + i, p + i)));
+      }
+    }
     auto solve = [&](MatrixXd G, const VectorXd& g) {
       G.diagonal().array() += ridge;
       return VectorXd(G.ldlt().solve(g));
@@ -198,11 +212,27 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
   std::vector<int> fold(static_cast<size_t>(S));
   for (Index s = 0; s < S; ++s) fold[s] = static_cast<int>((s / block) % folds);
   res.validation = "blocked " + std::to_string(folds) + "-fold cross-validation";
-  // Effective independent samples per joint: the residual is low-passed at f_c, so samples closer
-  // than 1 / (2 f_c) are not independent (duration x 2 f_c).
   const double duration = static_cast<double>(S) / d.rate_hz;
-  const double n_eff = std::min(static_cast<double>(S), duration * 2.0 * d.cutoff_hz);
-  res.effective_samples_per_joint = n_eff;
+  // Effective independent samples of joint j's residual: S / (1 + 2 sum rho_k), rho_k its
+  // autocorrelation, summed over the initial positive sequence (Geyer). The residual is low-passed
+  // and carries smooth model error, so counting every sample would make BIC overconfident.
+  auto effective_samples = [&](const VectorXd& residual) {
+    VectorXd n(N);
+    for (int j = 0; j < N; ++j) {
+      VectorXd r(S);
+      for (Index s = 0; s < S; ++s) r[s] = residual[s * N + j];
+      r.array() -= r.mean();
+      const double c0 = r.squaredNorm();
+      double tau = 1.0;
+      for (Index k = 1; k < S / 4 && c0 > 0; ++k) {
+        const double rho = r.head(S - k).dot(r.tail(S - k)) / c0;
+        if (rho <= 0) break;
+        tau += 2.0 * rho;
+      }
+      n[j] = static_cast<double>(S) / tau;
+    }
+    return n;
+  };
 
   CrossValidator cv(d, N, fold, folds);
   MatrixXd X = d.W;
@@ -344,36 +374,40 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
   for (int step = 0; step < o.max_effects; ++step) {
     const VectorXd residual = d.y - X * phi;
     std::vector<Candidate> cands = library(residual);
+    const VectorXd n_eff = effective_samples(residual);
+    if (step == 0) res.effective_samples_per_joint = n_eff.mean();
     int best = -1;
     double best_score = 0;
     std::vector<double> bic(cands.size()), gain(cands.size());
-    std::vector<char> physical(cands.size(), 1);
+    std::vector<char> physical(cands.size(), 1), collinear(cands.size(), 0);
     std::vector<VectorXd> vals(cands.size()), trains(cands.size());
     for (size_t c = 0; c < cands.size(); ++c) {
       VectorXd phi_c;
-      cv.evaluate(cands[c].columns, vals[c], trains[c], &phi_c);
-      double dbic = 0, v0 = 0, v1 = 0;
+      double novelty = 1;
+      cv.evaluate(cands[c].columns, vals[c], trains[c], &phi_c, &novelty);
+      collinear[c] = novelty < 1e-6;
+      double dbic = 0, v0 = 0, v1 = 0, n_joints = 0;
       for (int j : cands[c].joints) {
-        dbic += n_eff * std::log(std::max(1e-300, trains[c][j]) / std::max(1e-300, train0[j]));
+        n_joints += n_eff[j];
+        dbic += n_eff[j] * std::log(std::max(1e-300, trains[c][j]) / std::max(1e-300, train0[j]));
         v0 += val0[j] / std::max(1e-300, val_before[j]);  // joints weighted by their own scale
         v1 += vals[c][j] / std::max(1e-300, val_before[j]);
       }
-      dbic +=
-          static_cast<double>(cands[c].columns.cols()) * std::log(n_eff * static_cast<double>(cands[c].joints.size()));
+      dbic += static_cast<double>(cands[c].columns.cols()) * std::log(n_joints);
       // A candidate picked among several alternatives (the best frequency of a spectral search, ...)
       // pays for the look-elsewhere effect: 2 ln(alternatives), a Bonferroni factor in BIC units.
       dbic += 2.0 * std::log(static_cast<double>(cands[c].searched));
       bic[c] = dbic;
       gain[c] = v0 > 0 ? (v0 - v1) / v0 : 0;
-      // Physical signs: static friction exceeds Coulomb friction (Eq. 4), inertia and the friction
-      // of a coupled motor are positive, load-dependent friction opposes motion.
+      // Physical signs: static friction exceeds Coulomb friction (Eq. 4), rotor inertia is positive,
+      // load-dependent friction and a coupled motor's friction oppose motion (its inertia may be ~0).
       const VectorXd added = phi_c.tail(cands[c].columns.cols());
       const std::string& k = cands[c].kind;
       physical[c] = !((k == "stribeck" || k == "rotor_inertia" || k == "load_friction") && added[0] <= 0) &&
-                    !(k == "coupling" && (added[0] < 0 || added[1] < 0 || added[2] < 0));
+                    !(k == "coupling" && (added[0] < 0 || added[1] < 0));
       // Selection on validation error only: the largest relative validation gain among candidates
       // whose BIC evidence is very strong and whose parameters are physical.
-      if (physical[c] && dbic < -o.bic_threshold && gain[c] > 0 && gain[c] > best_score) {
+      if (physical[c] && !collinear[c] && dbic < -o.bic_threshold && gain[c] >= o.min_gain && gain[c] > best_score) {
         best_score = gain[c];
         best = static_cast<int>(c);
       }
@@ -476,7 +510,7 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
 void print_diagnose_report(std::ostream& out, const DiagnoseResult& r) {
   out << "dyncal diagnose: robot " << r.robot << ", declared model " << r.declared_model << ", " << r.samples
       << " samples, " << r.validation << ", BIC with n_eff = " << std::lround(r.effective_samples_per_joint)
-      << " per joint\n\n";
+      << " per joint (mean, from the residual's autocorrelation)\n\n";
   out << "effects added (greedy, by validation gain, each with BIC evidence):\n";
   if (r.effects.empty()) out << "  none: nothing significant is left in the residual\n";
   for (const auto& e : r.effects) {

@@ -16,6 +16,7 @@ struct DiagnoseOptions {
   int max_effects = 8;        ///< greedy steps at most
   int max_cycles = 64;        ///< position-periodic search: 1..max_cycles cycles per revolution
   double bic_threshold = 10;  ///< accept when BIC falls by more than this (Kass-Raftery "very strong")
+  double min_gain = 0.05;     ///< and the affected joints' validation RSS falls by at least this fraction
 };
 
 /// One effect added to the model.

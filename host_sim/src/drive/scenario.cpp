@@ -131,6 +131,21 @@ Scenario load_scenario(const std::string& path, const RobotDescription& robot) {
       throw InputError(w + ": tau_noise_std must be a number or an array of 6");
     }
   }
+  if (j.contains("couplings")) {
+    for (const json& c : j["couplings"]) {
+      CoupledFriction cf;
+      if (!c.contains("joints") || c["joints"].size() != 2) throw InputError(w + ": a coupling needs \"joints\": [i, j]");
+      cf.joint_i = c["joints"][0].get<int>() - 1;
+      cf.joint_j = c["joints"][1].get<int>() - 1;
+      if (cf.joint_i < 0 || cf.joint_j < 0 || cf.joint_i >= kDriveJoints || cf.joint_j >= kDriveJoints || cf.joint_i == cf.joint_j) {
+        throw InputError(w + ": coupling joints must be two different joints 1..6");
+      }
+      cf.sign = number(c, "sign", 1.0, w + ".couplings");
+      cf.Fc = number(c, "Fc", 0, w + ".couplings");
+      cf.beta = number(c, "beta", 0, w + ".couplings");
+      s.couplings.push_back(cf);
+    }
+  }
   if (j.contains("joints")) {
     const json& js = j["joints"];
     if (!js.is_array() || js.size() != kDriveJoints) throw InputError(w + ": 'joints' must be an array of 6 objects");

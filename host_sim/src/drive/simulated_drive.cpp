@@ -232,6 +232,12 @@ void SimulatedDrive::step() {
       if (e.cogging_amplitude != 0) tf += e.cogging_amplitude * std::sin(e.cogging_cycles * q[j] + e.cogging_phase);
       rhs[j] -= tf;
     }
+    for (const CoupledFriction& c : scenario_.couplings) {
+      const double v = qd[c.joint_i] + c.sign * qd[c.joint_j];
+      const double f = c.Fc * (v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0)) + c.beta * v;
+      rhs[c.joint_i] -= f;
+      rhs[c.joint_j] -= c.sign * f;
+    }
     qdd = M.ldlt().solve(rhs);
   };
   const double hstep = dt / scenario_.substeps;

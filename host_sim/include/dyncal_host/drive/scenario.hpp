@@ -6,6 +6,7 @@
 #include <array>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "dyncal_host/robot_description.hpp"
 
@@ -38,6 +39,14 @@ struct JointEffects {
   double rotor_inertia = 0;          ///< Ia, reflected to the joint side [kg m^2]
 };
 
+/// A motor that turns with q_i + sign q_j (a coupled wrist transmission): its friction
+/// Fc sgn(v) + beta v, v = qd_i + sign qd_j, acts on joint i and, with the sign, on joint j.
+struct CoupledFriction {
+  int joint_i = 0, joint_j = 0;  ///< 0-based
+  double sign = 1.0;
+  double Fc = 0, beta = 0;
+};
+
 struct Scenario {
   std::string robot = "er20";
   std::uint64_t seed = 1;
@@ -50,6 +59,7 @@ struct Scenario {
   double encoder_counts = 131072;  ///< per motor revolution (quantisation: 2 pi / (counts N_j))
   std::array<JointFriction, kDriveJoints> friction{};
   std::array<JointEffects, kDriveJoints> effects{};
+  std::vector<CoupledFriction> couplings;
 };
 
 /// The default scenario for `robot`: Eq. 7 friction with the robot file's Fc and beta, the
