@@ -33,6 +33,15 @@ TEST(Diagnose, Tx40FindsTheWristCouplingAndLiftsJoint5) {
   EXPECT_LT(r.joints[4].r2_validation_before, 0.7);
   EXPECT_GE(r.joints[4].r2_validation_after, 0.9);
   EXPECT_GE(r.joints[5].r2_validation_after, 0.9);
+  // The plots a person looks at: four SVG files per joint, drawn by gnuplot.
+  const auto dir = std::filesystem::temp_directory_path() / ("dyncal_plots_" + std::to_string(getpid()));
+  const auto files = write_diagnose_plots(r, dir.string());
+  EXPECT_EQ(files.size(), 24u);
+  for (const auto& f : files) {
+    ASSERT_TRUE(std::filesystem::exists(f)) << f;
+    EXPECT_GT(std::filesystem::file_size(f), 2000u) << f;
+  }
+  std::filesystem::remove_all(dir);
 }
 
 /// A log recorded from the simulated drive in process: `seconds` of the default excitation.

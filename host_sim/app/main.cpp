@@ -73,6 +73,8 @@ int main(int argc, char** argv) {
   diagnose->add_option("--max-effects", dopt.max_effects, "greedy steps at most")->capture_default_str();
   diagnose->add_option("--bic", dopt.bic_threshold, "BIC drop an effect needs")->capture_default_str();
   diagnose->add_option("--report", diag_report, "write the report as JSON");
+  std::string diag_plots;
+  diagnose->add_option("--plots", diag_plots, "write SVG plots (gnuplot) into this directory");
 
   std::function<int()> run;
   add_drive_commands(app, run, robots_dir);
@@ -97,6 +99,10 @@ int main(int argc, char** argv) {
       const auto result = dyncal::host::diagnose(robot, log, dopt);
       dyncal::host::print_diagnose_report(std::cout, result);
       if (!diag_report.empty()) write_json(diag_report, dyncal::host::diagnose_report_json(result));
+      if (!diag_plots.empty()) {
+        const auto files = dyncal::host::write_diagnose_plots(result, diag_plots);
+        std::cout << "\nplots: " << files.size() << " SVG files in " << diag_plots << "\n";
+      }
       return 0;
     }
     if (app.got_subcommand(identify)) {

@@ -47,6 +47,13 @@ struct DiagnoseJoint {
   double e_T_before = 0, e_T_after = 0, e_T_std_before = 0, e_T_std_after = 0;
 };
 
+/// What the plots show, per joint (kept samples, decimated rate).
+struct DiagnoseTraces {
+  Eigen::VectorXd t;
+  Eigen::MatrixXd q, qd, tau, tau_before, tau_after;  ///< S x N; predictions of the final fits
+  Eigen::MatrixXd spectrum;  ///< max_cycles x N: residual power removed by k cycles/rev (declared model)
+};
+
 struct DiagnoseResult {
   std::string robot, declared_model, validation;
   long samples = 0;
@@ -55,6 +62,7 @@ struct DiagnoseResult {
   std::vector<DiagnosedEffect> effects;
   std::vector<RejectedCandidate> rejected;  ///< best candidate per kind and joint of the last round
   std::vector<std::string> notes;
+  DiagnoseTraces traces;
 };
 
 /// Runs the diagnosis. Throws InputError on bad input (too few samples, a joint that does not
@@ -62,6 +70,11 @@ struct DiagnoseResult {
 DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, const DiagnoseOptions& options);
 
 void print_diagnose_report(std::ostream& out, const DiagnoseResult& r);
+
+/// Writes SVG plots with gnuplot into `dir` (created): per joint, residual vs velocity, residual vs
+/// position, residual spectrum over the joint angle, measured and predicted torque before/after.
+/// Returns the files written. Throws InputError when gnuplot is missing or fails.
+std::vector<std::string> write_diagnose_plots(const DiagnoseResult& r, const std::string& dir);
 nlohmann::json diagnose_report_json(const DiagnoseResult& r);
 
 }  // namespace dyncal::host
