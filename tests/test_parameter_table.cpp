@@ -37,7 +37,7 @@ TEST(ParameterTable, RoundTripsAndHasTheDocumentedLayout) {
   std::uint8_t bytes[dyncal::kTableMaxBytes];
   int size = 0;
   ASSERT_EQ(dyncal::encode_table(t, bytes, sizeof bytes, &size), dyncal::TableStatus::ok);
-  EXPECT_EQ(size, 16 + 4 * Model::kNumParams + 4);
+  EXPECT_EQ(size, 16 + 4 * Model::kNumParams + 2 + 4);
   EXPECT_EQ(bytes[0], 0x44);  // magic, little-endian
   EXPECT_EQ(bytes[6] | (bytes[7] << 8), Model::kNumParams);
   float v0;
@@ -60,11 +60,18 @@ TEST(ParameterTable, EveryCorruptionIsNamed) {
   dyncal::ParameterTable out;
   out.count = 7;  // must stay untouched on failure
   std::uint8_t b[dyncal::kTableMaxBytes];
-  // Any single flipped bit in the values or the CRC is caught.
-  for (int byte = 16; byte < size; byte += 7) {
+  // Any single flipped bit is caught: in the values or the CRC by the CRC, in the effect count by
+  // the size it implies.
+  const int effect_count_at = 16 + 4 * Model::kNumParams;
+  for (int byte = 16; byte < size; byte += 3) {
     std::memcpy(b, good, size);
     b[byte] ^= 0x10;
-    EXPECT_EQ(dyncal::decode_table(b, size, out), dyncal::TableStatus::bad_crc) << "byte " << byte;
+    const auto st = dyncal::decode_table(b, size, out);
+    if (byte == effect_count_at || byte == effect_count_at + 1) {
+      EXPECT_NE(st, dyncal::TableStatus::ok) << "byte " << byte;
+    } else {
+      EXPECT_EQ(st, dyncal::TableStatus::bad_crc) << "byte " << byte;
+    }
   }
   std::memcpy(b, good, size);
   b[0] ^= 1;
@@ -84,6 +91,48 @@ TEST(ParameterTable, EveryCorruptionIsNamed) {
   nan_table.values[3] = std::numeric_limits<float>::quiet_NaN();
   ASSERT_EQ(dyncal::encode_table(nan_table, b, sizeof b, &size), dyncal::TableStatus::ok);
   EXPECT_EQ(dyncal::decode_table(b, size, out), dyncal::TableStatus::non_finite);
+}
+
+TEST(ParameterTable, EffectTermsRoundTripAndAreChecked) {
+  auto t = valid_table();
+  t.effect_count = 2;
+  t.effects[0] = {dyncal::EffectKind::position_periodic, 1, 0, 1, 36.0f, {1.5f, -0.5f, 0.0f}};
+  t.effects[1] = {dyncal::EffectKind::coupling, 4, 5, -1, 0.0f, {0.8f, 0.3f, 0.01f}};
+  std::uint8_t bytes[dyncal::kTableMaxBytes];
+  int size = 0;
+  ASSERT_EQ(dyncal::encode_table(t, bytes, sizeof bytes, &size), dyncal::TableStatus::ok);
+  EXPECT_EQ(size, dyncal::encoded_table_size(Model::kNumParams, 2));
+  dyncal::ParameterTable back;
+  ASSERT_EQ(dyncal::decode_table(bytes, size, back), dyncal::TableStatus::ok);
+  ASSERT_EQ(back.effect_count, 2);
+  EXPECT_EQ(back.effects[0].kind, dyncal::EffectKind::position_periodic);
+  EXPECT_EQ(back.effects[0].shape, 36.0f);
+  EXPECT_EQ(back.effects[1].joint2, 5);
+  EXPECT_EQ(back.effects[1].sign, -1);
+  EXPECT_EQ(back.effects[1].c[2], 0.01f);
+  EXPECT_EQ(dyncal::check_table<Model>(back), dyncal::TableStatus::ok);
+  // The feed-forward of the two terms at one state, by hand.
+  Eigen::Matrix<double, 6, 1> q = Eigen::Matrix<double, 6, 1>::Constant(0.1), qd = Eigen::Matrix<double, 6, 1>::Zero(),
+                              qdd = Eigen::Matrix<double, 6, 1>::Zero(), rb = qd, tau = qd;
+  qd[4] = 1.0;
+  qd[5] = 0.25;
+  dyncal::add_effect_torques(back.effects, back.effect_count, q, qd, qdd, rb, tau);
+  EXPECT_NEAR(tau[1], 1.5 * std::sin(3.6) - 0.5 * std::cos(3.6), 1e-6);
+  EXPECT_NEAR(tau[4], 0.8 + 0.3 * 0.75, 1e-6);  // v = qd5 - qd6 = 0.75
+  EXPECT_NEAR(tau[5], -(0.8 + 0.3 * 0.75), 1e-6);
+  // Malformed terms are refused by the drive.
+  auto bad = back;
+  bad.effects[1].joint2 = 4;  // coupled with itself
+  EXPECT_EQ(dyncal::check_table<Model>(bad), dyncal::TableStatus::bad_effect);
+  bad = back;
+  bad.effects[0].shape = 0.0f;  // no period
+  EXPECT_EQ(dyncal::check_table<Model>(bad), dyncal::TableStatus::bad_effect);
+  bad = back;
+  bad.effects[0].kind = static_cast<dyncal::EffectKind>(42);
+  EXPECT_EQ(dyncal::check_table<Model>(bad), dyncal::TableStatus::bad_effect);
+  bad = back;
+  bad.effect_count = dyncal::kTableMaxEffects + 1;
+  EXPECT_EQ(dyncal::encode_table(bad, bytes, sizeof bytes, &size), dyncal::TableStatus::bad_effect);
 }
 
 TEST(ParameterTable, DriveChecksRobotModelAndRanges) {

@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <thread>
 
+#include "dyncal/effect_terms.hpp"
 #include "dyncal/identification_model.hpp"
 #include "dyncal/table_check.hpp"
 #include "dyncal_host/input_error.hpp"
@@ -40,6 +41,9 @@ ModelOps ops_for() {
                     typename Model::template ParamVector<double> phi;
                     for (int i = 0; i < Model::kNumParams; ++i) phi[i] = t.values[i];
                     tau = K * phi;
+                    // Effect terms of the table (dyncal diagnose); load friction needs the rigid-body torque.
+                    const Vec tau_rb = K.template leftCols<Robot::kNumBase>() * phi.template head<Robot::kNumBase>();
+                    add_effect_torques(t.effects, t.effect_count, q, qd, qdd, tau_rb, tau);
                   }};
 }
 

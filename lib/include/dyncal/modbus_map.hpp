@@ -27,7 +27,7 @@ struct Field {
 
 inline constexpr int kMaxJoints = 6;
 inline constexpr int kMaxHarmonics = 8;
-inline constexpr std::uint16_t kMapVersion = 1;
+inline constexpr std::uint16_t kMapVersion = 2;
 
 /// Drive states (input register `state`).
 enum class DriveState : std::uint16_t { idle = 0, playing = 1, finished = 2 };
@@ -57,7 +57,7 @@ inline constexpr std::uint16_t kModelErrorReg = 18;       // f32[6]
 inline constexpr std::uint16_t kActiveTableSizeReg = 30;  // u16 bytes
 inline constexpr std::uint16_t kActiveTableReg = 31;      // bytes, kTableMaxBytes
 inline constexpr std::uint16_t kTableWords = kTableMaxBytes / 2;
-inline constexpr std::uint16_t kRingReg = 400;               // u32 first seq, u16 count, samples
+inline constexpr std::uint16_t kRingReg = 500;               // u32 first seq, u16 count, samples
 inline constexpr int kSampleWords = 2 + 3 * 2 * kMaxJoints;  // seq u32, q, qd, tau f32[6]
 inline constexpr int kSamplesPerBlock = 3;                   // 3 + 3 * 38 = 117 words <= 125 per read
 inline constexpr std::uint16_t kRingWords = 3 + kSamplesPerBlock * kSampleWords;
@@ -82,7 +82,7 @@ static_assert(kActiveTableReg + kTableWords <= kRingReg, "input fields overlap")
 static_assert(kRingWords <= 125, "one ring block must fit one Modbus read");
 
 inline constexpr Field kRegisterMap[] = {
-    {"map_version", Bank::input, kMapVersionReg, 1, Type::u16, "-", "register map version (1)"},
+    {"map_version", Bank::input, kMapVersionReg, 1, Type::u16, "-", "register map version (2)"},
     {"num_joints", Bank::input, kNumJointsReg, 1, Type::u16, "-", "joints of the arm"},
     {"robot_id", Bank::input, kRobotIdReg, 2, Type::u32, "-", "generated kRobotId of the drive's robot"},
     {"active_model_id", Bank::input, kActiveModelIdReg, 2, Type::u32, "-", "model id of the active table"},

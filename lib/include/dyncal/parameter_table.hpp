@@ -7,6 +7,7 @@
 #include <cstring>
 
 #include "dyncal/crc32.hpp"
+#include "dyncal/effect_terms.hpp"
 
 namespace dyncal {
 
@@ -20,15 +21,19 @@ namespace dyncal {
 /// | 8 | 4 | robot id (generated `kRobotId`: what each base parameter means) |
 /// | 12 | 4 | model id (`dyncal::term` bits of the identification model: the columns after Y_b) |
 /// | 16 | 4 n | values, IEEE-754 float32, in the model's column order (SI units) |
-/// | 16 + 4 n | 4 | CRC-32 of bytes [0, 16 + 4 n) |
+/// | 16 + 4 n | 2 | effect count e (0..kTableMaxEffects) |
+/// | 18 + 4 n | 20 e | effect terms: kind u8, joint u8, joint2 u8, sign i8, shape f32, c0..c2 f32 |
+/// | 18 + 4 n + 20 e | 4 | CRC-32 of all bytes before it |
 inline constexpr std::uint32_t kTableMagic = 0x54504344u;
-inline constexpr std::uint16_t kTableFormatVersion = 1;
+inline constexpr std::uint16_t kTableFormatVersion = 2;
 inline constexpr int kTableHeaderBytes = 16;
 inline constexpr int kTableMaxParams = 128;
-inline constexpr int kTableMaxBytes = kTableHeaderBytes + 4 * kTableMaxParams + 4;
+inline constexpr int kTableMaxEffects = 16;
+inline constexpr int kTableMaxBytes =
+    kTableHeaderBytes + 4 * kTableMaxParams + 2 + kEffectTermBytes * kTableMaxEffects + 4;
 
-constexpr int encoded_table_size(int count) noexcept {
-  return kTableHeaderBytes + 4 * count + 4;
+constexpr int encoded_table_size(int count, int effects = 0) noexcept {
+  return kTableHeaderBytes + 4 * count + 2 + kEffectTermBytes * effects + 4;
 }
 
 /// Outcome of decoding or checking a table; every rejection names its reason.
@@ -43,6 +48,7 @@ enum class TableStatus : std::uint8_t {
   wrong_model,   ///< model id the drive does not run, or count not matching it
   non_finite,    ///< a value is NaN or infinite
   out_of_range,  ///< a value is outside the drive's accepted range
+  bad_effect,    ///< an effect term is malformed (kind, joints, sign, shape) or too many
 };
 
 constexpr const char* to_string(TableStatus s) noexcept {
@@ -67,6 +73,8 @@ constexpr const char* to_string(TableStatus s) noexcept {
       return "a value is NaN or infinite";
     case TableStatus::out_of_range:
       return "a value is outside the accepted range";
+    case TableStatus::bad_effect:
+      return "an effect term is malformed";
   }
   return "unknown";
 }
@@ -77,6 +85,8 @@ struct ParameterTable {
   std::uint32_t model_id = 0;
   std::uint16_t count = 0;
   float values[kTableMaxParams] = {};
+  std::uint16_t effect_count = 0;
+  EffectTerm effects[kTableMaxEffects] = {};
 };
 
 namespace detail {
@@ -112,7 +122,8 @@ inline float bits_float(std::uint32_t u) noexcept {
 /// without writing; on ok, *written = encoded_table_size(table.count).
 inline TableStatus encode_table(const ParameterTable& table, std::uint8_t* out, int capacity, int* written) noexcept {
   if (table.count == 0 || table.count > kTableMaxParams) return TableStatus::bad_count;
-  const int size = encoded_table_size(table.count);
+  if (table.effect_count > kTableMaxEffects) return TableStatus::bad_effect;
+  const int size = encoded_table_size(table.count, table.effect_count);
   if (capacity < size) return TableStatus::bad_size;
   detail::put_u32(out, kTableMagic);
   detail::put_u16(out + 4, kTableFormatVersion);
@@ -121,6 +132,18 @@ inline TableStatus encode_table(const ParameterTable& table, std::uint8_t* out, 
   detail::put_u32(out + 12, table.model_id);
   for (int i = 0; i < table.count; ++i)
     detail::put_u32(out + kTableHeaderBytes + 4 * i, detail::float_bits(table.values[i]));
+  std::uint8_t* e = out + kTableHeaderBytes + 4 * table.count;
+  detail::put_u16(e, table.effect_count);
+  e += 2;
+  for (int i = 0; i < table.effect_count; ++i, e += kEffectTermBytes) {
+    const EffectTerm& t = table.effects[i];
+    e[0] = static_cast<std::uint8_t>(t.kind);
+    e[1] = t.joint;
+    e[2] = t.joint2;
+    e[3] = static_cast<std::uint8_t>(t.sign);
+    detail::put_u32(e + 4, detail::float_bits(t.shape));
+    for (int k = 0; k < 3; ++k) detail::put_u32(e + 8 + 4 * k, detail::float_bits(t.c[k]));
+  }
   detail::put_u32(out + size - 4, crc32(out, static_cast<std::size_t>(size - 4)));
   *written = size;
   return TableStatus::ok;
@@ -140,7 +163,10 @@ inline TableStatus decode_table(const std::uint8_t* in, int size, ParameterTable
   if (detail::get_u16(in + 4) != kTableFormatVersion) return TableStatus::bad_version;
   const int count = detail::get_u16(in + 6);
   if (count == 0 || count > kTableMaxParams) return TableStatus::bad_count;
-  if (size != encoded_table_size(count)) return TableStatus::bad_size;
+  if (size < encoded_table_size(count)) return TableStatus::bad_size;
+  const int effects = detail::get_u16(in + kTableHeaderBytes + 4 * count);
+  if (effects > kTableMaxEffects) return TableStatus::bad_effect;
+  if (size != encoded_table_size(count, effects)) return TableStatus::bad_size;
   if (crc32(in, static_cast<std::size_t>(size - 4)) != detail::get_u32(in + size - 4)) return TableStatus::bad_crc;
   for (int i = 0; i < count; ++i) {
     if (!std::isfinite(detail::bits_float(detail::get_u32(in + kTableHeaderBytes + 4 * i)))) {
@@ -151,6 +177,17 @@ inline TableStatus decode_table(const std::uint8_t* in, int size, ParameterTable
   out.model_id = detail::get_u32(in + 12);
   out.count = static_cast<std::uint16_t>(count);
   for (int i = 0; i < count; ++i) out.values[i] = detail::bits_float(detail::get_u32(in + kTableHeaderBytes + 4 * i));
+  out.effect_count = static_cast<std::uint16_t>(effects);
+  const std::uint8_t* e = in + kTableHeaderBytes + 4 * count + 2;
+  for (int i = 0; i < effects; ++i, e += kEffectTermBytes) {
+    EffectTerm& t = out.effects[i];
+    t.kind = static_cast<EffectKind>(e[0]);
+    t.joint = e[1];
+    t.joint2 = e[2];
+    t.sign = static_cast<std::int8_t>(e[3]);
+    t.shape = detail::bits_float(detail::get_u32(e + 4));
+    for (int k = 0; k < 3; ++k) t.c[k] = detail::bits_float(detail::get_u32(e + 8 + 4 * k));
+  }
   return TableStatus::ok;
 }
 

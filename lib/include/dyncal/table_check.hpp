@@ -31,6 +31,13 @@ TableStatus check_table(const ParameterTable& table) noexcept {
         (info.term == term::coulomb || info.term == term::viscous || info.term == term::rotor_inertia);
     if (non_negative && v < 0.0f) return TableStatus::out_of_range;
   }
+  if (table.effect_count > kTableMaxEffects) return TableStatus::bad_effect;
+  for (int i = 0; i < table.effect_count; ++i) {
+    const EffectTerm& e = table.effects[i];
+    if (!effect_term_valid(e, Model::kNumJoints)) return TableStatus::bad_effect;
+    for (float c : e.c)
+      if (std::fabs(c) > kTableMaxAbsValue) return TableStatus::out_of_range;
+  }
   return TableStatus::ok;
 }
 
