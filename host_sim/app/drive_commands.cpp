@@ -213,6 +213,8 @@ void add_drive_commands(CLI::App& app, std::function<int()>& run, const std::str
                   "fit only rows where |qd_j| >= this fraction of joint j's top speed (stiction)")
       ->capture_default_str();
   cal->add_flag("--no-flash", s->no_flash, "identify and verify, but leave the drive's table alone");
+  cal->add_flag("--diagnose", s->cal.diagnose,
+                "diagnose the residual (as dyncal diagnose) and flash the effects found with the table");
   cal->add_flag("--quiet", s->quiet, "no progress output");
   cal->add_option("--report", s->report, "write the report as JSON");
   cal->callback([&run, s] { run = [s] { return run_calibrate(*s); }; });

@@ -342,6 +342,24 @@ CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions&
     table.model_id = o.terms;
     table.count = static_cast<std::uint16_t>(r.phi_batch.size());
     for (size_t i = 0; i < r.phi_batch.size(); ++i) table.values[i] = static_cast<float>(r.phi_batch[i]);
+    if (o.diagnose) {
+      // The same analysis as `dyncal diagnose` on the excitation; the table then carries the effects
+      // found and the declared parameters re-estimated with them.
+      DiagnoseOptions dopt;
+      dopt.identify = io;
+      const DiagnoseResult d = diagnose(robot, log, dopt);
+      std::vector<std::string> skipped;
+      const std::vector<EffectTerm> terms = effect_terms(d, &skipped);
+      if (static_cast<int>(terms.size()) > kTableMaxEffects) throw InputError("more effects than a table holds");
+      for (size_t i = 0; i < d.declared_params.size(); ++i) table.values[i] = static_cast<float>(d.declared_params[i]);
+      table.effect_count = static_cast<std::uint16_t>(terms.size());
+      for (size_t i = 0; i < terms.size(); ++i) table.effects[i] = terms[i];
+      for (const auto& e : d.effects) r.effects.push_back(e.explanation);
+      r.effects_not_flashed = skipped;
+      progress << "diagnosis: " << d.effects.size() << " effect(s) found";
+      for (const auto& e : d.effects) progress << "\n  " << e.explanation;
+      progress << "\n";
+    }
     const port::PortStatus st = drive->write(table, &r.flash_status);
     r.flashed = st == port::PortStatus::ok;
     r.flash_message = st == port::PortStatus::rejected
@@ -376,6 +394,11 @@ void print_calibrate_report(std::ostream& out, const CalibrateResult& r) {
     out << "  " << std::setw(5) << j + 1 << std::setprecision(3) << std::setw(12) << r.verify_batch.rms_tau[j]
         << std::setw(12) << r.verify_batch.rms[j] << std::setw(12) << r.verify_kf.rms[j] << std::setw(12)
         << r.verify_rls.rms[j] << "\n";
+  }
+  if (!r.effects.empty()) {
+    out << "effects diagnosed and flashed with the table:\n";
+    for (const auto& e : r.effects) out << "  " << e << "\n";
+    for (const auto& e : r.effects_not_flashed) out << "  (not flashed: " << e << " - drift has no table term)\n";
   }
   out << "flash: " << r.flash_message << "\n";
   if (r.flashed) {

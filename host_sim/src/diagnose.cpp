@@ -30,6 +30,8 @@ struct Candidate {
   MatrixXd columns;    // (S N) x m
   std::string detail;  // e.g. "36 cycles per revolution"
   int searched = 1;    // alternatives the search chose among (frequencies, velocity scales, signs)
+  double shape = 0;    // velocity scale (stribeck) or cycles per revolution (position_periodic)
+  double sign = 1;     // coupling: q_i + sign q_j
 };
 
 /// Blocked cross-validation from per-fold, per-joint Gram matrices of the design [X C] and y. The
@@ -292,6 +294,7 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
         if (gain > best_gain) {
           best_gain = gain;
           best_stribeck = c;
+          best_stribeck.shape = qds;
         }
       }
       best_stribeck.searched = 4;
@@ -341,6 +344,7 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
             },
             std::to_string(best_k) + " cycles per revolution"));
         out.back().searched = o.max_cycles;
+        out.back().shape = best_k;
       }
       out.push_back(make("drift", {j}, {"dFv" + J, "doffset" + J}, [&](Index s, MatrixXd& m) {
         const double tau_t = (d.t[s] - d.t[0]) / duration;  // 0..1 over the log
@@ -368,6 +372,7 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
               sign > 0 ? "motor turning with q" + std::to_string(i + 1) + " + q" + std::to_string(j + 1)
                        : "motor turning with q" + std::to_string(i + 1) + " - q" + std::to_string(j + 1)));
           out.back().searched = 2;
+          out.back().sign = sign;
         }
       }
     }
@@ -452,6 +457,8 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
     e.param_names = c.names;
     for (Index k = 0; k < c.columns.cols(); ++k) e.params.push_back(phi[X.cols() - c.columns.cols() + k]);
     e.delta_bic = bic[static_cast<size_t>(best)];
+    e.shape = c.shape;
+    e.sign = c.sign;
     e.validation_gain = gain[static_cast<size_t>(best)];
     std::ostringstream ex;
     ex << std::setprecision(3) << "joint" << (c.joints.size() > 1 ? "s " : " ") << joint_list(c.joints) << ": ";
@@ -483,6 +490,8 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
     res.effects.push_back(e);
   }
 
+  res.declared_names = d.names;
+  res.declared_params.assign(phi.data(), phi.data() + d.W.cols());
   // Traces for the plots.
   {
     res.traces.t = d.t;
@@ -629,6 +638,40 @@ std::vector<std::string> write_diagnose_plots(const DiagnoseResult& r, const std
     throw InputError("gnuplot failed or is missing (scripts/setup installs gnuplot-nox); see " + dir + "/gnuplot.log");
   }
   return files;
+}
+
+std::vector<EffectTerm> effect_terms(const DiagnoseResult& r, std::vector<std::string>* skipped) {
+  std::vector<EffectTerm> out;
+  for (const auto& e : r.effects) {
+    EffectTerm t;
+    t.joint = static_cast<std::uint8_t>(e.joints.front() - 1);
+    for (size_t k = 0; k < e.params.size() && k < 3; ++k) t.c[k] = static_cast<float>(e.params[k]);
+    t.shape = static_cast<float>(e.shape);
+    if (e.kind == "stribeck")
+      t.kind = EffectKind::stribeck;
+    else if (e.kind == "asymmetric_friction")
+      t.kind = EffectKind::asymmetric_friction;
+    else if (e.kind == "velocity_power")
+      t.kind = EffectKind::velocity_power;
+    else if (e.kind == "load_friction")
+      t.kind = EffectKind::load_friction;
+    else if (e.kind == "rotor_inertia")
+      t.kind = EffectKind::rotor_inertia;
+    else if (e.kind == "offset")
+      t.kind = EffectKind::offset;
+    else if (e.kind == "position_periodic")
+      t.kind = EffectKind::position_periodic;
+    else if (e.kind == "coupling") {
+      t.kind = EffectKind::coupling;
+      t.joint2 = static_cast<std::uint8_t>(e.joints.back() - 1);
+      t.sign = static_cast<std::int8_t>(e.sign > 0 ? 1 : -1);
+    } else {
+      if (skipped) skipped->push_back(e.kind + " on joint " + std::to_string(e.joints.front()));
+      continue;
+    }
+    out.push_back(t);
+  }
+  return out;
 }
 
 nlohmann::json diagnose_report_json(const DiagnoseResult& r) {

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "dyncal/parameter_table.hpp"
+#include "dyncal_host/diagnose.hpp"
 #include "dyncal_host/identify.hpp"
 #include "dyncal_port/modbus_drive.hpp"
 
@@ -28,7 +29,8 @@ struct CalibrateOptions {
   double online_cutoff_hz = 20;  ///< causal low-pass of the online path
   double rls_mu = 0.9999;
   bool flash = true;
-  bool progress = true;                            ///< progress bar on the progress stream
+  bool diagnose = false;  ///< run dyncal diagnose on the excitation and flash the effects found
+  bool progress = true;   ///< progress bar on the progress stream
   IdentifyOptions identify = stiction_excluded();  ///< batch fit settings (terms copied from above)
 
   /// Batch defaults for drive data: rows of a joint below 2 % of its top speed are left out of the
@@ -58,6 +60,8 @@ struct CalibrateResult {
   long online_updates = 0, online_rejected = 0;
   VerificationErrors verify_batch, verify_kf, verify_rls;           ///< fresh trajectory, identified models
   std::array<double, 6> drive_error_before{}, drive_error_after{};  ///< drive's own RMS(tau - tau_ff)
+  std::vector<std::string> effects;  ///< explanations of the effects diagnosed and flashed
+  std::vector<std::string> effects_not_flashed;
   bool flashed = false;
   TableStatus flash_status = TableStatus::ok;
   std::string flash_message;

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "dyncal/effect_terms.hpp"
 #include "dyncal_host/identify.hpp"
 
 namespace dyncal::host {
@@ -26,6 +27,8 @@ struct DiagnosedEffect {
   std::vector<int> joints;  ///< 1-based
   std::vector<std::string> param_names;
   std::vector<double> params;
+  double shape = 0;            ///< velocity scale [rad/s] (stribeck), cycles per revolution (periodic)
+  double sign = 1;             ///< coupling: the motor turns with q_i + sign q_j
   double delta_bic = 0;        ///< BIC change on the affected joints (negative: evidence for)
   double validation_gain = 0;  ///< relative drop of the affected joints' validation RSS
   std::string explanation;
@@ -62,6 +65,8 @@ struct DiagnoseResult {
   std::vector<DiagnosedEffect> effects;
   std::vector<RejectedCandidate> rejected;  ///< best candidate per kind and joint of the last round
   std::vector<std::string> notes;
+  std::vector<std::string> declared_names;  ///< the declared model's parameters...
+  std::vector<double> declared_params;      ///< ...re-estimated jointly with the effects found
   DiagnoseTraces traces;
 };
 
@@ -75,6 +80,10 @@ void print_diagnose_report(std::ostream& out, const DiagnoseResult& r);
 /// position, residual spectrum over the joint angle, measured and predicted torque before/after.
 /// Returns the files written. Throws InputError when gnuplot is missing or fails.
 std::vector<std::string> write_diagnose_plots(const DiagnoseResult& r, const std::string& dir);
+
+/// The effects as parameter-table terms (dyncal/effect_terms.hpp). Drift has no table term (it is a
+/// change over time, not a model term): it is skipped and named in *skipped.
+std::vector<EffectTerm> effect_terms(const DiagnoseResult& r, std::vector<std::string>* skipped);
 nlohmann::json diagnose_report_json(const DiagnoseResult& r);
 
 }  // namespace dyncal::host
