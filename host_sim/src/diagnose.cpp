@@ -75,6 +75,30 @@ class CrossValidator {
   /// coefficients of the fit on all rows, X's first.
   /// *novelty: the smallest fraction of a (unit-scaled) candidate column not explained by X (1 if C
   /// is empty); near 0 means the candidate is collinear with the model and not identifiable.
+  /// Out-of-fold predictions of the base design alone (each block predicted by the fit without its
+  /// fold), for the per-sample indices e_T and e_T_Std.
+  VectorXd predict_out_of_fold() const {
+    const MatrixXd& X = *X_;
+    const Index p = X.cols(), S = d_.t.size();
+    MatrixXd G_total = MatrixXd::Zero(p, p);
+    VectorXd g_total = VectorXd::Zero(p);
+    for (int f = 0; f < folds_; ++f) {
+      G_total += Gxx_fit_[f];
+      g_total += gx_fit_[f];
+    }
+    const double ridge = 1e-12 * std::max(1.0, G_total.diagonal().maxCoeff());
+    std::vector<VectorXd> beta(folds_);
+    for (int f = 0; f < folds_; ++f) {
+      MatrixXd G = G_total - Gxx_fit_[f];
+      G.diagonal().array() += ridge;
+      beta[f] = VectorXd(G.ldlt().solve(g_total - gx_fit_[f])).cwiseProduct(sx_);
+    }
+    VectorXd pred(S * N_);
+    for (Index s = 0; s < S; ++s)
+      for (int j = 0; j < N_; ++j) pred[s * N_ + j] = X.row(s * N_ + j).dot(beta[fold_[s]]);
+    return pred;
+  }
+
   void evaluate(const MatrixXd& C, VectorXd& val_rss, VectorXd& train_rss, VectorXd* phi_out = nullptr,
                 double* novelty = nullptr) const {
     const MatrixXd& X = *X_;
@@ -247,6 +271,7 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
   cv.evaluate(none, val0, train0, &phi);
   const VectorXd val_before = val0, train_before = train0;
   const VectorXd prediction_before = X * phi;
+  const VectorXd oof_before = cv.predict_out_of_fold();
   std::vector<std::string> names = d.names;
 
   // Rigid-body part of the prediction (load torque proxy for load-dependent friction).
@@ -529,6 +554,7 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
   // Metrics before/after.
   VectorXd val_after, train_after;
   cv.evaluate(none, val_after, train_after);
+  const VectorXd oof_after = cv.predict_out_of_fold();
   for (int j = 0; j < N; ++j) {
     DiagnoseJoint m;
     m.joint = j + 1;
@@ -545,9 +571,23 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
     m.rms_validation_after = std::sqrt(val_after[j] / n);
     m.r2_validation_before = 1 - val_before[j] / ss_tot;
     m.r2_validation_after = 1 - val_after[j] / ss_tot;
-    // e_T uses RMS / tau_max here (mean |e| needs the residual samples; RMS bounds it from above).
-    m.e_T_before = m.rms_validation_before / robot.tau_max[j];
-    m.e_T_after = m.rms_validation_after / robot.tau_max[j];
+    // e_T and e_T_Std (survey Sec. 5.1): mean and standard deviation of |tau - tau_hat| / tau_max
+    // over the out-of-fold predictions (rows in the fit only, as the validation RSS).
+    auto indices = [&](const VectorXd& pred, double& mean, double& stdev) {
+      double sa = 0, sa2 = 0, n_rows = 0;
+      for (Index s = 0; s < S; ++s) {
+        const Index r = s * N + j;
+        if (!d.fit_row[r]) continue;
+        const double a = std::abs(d.y[r] - pred[r]) / robot.tau_max[j];
+        sa += a;
+        sa2 += a * a;
+        n_rows += 1;
+      }
+      mean = sa / std::max(1.0, n_rows);
+      stdev = std::sqrt(std::max(0.0, sa2 / std::max(1.0, n_rows) - mean * mean));
+    };
+    indices(oof_before, m.e_T_before, m.e_T_std_before);
+    indices(oof_after, m.e_T_after, m.e_T_std_after);
     res.joints.push_back(m);
   }
   return res;
@@ -570,11 +610,20 @@ void print_diagnose_report(std::ostream& out, const DiagnoseResult& r) {
     for (int j : c.joints) out << " " << j;
     out << ": " << c.reason << "\n";
   }
-  out << "\njoint   RMS val before   after [Nm]   R2 before   after   rel. RMS after\n" << std::fixed;
+  out << "\njoint   RMS val before   after [Nm]   R2 before   after   rel. RMS after     e_T before  after   e_T_Std "
+         "before  after\n"
+      << std::fixed;
   for (const auto& j : r.joints) {
     out << std::setw(5) << j.joint << std::setprecision(4) << std::setw(17) << j.rms_validation_before << std::setw(12)
         << j.rms_validation_after << std::setw(12) << j.r2_validation_before << std::setw(8) << j.r2_validation_after
-        << std::setw(17) << j.rms_validation_after / j.rms_tau << "\n";
+        << std::setw(17) << j.rms_validation_after / j.rms_tau << std::setw(15) << j.e_T_before << std::setw(7)
+        << j.e_T_after << std::setw(15) << j.e_T_std_before << std::setw(7) << j.e_T_std_after << "\n";
+  }
+  out << "\njoint   RMS train before   after [Nm]   rel. RMS train before   after\n";
+  for (const auto& j : r.joints) {
+    out << std::setw(5) << j.joint << std::setprecision(4) << std::setw(19) << j.rms_train_before << std::setw(12)
+        << j.rms_train_after << std::setw(24) << j.rms_train_before / j.rms_tau << std::setw(8)
+        << j.rms_train_after / j.rms_tau << "\n";
   }
   out << std::defaultfloat;
 }
@@ -705,7 +754,11 @@ nlohmann::json diagnose_report_json(const DiagnoseResult& r) {
                            {"relative_rms_validation_before", m.rms_validation_before / m.rms_tau},
                            {"relative_rms_validation_after", m.rms_validation_after / m.rms_tau},
                            {"r2_validation_before", m.r2_validation_before},
-                           {"r2_validation_after", m.r2_validation_after}});
+                           {"r2_validation_after", m.r2_validation_after},
+                           {"e_T_before", m.e_T_before},
+                           {"e_T_after", m.e_T_after},
+                           {"e_T_std_before", m.e_T_std_before},
+                           {"e_T_std_after", m.e_T_std_after}});
   }
   return j;
 }

@@ -14,7 +14,7 @@ namespace dyncal::host {
 
 struct DiagnoseOptions {
   IdentifyOptions identify;   ///< filtering, declared model (terms), folds, block length
-  int max_effects = 8;        ///< greedy steps at most
+  int max_effects = 16;       ///< greedy steps at most
   int max_cycles = 64;        ///< position-periodic search: 1..max_cycles cycles per revolution
   double bic_threshold = 10;  ///< accept when BIC falls by more than this (Kass-Raftery "very strong")
   double min_gain = 0.05;     ///< and the affected joints' validation RSS falls by at least this fraction
