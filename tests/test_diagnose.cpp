@@ -206,6 +206,17 @@ TEST(Diagnose, BadInputGetsAClearMessage) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("joint 4 does not move"), std::string::npos) << e.what();
   }
+  JointLog short_log;  // a quarter of a second
+  short_log.t = log.t.head(125);
+  short_log.q = log.q.topRows(125);
+  short_log.tau = log.tau.topRows(125);
+  short_log.q.col(3) = 0.5 * (short_log.t.array() * 4).sin();
+  try {
+    diagnose(robot, short_log, sim_options());
+    FAIL() << "no error for too few samples";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("too few samples"), std::string::npos) << e.what();
+  }
   log.q.col(3) = 0.3 * log.t;  // constant velocity
   try {
     diagnose(robot, log, sim_options());
