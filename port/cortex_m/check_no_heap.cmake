@@ -1,0 +1,11 @@
+# Fails when the firmware image defines or references an allocator symbol.
+execute_process(COMMAND ${NM} ${ELF} OUTPUT_VARIABLE symbols RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "nm failed on ${ELF}")
+endif()
+foreach(sym malloc free calloc realloc _malloc_r _free_r _sbrk _Znwj _Znaj _ZdlPv _ZdaPv)
+  if(symbols MATCHES "[ \n][TtUuWw] ${sym}\n")
+    message(FATAL_ERROR "${ELF} contains the heap symbol ${sym}")
+  endif()
+endforeach()
+message(STATUS "no heap symbols in ${ELF}")
