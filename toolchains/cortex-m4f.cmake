@@ -10,4 +10,4 @@ if(NOT QEMU_SYSTEM_ARM)
 endif()
 # Firmware tests run under qemu: CTest prefixes the image with this command.
 set(CMAKE_CROSSCOMPILING_EMULATOR ${QEMU_SYSTEM_ARM} -M ${DYNCAL_FW_BOARD} -cpu ${DYNCAL_FW_QEMU_CPU} -nographic
-    -monitor none -serial none -semihosting-config enable=on,target=native -kernel)
+    -monitor none -serial none -icount shift=0 -semihosting-config enable=on,target=native -kernel)

@@ -6,6 +6,7 @@
 #include "dyncal/fourier_trajectory.hpp"
 #include "dyncal/identification_model.hpp"
 #include "dyncal/kalman_filter.hpp"
+#include "dyncal_cortex_m/instruction_counter.hpp"
 #include "dyncal_cortex_m/semihosting.hpp"
 #include "er20/robot.hpp"
 
@@ -71,10 +72,19 @@ int main() {
   const Vec r = Vec::Constant(Scalar(1e-2));
   const int samples = 2000;  // 20 s at 100 Hz
   int rejected = 0;
+  using Counter = dyncal::cortex_m::InstructionCounter;
+  Counter::start();
+  std::uint32_t ticks_sample = 0, ticks_update = 0;
   for (int k = 0; k < samples; ++k) {
     Vec tau;
-    sample(Scalar(k) / Scalar(100), tau);
-    if (g_kf.update(g_K, tau, r) != dyncal::UpdateStatus::ok) ++rejected;
+    const std::uint32_t t0 = Counter::ticks();
+    sample(Scalar(k) / Scalar(100), tau);  // trajectory, generated regressor, tau = K phi
+    const std::uint32_t t1 = Counter::ticks();
+    const dyncal::UpdateStatus st = g_kf.update(g_K, tau, r);
+    const std::uint32_t t2 = Counter::ticks();
+    ticks_sample += Counter::elapsed(t0, t1);
+    ticks_update += Counter::elapsed(t1, t2);
+    if (st != dyncal::UpdateStatus::ok) ++rejected;
   }
   // Prediction on fresh samples (the second period, shifted by half a sample).
   Scalar se = 0, st = 0;
@@ -104,6 +114,10 @@ int main() {
     sh::write_float(static_cast<double>(g_kf.estimate()[Model::column(t, 5)]), 5);
     sh::write(" ");
   }
+  sh::write("\n  instructions per sample (qemu -icount, +-40): trajectory + regressor + K phi ");
+  sh::write_int(static_cast<long long>(ticks_sample) * Counter::kInstructionsPerTick / samples);
+  sh::write(", KF update ");
+  sh::write_int(static_cast<long long>(ticks_update) * Counter::kInstructionsPerTick / samples);
   sh::write("\n");
   return (rejected == 0 && rel < Scalar(1e-3)) ? 0 : 1;
 }
