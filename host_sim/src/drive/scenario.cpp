@@ -134,10 +134,12 @@ Scenario load_scenario(const std::string& path, const RobotDescription& robot) {
   if (j.contains("couplings")) {
     for (const json& c : j["couplings"]) {
       CoupledFriction cf;
-      if (!c.contains("joints") || c["joints"].size() != 2) throw InputError(w + ": a coupling needs \"joints\": [i, j]");
+      if (!c.contains("joints") || c["joints"].size() != 2)
+        throw InputError(w + ": a coupling needs \"joints\": [i, j]");
       cf.joint_i = c["joints"][0].get<int>() - 1;
       cf.joint_j = c["joints"][1].get<int>() - 1;
-      if (cf.joint_i < 0 || cf.joint_j < 0 || cf.joint_i >= kDriveJoints || cf.joint_j >= kDriveJoints || cf.joint_i == cf.joint_j) {
+      if (cf.joint_i < 0 || cf.joint_j < 0 || cf.joint_i >= kDriveJoints || cf.joint_j >= kDriveJoints ||
+          cf.joint_i == cf.joint_j) {
         throw InputError(w + ": coupling joints must be two different joints 1..6");
       }
       cf.sign = number(c, "sign", 1.0, w + ".couplings");

@@ -21,7 +21,7 @@ struct DriveSample {
 
 enum class PortStatus : std::uint8_t {
   ok = 0,
-  no_data,          ///< nothing new yet; try again
+  no_data,          ///< nothing yet; try again
   end_of_stream,    ///< the source finished and every sample has been delivered
   transport_error,  ///< the link failed (details from the port's own error text)
   sequence_gap,     ///< samples were lost (drive overrun): the block starts after a gap
@@ -49,7 +49,7 @@ constexpr const char* to_string(PortStatus s) noexcept {
 /// Delivers samples in order, each exactly once.
 class SampleSource {
  public:
-  /// Copies up to `capacity` new samples into `out`, sets *count. ok with *count > 0, no_data,
+  /// Copies up to `capacity` unread samples into `out`, sets *count. ok with *count > 0, no_data,
   /// end_of_stream, sequence_gap (the samples returned follow a gap; the gap size is the jump in
   /// seq) or transport_error.
   virtual PortStatus read(DriveSample* out, int capacity, int* count) noexcept = 0;
