@@ -73,32 +73,22 @@ class CrossValidator {
 
   /// Validation and training RSS per joint of [X C] (C may have no columns); phi_out: the
   /// coefficients of the fit on all rows, X's first.
-  /// *novelty: the smallest fraction of a (unit-scaled) candidate column not explained by X (1 if C
-  /// is empty); near 0 means the candidate is collinear with the model and not identifiable.
   /// Out-of-fold predictions of the base design alone (each block predicted by the fit without its
   /// fold), for the per-sample indices e_T and e_T_Std.
   VectorXd predict_out_of_fold() const {
     const MatrixXd& X = *X_;
-    const Index p = X.cols(), S = d_.t.size();
-    MatrixXd G_total = MatrixXd::Zero(p, p);
-    VectorXd g_total = VectorXd::Zero(p);
-    for (int f = 0; f < folds_; ++f) {
-      G_total += Gxx_fit_[f];
-      g_total += gx_fit_[f];
-    }
-    const double ridge = 1e-12 * std::max(1.0, G_total.diagonal().maxCoeff());
-    std::vector<VectorXd> beta(folds_);
-    for (int f = 0; f < folds_; ++f) {
-      MatrixXd G = G_total - Gxx_fit_[f];
-      G.diagonal().array() += ridge;
-      beta[f] = VectorXd(G.ldlt().solve(g_total - gx_fit_[f])).cwiseProduct(sx_);
-    }
+    const Index S = d_.t.size();
+    std::vector<VectorXd> beta;
+    fold_fits(Gxx_fit_, gx_fit_, beta);
+    for (auto& b : beta) b = b.cwiseProduct(sx_);
     VectorXd pred(S * N_);
     for (Index s = 0; s < S; ++s)
       for (int j = 0; j < N_; ++j) pred[s * N_ + j] = X.row(s * N_ + j).dot(beta[fold_[s]]);
     return pred;
   }
 
+  /// *novelty: the smallest fraction of a (unit-scaled) candidate column not explained by X (1 if C
+  /// is empty); near 0 means the candidate is collinear with the model and not identifiable.
   void evaluate(const MatrixXd& C, VectorXd& val_rss, VectorXd& train_rss, VectorXd* phi_out = nullptr,
                 double* novelty = nullptr) const {
     const MatrixXd& X = *X_;
@@ -144,14 +134,12 @@ class CrossValidator {
         }
       }
     }
-    MatrixXd G_total = MatrixXd::Zero(q, q);
-    VectorXd g_total = VectorXd::Zero(q);
-    for (int f = 0; f < folds_; ++f) {
-      G_total += G_fit[f];
-      g_total += g_fit[f];
-    }
-    const double ridge = 1e-12 * std::max(1.0, G_total.diagonal().maxCoeff());
+    std::vector<VectorXd> fold_beta;
+    const VectorXd beta = fold_fits(G_fit, g_fit, fold_beta);
     if (novelty) {
+      MatrixXd G_total = MatrixXd::Zero(q, q);
+      for (const auto& G : G_fit) G_total += G;
+      const double ridge = ridge_for(G_total);
       *novelty = 1.0;
       if (m > 0) {
         MatrixXd Gxx = G_total.topLeftCorner(p, p);
@@ -162,19 +150,12 @@ class CrossValidator {
           *novelty = std::min(*novelty, schur(i, i) / std::max(1e-300, G_total(p + i, p + i)));
       }
     }
-    auto solve = [&](MatrixXd G, const VectorXd& g) {
-      G.diagonal().array() += ridge;
-      return VectorXd(G.ldlt().solve(g));
-    };
-    auto rss = [&](const VectorXd& beta, int f, int j) {
-      return std::max(0.0, yy_[f][j] - 2.0 * beta.dot(g_all[f][j]) + beta.dot(G_all[f][j] * beta));
+    auto rss = [&](const VectorXd& b, int f, int j) {
+      return std::max(0.0, yy_[f][j] - 2.0 * b.dot(g_all[f][j]) + b.dot(G_all[f][j] * b));
     };
     val_rss = VectorXd::Zero(N_);
-    for (int f = 0; f < folds_; ++f) {
-      const VectorXd beta = solve(G_total - G_fit[f], g_total - g_fit[f]);
-      for (int j = 0; j < N_; ++j) val_rss[j] += rss(beta, f, j);
-    }
-    const VectorXd beta = solve(G_total, g_total);
+    for (int f = 0; f < folds_; ++f)
+      for (int j = 0; j < N_; ++j) val_rss[j] += rss(fold_beta[f], f, j);
     train_rss = VectorXd::Zero(N_);
     for (int f = 0; f < folds_; ++f)
       for (int j = 0; j < N_; ++j) train_rss[j] += rss(beta, f, j);
@@ -186,6 +167,28 @@ class CrossValidator {
   }
 
  private:
+  static double ridge_for(const MatrixXd& G) { return 1e-12 * std::max(1.0, G.diagonal().maxCoeff()); }
+
+  /// Least-squares coefficients from per-fold Gram matrices: fold_beta[f] from every fold but f,
+  /// and the return value from all folds (a tiny ridge keeps LDLT defined for collinear columns).
+  VectorXd fold_fits(const std::vector<MatrixXd>& G_fit, const std::vector<VectorXd>& g_fit,
+                     std::vector<VectorXd>& fold_beta) const {
+    MatrixXd G_total = MatrixXd::Zero(G_fit[0].rows(), G_fit[0].cols());
+    VectorXd g_total = VectorXd::Zero(g_fit[0].size());
+    for (int f = 0; f < folds_; ++f) {
+      G_total += G_fit[f];
+      g_total += g_fit[f];
+    }
+    const double ridge = ridge_for(G_total);
+    auto solve = [&](MatrixXd G, const VectorXd& g) {
+      G.diagonal().array() += ridge;
+      return VectorXd(G.ldlt().solve(g));
+    };
+    fold_beta.resize(folds_);
+    for (int f = 0; f < folds_; ++f) fold_beta[f] = solve(G_total - G_fit[f], g_total - g_fit[f]);
+    return solve(G_total, g_total);
+  }
+
   const StackedData& d_;
   int N_;
   const std::vector<int>& fold_;
