@@ -14,3 +14,12 @@ set(CMAKE_FIND_ROOT_PATH_MODE_PROGRAM NEVER)
 set(CMAKE_FIND_ROOT_PATH_MODE_LIBRARY ONLY)
 set(CMAKE_FIND_ROOT_PATH_MODE_INCLUDE ONLY)
 set(CMAKE_FIND_ROOT_PATH_MODE_PACKAGE NEVER)  # Eigen's CMake package comes from the host
+
+# Firmware tests run under qemu (the per-CPU file sets the board and CPU before including this one):
+# CTest prefixes each image with this command. -icount shift=0: one guest instruction per virtual ns.
+find_program(QEMU_SYSTEM_ARM qemu-system-arm)
+if(NOT QEMU_SYSTEM_ARM)
+  message(FATAL_ERROR "qemu-system-arm not found: run scripts/setup")
+endif()
+set(CMAKE_CROSSCOMPILING_EMULATOR ${QEMU_SYSTEM_ARM} -M ${DYNCAL_FW_BOARD} -cpu ${DYNCAL_FW_QEMU_CPU} -nographic
+    -monitor none -serial none -icount shift=0 -semihosting-config enable=on,target=native -kernel)
