@@ -66,7 +66,7 @@ int main(int argc, char** argv) {
   diagnose->add_option("--robots-dir", robots_dir, "directory holding the robot descriptions");
   diagnose->add_option("--format", format, "log format: csv or tx40")->check(CLI::IsMember({"csv", "tx40"}));
   diagnose->add_option("--data", data, "CSV log file, or the folder of the TX40 files")->required();
-  diagnose->add_option("--model", diag_model, "declared model: eq7, optionally with rotor_inertia and offset")
+  diagnose->add_option("--model", diag_model, "declared model: eq7 or eq8, optionally with rotor_inertia and offset")
       ->capture_default_str();
   diagnose->add_option("--cutoff", dopt.identify.cutoff_hz, "zero-phase Butterworth cut-off [Hz]")
       ->capture_default_str();

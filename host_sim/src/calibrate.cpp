@@ -14,6 +14,7 @@
 #include "dyncal/kalman_filter.hpp"
 #include "dyncal/rls_forgetting.hpp"
 #include "dyncal_host/input_error.hpp"
+#include "dyncal_host/term_sets.hpp"
 #include "er20/robot.hpp"
 
 namespace dyncal::host {
@@ -124,33 +125,6 @@ struct ModelRun {
     return e;
   }
 };
-
-template <template <unsigned> class F, typename... Args>
-void dispatch(unsigned terms, Args&&... args) {
-  constexpr unsigned ia = term::rotor_inertia, off = term::offset;
-  switch (terms) {
-    case kFrictionEq7:
-      return F<kFrictionEq7>::run(args...);
-    case kFrictionEq7 | ia:
-      return F<kFrictionEq7 | ia>::run(args...);
-    case kFrictionEq7 | off:
-      return F<kFrictionEq7 | off>::run(args...);
-    case kFrictionEq7 | ia | off:
-      return F<kFrictionEq7 | ia | off>::run(args...);
-    case kFrictionEq8:
-      return F<kFrictionEq8>::run(args...);
-    case kFrictionEq8 | ia:
-      return F<kFrictionEq8 | ia>::run(args...);
-    case kFrictionEq8 | off:
-      return F<kFrictionEq8 | off>::run(args...);
-    case kFrictionEq8 | ia | off:
-      return F<kFrictionEq8 | ia | off>::run(args...);
-    default:
-      throw InputError("model '" + model_name(terms) +
-                       "' is not built for calibration (eq7 or eq8, optionally with "
-                       "rotor_inertia and offset)");
-  }
-}
 
 template <unsigned Terms>
 struct Online {
@@ -318,7 +292,7 @@ CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions&
            << " periods at " << o.sample_rate_hz << " Hz, cond(K) = " << std::setprecision(3) << r.trajectory_cond
            << "\n";
   SampleSink sink;
-  dispatch<Online>(o.terms, Vec(robot.qd_max), o, sink);
+  with_term_set<Online>(o.terms, Vec(robot.qd_max), o, sink);
   const JointLog log =
       stream_run(*drive, excitation, o.periods, o.sample_rate_hz, prog, &r.lost, &r.stream_seconds, sink.push);
   sink.finish(r);
@@ -335,7 +309,7 @@ CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions&
   const auto fresh = default_excitation(robot, o.f_f, o.harmonics, 1, o.seed + 1000, nullptr);
   progress << "verification run with the drive's current table\n";
   const JointLog vlog = verification_run(*drive, fresh, o, prog, &r.lost, r.drive_error_before);
-  dispatch<Verify>(o.terms, vlog, o, r);
+  with_term_set<Verify>(o.terms, vlog, o, r);
   if (o.flash) {
     ParameterTable table;
     table.robot_id = Robot::kRobotId;

@@ -22,7 +22,7 @@ struct StackedData {
   double cutoff_hz = 0;
 };
 
-/// Prepares `log` for the declared model options.terms (Eq. 7, optionally Ia and offset) of
+/// Prepares `log` for the declared model options.terms (a built term set, term_sets.hpp) of
 /// `robot` (er20 or tx40). Throws InputError.
 StackedData prepare_stacked(const RobotDescription& robot, const JointLog& log, const IdentifyOptions& options);
 StackedData prepare_er20(const RobotDescription& robot, const JointLog& log, const IdentifyOptions& options);

@@ -3,6 +3,7 @@
 #include "dyncal/identification_model.hpp"
 #include "dyncal_host/identify.hpp"
 #include "dyncal_host/input_error.hpp"
+#include "dyncal_host/term_sets.hpp"
 #include "er20/robot.hpp"
 
 namespace dyncal::host {
@@ -62,22 +63,15 @@ std::vector<TrueParameter> truth(const Scenario& s) {
   return out;
 }
 
+template <unsigned Terms>
+struct Truth {
+  static std::vector<TrueParameter> run(const Scenario& s) { return truth<Terms>(s); }
+};
+
 }  // namespace
 
 std::vector<TrueParameter> true_parameters(const Scenario& s, unsigned terms) {
-  constexpr unsigned ia = term::rotor_inertia, off = term::offset;
-  switch (terms) {
-    case kFrictionEq7:
-      return truth<kFrictionEq7>(s);
-    case kFrictionEq7 | ia:
-      return truth<kFrictionEq7 | ia>(s);
-    case kFrictionEq7 | off:
-      return truth<kFrictionEq7 | off>(s);
-    case kFrictionEq7 | ia | off:
-      return truth<kFrictionEq7 | ia | off>(s);
-    default:
-      throw InputError("ground truth is built for Eq. 7 models only, not '" + model_name(terms) + "'");
-  }
+  return with_term_set<Truth>(terms, s);
 }
 
 }  // namespace dyncal::host

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <optional>
 #include <stdexcept>
 #include <thread>
 
@@ -14,6 +15,7 @@
 #include "dyncal/identification_model.hpp"
 #include "dyncal/table_check.hpp"
 #include "dyncal_host/input_error.hpp"
+#include "dyncal_host/term_sets.hpp"
 #include "er20/robot.hpp"
 
 namespace dyncal::host {
@@ -47,23 +49,20 @@ ModelOps ops_for() {
                   }};
 }
 
-/// The models this drive runs: the term sets `dyncal identify` fits (Eq. 7 or 8, with or without
-/// rotor inertia and offset).
-const ModelOps* find_ops(std::uint32_t model_id) {
-  constexpr unsigned ia = term::rotor_inertia, off = term::offset;
-  static const ModelOps kOps[] = {ops_for<kFrictionEq7>(),       ops_for<kFrictionEq7 | ia>(),
-                                  ops_for<kFrictionEq7 | off>(), ops_for<kFrictionEq7 | ia | off>(),
-                                  ops_for<kFrictionEq8>(),       ops_for<kFrictionEq8 | ia>(),
-                                  ops_for<kFrictionEq8 | off>(), ops_for<kFrictionEq8 | ia | off>()};
-  for (const ModelOps& o : kOps) {
-    if (o.terms == model_id) return &o;
-  }
-  return nullptr;
+template <unsigned Terms>
+struct OpsFor {
+  static ModelOps run() { return ops_for<Terms>(); }
+};
+
+/// The models this drive runs: the term sets the host tools build (term_sets.hpp).
+std::optional<ModelOps> find_ops(std::uint32_t model_id) {
+  if (!is_built_term_set(model_id)) return std::nullopt;
+  return with_term_set<OpsFor>(model_id);
 }
 
 TableStatus check_any(const ParameterTable& t) {
   if (t.robot_id != Robot::kRobotId) return TableStatus::wrong_robot;
-  const ModelOps* ops = find_ops(t.model_id);
+  const std::optional<ModelOps> ops = find_ops(t.model_id);
   return ops ? ops->check(t) : TableStatus::wrong_model;
 }
 
@@ -100,7 +99,7 @@ struct SimulatedDrive::Impl {
   Vec q_meas_prev = Vec::Zero();
   Vec kp = Vec::Zero(), kd = Vec::Zero();
   Vec quantum = Vec::Zero();  // encoder resolution on the joint side [rad]
-  const ModelOps* ops = nullptr;
+  ModelOps ops{};             // feed-forward and check of the active table's model
   std::normal_distribution<double> normal{0.0, 1.0};
 };
 
@@ -131,7 +130,7 @@ SimulatedDrive::SimulatedDrive(const RobotDescription& robot, const Scenario& sc
     }
   }
   active_bytes_ = encode(active_);
-  impl_->ops = find_ops(active_.model_id);
+  impl_->ops = *find_ops(active_.model_id);  // the active table passed check_any
   trajectory.f_f = 0.1;
   trajectory.harmonics = 5;
 }
@@ -199,7 +198,7 @@ void SimulatedDrive::step() {
   // Control law (survey Fig. 3): feed-forward from the active table plus PD on the tracking error.
   Vec q_d, qd_d, qdd_d, tau_ff;
   trajectory.evaluate(time_, q_d, qd_d, qdd_d);
-  s.ops->feedforward(active_, q_d, qd_d, qdd_d, tau_ff);
+  s.ops.feedforward(active_, q_d, qd_d, qdd_d, tau_ff);
   const Vec tau_cmd = tau_ff + s.kp.cwiseProduct(q_d - q_meas) + s.kd.cwiseProduct(qd_d - qd_meas);
   for (int j = 0; j < kDriveJoints; ++j) error_sq_[j] += (tau_cmd[j] - tau_ff[j]) * (tau_cmd[j] - tau_ff[j]);
   ++error_n_;
@@ -274,7 +273,7 @@ TableStatus SimulatedDrive::commit(const std::uint8_t* bytes, int size) {
   write_file_atomically(table_path_, encoded, flash_chunk_delay_ms);
   active_ = t;
   active_bytes_ = std::move(encoded);
-  impl_->ops = find_ops(t.model_id);
+  impl_->ops = *find_ops(t.model_id);
   return TableStatus::ok;
 }
 
