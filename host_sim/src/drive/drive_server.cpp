@@ -25,7 +25,8 @@ std::uint16_t be16(const std::uint8_t* p) {
 }
 
 /// Copies the drive's state into the input registers (the ring window starts at the ack).
-void refresh_inputs(const SimulatedDrive& d, std::uint16_t* in) {
+/// `table_generation`: the drive's table generation last copied into the registers (-1: none yet).
+void refresh_inputs(const SimulatedDrive& d, std::uint16_t* in, long& table_generation) {
   in[mm::kMapVersionReg] = mm::kMapVersion;
   in[mm::kNumJointsReg] = kDriveJoints;
   mm::set_u32(in + mm::kRobotIdReg, d.robot_id());
@@ -35,15 +36,17 @@ void refresh_inputs(const SimulatedDrive& d, std::uint16_t* in) {
   mm::set_f32(in + mm::kSimTimeReg, static_cast<float>(d.time()));
   mm::set_u32(in + mm::kProducedReg, d.produced());
   mm::set_u32(in + mm::kOverrunReg, d.overruns());
-  const auto& bytes = d.active_table_bytes();
-  std::uint32_t crc = 0;
-  for (int i = 0; i < 4; ++i) crc = (crc << 8) | bytes[bytes.size() - 1 - static_cast<size_t>(i)];
-  mm::set_u32(in + mm::kActiveCrcReg, crc);
   const auto err = d.model_error_rms();
   for (int j = 0; j < kDriveJoints; ++j) mm::set_f32(in + mm::kModelErrorReg + 2 * j, static_cast<float>(err[j]));
-  in[mm::kActiveTableSizeReg] = static_cast<std::uint16_t>(bytes.size());
-  std::memset(in + mm::kActiveTableReg, 0, 2 * mm::kTableWords);
-  mm::bytes_to_regs(bytes.data(), static_cast<int>(bytes.size()), in + mm::kActiveTableReg);
+  // The table registers change only with the table: copy them when it changed.
+  if (table_generation != static_cast<long>(d.table_generation())) {
+    const auto& bytes = d.active_table_bytes();
+    mm::set_u32(in + mm::kActiveCrcReg, dyncal::detail::get_u32(bytes.data() + bytes.size() - 4));
+    in[mm::kActiveTableSizeReg] = static_cast<std::uint16_t>(bytes.size());
+    std::memset(in + mm::kActiveTableReg, 0, 2 * mm::kTableWords);
+    mm::bytes_to_regs(bytes.data(), static_cast<int>(bytes.size()), in + mm::kActiveTableReg);
+    table_generation = static_cast<long>(d.table_generation());
+  }
   // Ring window: the oldest unacknowledged samples.
   std::uint16_t* w = in + mm::kRingReg;
   const auto& ring = d.ring();
@@ -266,7 +269,7 @@ class Server {
     const int off = modbus_get_header_length(ctx_);
     const int function = query[off];
     const int address = be16(query + off + 1);
-    refresh_inputs(drive_, map_->tab_input_registers);
+    refresh_inputs(drive_, map_->tab_input_registers, table_generation_);
     map_->tab_registers[mm::kCommandReg] = 0;
     int exception = 0;
     int write_address = -1, write_count = 0;
@@ -370,6 +373,7 @@ class Server {
   modbus_mapping_t* map_ = nullptr;
   int listen_fd_ = -1;
   std::vector<int> clients_;
+  long table_generation_ = -1;
   Clock::time_point wall_start_ = Clock::now();
 };
 

@@ -273,6 +273,7 @@ TableStatus SimulatedDrive::commit(const std::uint8_t* bytes, int size) {
   write_file_atomically(table_path_, encoded, flash_chunk_delay_ms);
   active_ = t;
   active_bytes_ = std::move(encoded);
+  ++table_generation_;
   impl_->ops = *find_ops(t.model_id);
   return TableStatus::ok;
 }

@@ -63,6 +63,8 @@ class SimulatedDrive {
   /// On any failure the active table and the file stay as they were.
   TableStatus commit(const std::uint8_t* bytes, int size);
   const std::vector<std::uint8_t>& active_table_bytes() const { return active_bytes_; }
+  /// Incremented each time the active table changes (a commit that took effect).
+  std::uint32_t table_generation() const { return table_generation_; }
   const ParameterTable& active_table() const { return active_; }
   const std::string& startup_note() const { return startup_note_; }
   /// Milliseconds to sleep after each 64-byte chunk written to the flash file (0: none); lets tests
@@ -84,6 +86,7 @@ class SimulatedDrive {
   std::uint32_t acked_ = 0, produced_ = 0, overruns_ = 0;
   ParameterTable active_;
   std::vector<std::uint8_t> active_bytes_;
+  std::uint32_t table_generation_ = 0;
   std::string startup_note_;
   std::array<double, kDriveJoints> error_sq_{};
   long error_n_ = 0;
