@@ -20,7 +20,7 @@ from dyncal_codegen.description import STANDARD_NAMES  # noqa: E402
 from dyncal_codegen.emit_cpp import CppPrinter  # noqa: E402
 from dyncal_codegen.tracer import live_program  # noqa: E402
 
-GENERATOR_VERSION = "2"
+GENERATOR_VERSION = "3"
 
 
 def input_digest(robot_dir, desc):
@@ -244,6 +244,10 @@ inline void mass_matrix(const {vec}& q, const {pvec}& phi, Eigen::Matrix<Scalar,
     for b, k in enumerate(bp.independent):
         terms = [f" + Scalar({fmt(bp.beta[b, d])}) * phi[{bp.dependent[d]}]" for d in range(len(bp.dependent)) if bp.beta[b, d] != 0.0]
         map_lines.append(f"  phi_b[{b}] = phi[{k}]" + "".join(terms) + ";")
+    col_rows = []
+    for k in bp.independent:
+        rows = [i for i in range(n) if Y[i][k] != 0]
+        col_rows.append(f"{{{min(rows)}, {max(rows)}}}" if rows else "{0, -1}")
     rotor_sep = ", ".join("true" if x else "false" for x in bp.rotor_independent)
     absorbed = []
     absorbed_coeff = []
@@ -305,6 +309,11 @@ inline constexpr const char* kBaseParamNames[kNumBase] = {{
 /// Standard index each base parameter is anchored on.
 inline constexpr int kBaseAnchor[kNumBase] = {{{", ".join(str(k) for k in bp.independent)}}};
 
+/// Structural sparsity of the base regressor: column b of Y_b can be nonzero only in rows
+/// kBaseColumnRows[b][0]..kBaseColumnRows[b][1] (0-based joints; a link's parameters act on its
+/// own joint and the joints before it). Rows outside the range are written as exact zeros.
+inline constexpr int kBaseColumnRows[kNumBase][2] = {{{", ".join(col_rows)}}};
+
 /// Rotor inertia Ia_j (q_dd_j column, reflected to the joint side): true where it is identifiable
 /// as a parameter of its own; otherwise it is absorbed into base parameter
 /// kRotorInertiaAbsorbedInto[j] with coefficient kRotorInertiaAbsorbedCoefficient[j].
@@ -362,6 +371,9 @@ struct Robot {{
   /// Base parameter that absorbs joint j's rotor inertia when it is not separate (else -1).
   static constexpr int rotor_inertia_absorbed_into(int j) {{ return kRotorInertiaAbsorbedInto[j]; }}
   static constexpr const char* base_param_name(int i) {{ return kBaseParamNames[i]; }}
+  /// First and last row (0-based joint) where base column b can be nonzero (kBaseColumnRows).
+  static constexpr int base_column_first_row(int b) {{ return kBaseColumnRows[b][0]; }}
+  static constexpr int base_column_last_row(int b) {{ return kBaseColumnRows[b][1]; }}
   /// Gravity [m/s^2] along base axis i.
   static constexpr double gravity(int i) {{ return kGravity[i]; }}
   static constexpr const char* standard_param_name(int i) {{ return kStandardParamNames[i]; }}

@@ -6,6 +6,7 @@
 #include <random>
 
 #include "dyncal/kalman_filter.hpp"
+#include "dyncal/ud_covariance.hpp"
 #include "dyncal/rls_forgetting.hpp"
 #include "dyncal/streaming_least_squares.hpp"
 #include "support/synthetic.hpp"
@@ -122,7 +123,8 @@ TEST(KalmanFilter, NonFiniteAndOutlierSamplesLeaveStateUntouched) {
     ASSERT_EQ(kf->update(s.K[i], s.tau[i], JointVec::Constant(0.01)), UpdateStatus::ok);
   ASSERT_EQ(kf->set_gate(5.0), UpdateStatus::ok);
   const ParamVec before = kf->estimate();
-  const Eigen::Matrix<double, P, 1> d_before = kf->covariance().d();
+  Eigen::Matrix<double, P, P> p_before, p_after;
+  kf->covariance().to_dense(p_before);
   JointVec bad = s.tau[10];
   bad[3] = std::numeric_limits<double>::infinity();
   EXPECT_EQ(kf->update(s.K[10], bad, JointVec::Constant(0.01)), UpdateStatus::rejected_non_finite);
@@ -131,8 +133,50 @@ TEST(KalmanFilter, NonFiniteAndOutlierSamplesLeaveStateUntouched) {
   EXPECT_EQ(kf->update(s.K[10], outlier, JointVec::Constant(0.01)), UpdateStatus::rejected_outlier);
   EXPECT_EQ(kf->update(s.K[10], s.tau[10], JointVec::Zero()), UpdateStatus::not_positive_definite);
   EXPECT_EQ((kf->estimate() - before).cwiseAbs().maxCoeff(), 0.0);
-  EXPECT_EQ((kf->covariance().d() - d_before).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ((kf->estimate() - before).cwiseAbs().maxCoeff(), 0.0);
+  kf->covariance().to_dense(p_after);
+  EXPECT_EQ((p_after - p_before).cwiseAbs().maxCoeff(), 0.0);
   EXPECT_EQ(kf->update(s.K[10], s.tau[10], JointVec::Constant(0.01)), UpdateStatus::ok);
+}
+
+// The block update over packed P with the regressor's structure must equal N sequential scalar
+// Bierman updates on a UD-factorised P (an independent implementation of Eq. 19).
+TEST(KalmanFilter, StructuredBlockUpdateEqualsSequentialBiermanUpdates) {
+  const ParamVec truth = dyncal::test::er20_truth<kTerms>();
+  const Samples s = make_samples(400, 0.01, truth, 0.5);
+  auto kf = std::make_unique<dyncal::KalmanFilter<double, P, N>>();
+  ASSERT_EQ(kf->reset(ParamVec::Zero(), ParamVec::Constant(1e4), Model::structure()), UpdateStatus::ok);
+  auto ud = std::make_unique<dyncal::UdCovariance<double, P>>();
+  ASSERT_EQ(ud->reset(ParamVec::Constant(1e4)), UpdateStatus::ok);
+  ParamVec phi_ud = ParamVec::Zero();
+  const JointVec r(0.01, 0.02, 0.03, 0.04, 0.05, 0.06);
+  for (size_t i = 0; i < s.K.size(); ++i) {
+    ASSERT_EQ(kf->update(s.K[i], s.tau[i], r), UpdateStatus::ok);
+    for (int j = 0; j < N; ++j) {
+      const ParamVec h = s.K[i].row(j).transpose();
+      ASSERT_EQ(ud->assimilate(h, s.tau[i][j], r[j], phi_ud), UpdateStatus::ok);
+    }
+  }
+  EXPECT_LE((kf->estimate() - phi_ud).norm(), 1e-8 * phi_ud.norm());
+  Eigen::Matrix<double, P, P> p_kf, p_ud;
+  kf->covariance().to_dense(p_kf);
+  ud->to_dense(p_ud);
+  // The covariance form subtracts from the prior (1e4): its rounding is relative to that scale.
+  EXPECT_LE((p_kf - p_ud).cwiseAbs().maxCoeff(), 1e-11 * 1e4);
+}
+
+TEST(KalmanFilter, RegressorOutsideItsStructureIsRejected) {
+  const ParamVec truth = dyncal::test::er20_truth<kTerms>();
+  const Samples s = make_samples(10, 0.01, truth);
+  auto kf = std::make_unique<dyncal::KalmanFilter<double, P, N>>();
+  ASSERT_EQ(kf->reset(ParamVec::Zero(), ParamVec::Constant(1e4), Model::structure()), UpdateStatus::ok);
+  Eigen::Matrix<double, N, P> K = s.K[3];
+  K(5, 0) = 1.0;  // base column 0 (link1_ZZ_R) acts on joint 1 only
+  EXPECT_EQ(kf->update(K, s.tau[3], JointVec::Ones()), UpdateStatus::invalid_argument);
+  K(5, 0) = std::nan("");
+  EXPECT_EQ(kf->update(K, s.tau[3], JointVec::Ones()), UpdateStatus::rejected_non_finite);
+  EXPECT_EQ(kf->estimate().cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ(kf->update(s.K[3], s.tau[3], JointVec::Ones()), UpdateStatus::ok);
 }
 
 // Survey Fig. 4: beta of joint 3 changes as a ramp or as a second-order function of the

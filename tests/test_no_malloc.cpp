@@ -9,6 +9,7 @@
 #include <new>
 
 #include "dyncal/causal_differentiator.hpp"
+#include "dyncal/extended_kalman_filter.hpp"
 #include "dyncal/kalman_filter.hpp"
 #include "dyncal/rls_forgetting.hpp"
 #include "dyncal/streaming_least_squares.hpp"
@@ -64,6 +65,8 @@ struct Workspace {
   dyncal::StreamingLeastSquares<Scalar, P> ls;
   dyncal::KalmanFilter<Scalar, P, 6> kf;
   dyncal::RlsForgetting<Scalar, P, 6> rls;
+  dyncal::KalmanFilter<Scalar, P, 6, dyncal::UdCovariance<Scalar, P>> kf_ud;
+  dyncal::ExtendedKalmanFilter<Scalar, Er20, dyncal::NonlinearFrictionModel::eq4> ekf;
   Eigen::Matrix<Scalar, 6, P> K;
   Eigen::Matrix<Scalar, 6, Er20::kNumStandard> Y;
   Eigen::Matrix<Scalar, Er20::kNumStandard, 1> phi_std;
@@ -82,6 +85,10 @@ void run_updaters(Workspace<Scalar>& w) {
   for (int i = 0; i < Er20::kNumStandard; ++i) w.phi_std[i] = Scalar(dyncal::generated::er20::kNominalStandard[i]);
   ASSERT_EQ(w.kf.reset(PV::Zero(), PV::Constant(Scalar(1e4))), dyncal::UpdateStatus::ok);
   ASSERT_EQ(w.kf.set_gate(Scalar(100)), dyncal::UpdateStatus::ok);
+  ASSERT_EQ(w.kf_ud.reset(PV::Zero(), PV::Constant(Scalar(1e4))), dyncal::UpdateStatus::ok);
+  using Ekf = dyncal::ExtendedKalmanFilter<Scalar, Er20, dyncal::NonlinearFrictionModel::eq4>;
+  ASSERT_EQ(w.ekf.reset(Ekf::ParamVector::Constant(Scalar(1)), Ekf::ParamVector::Constant(Scalar(1e2)), Scalar(0.999)),
+            dyncal::UpdateStatus::ok);
   ASSERT_EQ(w.rls.reset(PV::Zero(), PV::Constant(Scalar(1e4)), Scalar(0.999)), dyncal::UpdateStatus::ok);
   ASSERT_EQ(w.diff.reset(Scalar(0.01), Scalar(20)), dyncal::UpdateStatus::ok);
   JointVec qd_, q_, qdd_;
@@ -98,6 +105,8 @@ void run_updaters(Workspace<Scalar>& w) {
     ASSERT_EQ(w.ls.update(w.K, tau), dyncal::UpdateStatus::ok);
     ASSERT_EQ(w.kf.update(w.K, tau, V::Ones()), dyncal::UpdateStatus::ok);
     ASSERT_EQ(w.rls.update(w.K, tau), dyncal::UpdateStatus::ok);
+    ASSERT_EQ(w.kf_ud.update(w.K, tau, V::Ones()), dyncal::UpdateStatus::ok);
+    ASSERT_EQ(w.ekf.update(q, qd, qdd, tau, V::Constant(Scalar(100))), dyncal::UpdateStatus::ok);
     V fq, fqd, fqdd, ftau;
     const auto ds = w.diff.update(q, tau, fq, fqd, fqdd, ftau);
     ASSERT_TRUE(ds == dyncal::UpdateStatus::ok || ds == dyncal::UpdateStatus::not_ready);

@@ -1,5 +1,5 @@
 // GENERATED FILE - DO NOT EDIT.
-// Generator: codegen/generate.py (dyncal codegen 2, SymPy 1.11.1)
+// Generator: codegen/generate.py (dyncal codegen 3, SymPy 1.11.1)
 // Robot: er20; inputs: robots/er20/robot.json (sha256 2ed936baf54754ce)
 // Contents: inverse dynamics tau(q, qd, qdd, phi) and mass matrix M(q, phi)
 // Operation count inverse_dynamics: 372 multiplications, 309 additions (plus dyncal::sin_cos of q)

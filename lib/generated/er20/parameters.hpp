@@ -1,5 +1,5 @@
 // GENERATED FILE - DO NOT EDIT.
-// Generator: codegen/generate.py (dyncal codegen 2, SymPy 1.11.1)
+// Generator: codegen/generate.py (dyncal codegen 3, SymPy 1.11.1)
 // Robot: er20; inputs: robots/er20/robot.json (sha256 2ed936baf54754ce)
 // Contents: parameter index names, standard->base map, kinematic data
 // Regenerate: cmake --build <build> --target regenerate (or scripts/codegen).
@@ -171,6 +171,11 @@ inline constexpr const char* kBaseParamNames[kNumBase] = {
 
 /// Standard index each base parameter is anchored on.
 inline constexpr int kBaseAnchor[kNumBase] = {5, 10, 11, 12, 14, 15, 16, 17, 20, 21, 22, 24, 25, 26, 27, 30, 31, 32, 34, 35, 36, 37, 40, 41, 42, 44, 45, 46, 47, 50, 51, 52, 54, 55, 56, 57};
+
+/// Structural sparsity of the base regressor: column b of Y_b can be nonzero only in rows
+/// kBaseColumnRows[b][0]..kBaseColumnRows[b][1] (0-based joints; a link's parameters act on its
+/// own joint and the joints before it). Rows outside the range are written as exact zeros.
+inline constexpr int kBaseColumnRows[kNumBase][2] = {{0, 0}, {0, 1}, {0, 1}, {0, 1}, {0, 1}, {0, 1}, {0, 1}, {0, 1}, {0, 2}, {0, 2}, {0, 2}, {0, 2}, {0, 2}, {0, 2}, {0, 2}, {0, 3}, {0, 3}, {0, 3}, {0, 3}, {0, 3}, {0, 3}, {0, 3}, {0, 4}, {0, 4}, {0, 4}, {0, 4}, {0, 4}, {0, 4}, {0, 4}, {0, 5}, {0, 5}, {0, 5}, {0, 5}, {0, 5}, {0, 5}, {0, 5}};
 
 /// Rotor inertia Ia_j (q_dd_j column, reflected to the joint side): true where it is identifiable
 /// as a parameter of its own; otherwise it is absorbed into base parameter

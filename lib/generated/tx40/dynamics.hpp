@@ -1,5 +1,5 @@
 // GENERATED FILE - DO NOT EDIT.
-// Generator: codegen/generate.py (dyncal codegen 2, SymPy 1.11.1)
+// Generator: codegen/generate.py (dyncal codegen 3, SymPy 1.11.1)
 // Robot: tx40; inputs: robots/tx40/robot.json (sha256 14380c70690bae49), robots/tx40/tx40.urdf (sha256 3d00cbd46279c915)
 // Contents: inverse dynamics tau(q, qd, qdd, phi) and mass matrix M(q, phi)
 // Operation count inverse_dynamics: 360 multiplications, 299 additions (plus dyncal::sin_cos of q)

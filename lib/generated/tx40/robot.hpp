@@ -1,5 +1,5 @@
 // GENERATED FILE - DO NOT EDIT.
-// Generator: codegen/generate.py (dyncal codegen 2, SymPy 1.11.1)
+// Generator: codegen/generate.py (dyncal codegen 3, SymPy 1.11.1)
 // Robot: tx40; inputs: robots/tx40/robot.json (sha256 14380c70690bae49), robots/tx40/tx40.urdf (sha256 3d00cbd46279c915)
 // Contents: the Robot traits type gathering the generated model
 // Regenerate: cmake --build <build> --target regenerate (or scripts/codegen).
@@ -27,6 +27,9 @@ struct Robot {
   /// Base parameter that absorbs joint j's rotor inertia when it is not separate (else -1).
   static constexpr int rotor_inertia_absorbed_into(int j) { return kRotorInertiaAbsorbedInto[j]; }
   static constexpr const char* base_param_name(int i) { return kBaseParamNames[i]; }
+  /// First and last row (0-based joint) where base column b can be nonzero (kBaseColumnRows).
+  static constexpr int base_column_first_row(int b) { return kBaseColumnRows[b][0]; }
+  static constexpr int base_column_last_row(int b) { return kBaseColumnRows[b][1]; }
   /// Gravity [m/s^2] along base axis i.
   static constexpr double gravity(int i) { return kGravity[i]; }
   static constexpr const char* standard_param_name(int i) { return kStandardParamNames[i]; }

@@ -3,6 +3,7 @@
 #include <Eigen/Core>
 
 #include "friction.hpp"
+#include "regressor_structure.hpp"
 
 namespace dyncal {
 
@@ -93,6 +94,26 @@ class IdentificationModel {
       }
     }
     return ParamInfo{ParamKind::term, -1, 0u, 0};
+  }
+
+  /// Rows where column c of K can be nonzero: the generated structure of the base regressor
+  /// (Robot::base_column_first_row/last_row) and joint j's own row for its term columns.
+  static constexpr RegressorStructure<kNumParams> structure() {
+    RegressorStructure<kNumParams> s{};
+    for (int c = 0; c < kNumBase; ++c) {
+      s.first[c] = static_cast<std::int8_t>(Robot::base_column_first_row(c));
+      s.last[c] = static_cast<std::int8_t>(Robot::base_column_last_row(c));
+    }
+    int col = kNumBase;
+    for (int j = 0; j < kNumJoints; ++j) {
+      for (int i = 0; i < kNumTerms; ++i) {
+        if (!has_column(term_bit(i), j)) continue;
+        s.first[col] = static_cast<std::int8_t>(j);
+        s.last[col] = static_cast<std::int8_t>(j);
+        ++col;
+      }
+    }
+    return s;
   }
 
   /// Fills K (kNumJoints x kNumParams) at one sample. q [rad], qd [rad/s], qdd [rad/s^2];

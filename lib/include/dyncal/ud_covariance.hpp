@@ -2,6 +2,9 @@
 
 #include <Eigen/Core>
 
+#include <cmath>
+
+#include "regressor_structure.hpp"
 #include "status.hpp"
 
 namespace dyncal {
@@ -11,7 +14,13 @@ namespace dyncal {
 /// Sequential Estimation", 1977). P stays symmetric and positive definite by construction, also in
 /// float: it is never formed, and D is updated by ratios of positive numbers.
 ///
-/// Memory: P*P + 3*P scalars in the object; no heap. Strictly upper part of U_ is used.
+/// Compared with PackedCovariance (the default of KalmanFilter and RlsForgetting) this is slower —
+/// N passes of 3P^2/2 multiply-adds per sample, no use of H's sparsity — but it holds a P whose
+/// variances span more than float's 7 digits: use it in float when the prior variance exceeds the
+/// posterior one by more than about 1e6 (tiny r, huge p0), where the covariance form reports
+/// not_positive_definite.
+///
+/// Memory: P*P + 5*P scalars in the object; no heap. Strictly upper part of U_ is used.
 template <typename Scalar, int P>
 class UdCovariance {
  public:
@@ -86,6 +95,49 @@ class UdCovariance {
     return UpdateStatus::ok;
   }
 
+  /// Same contract as PackedCovariance::reset (the structure is accepted and checked, not exploited).
+  template <int N>
+  UpdateStatus reset(const Vector& p0, const RegressorStructure<P>& structure) noexcept {
+    for (int c = 0; c < P; ++c) {
+      if (structure.first[c] <= structure.last[c] && (structure.first[c] < 0 || structure.last[c] >= N))
+        return UpdateStatus::invalid_argument;
+    }
+    return reset(p0);
+  }
+
+  /// Same contract as PackedCovariance::assimilate: a sample of N measurements y = H phi + v,
+  /// v ~ N(0, diag(r)), as N sequential Bierman updates, then P <- scale * P. Gating uses the
+  /// prior innovation variances of all rows, checked before anything changes. Errors leave phi
+  /// and P unchanged except a numerical failure after the first row (reported, not expected for
+  /// r > 0 and finite data).
+  template <int N>
+  UpdateStatus assimilate(const Eigen::Matrix<Scalar, N, P>& H, const Eigen::Matrix<Scalar, N, 1>& y,
+                          const Eigen::Matrix<Scalar, N, 1>& r, Scalar gate, Scalar scale, Vector& phi) noexcept {
+    for (int j = 0; j < P; ++j) {
+      for (int k = 0; k < N; ++k) {
+        if (!std::isfinite(H(k, j))) return UpdateStatus::rejected_non_finite;
+      }
+    }
+    for (int k = 0; k < N; ++k) {
+      if (!std::isfinite(y[k]) || !std::isfinite(r[k])) return UpdateStatus::rejected_non_finite;
+      if (!(r[k] > Scalar(0))) return UpdateStatus::not_positive_definite;
+    }
+    if (gate > Scalar(0)) {
+      for (int k = 0; k < N; ++k) {
+        h_ = H.row(k).transpose();
+        const Scalar e = y[k] - h_.dot(phi);
+        if (e * e > gate * gate * innovation_variance(h_, r[k])) return UpdateStatus::rejected_outlier;
+      }
+    }
+    for (int k = 0; k < N; ++k) {
+      h_ = H.row(k).transpose();
+      const UpdateStatus s = assimilate(h_, y[k], r[k], phi);
+      if (s != UpdateStatus::ok) return s;
+    }
+    if (scale != Scalar(1)) d_ *= scale;
+    return UpdateStatus::ok;
+  }
+
   /// P <- P / mu (exponential forgetting, survey Eq. 23), mu in (0, 1].
   void scale(Scalar inverse_mu) noexcept { d_ *= inverse_mu; }
 
@@ -126,7 +178,7 @@ class UdCovariance {
  private:
   Eigen::Matrix<Scalar, P, P> U_;
   Vector d_;
-  Vector f_, g_, b_, gain_;
+  Vector f_, g_, b_, gain_, h_;
 };
 
 }  // namespace dyncal

@@ -68,8 +68,8 @@ void sample(Scalar t, Vec& tau) {
 int main() {
   true_parameters();
   trajectory();
-  if (g_kf.reset(ParamVec::Zero(), ParamVec::Constant(Scalar(1e4))) != dyncal::UpdateStatus::ok) return 2;
-  const Vec r = Vec::Constant(Scalar(1e-2));
+  if (g_kf.reset(ParamVec::Zero(), ParamVec::Constant(Scalar(1e4)), Model::structure()) != dyncal::UpdateStatus::ok) return 2;
+  const Vec r = Vec::Constant(Scalar(1));  // 1 Nm^2: a drive torque channel; see UdCovariance for tiny r
   const int samples = 2000;  // 20 s at 100 Hz
   int rejected = 0;
   using Counter = dyncal::cortex_m::InstructionCounter;
