@@ -6,9 +6,9 @@
 #include <random>
 
 #include "dyncal/kalman_filter.hpp"
-#include "dyncal/ud_covariance.hpp"
 #include "dyncal/rls_forgetting.hpp"
 #include "dyncal/streaming_least_squares.hpp"
+#include "dyncal/ud_covariance.hpp"
 #include "support/synthetic.hpp"
 
 namespace {

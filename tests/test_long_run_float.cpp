@@ -23,12 +23,12 @@ TEST(LongRunFloat, MillionUpdatesStayPositiveDefiniteAndNearDouble) {
   const Eigen::Matrix<double, P, 1> truth = dyncal::test::er20_truth<kTerms>();
   auto kf_f = std::make_unique<dyncal::KalmanFilter<float, P, 6>>();
   auto kf_d = std::make_unique<dyncal::KalmanFilter<double, P, 6>>();
-  ASSERT_EQ(kf_f->reset(Eigen::Matrix<float, P, 1>::Zero(), Eigen::Matrix<float, P, 1>::Constant(1e4f),
-                          Model::structure()),
-            dyncal::UpdateStatus::ok);
-  ASSERT_EQ(kf_d->reset(Eigen::Matrix<double, P, 1>::Zero(), Eigen::Matrix<double, P, 1>::Constant(1e4),
-                          Model::structure()),
-            dyncal::UpdateStatus::ok);
+  ASSERT_EQ(
+      kf_f->reset(Eigen::Matrix<float, P, 1>::Zero(), Eigen::Matrix<float, P, 1>::Constant(1e4f), Model::structure()),
+      dyncal::UpdateStatus::ok);
+  ASSERT_EQ(
+      kf_d->reset(Eigen::Matrix<double, P, 1>::Zero(), Eigen::Matrix<double, P, 1>::Constant(1e4), Model::structure()),
+      dyncal::UpdateStatus::ok);
   // Survey Table 7 torque noise; R = its variance.
   const Eigen::Matrix<double, 6, 1> sigma = (Eigen::Matrix<double, 6, 1>() << 10, 10, 10, 1.78, 1.78, 1.78).finished();
   const Eigen::Matrix<double, 6, 1> r = sigma.cwiseAbs2();

@@ -27,8 +27,9 @@ double worst_jacobian_error(const double* theta) {
       const double h = 1e-6 * std::max(1.0, std::abs(theta[i]));
       tp[i] += h;
       tm[i] -= h;
-      const double fd = (F::torque(tp, qd, static_cast<double*>(nullptr)) -
-                         F::torque(tm, qd, static_cast<double*>(nullptr))) / (2 * h);
+      const double fd =
+          (F::torque(tp, qd, static_cast<double*>(nullptr)) - F::torque(tm, qd, static_cast<double*>(nullptr))) /
+          (2 * h);
       worst = std::max(worst, std::abs(fd - jac[i]) / std::max(1.0, std::abs(fd)));
     }
   }
@@ -47,8 +48,8 @@ TEST(NonlinearFriction, AnalyticJacobiansMatchFiniteDifferences) {
 TEST(NonlinearFriction, Eq4IsTheStribeckCurve) {
   const double th[] = {20.0, 28.0, 0.12, 9.0};
   using F = NonlinearFriction<NonlinearFrictionModel::eq4>;
-  EXPECT_NEAR(F::torque(th, 1e-9, static_cast<double*>(nullptr)), 28.0, 1e-6);           // static friction Fs
-  EXPECT_NEAR(F::torque(th, 3.0, static_cast<double*>(nullptr)), 20.0 + 27.0, 1e-6);     // Fc + beta qd
+  EXPECT_NEAR(F::torque(th, 1e-9, static_cast<double*>(nullptr)), 28.0, 1e-6);            // static friction Fs
+  EXPECT_NEAR(F::torque(th, 3.0, static_cast<double*>(nullptr)), 20.0 + 27.0, 1e-6);      // Fc + beta qd
   EXPECT_NEAR(F::torque(th, -3.0, static_cast<double*>(nullptr)), -(20.0 + 27.0), 1e-6);  // odd
   EXPECT_EQ(F::torque(th, 0.0, static_cast<double*>(nullptr)), 0.0);
 }
@@ -74,7 +75,7 @@ struct Eq4Truth {
     Ekf::JointVector t = Yb * phi.head<36>();
     for (int j = 0; j < 6; ++j)
       t[j] += NonlinearFriction<NonlinearFrictionModel::eq4>::torque(phi.data() + Ekf::column(0, j), qd[j],
-                                                                      static_cast<double*>(nullptr));
+                                                                     static_cast<double*>(nullptr));
     return t;
   }
 };
@@ -123,7 +124,8 @@ EkfResult run_ekf(double mu) {
   for (int j = 0; j < 6; ++j) {
     for (int i = 0; i < 4; ++i) {
       const int c = Ekf::column(i, j);
-      res.worst_friction_error = std::max(res.worst_friction_error, std::abs(ekf->estimate()[c] - truth.phi[c]) / truth.phi[c]);
+      res.worst_friction_error =
+          std::max(res.worst_friction_error, std::abs(ekf->estimate()[c] - truth.phi[c]) / truth.phi[c]);
     }
   }
   res.prediction_error = prediction_error(*ekf, truth);
@@ -153,9 +155,11 @@ TEST(ExtendedKalmanFilter, BadSamplesLeaveStateUntouched) {
   Ekf::JointVector q, qd, qdd;
   dyncal::test::fourier_state(1.0, q, qd, qdd);
   qd[2] = std::nan("");
-  EXPECT_EQ(ekf->update(q, qd, qdd, Ekf::JointVector::Zero(), Ekf::JointVector::Ones()), UpdateStatus::rejected_non_finite);
+  EXPECT_EQ(ekf->update(q, qd, qdd, Ekf::JointVector::Zero(), Ekf::JointVector::Ones()),
+            UpdateStatus::rejected_non_finite);
   dyncal::test::fourier_state(1.0, q, qd, qdd);
-  EXPECT_EQ(ekf->update(q, qd, qdd, Ekf::JointVector::Zero(), Ekf::JointVector::Zero()), UpdateStatus::not_positive_definite);
+  EXPECT_EQ(ekf->update(q, qd, qdd, Ekf::JointVector::Zero(), Ekf::JointVector::Zero()),
+            UpdateStatus::not_positive_definite);
   EXPECT_EQ(ekf->reset(Ekf::ParamVector::Zero(), Ekf::ParamVector::Ones(), 1.5), UpdateStatus::invalid_argument);
   // qds projected onto its domain at reset.
   EXPECT_GE(ekf->estimate()[Ekf::column(2, 0)], 1e-3);

@@ -105,7 +105,8 @@ class ExtendedKalmanFilter {
   void predict(const JointVector& q, const JointVector& qd, const JointVector& qdd, JointVector& tau) noexcept {
     Robot::base_regressor(q, qd, qdd, K_);
     tau = K_.template leftCols<kNumBase>() * phi_.template head<kNumBase>();
-    for (int j = 0; j < kNumJoints; ++j) tau[j] += Friction::torque(phi_.data() + column(0, j), qd[j], static_cast<Scalar*>(nullptr));
+    for (int j = 0; j < kNumJoints; ++j)
+      tau[j] += Friction::torque(phi_.data() + column(0, j), qd[j], static_cast<Scalar*>(nullptr));
   }
 
   const ParamVector& estimate() const noexcept { return phi_; }

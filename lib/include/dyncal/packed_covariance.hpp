@@ -63,14 +63,16 @@ class PackedCovariance {
       if (runs > 0 && runs_[runs - 1].end == c && runs_[runs - 1].code == code) {
         ++runs_[runs - 1].end;
       } else {
-        runs_[runs++] = Run{static_cast<std::uint8_t>(c), static_cast<std::uint8_t>(c + 1), static_cast<std::uint8_t>(code)};
+        runs_[runs++] =
+            Run{static_cast<std::uint8_t>(c), static_cast<std::uint8_t>(c + 1), static_cast<std::uint8_t>(code)};
       }
     }
     num_runs_ = runs;
     num_outside_ = 0;
     for (int c = 0; c < P; ++c) {
       for (int k = 0; k < N; ++k) {
-        if (k < structure.first[c] || k > structure.last[c]) outside_[num_outside_++] = static_cast<std::uint16_t>(c * N + k);
+        if (k < structure.first[c] || k > structure.last[c])
+          outside_[num_outside_++] = static_cast<std::uint16_t>(c * N + k);
       }
     }
     structure_ = structure;
@@ -239,7 +241,8 @@ class PackedCovariance {
   }
 
   template <int Code>
-  DYNCAL_ALWAYS_INLINE void dispatch2(int code, int i, int b, int e, const Scalar* H, Scalar* a0, Scalar* a1) const noexcept {
+  DYNCAL_ALWAYS_INLINE void dispatch2(int code, int i, int b, int e, const Scalar* H, Scalar* a0,
+                                      Scalar* a1) const noexcept {
     if constexpr (Code < 2 * N) {
       if (code == Code) {
         if constexpr (Code < N) {

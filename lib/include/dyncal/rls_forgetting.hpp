@@ -4,9 +4,9 @@
 
 #include "finite.hpp"
 #include "packed_covariance.hpp"
-#include "ud_covariance.hpp"
 #include "regressor_structure.hpp"
 #include "status.hpp"
+#include "ud_covariance.hpp"
 
 namespace dyncal {
 

@@ -1,7 +1,6 @@
 #pragma once
 
 #include <Eigen/Core>
-
 #include <cmath>
 
 #include "regressor_structure.hpp"

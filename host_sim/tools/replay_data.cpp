@@ -1,0 +1,133 @@
+// Writes port/replay/er20_replay_data.hpp: a block of simulated er20 drive samples (the simulated
+// drive of host_sim with Eq. 4 Stribeck friction and the survey's Table 7 torque noise, recorded at
+// 100 Hz over two periods of the default excitation) and the host's double-precision replay of
+// the KF, RLS and EKF over them (the reference the firmware images compare against).
+// Usage: dyncal_replay_data OUT.hpp   (CMake target `replay-data`).
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <memory>
+#include <sstream>
+#include <vector>
+
+#include "dyncal_host/calibrate.hpp"
+#include "dyncal_host/drive/scenario.hpp"
+#include "dyncal_host/drive/simulated_drive.hpp"
+#include "dyncal_host/robot_description.hpp"
+#include "replay.hpp"
+
+namespace {
+
+using dyncal::replay::Updater;
+
+constexpr std::uint64_t kSeed = 2026;
+constexpr double kRate = 100.0;
+
+template <Updater U>
+std::vector<double> reference(const std::vector<std::array<float, 12>>& samples, const double* sigma,
+                              dyncal::replay::Counts& c) {
+  auto est = std::make_unique<dyncal::replay::Estimator<double, U>>();
+  auto diff = std::make_unique<dyncal::CausalDifferentiator<double, 6>>();
+  if (est->reset() != dyncal::UpdateStatus::ok) throw std::runtime_error("reset failed");
+  c = dyncal::replay::run(*est, *diff, reinterpret_cast<const float(*)[12]>(samples.data()),
+                          static_cast<int>(samples.size()), 1.0 / kRate, sigma, [](int) {});
+  return std::vector<double>(est->estimate().data(), est->estimate().data() + est->estimate().size());
+}
+
+void write_array(std::ostream& o, const char* name, const std::vector<double>& v) {
+  o << "inline constexpr double " << name << "[" << v.size() << "] = {";
+  for (size_t i = 0; i < v.size(); ++i) o << (i % 4 == 0 ? "\n    " : " ") << std::setprecision(17) << v[i] << ",";
+  o << "};\n";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc != 2) {
+    std::cerr << "usage: dyncal_replay_data OUT.hpp\n";
+    return 2;
+  }
+  try {
+    const auto robot = dyncal::host::load_robot(dyncal::host::default_robots_dir(), "er20");
+    dyncal::host::Scenario scenario = dyncal::host::default_scenario(robot);
+    scenario.seed = kSeed;
+    scenario.sample_rate_hz = kRate;
+    for (int j = 0; j < 6; ++j) {
+      scenario.friction[j].model = dyncal::host::FrictionModel::eq4;  // Fc, Fs, qds, beta of robot.json
+      scenario.effects[j].rotor_inertia = 0.0;                        // the replayed models declare none
+    }
+    double cond = 0;
+    const auto traj = dyncal::host::default_excitation(robot, 0.1, 5, 16, kSeed, &cond);
+    const std::string table = (std::filesystem::temp_directory_path() / "dyncal_replay_table.bin").string();
+    std::filesystem::remove(table);
+    dyncal::host::SimulatedDrive drive(robot, scenario, table);
+    for (int j = 0; j < 6; ++j) {
+      for (int l = 0; l < dyncal::modbus_map::kMaxHarmonics; ++l) {
+        drive.trajectory.a(j, l) = traj.a(j, l);
+        drive.trajectory.b(j, l) = traj.b(j, l);
+      }
+      drive.trajectory.q0[j] = traj.q0[j];
+    }
+    drive.trajectory.f_f = traj.f_f;
+    drive.trajectory.harmonics = traj.harmonics;
+    drive.periods = 2;
+    drive.sample_rate_hz = kRate;
+    drive.start();
+    std::vector<std::array<float, 12>> samples;
+    while (drive.state() == dyncal::modbus_map::DriveState::playing) {
+      drive.step();
+      for (const auto& s : drive.ring()) {
+        std::array<float, 12> row{};
+        for (int j = 0; j < 6; ++j) {
+          row[j] = s.q[j];
+          row[6 + j] = s.tau[j];
+        }
+        samples.push_back(row);
+      }
+      if (!drive.ring().empty()) drive.ack(drive.ring().back().seq + 1);
+    }
+    std::filesystem::remove(table);
+    const double* sigma = scenario.tau_noise_std.data();
+    dyncal::replay::Counts ck, cr, ce;
+    const auto kf = reference<Updater::kf>(samples, sigma, ck);
+    const auto rls = reference<Updater::rls>(samples, sigma, cr);
+    const auto ekf = reference<Updater::ekf>(samples, sigma, ce);
+
+    std::ostringstream o;
+    o << "// GENERATED FILE - DO NOT EDIT.\n"
+      << "// Generator: host_sim/tools/replay_data.cpp (cmake --build <build> --target replay-data)\n"
+      << "// Inputs: robots/er20, the simulated drive (seed " << kSeed << ", Eq. 4 friction from robot.json, survey\n"
+      << "// Table 7 torque noise, encoder quantisation), default excitation (cond(K) " << std::setprecision(4) << cond
+      << "), " << kRate << " Hz, 2 periods.\n"
+      << "// Reference estimates: port/replay/replay.hpp run in double on the host (accepted updates: KF "
+      << ck.accepted << ", RLS " << cr.accepted << ", EKF " << ce.accepted << ").\n"
+      << "#pragma once\n\nnamespace dyncal::replay::data {\n\n"
+      << "inline constexpr double kSamplePeriod = " << 1.0 / kRate << ";  // [s]\n"
+      << "/// Torque noise standard deviation per joint [Nm] (survey Table 7): R = sigma^2.\n"
+      << "inline constexpr double kSigma[6] = {";
+    for (int j = 0; j < 6; ++j) o << std::setprecision(17) << sigma[j] << (j < 5 ? ", " : "};\n");
+    o << "inline constexpr int kCount = " << samples.size() << ";\n"
+      << "/// Drive samples: q[6] [rad], tau[6] [Nm] (float32, as the drive records them).\n"
+      << "inline constexpr float kSamples[kCount][12] = {\n";
+    for (const auto& row : samples) {
+      o << "    {";
+      for (int i = 0; i < 12; ++i) o << std::setprecision(9) << row[i] << "f" << (i < 11 ? ", " : "},\n");
+    }
+    o << "};\n\n/// Host double-precision estimates after the replay (parameter order of replay.hpp).\n";
+    write_array(o, "kReferenceKf", kf);
+    write_array(o, "kReferenceRls", rls);
+    write_array(o, "kReferenceEkf", ekf);
+    o << "\n}  // namespace dyncal::replay::data\n";
+    std::ofstream f(argv[1]);
+    f << o.str();
+    if (!f) throw std::runtime_error(std::string("cannot write ") + argv[1]);
+    std::cerr << "wrote " << argv[1] << ": " << samples.size() << " samples; accepted KF " << ck.accepted << " RLS "
+              << cr.accepted << " EKF " << ce.accepted << "\n";
+    return 0;
+  } catch (const std::exception& e) {
+    std::cerr << "dyncal_replay_data: " << e.what() << "\n";
+    return 1;
+  }
+}

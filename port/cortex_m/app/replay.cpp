@@ -1,0 +1,147 @@
+// Firmware application: replays the recorded er20 drive samples (port/replay/er20_replay_data.hpp,
+// const data in flash) through the causal differentiator, the generated regressor and one updater
+// (DYNCAL_FW_UPDATER: 0 KF, 1 RLS with forgetting, 2 EKF with Eq. 4 friction) — the same lib/ code
+// as the host — in float on the Cortex-M4F and double on the M7. Prints the instructions per update
+// and the estimate's agreement with the host's double run, writes the KF/RLS estimate to the flash
+// parameter store and reads it back, and exits 0 only when everything holds.
+#include "replay.hpp"
+
+#include "dyncal/table_check.hpp"
+#include "dyncal_cortex_m/flash_parameter_store.hpp"
+#include "dyncal_cortex_m/instruction_counter.hpp"
+#include "dyncal_cortex_m/semihosting.hpp"
+#include "dyncal_cortex_m/stack_usage.hpp"
+#include "er20_replay_data.hpp"
+
+#ifndef DYNCAL_FW_SCALAR
+#define DYNCAL_FW_SCALAR float
+#endif
+#ifndef DYNCAL_FW_UPDATER
+#define DYNCAL_FW_UPDATER 0
+#endif
+
+namespace {
+
+using Scalar = DYNCAL_FW_SCALAR;
+constexpr dyncal::replay::Updater kUpdater = static_cast<dyncal::replay::Updater>(DYNCAL_FW_UPDATER);
+using Estimator = dyncal::replay::Estimator<Scalar, kUpdater>;
+namespace data = dyncal::replay::data;
+namespace sh = dyncal::cortex_m;
+using Counter = sh::InstructionCounter;
+
+// Tolerance on the relative RMS difference between the torques predicted by this run's estimate
+// and by the host double run's (over the replayed samples): float32 carries ~7 digits and the
+// recursion loses a few of them; double differs from the host only by rounding order.
+constexpr double kTolerance = sizeof(Scalar) == 4 ? 1e-3 : 1e-8;
+
+// Static storage: no heap, no large stack frames.
+Estimator g_est;
+dyncal::CausalDifferentiator<Scalar, 6> g_diff;
+Scalar g_reference[Estimator::kNumParams];
+std::uint32_t g_ticks = 0, g_t0 = 0;
+int g_updates = 0;
+
+const double* reference() {
+  switch (kUpdater) {
+    case dyncal::replay::Updater::kf:
+      return data::kReferenceKf;
+    case dyncal::replay::Updater::rls:
+      return data::kReferenceRls;
+    default:
+      return data::kReferenceEkf;
+  }
+}
+
+// Parameter store round trip (the linear models have a table layout; the EKF's Eq. 4 parameters
+// are not a table model and are not stored).
+bool store_round_trip() {
+  if constexpr (kUpdater == dyncal::replay::Updater::ekf) {
+    return true;
+  } else {
+    static dyncal::ParameterTable table;  // one table: RAM is the budget
+    dyncal::make_table<dyncal::replay::LinearModel>(g_est.estimate(), table);
+    auto& store = sh::flash_parameter_store<dyncal::replay::LinearModel>();
+    dyncal::TableStatus reason = dyncal::TableStatus::ok;
+    for (int round = 0; round < 3; ++round) {  // three writes: both slots used, newest wins
+      table.values[0] += 1.0f;
+      if (store.write(table, &reason) != dyncal::port::PortStatus::ok) {
+        sh::write("  parameter store write failed: ");
+        sh::write(dyncal::to_string(reason));
+        sh::write("\n");
+        return false;
+      }
+    }
+    // Read back into the same table: the values are the estimate (float32) plus the 3 added above.
+    if (store.read(table, &reason) != dyncal::port::PortStatus::ok) return false;
+    if (table.count != Estimator::kNumParams) return false;
+    for (int i = 0; i < table.count; ++i) {
+      const float expected = static_cast<float>(g_est.estimate()[i]) + (i == 0 ? 3.0f : 0.0f);
+      if (i == 0 ? !(std::fabs(table.values[0] - expected) <= 1e-5f * std::fabs(expected) + 1e-5f)
+                 : table.values[i] != expected)
+        return false;
+    }
+    // A table for another model is refused and leaves the store as it was.
+    const float kept = table.values[0];
+    table.model_id ^= 1u;
+    dyncal::TableStatus refused = dyncal::TableStatus::ok;
+    if (store.write(table, &refused) != dyncal::port::PortStatus::rejected) return false;
+    if (store.read(table, &reason) != dyncal::port::PortStatus::ok || table.values[0] != kept) return false;
+    sh::write("  parameter table written to the flash store 3 times (generation ");
+    sh::write_int(store.generation());
+    sh::write("), read back identical; a wrong-model table refused (");
+    sh::write(dyncal::to_string(refused));
+    sh::write(")\n");
+    return true;
+  }
+}
+
+}  // namespace
+
+int main() {
+  sh::StackUsage::paint();
+  if (g_est.reset() != dyncal::UpdateStatus::ok) return 2;
+  for (int i = 0; i < Estimator::kNumParams; ++i) g_reference[i] = Scalar(reference()[i]);
+  Counter::start();
+  const dyncal::replay::Counts c = dyncal::replay::run(g_est, g_diff, data::kSamples, data::kCount, data::kSamplePeriod,
+                                                       data::kSigma, [](int phase) {
+                                                         if (phase == 0) {
+                                                           g_t0 = Counter::ticks();
+                                                         } else {
+                                                           g_ticks += Counter::elapsed(g_t0, Counter::ticks());
+                                                           ++g_updates;
+                                                         }
+                                                       });
+  double difference = 0, residual = 0;
+  dyncal::replay::compare(g_est, g_reference, g_diff, data::kSamples, data::kCount, data::kSamplePeriod, difference,
+                          residual);
+  sh::write("dyncal firmware replay (");
+  sh::write(dyncal::replay::name(kUpdater));
+  sh::write(sizeof(Scalar) == 4 ? ", float" : ", double");
+  sh::write("): ");
+  sh::write_int(data::kCount);
+  sh::write(" drive samples, ");
+  sh::write_int(Estimator::kNumParams);
+  sh::write(" parameters; updates accepted ");
+  sh::write_int(c.accepted);
+  sh::write(", rejected ");
+  sh::write_int(c.rejected);
+  sh::write(", filter warm-up ");
+  sh::write_int(c.not_ready);
+  sh::write("\n  instructions per update (regressor + updater, qemu -icount, +-40): ");
+  sh::write_int(g_updates > 0 ? static_cast<long long>(g_ticks) * Counter::kInstructionsPerTick / g_updates : 0);
+  sh::write("\n  torque predicted by this estimate vs the host double run: relative RMS difference ");
+  sh::write_float(difference, 3);
+  sh::write(" (tolerance ");
+  sh::write_float(kTolerance, 1);
+  sh::write("); relative residual ");
+  sh::write_float(residual, 4);
+  sh::write("\n");
+  const bool stored = store_round_trip();
+  sh::write("  stack: peak ");
+  sh::write_int(sh::StackUsage::peak_bytes());
+  sh::write(" bytes of ");
+  sh::write_int(sh::StackUsage::reserved_bytes());
+  sh::write(" reserved\n");
+  const bool ok = difference < kTolerance && c.accepted > data::kCount * 9 / 10 && stored;
+  return ok ? 0 : 1;
+}

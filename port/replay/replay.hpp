@@ -1,0 +1,188 @@
+#pragma once
+// The firmware replay, shared by the Cortex-M images and the host: a block of recorded er20 drive
+// samples (q, tau at 100 Hz) goes through the causal differentiator, the generated regressor and
+// one updater — the Kalman filter (Eq. 19) or RLS with forgetting (Eq. 23) on the base parameters
+// + Eq. 7 friction, or the EKF (Eq. 21) on the base parameters + Eq. 4 (Stribeck) friction —
+// exactly as a drive would run them online. Templated on the scalar: float on the M4F, double on
+// the M7 and on the host (the reference). Static storage only; no heap.
+#include <cstdint>
+
+#include "dyncal/causal_differentiator.hpp"
+#include "dyncal/extended_kalman_filter.hpp"
+#include "dyncal/identification_model.hpp"
+#include "dyncal/kalman_filter.hpp"
+#include "dyncal/rls_forgetting.hpp"
+#include "er20/robot.hpp"
+
+namespace dyncal::replay {
+
+using Robot = dyncal::generated::er20::Robot;
+using LinearModel = IdentificationModel<Robot, kFrictionEq7>;
+
+enum class Updater { kf, rls, ekf };
+
+constexpr const char* name(Updater u) {
+  return u == Updater::kf ? "KF" : (u == Updater::rls ? "RLS" : "EKF");
+}
+
+/// Settings of the replay (the same on every target).
+struct Settings {
+  static constexpr double kCutoffHz = 10.0;  ///< causal low-pass on q and tau
+  static constexpr double kPrior = 1e4;      ///< initial variance of every parameter
+  static constexpr double kMu = 0.999;       ///< RLS forgetting factor
+  static constexpr double kGate = 8.0;       ///< innovation gate [standard deviations]
+};
+
+template <typename Scalar, Updater U>
+struct Estimator;
+
+template <typename Scalar>
+struct Estimator<Scalar, Updater::kf> {
+  static constexpr int kNumParams = LinearModel::kNumParams;
+  KalmanFilter<Scalar, kNumParams, 6> filter;
+  typename LinearModel::template Regressor<Scalar> K;
+  UpdateStatus reset() {
+    const UpdateStatus s =
+        filter.reset(LinearModel::ParamVector<Scalar>::Zero(),
+                     LinearModel::ParamVector<Scalar>::Constant(Scalar(Settings::kPrior)), LinearModel::structure());
+    return s != UpdateStatus::ok ? s : filter.set_gate(Scalar(Settings::kGate));
+  }
+  template <class V>
+  UpdateStatus update(const V& q, const V& qd, const V& qdd, const V& tau, const V& r) {
+    LinearModel::regressor(q, qd, qdd, V::Zero().eval(), K);
+    return filter.update(K, tau, r);
+  }
+  /// tau = K(q, qd, qdd) phi for a parameter vector phi (kNumParams).
+  template <class V>
+  void predict(const Scalar* phi, const V& q, const V& qd, const V& qdd, V& tau) {
+    LinearModel::regressor(q, qd, qdd, V::Zero().eval(), K);
+    tau.noalias() = K * Eigen::Map<const Eigen::Matrix<Scalar, kNumParams, 1>>(phi);
+  }
+  const Eigen::Matrix<Scalar, kNumParams, 1>& estimate() const { return filter.estimate(); }
+};
+
+template <typename Scalar>
+struct Estimator<Scalar, Updater::rls> {
+  static constexpr int kNumParams = LinearModel::kNumParams;
+  RlsForgetting<Scalar, kNumParams, 6> filter;
+  typename LinearModel::template Regressor<Scalar> K;
+  UpdateStatus reset() {
+    return filter.reset(LinearModel::ParamVector<Scalar>::Zero(),
+                        LinearModel::ParamVector<Scalar>::Constant(Scalar(Settings::kPrior)), Scalar(Settings::kMu),
+                        Scalar(0), LinearModel::structure());
+  }
+  template <class V>
+  UpdateStatus update(const V& q, const V& qd, const V& qdd, const V& tau, const V& r) {
+    LinearModel::regressor(q, qd, qdd, V::Zero().eval(), K);
+    V w;
+    for (int j = 0; j < 6; ++j) w[j] = Scalar(1) / std::sqrt(r[j]);  // weights 1 / sigma_j
+    return filter.update(K, tau, w);
+  }
+  /// tau = K(q, qd, qdd) phi for a parameter vector phi (kNumParams).
+  template <class V>
+  void predict(const Scalar* phi, const V& q, const V& qd, const V& qdd, V& tau) {
+    LinearModel::regressor(q, qd, qdd, V::Zero().eval(), K);
+    tau.noalias() = K * Eigen::Map<const Eigen::Matrix<Scalar, kNumParams, 1>>(phi);
+  }
+  const Eigen::Matrix<Scalar, kNumParams, 1>& estimate() const { return filter.estimate(); }
+};
+
+template <typename Scalar>
+struct Estimator<Scalar, Updater::ekf> {
+  using Filter = ExtendedKalmanFilter<Scalar, Robot, NonlinearFrictionModel::eq4>;
+  static constexpr int kNumParams = Filter::kNumParams;
+  Filter filter;
+  UpdateStatus reset() {
+    typename Filter::ParamVector phi0 = Filter::ParamVector::Zero(),
+                                 p0 = Filter::ParamVector::Constant(Scalar(Settings::kPrior));
+    for (int j = 0; j < 6; ++j) {  // Stribeck velocity: prior 0.2 +- 0.1 rad/s
+      phi0[Filter::column(2, j)] = Scalar(0.2);
+      p0[Filter::column(2, j)] = Scalar(0.01);
+    }
+    const UpdateStatus s = filter.reset(phi0, p0, Scalar(Settings::kMu));
+    return s != UpdateStatus::ok ? s : filter.set_gate(Scalar(Settings::kGate));
+  }
+  template <class V>
+  UpdateStatus update(const V& q, const V& qd, const V& qdd, const V& tau, const V& r) {
+    return filter.update(q, qd, qdd, tau, r);
+  }
+  Eigen::Matrix<Scalar, 6, Robot::kNumBase> Yb;
+  /// tau = Y_b phi_b + f(theta, qd) for a parameter vector phi (kNumParams).
+  template <class V>
+  void predict(const Scalar* phi, const V& q, const V& qd, const V& qdd, V& tau) {
+    Robot::base_regressor(q, qd, qdd, Yb);
+    tau.noalias() = Yb * Eigen::Map<const Eigen::Matrix<Scalar, Robot::kNumBase, 1>>(phi);
+    for (int j = 0; j < 6; ++j)
+      tau[j] += Filter::Friction::torque(phi + Filter::column(0, j), qd[j], static_cast<Scalar*>(nullptr));
+  }
+  const Eigen::Matrix<Scalar, kNumParams, 1>& estimate() const { return filter.estimate(); }
+};
+
+/// Counts of one replay.
+struct Counts {
+  int accepted = 0, rejected = 0, not_ready = 0;
+};
+
+/// Runs the estimator over samples[count][12] (q[6] rad, tau[6] Nm, at period h). `tick` is
+/// called around each update with 0 (before the regressor) and 1 (after the update) for cost
+/// measurement; pass a no-op on the host.
+template <typename Scalar, Updater U, class Tick>
+Counts run(Estimator<Scalar, U>& est, CausalDifferentiator<Scalar, 6>& diff, const float (*samples)[12], int count,
+           double h, const double* sigma, Tick&& tick) {
+  using V = Eigen::Matrix<Scalar, 6, 1>;
+  Counts c;
+  diff.reset(Scalar(h), Scalar(Settings::kCutoffHz));
+  V r;
+  for (int j = 0; j < 6; ++j) r[j] = Scalar(sigma[j] * sigma[j]);
+  for (int k = 0; k < count; ++k) {
+    V q_in, tau_in, q, qd, qdd, tau;
+    for (int j = 0; j < 6; ++j) {
+      q_in[j] = Scalar(samples[k][j]);
+      tau_in[j] = Scalar(samples[k][6 + j]);
+    }
+    if (diff.update(q_in, tau_in, q, qd, qdd, tau) != UpdateStatus::ok) {
+      ++c.not_ready;
+      continue;
+    }
+    tick(0);
+    const UpdateStatus s = est.update(q, qd, qdd, tau, r);
+    tick(1);
+    if (s == UpdateStatus::ok) {
+      ++c.accepted;
+    } else {
+      ++c.rejected;
+    }
+  }
+  return c;
+}
+
+/// Relative RMS difference between the torques predicted by the estimate of `est` and by the
+/// reference parameters `ref` (kNumParams, a host double run) over the same filtered samples, and
+/// the relative RMS residual of the estimate: sqrt(sum |tau_est - tau_ref|^2 / sum |tau_ref|^2).
+template <typename Scalar, Updater U>
+void compare(Estimator<Scalar, U>& est, const Scalar* ref, CausalDifferentiator<Scalar, 6>& diff,
+             const float (*samples)[12], int count, double h, double& rel_difference, double& rel_residual) {
+  using V = Eigen::Matrix<Scalar, 6, 1>;
+  diff.reset(Scalar(h), Scalar(Settings::kCutoffHz));
+  double sd = 0, sr = 0, st = 0;
+  for (int k = 0; k < count; ++k) {
+    V q_in, tau_in, q, qd, qdd, tau;
+    for (int j = 0; j < 6; ++j) {
+      q_in[j] = Scalar(samples[k][j]);
+      tau_in[j] = Scalar(samples[k][6 + j]);
+    }
+    if (diff.update(q_in, tau_in, q, qd, qdd, tau) != UpdateStatus::ok) continue;
+    V a, b;
+    est.predict(est.estimate().data(), q, qd, qdd, a);
+    est.predict(ref, q, qd, qdd, b);
+    for (int j = 0; j < 6; ++j) {
+      sd += double(a[j] - b[j]) * double(a[j] - b[j]);
+      sr += double(a[j] - tau[j]) * double(a[j] - tau[j]);
+      st += double(b[j]) * double(b[j]);
+    }
+  }
+  rel_difference = st > 0 ? std::sqrt(sd / st) : 0.0;
+  rel_residual = st > 0 ? std::sqrt(sr / st) : 0.0;
+}
+
+}  // namespace dyncal::replay
