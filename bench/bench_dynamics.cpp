@@ -5,6 +5,7 @@
 #include <kdl/chainidsolver_recursive_newton_euler.hpp>
 #include <memory>
 #include <random>
+#include <vector>
 
 #include "dyncal/identification_model.hpp"
 #include "dyncal/kalman_filter.hpp"
@@ -135,33 +136,48 @@ void BM_KdlRne(benchmark::State& state) {
 }
 BENCHMARK(BM_KdlRne);
 
+// One update per iteration over 64 precomputed regressors (an update returns early only on a
+// rejection; the status is checked to keep that honest).
+template <class Filter, typename Scalar>
+void run_filter(benchmark::State& state, Filter& f) {
+  using V = Eigen::Matrix<Scalar, 6, 1>;
+  std::vector<Eigen::Matrix<Scalar, 6, P>> K(64);
+  const V zero = V::Zero(), r = V::Constant(Scalar(100)), tau = V::Ones();
+  for (int i = 0; i < 64; ++i)
+    Model::regressor<Scalar>(kStates.q[i].cast<Scalar>(), kStates.qd[i].cast<Scalar>(), kStates.qdd[i].cast<Scalar>(),
+                             zero, K[i]);
+  long i = 0, rejected = 0;
+  for (auto _ : state) {
+    if (f.update(K[i & 63], tau, r) != dyncal::UpdateStatus::ok) ++rejected;
+    ++i;
+  }
+  state.counters["rejected"] = static_cast<double>(rejected);
+}
+
 template <typename Scalar>
 void BM_KalmanUpdate(benchmark::State& state) {
   using PV = Eigen::Matrix<Scalar, P, 1>;
-  using V = Eigen::Matrix<Scalar, 6, 1>;
   auto kf = std::make_unique<dyncal::KalmanFilter<Scalar, P, 6>>();
-  kf->reset(PV::Zero(), PV::Constant(Scalar(1e3)));
-  Eigen::Matrix<Scalar, 6, P> K;
-  const V zero = V::Zero(), r = V::Ones();
-  Model::regressor<Scalar>(kStates.q[0].cast<Scalar>(), kStates.qd[0].cast<Scalar>(), kStates.qdd[0].cast<Scalar>(),
-                           zero, K);
-  const V tau = V::Ones();
-  for (auto _ : state) {
-    benchmark::DoNotOptimize(kf->update(K, tau, r));
-  }
+  kf->reset(PV::Zero(), PV::Constant(Scalar(1e3)), Model::structure());
+  run_filter<decltype(*kf), Scalar>(state, *kf);
 }
 BENCHMARK_TEMPLATE(BM_KalmanUpdate, double);
 BENCHMARK_TEMPLATE(BM_KalmanUpdate, float);
 
+template <typename Scalar>
+void BM_KalmanUpdateUd(benchmark::State& state) {
+  using PV = Eigen::Matrix<Scalar, P, 1>;
+  auto kf = std::make_unique<dyncal::KalmanFilter<Scalar, P, 6, dyncal::UdCovariance<Scalar, P>>>();
+  kf->reset(PV::Zero(), PV::Constant(Scalar(1e3)));
+  run_filter<decltype(*kf), Scalar>(state, *kf);
+}
+BENCHMARK_TEMPLATE(BM_KalmanUpdateUd, double);
+
 void BM_RlsUpdate(benchmark::State& state) {
   using PV = Eigen::Matrix<double, P, 1>;
   auto rls = std::make_unique<dyncal::RlsForgetting<double, P, 6>>();
-  rls->reset(PV::Zero(), PV::Constant(1e3), 0.999);
-  Eigen::Matrix<double, 6, P> K;
-  const Vec zero = Vec::Zero();
-  Model::regressor(kStates.q[0], kStates.qd[0], kStates.qdd[0], zero, K);
-  const Vec tau = Vec::Ones();
-  for (auto _ : state) benchmark::DoNotOptimize(rls->update(K, tau));
+  rls->reset(PV::Zero(), PV::Constant(1e3), 0.999, 0.0, Model::structure());
+  run_filter<decltype(*rls), double>(state, *rls);
 }
 BENCHMARK(BM_RlsUpdate);
 
