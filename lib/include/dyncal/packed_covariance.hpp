@@ -214,10 +214,17 @@ class PackedCovariance {
   /// Adds columns [b, e) of one run (rows R0..R1 of H) to rows i and i + 1 of V.
   template <int R0, int R1>
   DYNCAL_ALWAYS_INLINE void run2(int i, int b, int e, const Scalar* H, Scalar* a0, Scalar* a1) const noexcept {
+    if (b >= i + 2) {  // the whole run right of the 2 x 2 diagonal block: rows i and i + 1, contiguous
+      const Scalar* r0 = p_ + row_[i] + b;
+      const Scalar* r1 = p_ + row_[i + 1] + b;
+      const Scalar* h = H + b * N;
+      for (int n = e - b; n > 0; --n, h += N) mac2<R0, R1>(*r0++, *r1++, h, a0, a1);
+      return;
+    }
     int c = b;
     const int lower_end = e < i ? e : i;
     if (c < lower_end) {  // P(c, i) and P(c, i + 1) are neighbours in row c
-      const Scalar* q = p_ + index(c, i);
+      const Scalar* q = p_ + row_[c] + i;
       const Scalar* h = H + c * N;
       for (; c < lower_end; ++c, h += N) {
         mac2<R0, R1>(q[0], q[1], h, a0, a1);
@@ -225,7 +232,7 @@ class PackedCovariance {
       }
     }
     for (; c < e && c < i + 2; ++c) {  // the 2 x 2 diagonal corner
-      const Scalar pii = p_[index(i, i)], pij = p_[index(i, i + 1)], pjj = p_[index(i + 1, i + 1)];
+      const Scalar pii = p_[row_[i] + i], pij = p_[row_[i] + i + 1], pjj = p_[row_[i + 1] + i + 1];
       if (c == i) {
         mac2<R0, R1>(pii, pij, H + c * N, a0, a1);
       } else {
@@ -233,8 +240,8 @@ class PackedCovariance {
       }
     }
     if (c < e) {  // rows i and i + 1, contiguous
-      const Scalar* r0 = p_ + index(i, c);
-      const Scalar* r1 = p_ + index(i + 1, c);
+      const Scalar* r0 = p_ + row_[i] + c;
+      const Scalar* r1 = p_ + row_[i + 1] + c;
       const Scalar* h = H + c * N;
       for (; c < e; ++c, h += N) mac2<R0, R1>(*r0++, *r1++, h, a0, a1);
     }
@@ -349,6 +356,14 @@ class PackedCovariance {
   RegressorStructure<P> structure_ = RegressorStructure<P>::dense(N);
   Run runs_[P] = {};
   int num_runs_ = 0;
+  /// row_[i] = index(i, i) - i: P(i, j) = p_[row_[i] + j] for j >= i.
+  static constexpr struct RowOffsets {
+    int v[P];
+    constexpr RowOffsets() : v() {
+      for (int i = 0; i < P; ++i) v[i] = index(i, i) - i;
+    }
+    constexpr int operator[](int i) const { return v[i]; }
+  } row_{};
   std::uint16_t outside_[P * N] = {};  ///< positions in H (column-major) outside the structure
   int num_outside_ = 0;
 };
