@@ -36,22 +36,12 @@ struct Settings {
 template <typename Scalar, Updater U>
 struct Estimator;
 
-template <typename Scalar>
-struct Estimator<Scalar, Updater::kf> {
+/// What the KF and RLS replays share: the linear model's regressor and prediction.
+template <typename Scalar, class Filter>
+struct LinearEstimator {
   static constexpr int kNumParams = LinearModel::kNumParams;
-  KalmanFilter<Scalar, kNumParams, 6> filter;
+  Filter filter;
   typename LinearModel::template Regressor<Scalar> K;
-  UpdateStatus reset() {
-    const UpdateStatus s =
-        filter.reset(LinearModel::ParamVector<Scalar>::Zero(),
-                     LinearModel::ParamVector<Scalar>::Constant(Scalar(Settings::kPrior)), LinearModel::structure());
-    return s != UpdateStatus::ok ? s : filter.set_gate(Scalar(Settings::kGate));
-  }
-  template <class V>
-  UpdateStatus update(const V& q, const V& qd, const V& qdd, const V& tau, const V& r) {
-    LinearModel::regressor(q, qd, qdd, V::Zero().eval(), K);
-    return filter.update(K, tau, r);
-  }
   /// tau = K(q, qd, qdd) phi for a parameter vector phi (kNumParams).
   template <class V>
   void predict(const Scalar* phi, const V& q, const V& qd, const V& qdd, V& tau) {
@@ -62,29 +52,34 @@ struct Estimator<Scalar, Updater::kf> {
 };
 
 template <typename Scalar>
-struct Estimator<Scalar, Updater::rls> {
-  static constexpr int kNumParams = LinearModel::kNumParams;
-  RlsForgetting<Scalar, kNumParams, 6> filter;
-  typename LinearModel::template Regressor<Scalar> K;
+struct Estimator<Scalar, Updater::kf> : LinearEstimator<Scalar, KalmanFilter<Scalar, LinearModel::kNumParams, 6>> {
   UpdateStatus reset() {
-    return filter.reset(LinearModel::ParamVector<Scalar>::Zero(),
-                        LinearModel::ParamVector<Scalar>::Constant(Scalar(Settings::kPrior)), Scalar(Settings::kMu),
-                        Scalar(0), LinearModel::structure());
+    const UpdateStatus s = this->filter.reset(LinearModel::ParamVector<Scalar>::Zero(),
+                                              LinearModel::ParamVector<Scalar>::Constant(Scalar(Settings::kPrior)),
+                                              LinearModel::structure());
+    return s != UpdateStatus::ok ? s : this->filter.set_gate(Scalar(Settings::kGate));
   }
   template <class V>
   UpdateStatus update(const V& q, const V& qd, const V& qdd, const V& tau, const V& r) {
-    LinearModel::regressor(q, qd, qdd, V::Zero().eval(), K);
+    LinearModel::regressor(q, qd, qdd, V::Zero().eval(), this->K);
+    return this->filter.update(this->K, tau, r);
+  }
+};
+
+template <typename Scalar>
+struct Estimator<Scalar, Updater::rls> : LinearEstimator<Scalar, RlsForgetting<Scalar, LinearModel::kNumParams, 6>> {
+  UpdateStatus reset() {
+    return this->filter.reset(LinearModel::ParamVector<Scalar>::Zero(),
+                              LinearModel::ParamVector<Scalar>::Constant(Scalar(Settings::kPrior)),
+                              Scalar(Settings::kMu), Scalar(0), LinearModel::structure());
+  }
+  template <class V>
+  UpdateStatus update(const V& q, const V& qd, const V& qdd, const V& tau, const V& r) {
+    LinearModel::regressor(q, qd, qdd, V::Zero().eval(), this->K);
     V w;
     for (int j = 0; j < 6; ++j) w[j] = Scalar(1) / std::sqrt(r[j]);  // weights 1 / sigma_j
-    return filter.update(K, tau, w);
+    return this->filter.update(this->K, tau, w);
   }
-  /// tau = K(q, qd, qdd) phi for a parameter vector phi (kNumParams).
-  template <class V>
-  void predict(const Scalar* phi, const V& q, const V& qd, const V& qdd, V& tau) {
-    LinearModel::regressor(q, qd, qdd, V::Zero().eval(), K);
-    tau.noalias() = K * Eigen::Map<const Eigen::Matrix<Scalar, kNumParams, 1>>(phi);
-  }
-  const Eigen::Matrix<Scalar, kNumParams, 1>& estimate() const { return filter.estimate(); }
 };
 
 template <typename Scalar>
