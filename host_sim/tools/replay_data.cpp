@@ -101,9 +101,9 @@ int main(int argc, char** argv) {
       << "// Inputs: robots/er20, the simulated drive (seed " << kSeed << ", Eq. 4 friction from robot.json, survey\n"
       << "// Table 7 torque noise, encoder quantisation), default excitation (cond(K) " << std::setprecision(4) << cond
       << "), " << kRate << " Hz, 2 periods.\n"
-      << "// Reference estimates: port/replay/replay.hpp run in double on the host (accepted updates: KF "
+      << "// Reference estimates: port/replay/replay.hpp run in double on the host\n// (accepted updates: KF "
       << ck.accepted << ", RLS " << cr.accepted << ", EKF " << ce.accepted << ").\n"
-      << "#pragma once\n\nnamespace dyncal::replay::data {\n\n"
+      << "#pragma once\n\n// clang-format off\nnamespace dyncal::replay::data {\n\n"
       << "inline constexpr double kSamplePeriod = " << 1.0 / kRate << ";  // [s]\n"
       << "/// Torque noise standard deviation per joint [Nm] (survey Table 7): R = sigma^2.\n"
       << "inline constexpr double kSigma[6] = {";
@@ -119,7 +119,7 @@ int main(int argc, char** argv) {
     write_array(o, "kReferenceKf", kf);
     write_array(o, "kReferenceRls", rls);
     write_array(o, "kReferenceEkf", ekf);
-    o << "\n}  // namespace dyncal::replay::data\n";
+    o << "\n}  // namespace dyncal::replay::data\n// clang-format on\n";
     std::ofstream f(argv[1]);
     f << o.str();
     if (!f) throw std::runtime_error(std::string("cannot write ") + argv[1]);

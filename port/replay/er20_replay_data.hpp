@@ -2,9 +2,11 @@
 // Generator: host_sim/tools/replay_data.cpp (cmake --build <build> --target replay-data)
 // Inputs: robots/er20, the simulated drive (seed 2026, Eq. 4 friction from robot.json, survey
 // Table 7 torque noise, encoder quantisation), default excitation (cond(K) 8.941), 100 Hz, 2 periods.
-// Reference estimates: port/replay/replay.hpp run in double on the host (accepted updates: KF 1967, RLS 1968, EKF 1967).
+// Reference estimates: port/replay/replay.hpp run in double on the host
+// (accepted updates: KF 1967, RLS 1968, EKF 1967).
 #pragma once
 
+// clang-format off
 namespace dyncal::replay::data {
 
 inline constexpr double kSamplePeriod = 0.01;  // [s]
@@ -2060,3 +2062,4 @@ inline constexpr double kReferenceEkf[60] = {
     3.3871068156945583, 0.06678850333834789, 0.21252911908444702, 7.010122744473688,};
 
 }  // namespace dyncal::replay::data
+// clang-format on

@@ -41,10 +41,7 @@ class ExtendedKalmanFilter {
   /// Rows where each column of K can be nonzero (generated base structure; friction: own joint).
   static constexpr RegressorStructure<kNumParams> structure() noexcept {
     RegressorStructure<kNumParams> s{};
-    for (int c = 0; c < kNumBase; ++c) {
-      s.first[c] = static_cast<std::int8_t>(Robot::base_column_first_row(c));
-      s.last[c] = static_cast<std::int8_t>(Robot::base_column_last_row(c));
-    }
+    set_base_structure<Robot>(s);
     for (int j = 0; j < kNumJoints; ++j) {
       for (int i = 0; i < kFrictionParams; ++i) {
         s.first[column(i, j)] = static_cast<std::int8_t>(j);

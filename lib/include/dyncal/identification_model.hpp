@@ -100,10 +100,7 @@ class IdentificationModel {
   /// (Robot::base_column_first_row/last_row) and joint j's own row for its term columns.
   static constexpr RegressorStructure<kNumParams> structure() {
     RegressorStructure<kNumParams> s{};
-    for (int c = 0; c < kNumBase; ++c) {
-      s.first[c] = static_cast<std::int8_t>(Robot::base_column_first_row(c));
-      s.last[c] = static_cast<std::int8_t>(Robot::base_column_last_row(c));
-    }
+    set_base_structure<Robot>(s);
     int col = kNumBase;
     for (int j = 0; j < kNumJoints; ++j) {
       for (int i = 0; i < kNumTerms; ++i) {

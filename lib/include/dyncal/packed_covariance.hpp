@@ -33,7 +33,7 @@ namespace dyncal {
 ///
 /// Safeguards (every failure leaves phi and P exactly as they were): non-finite input, an entry
 /// of H outside its declared structure, r <= 0, S not positive definite, a diagonal entry of the
-/// new P not positive (checked before P is written), and optional innovation gating.
+/// updated P not positive (checked before P is written), and optional innovation gating.
 template <typename Scalar, int P, int N>
 class PackedCovariance {
  public:
@@ -150,7 +150,7 @@ class PackedCovariance {
       for (int t = 0; t < k; ++t) x -= S[k][t] * z[t];
       z[k] = x * inv_d_[k];
     }
-    // W = V L^-T row by row (in place), the parameter change W z, and the new diagonal.
+    // W = V L^-T row by row (in place), the parameter change W z, and the updated diagonal.
     for (int i = 0; i < P; ++i) {
       Scalar* w = v_[i];
       Scalar dphi = Scalar(0), ww = Scalar(0);
@@ -185,10 +185,6 @@ class PackedCovariance {
     Scalar t(0);
     for (int i = 0; i < P; ++i) t += p_[index(i, i)];
     return t;
-  }
-  /// P <- P * factor (factor > 0).
-  void scale(Scalar factor) noexcept {
-    for (int k = 0; k < kPacked; ++k) p_[k] *= factor;
   }
   /// The full P into `out` (host-side diagnostics and tests).
   void to_dense(Eigen::Matrix<Scalar, P, P>& out) const noexcept {

@@ -26,4 +26,15 @@ struct RegressorStructure {
   }
 };
 
+/// Writes the generated base-regressor structure of Robot (Robot::base_column_first_row /
+/// last_row) into columns 0..Robot::kNumBase-1 of `s`.
+template <class Robot, int P>
+constexpr void set_base_structure(RegressorStructure<P>& s) noexcept {
+  static_assert(P >= Robot::kNumBase, "structure narrower than the base regressor");
+  for (int c = 0; c < Robot::kNumBase; ++c) {
+    s.first[c] = static_cast<std::int8_t>(Robot::base_column_first_row(c));
+    s.last[c] = static_cast<std::int8_t>(Robot::base_column_last_row(c));
+  }
+}
+
 }  // namespace dyncal
