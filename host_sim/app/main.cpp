@@ -11,6 +11,7 @@
 #include "dyncal_host/input_error.hpp"
 #include "dyncal_host/joint_log.hpp"
 #include "dyncal_host/robot_description.hpp"
+#include "dyncal_host/survey/survey.hpp"
 
 namespace {
 
@@ -18,6 +19,16 @@ void write_json(const std::string& path, const nlohmann::json& j) {
   std::ofstream out(path);
   if (!out) throw dyncal::host::InputError("cannot write '" + path + "'");
   out << j.dump(2) << "\n";
+}
+
+nlohmann::json read_json(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw dyncal::host::InputError("cannot read '" + path + "'");
+  try {
+    return nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception& e) {
+    throw dyncal::host::InputError(path + ": invalid JSON: " + e.what());
+  }
 }
 
 }  // namespace
@@ -76,6 +87,20 @@ int main(int argc, char** argv) {
   std::string diag_plots;
   diagnose->add_option("--plots", diag_plots, "write SVG plots (gnuplot) into this directory");
 
+  dyncal::host::survey::SurveyOptions sopt;
+  std::string survey_json, survey_check;
+  double survey_tolerance = 1e-3;
+  auto* survey = app.add_subcommand(
+      "survey", "reproduce the survey's simulation study on the er20 (Tables 5, 6, 8, 9, 11) next to its numbers");
+  survey->add_option("--robots-dir", robots_dir, "directory holding the robot descriptions");
+  survey->add_flag("--quick", sopt.quick, "one excitation period instead of two (CI)");
+  survey->add_option("--seed", sopt.seed, "excitation, noise and CAD-prior seed")->capture_default_str();
+  survey->add_option("--prior-error", sopt.prior_error, "CAD prior: relative error of every set value (uniform)")
+      ->capture_default_str();
+  survey->add_option("--json", survey_json, "write the results as JSON");
+  survey->add_option("--check", survey_check, "compare with a committed result JSON; exit 1 on any difference");
+  survey->add_option("--tolerance", survey_tolerance, "relative tolerance of --check")->capture_default_str();
+
   std::function<int()> run;
   add_drive_commands(app, run, robots_dir);
 
@@ -87,6 +112,23 @@ int main(int argc, char** argv) {
 
   try {
     if (run) return run();
+    if (app.got_subcommand(survey)) {
+      const auto robot = dyncal::host::load_robot(robots_dir, "er20");
+      const nlohmann::json published = read_json(robots_dir + "/er20/survey_published.json");
+      const nlohmann::json result = dyncal::host::survey::run_survey(robot, sopt);
+      dyncal::host::survey::print_survey(std::cout, result, published);
+      if (!survey_json.empty()) write_json(survey_json, result);
+      if (!survey_check.empty()) {
+        const std::string diff =
+            dyncal::host::survey::compare_survey(result, read_json(survey_check), survey_tolerance);
+        if (!diff.empty()) {
+          std::cerr << "dyncal survey: differs from " << survey_check << ":\n" << diff;
+          return 1;
+        }
+        std::cout << "\nmatches " << survey_check << " (relative tolerance " << survey_tolerance << ")\n";
+      }
+      return 0;
+    }
     if (app.got_subcommand(diagnose)) {
       if (robot_name.empty()) {
         if (format != "tx40") throw dyncal::host::InputError("--robot is required for --format csv");

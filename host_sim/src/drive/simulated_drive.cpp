@@ -159,13 +159,15 @@ void SimulatedDrive::start() {
   }
   impl_->q_meas_prev = q_meas - qd_d * control_period();
   // PD gains from the arm's inertia at the start pose: natural frequency bandwidth_hz, damping zeta.
-  Mat M;
-  Robot::mass_matrix(impl_->q, impl_->phi_true, M);
-  const double w = 2.0 * M_PI * scenario_.bandwidth_hz;
-  for (int j = 0; j < kDriveJoints; ++j) {
-    const double m = M(j, j) + impl_->ia[j];
-    impl_->kp[j] = m * w * w;
-    impl_->kd[j] = 2.0 * scenario_.damping * m * w;
+  if (!gains_fixed_) {
+    Mat M;
+    Robot::mass_matrix(impl_->q, impl_->phi_true, M);
+    const double w = 2.0 * M_PI * scenario_.bandwidth_hz;
+    for (int j = 0; j < kDriveJoints; ++j) {
+      const double m = M(j, j) + impl_->ia[j];
+      impl_->kp[j] = m * w * w;
+      impl_->kd[j] = 2.0 * scenario_.damping * m * w;
+    }
   }
   time_ = 0;
   steps_ = 0;
@@ -203,14 +205,23 @@ void SimulatedDrive::step() {
   for (int j = 0; j < kDriveJoints; ++j) error_sq_[j] += (tau_cmd[j] - tau_ff[j]) * (tau_cmd[j] - tau_ff[j]);
   ++error_n_;
   // Record.
-  if (steps_ % steps_per_sample_ == 0) {
+  const bool record = steps_ % steps_per_sample_ == 0;
+  if (record) {
     port::DriveSample sample{};
     sample.seq = produced_++;
+    PlantSample exact;
+    exact.t = time_;
     for (int j = 0; j < kDriveJoints; ++j) {
+      const double tau_measured = tau_cmd[j] + scenario_.tau_noise_std[j] * s.normal(rng_);
       sample.q[j] = static_cast<float>(q_meas[j]);
       sample.qd[j] = static_cast<float>(qd_meas[j]);
-      sample.tau[j] = static_cast<float>(tau_cmd[j] + scenario_.tau_noise_std[j] * s.normal(rng_));
+      sample.tau[j] = static_cast<float>(tau_measured);
+      exact.q[j] = s.q[j];
+      exact.qd[j] = s.qd[j];
+      exact.tau_cmd[j] = tau_cmd[j];
+      exact.tau_measured[j] = tau_measured;
     }
+    if (plant_log) plant_log->push_back(exact);  // qdd filled in by the first RK4 stage below
     if (ring_full()) {
       ++overruns_;  // the host sees the gap in seq
     } else {
@@ -247,6 +258,9 @@ void SimulatedDrive::step() {
   for (int k = 0; k < scenario_.substeps; ++k) {
     Vec a1, a2, a3, a4;
     accel(s.q, s.qd, a1);
+    if (k == 0 && record && plant_log) {
+      for (int j = 0; j < kDriveJoints; ++j) plant_log->back().qdd[j] = a1[j];
+    }
     accel(s.q + 0.5 * hstep * s.qd, s.qd + 0.5 * hstep * a1, a2);
     accel(s.q + 0.5 * hstep * (s.qd + 0.5 * hstep * a1), s.qd + 0.5 * hstep * a2, a3);
     accel(s.q + hstep * (s.qd + 0.5 * hstep * a2), s.qd + hstep * a3, a4);
@@ -306,6 +320,33 @@ void write_file_atomically(const std::string& path, const std::vector<std::uint8
     ::fsync(dfd);
     ::close(dfd);
   }
+}
+
+void SimulatedDrive::set_plant_parameters(const std::vector<double>& phi_standard) {
+  if (static_cast<int>(phi_standard.size()) != Robot::kNumStandard) {
+    throw InputError("plant parameters: expected " + std::to_string(Robot::kNumStandard) + " standard parameters");
+  }
+  for (int i = 0; i < Robot::kNumStandard; ++i) impl_->phi_true[i] = phi_standard[static_cast<size_t>(i)];
+}
+
+void SimulatedDrive::fix_gains(const std::array<double, kDriveJoints>& kp, const std::array<double, kDriveJoints>& kd) {
+  for (int j = 0; j < kDriveJoints; ++j) {
+    impl_->kp[j] = kp[j];
+    impl_->kd[j] = kd[j];
+  }
+  gains_fixed_ = true;
+}
+
+std::array<double, kDriveJoints> SimulatedDrive::kp() const {
+  std::array<double, kDriveJoints> g{};
+  for (int j = 0; j < kDriveJoints; ++j) g[j] = impl_->kp[j];
+  return g;
+}
+
+std::array<double, kDriveJoints> SimulatedDrive::kd() const {
+  std::array<double, kDriveJoints> g{};
+  for (int j = 0; j < kDriveJoints; ++j) g[j] = impl_->kd[j];
+  return g;
 }
 
 }  // namespace dyncal::host

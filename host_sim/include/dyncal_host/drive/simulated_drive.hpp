@@ -74,6 +74,24 @@ class SimulatedDrive {
   /// Per joint RMS of tau_cmd - tau_ff [Nm] since start(): the drive's own model error.
   std::array<double, kDriveJoints> model_error_rms() const;
 
+  /// The exact plant state at one recorded sample (simulation studies, survey Fig. 3): q [rad],
+  /// qd [rad/s], qdd [rad/s^2] of the plant at the sample instant, the commanded torque [Nm] and the
+  /// measured (noisy) torque [Nm] recorded with it.
+  struct PlantSample {
+    double t = 0;
+    std::array<double, kDriveJoints> q{}, qd{}, qdd{}, tau_cmd{}, tau_measured{};
+  };
+  /// If set, every recorded sample also appends its PlantSample here (not through the ring).
+  std::vector<PlantSample>* plant_log = nullptr;
+  /// Standard parameters of the plant (60, generated StandardParam order); nominal by default.
+  /// Only while not playing. Throws InputError on a size mismatch.
+  void set_plant_parameters(const std::vector<double>& phi_standard);
+  /// PD gains of the control law (computed by start() from M(q0) unless fixed here; the known
+  /// control law IDIM-IV simulates). Only while not playing.
+  void fix_gains(const std::array<double, kDriveJoints>& kp, const std::array<double, kDriveJoints>& kd);
+  std::array<double, kDriveJoints> kp() const;
+  std::array<double, kDriveJoints> kd() const;
+
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
@@ -89,6 +107,7 @@ class SimulatedDrive {
   std::uint32_t table_generation_ = 0;
   std::string startup_note_;
   std::array<double, kDriveJoints> error_sq_{};
+  bool gains_fixed_ = false;
   long error_n_ = 0;
   std::mt19937_64 rng_;
 };

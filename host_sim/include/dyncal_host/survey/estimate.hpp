@@ -1,0 +1,59 @@
+#pragma once
+// What a calculation method of the survey study returns, the set parameters it is judged against,
+// and the evaluation indices of survey Sec. 5 (e_T, e_T_Std, e_d, e_f, J_e; plus e_b).
+
+#include <Eigen/Core>
+#include <array>
+#include <string>
+#include <vector>
+
+#include "dyncal_host/drive/scenario.hpp"
+
+namespace dyncal::host::survey {
+
+/// Friction parameter names per joint of a model: Eq. 7 {Fc, beta}; Eq. 4 {Fc, Fs, qds, beta}.
+std::vector<std::string> friction_parameter_names(FrictionModel model);
+/// Set friction parameters, joint-major in friction_parameter_names order.
+std::vector<double> set_friction(const Scenario& scenario, FrictionModel model);
+/// Friction torque of joint j (0-based) for parameters theta (friction_parameter_names order).
+double friction_torque(FrictionModel model, const double* theta, double qd);
+
+struct Estimate {
+  std::string method;
+  FrictionModel model = FrictionModel::eq7;
+  Eigen::VectorXd base;            ///< 36 base parameters
+  Eigen::VectorXd standard;        ///< 60 standard parameters as the method gives them (from base:
+                                   ///< the minimum-norm ones, as a pseudo-inverse of the standard regressor)
+  Eigen::VectorXd standard_prior;  ///< 60 with the CAD prior in the unidentifiable directions
+  std::vector<double> friction;    ///< joint-major, friction_parameter_names order
+  Eigen::MatrixXd tau_hat;         ///< S x 6 torque of Eq. 2 with the estimate [Nm]
+  double seconds = 0;              ///< wall time of the calculation
+  int iterations = 0;              ///< outer iterations (IDIM-IV, optimisers), 0 if not iterative
+  /// Physically consistent methods: per link the smallest eigenvalue of J = L L^T from the factor L
+  /// itself (sigma_min(L)^2, exact to rounding even where J is nearly singular); empty otherwise.
+  std::vector<double> pseudo_inertia_min_eigenvalue;
+  std::string note;
+};
+
+/// Survey Sec. 5 indices; e_d and e_f are means of |(set - est) / set| over the parameters whose
+/// set value is nonzero (m, X Y Z, I11..I33 of every link, Table 5's parametrisation).
+struct Indices {
+  double e_d = 0;        ///< inertial parameter error, standard parameters as the method gives them
+  double e_d_prior = 0;  ///< the same with the CAD prior (Estimate::standard_prior)
+  double e_f = 0;        ///< friction parameter error
+  double e_T = 0;        ///< |Mean((tau - tau_hat) / tau_max)| (signed mean, as the published numbers)
+  double e_T_std = 0;    ///< Std((tau - tau_hat) / tau_max)
+  double e_T_abs = 0;    ///< Mean(|tau - tau_hat| / tau_max), Sec. 5.1 read literally
+  double J_e = 0;        ///< e_d + e_f + e_T + e_T_std
+  double J_e_prior = 0;  ///< e_d_prior + e_f + e_T + e_T_std
+  double e_b = 0;        ///< base parameter error: mean |(set - est) / set| over nonzero set base parameters
+};
+
+/// tau: the measured torque the method was given (S x 6); tau_max per joint [Nm].
+Indices evaluate(const Estimate& est, const Scenario& scenario, const Eigen::MatrixXd& tau,
+                 const std::array<double, 6>& tau_max);
+
+/// Level letter of survey Tables 1-4: 'A' below a, 'B' below b, else 'C'.
+char level(double value, double a, double b);
+
+}  // namespace dyncal::host::survey

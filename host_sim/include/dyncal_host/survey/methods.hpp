@@ -1,0 +1,36 @@
+#pragma once
+// The survey's calculation methods (Sec. 3) run on one SurveyData: pseudo-inverse (Eq. 16),
+// Kalman filter (Eq. 19), exponential forgetting (Eq. 23), extended Kalman filter (Eq. 21) and its
+// forgetting form (Eq. 24). The recursive ones are the allocation-free lib/ updaters, fed one
+// sample at a time in order, as on a drive.
+
+#include <Eigen/Core>
+#include <array>
+
+#include "dyncal_host/survey/estimate.hpp"
+#include "dyncal_host/survey/survey_data.hpp"
+
+namespace dyncal::host::survey {
+
+struct MethodSettings {
+  Eigen::VectorXd prior;                                      ///< CAD standard parameters (60)
+  double prior_relative_std = 0.2;                            ///< CAD uncertainty, relative (1 sigma)
+  std::array<double, 6> sigma{10, 10, 10, 1.78, 1.78, 1.78};  ///< assumed torque noise (Table 7) [Nm]
+  double mu = 0.999;                                          ///< forgetting factor (Eq. 23, 24)
+  double p0 = 1e6;                                            ///< initial covariance of unknown parameters
+};
+
+/// Fills standard, standard_prior and tau_hat of `e` from its base and friction parameters.
+void complete_estimate(Estimate& e, const SurveyData& data, const MethodSettings& settings);
+
+/// Eq. 7 model, least squares over every sample (QR of the stacked base regressor).
+Estimate pseudo_inverse(const SurveyData& data, const MethodSettings& settings);
+/// Eq. 7 model, lib/ KalmanFilter (R = sigma^2, prior 0 with covariance p0).
+Estimate kalman_filter(const SurveyData& data, const MethodSettings& settings);
+/// Eq. 7 model, lib/ RlsForgetting (weights 1/sigma, forgetting factor mu).
+Estimate exponential_forgetting(const SurveyData& data, const MethodSettings& settings);
+/// Eq. 4 model, lib/ ExtendedKalmanFilter; mu = 1: Eq. 21, mu < 1: Eq. 24. Friction prior:
+/// Fc = Fs = 10 Nm, qds = 0.3 +- 0.1 rad/s, beta = 0 (no knowledge of the set values).
+Estimate extended_kalman_filter(const SurveyData& data, const MethodSettings& settings, double mu);
+
+}  // namespace dyncal::host::survey

@@ -1,0 +1,103 @@
+#include "dyncal_host/survey/estimate.hpp"
+
+#include <cmath>
+
+#include "dyncal/nonlinear_friction.hpp"
+#include "dyncal_host/input_error.hpp"
+#include "dyncal_host/survey/standard_parameters.hpp"
+
+namespace dyncal::host::survey {
+namespace {
+
+double mean_relative_error(const double* set, const double* est, int n, int* counted) {
+  double sum = 0;
+  int k = 0;
+  for (int i = 0; i < n; ++i) {
+    if (set[i] == 0.0) continue;
+    sum += std::fabs((set[i] - est[i]) / set[i]);
+    ++k;
+  }
+  if (counted) *counted = k;
+  return k ? sum / k : 0.0;
+}
+
+}  // namespace
+
+std::vector<std::string> friction_parameter_names(FrictionModel model) {
+  switch (model) {
+    case FrictionModel::eq7:
+      return {"Fc", "beta"};
+    case FrictionModel::eq4:
+      return {"Fc", "Fs", "qds", "beta"};
+    default:
+      throw InputError("the survey study runs Eq. 7 and Eq. 4");
+  }
+}
+
+std::vector<double> set_friction(const Scenario& s, FrictionModel model) {
+  std::vector<double> out;
+  for (int j = 0; j < kDriveJoints; ++j) {
+    const JointFriction& f = s.friction[j];
+    if (model == FrictionModel::eq7) {
+      out.insert(out.end(), {f.Fc, f.beta});
+    } else if (model == FrictionModel::eq4) {
+      out.insert(out.end(), {f.Fc, f.Fs, f.qds, f.beta});
+    } else {
+      throw InputError("the survey study runs Eq. 7 and Eq. 4");
+    }
+  }
+  return out;
+}
+
+double friction_torque(FrictionModel model, const double* theta, double qd) {
+  if (model == FrictionModel::eq4) {
+    return NonlinearFriction<NonlinearFrictionModel::eq4>::torque(theta, qd, static_cast<double*>(nullptr));
+  }
+  return theta[0] * (qd > 0 ? 1.0 : (qd < 0 ? -1.0 : 0.0)) + theta[1] * qd;
+}
+
+Indices evaluate(const Estimate& est, const Scenario& scenario, const Eigen::MatrixXd& tau,
+                 const std::array<double, 6>& tau_max) {
+  Indices x;
+  const Eigen::VectorXd set = set_standard();
+  auto e_d = [&](const Eigen::VectorXd& phi) {
+    double sum = 0;
+    for (int l = 0; l < kLinks; ++l) {
+      const auto s = physical_parameters(set.data() + 10 * l);
+      const auto e = physical_parameters(phi.data() + 10 * l);
+      sum += mean_relative_error(s.data(), e.data(), 10, nullptr);
+    }
+    return sum / kLinks;
+  };
+  x.e_d = e_d(est.standard);
+  x.e_d_prior = e_d(est.standard_prior);
+  const std::vector<double> f = set_friction(scenario, est.model);
+  if (f.size() != est.friction.size()) throw InputError("estimate has the wrong number of friction parameters");
+  x.e_f = mean_relative_error(f.data(), est.friction.data(), static_cast<int>(f.size()), nullptr);
+  const Eigen::VectorXd set_b = base_map() * set;
+  x.e_b = mean_relative_error(set_b.data(), est.base.data(), kBase, nullptr);
+  // Torque error normalised per joint by its maximum driving torque, pooled over joints and samples.
+  const double n = static_cast<double>(tau.size());
+  double sum = 0, sum_abs = 0, sum_sq = 0;
+  for (Eigen::Index s = 0; s < tau.rows(); ++s) {
+    for (int j = 0; j < 6; ++j) {
+      const double e = (tau(s, j) - est.tau_hat(s, j)) / tau_max[j];
+      sum += e;
+      sum_abs += std::fabs(e);
+      sum_sq += e * e;
+    }
+  }
+  const double mean = sum / n;
+  x.e_T = std::fabs(mean);
+  x.e_T_abs = sum_abs / n;
+  x.e_T_std = std::sqrt(std::max(0.0, sum_sq / n - mean * mean) * n / std::max(n - 1.0, 1.0));
+  x.J_e = x.e_d + x.e_f + x.e_T + x.e_T_std;
+  x.J_e_prior = x.e_d_prior + x.e_f + x.e_T + x.e_T_std;
+  return x;
+}
+
+char level(double value, double a, double b) {
+  return value < a ? 'A' : (value < b ? 'B' : 'C');
+}
+
+}  // namespace dyncal::host::survey

@@ -1,0 +1,157 @@
+#include "dyncal_host/survey/survey_data.hpp"
+
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <random>
+#include <string>
+
+#include "dyncal/identification_model.hpp"
+#include "dyncal/parameter_table.hpp"
+#include "dyncal/table_check.hpp"
+#include "dyncal_host/calibrate.hpp"
+#include "dyncal_host/input_error.hpp"
+#include "er20/robot.hpp"
+
+namespace dyncal::host::survey {
+namespace {
+
+using Robot = dyncal::generated::er20::Robot;
+using Model7 = IdentificationModel<Robot, kFrictionEq7>;
+
+/// A scratch file for the drive's simulated flash (removed again by the caller).
+std::string scratch_table_path(std::uint64_t seed) {
+  static int counter = 0;
+  return (std::filesystem::temp_directory_path() / ("dyncal_survey_" + std::to_string(::getpid()) + "_" +
+                                                    std::to_string(seed) + "_" + std::to_string(counter++) + ".bin"))
+      .string();
+}
+
+/// The control law's feed-forward table: the set base parameters and the set Fc, beta (Eq. 7 part
+/// of the set friction), as Fig. 3 ("the inverse dynamic and friction model also takes phi_s").
+std::vector<std::uint8_t> set_parameter_table(const Scenario& s) {
+  Eigen::Matrix<double, Robot::kNumStandard, 1> phi_std;
+  for (int i = 0; i < Robot::kNumStandard; ++i) phi_std[i] = dyncal::generated::er20::kNominalStandard[i];
+  Model7::ParamVector<double> phi = Model7::ParamVector<double>::Zero();
+  Eigen::Matrix<double, Robot::kNumBase, 1> phi_b;
+  dyncal::generated::er20::standard_to_base(phi_std, phi_b);
+  phi.head<Robot::kNumBase>() = phi_b;
+  for (int i = Robot::kNumBase; i < Model7::kNumParams; ++i) {
+    const ParamInfo info = Model7::info(i);
+    const JointFriction& f = s.friction[info.joint - 1];
+    phi[i] = info.term == term::coulomb ? f.Fc : f.beta;
+  }
+  ParameterTable t;
+  make_table<Model7>(phi, t);
+  std::vector<std::uint8_t> bytes(kTableMaxBytes);
+  int size = 0;
+  if (encode_table(t, bytes.data(), static_cast<int>(bytes.size()), &size) != TableStatus::ok) {
+    throw InputError("cannot encode the set-parameter table");
+  }
+  bytes.resize(static_cast<size_t>(size));
+  return bytes;
+}
+
+/// Plays `trajectory` once (`periods`) on a drive with `scenario`, active table `table`, and
+/// returns the plant samples. plant_standard / gains: overrides (empty / nullptr: the drive's own).
+std::vector<SimulatedDrive::PlantSample> play(
+    const RobotDescription& robot, const Scenario& scenario, const DriveTrajectory& trajectory, int periods,
+    double rate_hz, const std::vector<std::uint8_t>& table, const std::vector<double>& plant_standard,
+    const std::array<double, kDriveJoints>* kp, const std::array<double, kDriveJoints>* kd,
+    std::array<double, kDriveJoints>* kp_out = nullptr, std::array<double, kDriveJoints>* kd_out = nullptr) {
+  const std::string path = scratch_table_path(scenario.seed);
+  std::filesystem::remove(path);
+  std::vector<SimulatedDrive::PlantSample> out;
+  {
+    SimulatedDrive drive(robot, scenario, path);
+    const TableStatus st = drive.commit(table.data(), static_cast<int>(table.size()));
+    if (st != TableStatus::ok) throw InputError(std::string("survey drive refused its table: ") + to_string(st));
+    drive.trajectory = trajectory;
+    drive.periods = periods;
+    drive.sample_rate_hz = rate_hz;
+    drive.lockstep = false;
+    if (!plant_standard.empty()) drive.set_plant_parameters(plant_standard);
+    if (kp && kd) drive.fix_gains(*kp, *kd);
+    drive.plant_log = &out;
+    drive.start();
+    while (drive.state() == modbus_map::DriveState::playing) {
+      drive.step();
+      if (!drive.ring().empty()) drive.ack(drive.ring().back().seq + 1);  // only the plant log is used
+    }
+    if (kp_out) *kp_out = drive.kp();
+    if (kd_out) *kd_out = drive.kd();
+  }
+  std::filesystem::remove(path);
+  return out;
+}
+
+}  // namespace
+
+SurveyData simulate_survey_data(const RobotDescription& robot, const SurveyDataOptions& o) {
+  if (robot.name != Robot::kName) throw InputError("the survey study runs on the er20 arm");
+  if (!(o.sample_rate_hz > 0) || o.periods < 1) throw InputError("survey data: sample rate > 0 and periods >= 1");
+  SurveyData d;
+  d.scenario = default_scenario(robot);
+  d.scenario.seed = o.seed;
+  d.scenario.sample_rate_hz = o.sample_rate_hz;
+  d.scenario.encoder_counts = 0;  // exact q_m (Sec. 6.1 step 1); position noise is studied separately
+  if (!o.torque_noise) d.scenario.tau_noise_std.fill(0.0);
+  for (int j = 0; j < kDriveJoints; ++j) {
+    d.scenario.friction[j].model = o.friction;  // Fc, beta, Fs, qds of robot.json
+    d.scenario.effects[j].rotor_inertia = 0.0;  // the survey's model (Eq. 2) has none
+  }
+  d.table = set_parameter_table(d.scenario);
+  const auto traj = default_excitation(robot, 0.1, 5, 16, o.seed, &d.trajectory_cond);
+  d.trajectory.f_f = traj.f_f;
+  d.trajectory.harmonics = traj.harmonics;
+  for (int j = 0; j < kDriveJoints; ++j) {
+    d.trajectory.q0[j] = traj.q0[j];
+    for (int l = 0; l < modbus_map::kMaxHarmonics; ++l) {
+      d.trajectory.a(j, l) = traj.a(j, l);
+      d.trajectory.b(j, l) = traj.b(j, l);
+    }
+  }
+  d.sample_rate_hz = o.sample_rate_hz;
+  const auto samples =
+      play(robot, d.scenario, d.trajectory, o.periods, o.sample_rate_hz, d.table, {}, nullptr, nullptr, &d.kp, &d.kd);
+  const Eigen::Index S = static_cast<Eigen::Index>(samples.size());
+  d.t.resize(S);
+  d.q.resize(S, kDriveJoints);
+  d.qd.resize(S, kDriveJoints);
+  d.qdd.resize(S, kDriveJoints);
+  d.tau.resize(S, kDriveJoints);
+  d.tau_cmd.resize(S, kDriveJoints);
+  for (Eigen::Index s = 0; s < S; ++s) {
+    const auto& p = samples[static_cast<size_t>(s)];
+    d.t[s] = p.t;
+    for (int j = 0; j < kDriveJoints; ++j) {
+      d.q(s, j) = p.q[j];
+      d.qd(s, j) = p.qd[j];
+      d.qdd(s, j) = p.qdd[j];
+      d.tau(s, j) = p.tau_measured[j];
+      d.tau_cmd(s, j) = p.tau_cmd[j];
+    }
+  }
+  return d;
+}
+
+std::vector<SimulatedDrive::PlantSample> simulate_closed_loop(const RobotDescription& robot, const SurveyData& data,
+                                                              const std::vector<double>& phi_standard,
+                                                              const std::array<double, kDriveJoints>& Fc,
+                                                              const std::array<double, kDriveJoints>& beta) {
+  Scenario s = data.scenario;
+  s.tau_noise_std.fill(0.0);
+  for (int j = 0; j < kDriveJoints; ++j) {
+    s.friction[j] = JointFriction{};
+    s.friction[j].model = FrictionModel::eq7;
+    s.friction[j].Fc = Fc[j];
+    s.friction[j].beta = beta[j];
+  }
+  const int periods = static_cast<int>(
+      std::lround(static_cast<double>(data.t.size()) / (data.trajectory.period() * data.sample_rate_hz)));
+  return play(robot, s, data.trajectory, std::max(periods, 1), data.sample_rate_hz, data.table, phi_standard, &data.kp,
+              &data.kd);
+}
+
+}  // namespace dyncal::host::survey

@@ -1,0 +1,148 @@
+// The survey study's parts against independent references: the base map against the generated
+// regressors, the physical parametrisation against the survey's published Table 5 set column, each
+// method against the set parameters of noise-free simulated data, and the physically consistent
+// result's pseudo-inertias.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "dyncal_host/robot_description.hpp"
+#include "dyncal_host/survey/methods.hpp"
+#include "dyncal_host/survey/physically_consistent.hpp"
+#include "dyncal_host/survey/standard_parameters.hpp"
+#include "er20/robot.hpp"
+
+namespace {
+
+using namespace dyncal::host;
+using namespace dyncal::host::survey;
+using Robot = dyncal::generated::er20::Robot;
+using Vec6 = Eigen::Matrix<double, 6, 1>;
+
+const std::array<double, 6> kTauMax{1200, 1300, 600, 110, 110, 60};
+
+const SurveyData& data(FrictionModel model) {
+  static std::map<FrictionModel, SurveyData> cache;
+  auto it = cache.find(model);
+  if (it == cache.end()) {
+    SurveyDataOptions o;
+    o.friction = model;
+    o.periods = 1;
+    it = cache.emplace(model, simulate_survey_data(load_robot(default_robots_dir(), "er20"), o)).first;
+  }
+  return it->second;
+}
+
+MethodSettings settings() {
+  MethodSettings s;
+  s.prior = cad_prior(0.2, 1);
+  return s;
+}
+
+TEST(SurveyParameters, BaseMapReproducesTheBaseRegressorTorque) {
+  // Y_std phi == Y_b (G phi) at random states and random standard parameters.
+  std::srand(3);
+  for (int k = 0; k < 20; ++k) {
+    const Vec6 q = Vec6::Random() * 2, qd = Vec6::Random() * 2, qdd = Vec6::Random() * 5;
+    const Eigen::VectorXd phi = Eigen::VectorXd::Random(kStandard);
+    Eigen::Matrix<double, 6, kStandard> Ys;
+    Eigen::Matrix<double, 6, kBase> Yb;
+    Robot::standard_regressor(q, qd, qdd, Ys);
+    Robot::base_regressor(q, qd, qdd, Yb);
+    EXPECT_LT((Ys * phi - Yb * (base_map() * phi)).norm(), 1e-9 * (1 + (Ys * phi).norm()));
+  }
+}
+
+TEST(SurveyParameters, PriorAnchoredStandardParametersHaveTheGivenBaseParameters) {
+  const Eigen::VectorXd prior = cad_prior(0.2, 5);
+  const Eigen::VectorXd phi_b = base_map() * set_standard();
+  const Eigen::VectorXd phi = standard_from_base(phi_b, prior, 0.2);
+  EXPECT_LT((base_map() * phi - phi_b).norm(), 1e-9 * phi_b.norm());
+  EXPECT_LT((base_map() * minimum_norm_standard(phi_b) - phi_b).norm(), 1e-9 * phi_b.norm());
+  // Closer to the set values than the minimum-norm solution (the prior carries information).
+  EXPECT_LT((phi - set_standard()).norm(), (minimum_norm_standard(phi_b) - set_standard()).norm());
+}
+
+TEST(SurveyParameters, PhysicalParametersOfLink3AreTheSurveysTable5SetColumn) {
+  std::ifstream in(std::string(DYNCAL_SOURCE_DIR) + "/robots/er20/survey_published.json");
+  const nlohmann::json pub = nlohmann::json::parse(in);
+  const auto& set = pub["table5_joint3_linear"]["set"];
+  const Eigen::VectorXd phi = set_standard();
+  const auto p = physical_parameters(phi.data() + 20);
+  for (int i = 0; i < 10; ++i) EXPECT_NEAR(p[i], set[i].get<double>(), 1e-9) << i;
+  // Round trip through the pseudo-inertia.
+  double back[10];
+  standard_from_pseudo_inertia(pseudo_inertia(phi.data() + 20), back);
+  for (int i = 0; i < 10; ++i) EXPECT_NEAR(back[i], phi[20 + i], 1e-12);
+}
+
+TEST(SurveyIndices, PerfectEstimateHasZeroErrorAndNoiseShowsInTheStd) {
+  const SurveyData& d = data(FrictionModel::eq7);
+  Estimate e;
+  e.model = FrictionModel::eq7;
+  e.base = base_map() * set_standard();
+  e.standard = e.standard_prior = set_standard();
+  e.friction = set_friction(d.scenario, FrictionModel::eq7);
+  complete_estimate(e, d, settings());
+  const Indices x = evaluate(e, d.scenario, d.tau_cmd, kTauMax);
+  EXPECT_LT(x.J_e, 1e-9);
+  EXPECT_LT(x.e_b, 1e-9);
+  // tau_cmd of the drive is exactly Eq. 2 + Eq. 7 at the plant state: e_T_Std is the model error.
+  EXPECT_LT(x.e_T_std, 1e-9);
+}
+
+TEST(SurveyMethods, PseudoInverseKalmanAndForgettingRecoverBaseParametersFromNoiseFreeData) {
+  const SurveyData& d = data(FrictionModel::eq7);
+  for (const Estimate& e :
+       {pseudo_inverse(d, settings()), kalman_filter(d, settings()), exponential_forgetting(d, settings())}) {
+    const Indices x = evaluate(e, d.scenario, d.tau, kTauMax);
+    EXPECT_LT(x.e_b, 1e-4) << e.method;  // base parameters: identifiable, so recovered
+    EXPECT_LT(x.e_f, 1e-4) << e.method;
+    EXPECT_LT(x.e_T_std, 1e-6) << e.method;
+    // Standard parameters are not identifiable: the minimum-norm ones are far off (survey Table 5).
+    EXPECT_GT(x.e_d, 1.0) << e.method;
+    EXPECT_LT(x.e_d_prior, 0.5) << e.method;
+  }
+}
+
+TEST(SurveyMethods, ForgettingEkfFitsStribeckFrictionFromNoiseFreeData) {
+  const SurveyData& d = data(FrictionModel::eq4);
+  const Estimate e = extended_kalman_filter(d, settings(), 0.999);
+  const Indices x = evaluate(e, d.scenario, d.tau, kTauMax);
+  // 1 000 samples only: torque fitted, friction within 50 % on average (Fc, beta within 2 %).
+  EXPECT_LT(x.e_T_std, 0.005);
+  EXPECT_LT(x.e_f, 0.5);
+  const auto f = set_friction(d.scenario, FrictionModel::eq4);
+  for (int j = 0; j < 6; ++j) {
+    EXPECT_NEAR(e.friction[4 * j + 3], f[4 * j + 3], 0.02 * f[4 * j + 3]) << "beta" << j + 1;
+  }
+}
+
+TEST(SurveyMethods, PhysicallyConsistentLsHasPositiveDefinitePseudoInertiasAndFitsTheData) {
+  for (FrictionModel m : {FrictionModel::eq7, FrictionModel::eq4}) {
+    const SurveyData& d = data(m);
+    const Estimate e = physically_consistent_ls(d, m, settings());
+    // Positive definite by construction (J = L L^T, diag(L) = exp(.)): from the factor itself, and
+    // from the standard parameters it is expressed in up to their rounding.
+    ASSERT_EQ(e.pseudo_inertia_min_eigenvalue.size(), 6u);
+    for (double ev : e.pseudo_inertia_min_eigenvalue) EXPECT_GT(ev, 0.0);
+    const auto from_standard = pseudo_inertia_min_eigenvalues(e.standard);
+    for (int l = 0; l < 6; ++l) EXPECT_GT(from_standard[l], -1e-12 * e.standard.segment(10 * l, 10).norm()) << l;
+    const Indices x = evaluate(e, d.scenario, d.tau, kTauMax);
+    // The set link 3 is not physically consistent (robots/er20), so the fit cannot be exact.
+    EXPECT_LT(x.e_T_std, 1e-3);
+    EXPECT_LT(x.e_f, 0.05);
+    EXPECT_LT(x.e_d, 0.3);
+    EXPECT_LT(x.J_e, 1.0);  // survey Table 2 level A
+    // The prior alone (projected onto the consistent set) is worse than the estimate.
+    Estimate prior_only = e;
+    prior_only.standard = settings().prior;
+    EXPECT_LT(x.e_d, evaluate(prior_only, d.scenario, d.tau, kTauMax).e_d);
+  }
+  // The set parameters themselves are not consistent: link 3's pseudo-inertia is indefinite.
+  EXPECT_LT(pseudo_inertia_min_eigenvalues(set_standard())[2], 0.0);
+}
+
+}  // namespace
