@@ -79,6 +79,27 @@ Estimate pseudo_inverse(const SurveyData& d, const MethodSettings& settings) {
   return e;
 }
 
+namespace {
+
+/// One pass of a lib/ Eq. 7 updater over the samples in order; `update(filter, K, tau)` feeds one.
+template <class Filter, class Update>
+Estimate run_linear_recursive(const SurveyData& d, const MethodSettings& settings, Filter& filter, Update update,
+                              const char* method, std::chrono::steady_clock::time_point t0) {
+  Model7::Regressor<double> K;
+  int rejected = 0;
+  for (Eigen::Index s = 0; s < d.q.rows(); ++s) {
+    Model7::regressor(row(d.q, s), row(d.qd, s), row(d.qdd, s), Vec6::Zero().eval(), K);
+    if (update(filter, K, row(d.tau, s)) != UpdateStatus::ok) ++rejected;
+  }
+  Estimate e = from_model7(filter.estimate(), method);
+  e.seconds = seconds_since(t0);
+  if (rejected) e.note = std::to_string(rejected) + " samples rejected";
+  complete_estimate(e, d, settings);
+  return e;
+}
+
+}  // namespace
+
 Estimate kalman_filter(const SurveyData& d, const MethodSettings& settings) {
   const auto t0 = std::chrono::steady_clock::now();
   auto kf = std::make_unique<KalmanFilter<double, P7, 6>>();
@@ -87,17 +108,8 @@ Estimate kalman_filter(const SurveyData& d, const MethodSettings& settings) {
     throw InputError("KF reset failed");
   Vec6 r;
   for (int j = 0; j < 6; ++j) r[j] = settings.sigma[j] * settings.sigma[j];
-  Model7::Regressor<double> K;
-  int rejected = 0;
-  for (Eigen::Index s = 0; s < d.q.rows(); ++s) {
-    Model7::regressor(row(d.q, s), row(d.qd, s), row(d.qdd, s), Vec6::Zero().eval(), K);
-    if (kf->update(K, row(d.tau, s), r) != UpdateStatus::ok) ++rejected;
-  }
-  Estimate e = from_model7(kf->estimate(), "Kalman");
-  e.seconds = seconds_since(t0);
-  if (rejected) e.note = std::to_string(rejected) + " samples rejected";
-  complete_estimate(e, d, settings);
-  return e;
+  return run_linear_recursive(
+      d, settings, *kf, [&](auto& f, const auto& K, const Vec6& tau) { return f.update(K, tau, r); }, "Kalman", t0);
 }
 
 Estimate exponential_forgetting(const SurveyData& d, const MethodSettings& settings) {
@@ -108,17 +120,9 @@ Estimate exponential_forgetting(const SurveyData& d, const MethodSettings& setti
     throw InputError("RLS reset failed");
   Vec6 w;
   for (int j = 0; j < 6; ++j) w[j] = 1.0 / settings.sigma[j];
-  Model7::Regressor<double> K;
-  int rejected = 0;
-  for (Eigen::Index s = 0; s < d.q.rows(); ++s) {
-    Model7::regressor(row(d.q, s), row(d.qd, s), row(d.qdd, s), Vec6::Zero().eval(), K);
-    if (rls->update(K, row(d.tau, s), w) != UpdateStatus::ok) ++rejected;
-  }
-  Estimate e = from_model7(rls->estimate(), "exponential forgetting");
-  e.seconds = seconds_since(t0);
-  if (rejected) e.note = std::to_string(rejected) + " samples rejected";
-  complete_estimate(e, d, settings);
-  return e;
+  return run_linear_recursive(
+      d, settings, *rls, [&](auto& f, const auto& K, const Vec6& tau) { return f.update(K, tau, w); },
+      "exponential forgetting", t0);
 }
 
 Estimate extended_kalman_filter(const SurveyData& d, const MethodSettings& settings, double mu) {
