@@ -179,6 +179,43 @@ TEST(KalmanFilter, RegressorOutsideItsStructureIsRejected) {
   EXPECT_EQ(kf->update(s.K[3], s.tau[3], JointVec::Ones()), UpdateStatus::ok);
 }
 
+// The float update (4-row blocks of V, the trailing term block in one pass) with a column the
+// structure declares all zero: it must follow the double run of the same data, and a nonzero entry
+// in that column must be refused.
+TEST(KalmanFilter, FloatBlockUpdateWithZeroColumnFollowsDouble) {
+  const ParamVec truth = dyncal::test::er20_truth<kTerms>();
+  const Samples s = make_samples(300, 0.01, truth, 1.0);
+  dyncal::RegressorStructure<P> structure = Model::structure();
+  structure.first[0] = 1;  // column 0 declared all zero (and zeroed below)
+  structure.last[0] = 0;
+  using ParamVecF = Eigen::Matrix<float, P, 1>;
+  auto kf_f = std::make_unique<dyncal::KalmanFilter<float, P, N>>();
+  auto kf_d = std::make_unique<dyncal::KalmanFilter<double, P, N>>();
+  ASSERT_EQ(kf_f->reset(ParamVecF::Zero(), ParamVecF::Constant(1e4f), structure), UpdateStatus::ok);
+  ASSERT_EQ(kf_d->reset(ParamVec::Zero(), ParamVec::Constant(1e4), structure), UpdateStatus::ok);
+  const JointVec r = JointVec::Ones();
+  for (size_t i = 0; i < s.K.size(); ++i) {
+    Eigen::Matrix<double, N, P> K = s.K[i];
+    K.col(0).setZero();
+    ASSERT_EQ(kf_d->update(K, s.tau[i], r), UpdateStatus::ok);
+    ASSERT_EQ(kf_f->update(K.cast<float>(), s.tau[i].cast<float>(), r.cast<float>()), UpdateStatus::ok);
+  }
+  // Torque predicted over the samples by the float and the double estimate (float: ~7 digits).
+  double diff = 0, norm = 0;
+  for (size_t i = 0; i < s.K.size(); ++i) {
+    const JointVec t_d = s.K[i] * kf_d->estimate();
+    const JointVec t_f = s.K[i] * kf_f->estimate().cast<double>();
+    diff += (t_f - t_d).squaredNorm();
+    norm += t_d.squaredNorm();
+  }
+  EXPECT_LT(std::sqrt(diff / norm), 1e-3);
+  Eigen::Matrix<float, N, P> K = s.K[5].cast<float>();
+  K(2, 0) = 1.0f;
+  const ParamVecF before = kf_f->estimate();
+  EXPECT_EQ(kf_f->update(K, s.tau[5].cast<float>(), r.cast<float>()), UpdateStatus::invalid_argument);
+  EXPECT_EQ(kf_f->estimate(), before);
+}
+
 // Survey Fig. 4: beta of joint 3 changes as a ramp or as a second-order function of the
 // iteration; forgetting RLS must track it more closely than the Kalman filter.
 double tracking_error(bool use_rls, bool second_order) {

@@ -3,7 +3,10 @@
 #include <Eigen/Core>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
+#include <type_traits>
 
+#include "arm_float_kernels.hpp"
 #include "regressor_structure.hpp"
 #include "status.hpp"
 
@@ -12,10 +15,13 @@
 #if defined(__clang__)
 #define DYNCAL_ALWAYS_INLINE inline __attribute__((always_inline))
 #define DYNCAL_UNROLL _Pragma("unroll")
+#define DYNCAL_ALWAYS_INLINE_LAMBDA __attribute__((always_inline))
 #elif defined(__GNUC__)
 #define DYNCAL_ALWAYS_INLINE inline __attribute__((always_inline))
 #define DYNCAL_UNROLL _Pragma("GCC unroll 16")
+#define DYNCAL_ALWAYS_INLINE_LAMBDA __attribute__((always_inline))
 #else
+#define DYNCAL_ALWAYS_INLINE_LAMBDA
 #define DYNCAL_ALWAYS_INLINE inline
 #define DYNCAL_UNROLL
 #endif
@@ -29,7 +35,10 @@ namespace dyncal {
 ///   phi += W L^-1 e,  P <- s (P - W W^T)   (s = 1, or 1/mu for exponential forgetting).
 /// This is the same update as N sequential scalar updates (R diagonal) but passes over P once.
 /// Work per sample: P * nnz(H) for V (the structural zeros of H — RegressorStructure — are
-/// skipped) and N * P(P+1)/2 for the downdate; no heap, no exceptions.
+/// skipped) and N * P(P+1)/2 for the downdate; no heap, no exceptions. V is built four rows of P
+/// at a time (two in double) over runs of columns with the same rows of H, and a trailing block of
+/// per-joint term columns (friction) in one unrolled pass. In float with N = 6 on an ARMv7E-M core
+/// the inner loops are the assembler kernels of arm_float_kernels.hpp.
 ///
 /// Safeguards (every failure leaves phi and P exactly as they were): non-finite input, an entry
 /// of H outside its declared structure, r <= 0, S not positive definite, a diagonal entry of the
@@ -68,12 +77,28 @@ class PackedCovariance {
       }
     }
     num_runs_ = runs;
-    num_outside_ = 0;
-    for (int c = 0; c < P; ++c) {
-      for (int k = 0; k < N; ++k) {
-        if (k < structure.first[c] || k > structure.last[c])
-          outside_[num_outside_++] = static_cast<std::uint16_t>(c * N + k);
+    // A trailing term block (friction and other per-joint terms): M columns per joint, joint j's on
+    // row j only, joints in order. V takes it in one unrolled pass instead of N runs.
+    term_columns_ = 0;
+    num_base_runs_ = runs;
+    for (int m = kMaxTermColumns; m >= 1; --m) {
+      const int b = P - m * N;
+      if (b < 0) continue;
+      bool block = true;
+      for (int c = b; c < P && block; ++c)
+        block = structure.first[c] == (c - b) / m && structure.last[c] == (c - b) / m;
+      if (!block) continue;
+      int r = 0;
+      while (r < runs && runs_[r].begin < b) ++r;
+      if (r < runs && runs_[r].begin == b) {
+        term_columns_ = m;
+        num_base_runs_ = r;
       }
+      break;
+    }
+    num_zero_columns_ = 0;
+    for (int c = 0; c < P; ++c) {
+      if (structure.first[c] > structure.last[c]) zero_columns_[num_zero_columns_++] = static_cast<std::uint8_t>(c);
     }
     structure_ = structure;
     for (int k = 0; k < kPacked; ++k) p_[k] = Scalar(0);
@@ -89,17 +114,34 @@ class PackedCovariance {
   UpdateStatus assimilate(const Regressor& H, const MeasVector& y, const MeasVector& r, Scalar gate, Scalar scale,
                           ParamVector& phi) noexcept {
     const Scalar* h = H.data();  // column-major: column c at h + c * N
-    for (int n = 0; n < num_outside_; ++n) {
-      const Scalar x = h[outside_[n]];
-      if (x != Scalar(0)) return std::isfinite(x) ? UpdateStatus::invalid_argument : UpdateStatus::rejected_non_finite;
-    }
-    // Innovation e = y - H phi (non-finite H, y or phi shows up here).
+    // Innovation e = y - H phi over H's structure (non-finite H, y or phi shows up here), and the
+    // bit patterns of every entry outside the structure OR-ed together: any bit but the sign
+    // means a nonzero (or non-finite) entry where the structure promises zero.
     Scalar e[N];
     for (int k = 0; k < N; ++k) e[k] = y[k];
-    for (int c = 0; c < P; ++c) {
-      const Scalar pc = phi[c];
-      for (int k = 0; k < N; ++k) e[k] -= h[c * N + k] * pc;
+    Bits outside = 0;
+    for (int n = 0; n < num_runs_; ++n) {
+      const Run& u = runs_[n];
+      with_rows(u.code, [&](auto r0, auto r1) DYNCAL_ALWAYS_INLINE_LAMBDA {
+        constexpr int R0 = decltype(r0)::value, R1 = decltype(r1)::value;
+        for (int c = u.begin; c < u.end; ++c) {
+          const Scalar pc = phi[c];
+          const Scalar* hc = h + c * N;
+          DYNCAL_UNROLL
+          for (int k = 0; k < N; ++k) {
+            if (k >= R0 && k <= R1) {
+              e[k] -= hc[k] * pc;
+            } else {
+              outside |= bits(hc[k]);
+            }
+          }
+        }
+      });
     }
+    for (int n = 0; n < num_zero_columns_; ++n) {
+      for (int k = 0; k < N; ++k) outside |= bits(h[zero_columns_[n] * N + k]);
+    }
+    if ((outside << 1) != 0) return outside_status(h);
     for (int k = 0; k < N; ++k) {
       if (!std::isfinite(e[k]) || !std::isfinite(r[k])) return UpdateStatus::rejected_non_finite;
       if (!(r[k] > Scalar(0))) return UpdateStatus::not_positive_definite;
@@ -111,12 +153,18 @@ class PackedCovariance {
       for (int s = 0; s <= k; ++s) S[k][s] = Scalar(0);
       S[k][k] = r[k];
     }
-    for (int c = 0; c < P; ++c) {
-      const int f = structure_.first[c], l = structure_.last[c];
-      for (int k = f; k <= l; ++k) {
-        const Scalar hk = h[c * N + k];
-        for (int s = 0; s <= k; ++s) S[k][s] += hk * v_[c][s];
-      }
+    for (int n = 0; n < num_runs_; ++n) {
+      const Run& u = runs_[n];
+      with_rows(u.code, [&](auto r0, auto r1) DYNCAL_ALWAYS_INLINE_LAMBDA {
+        for (int c = u.begin; c < u.end; ++c) {
+          DYNCAL_UNROLL
+          for (int k = decltype(r0)::value; k <= decltype(r1)::value; ++k) {
+            const Scalar hk = h[c * N + k];
+            DYNCAL_UNROLL
+            for (int t = 0; t <= k; ++t) S[k][t] += hk * v_[c][t];
+          }
+        }
+      });
     }
     for (int k = 0; k < N; ++k) {
       for (int s = 0; s <= k; ++s) {
@@ -154,8 +202,10 @@ class PackedCovariance {
     for (int i = 0; i < P; ++i) {
       Scalar* w = v_[i];
       Scalar dphi = Scalar(0), ww = Scalar(0);
+      DYNCAL_UNROLL
       for (int k = 0; k < N; ++k) {
         Scalar x = w[k];
+        DYNCAL_UNROLL
         for (int t = 0; t < k; ++t) x -= S[k][t] * w[t];
         x *= inv_d_[k];
         w[k] = x;
@@ -194,100 +244,221 @@ class PackedCovariance {
   }
 
  private:
+  /// The first entry of H outside the structure that is not zero: invalid_argument if finite,
+  /// rejected_non_finite otherwise (ok if there is none).
+  UpdateStatus outside_status(const Scalar* h) const noexcept {
+    for (int c = 0; c < P; ++c) {
+      for (int k = 0; k < N; ++k) {
+        const Scalar x = h[c * N + k];
+        if ((k < structure_.first[c] || k > structure_.last[c]) && x != Scalar(0))
+          return std::isfinite(x) ? UpdateStatus::invalid_argument : UpdateStatus::rejected_non_finite;
+      }
+    }
+    return UpdateStatus::ok;
+  }
+
+  using Bits = std::conditional_t<sizeof(Scalar) == 8, std::uint64_t, std::uint32_t>;
+  static_assert(sizeof(Bits) == sizeof(Scalar), "Scalar must be float or double");
+  static Bits bits(Scalar x) noexcept {
+    Bits b;
+    std::memcpy(&b, &x, sizeof b);
+    return b;
+  }
+
   struct Run {
     std::uint8_t begin, end, code;
   };
+  /// The ARMv7E-M float kernels for V's runs (four rows, six measurements).
+  template <int B>
+  static constexpr bool kAsmV = (kArmFloatKernels && std::is_same_v<Scalar, float> && N == 6 && B == 4);
 
-  template <int R0, int R1>
-  static DYNCAL_ALWAYS_INLINE void mac2(Scalar p0, Scalar p1, const Scalar* h, Scalar* a0, Scalar* a1) noexcept {
+  /// Rows of P per block in V = P H^T: the accumulators (kBlock x N) stay in FPU registers
+  /// (32 single-precision on the M4F; 16 double on the M7).
+  static constexpr int kBlock = sizeof(Scalar) <= 4 ? 4 : 2;
+
+  /// a[r][k] += p[r] * h[k] for the B rows of a block and the rows R0..R1 of one column of H.
+  template <int B, int R0, int R1>
+  static DYNCAL_ALWAYS_INLINE void mac(const Scalar (&p)[B], const Scalar* h, Scalar (&a)[B][N]) noexcept {
     DYNCAL_UNROLL
     for (int k = R0; k <= R1; ++k) {
-      a0[k] += p0 * h[k];
-      a1[k] += p1 * h[k];
+      const Scalar hk = h[k];
+      DYNCAL_UNROLL
+      for (int r = 0; r < B; ++r) a[r][k] += p[r] * hk;
     }
   }
 
-  /// Adds columns [b, e) of one run (rows R0..R1 of H) to rows i and i + 1 of V.
-  template <int R0, int R1>
-  DYNCAL_ALWAYS_INLINE void run2(int i, int b, int e, const Scalar* H, Scalar* a0, Scalar* a1) const noexcept {
-    if (b >= i + 2) {  // the whole run right of the 2 x 2 diagonal block: rows i and i + 1, contiguous
-      const Scalar* r0 = p_ + row_[i] + b;
-      const Scalar* r1 = p_ + row_[i + 1] + b;
-      const Scalar* h = H + b * N;
-      for (int n = e - b; n > 0; --n, h += N) mac2<R0, R1>(*r0++, *r1++, h, a0, a1);
+  /// Columns [b, e) of one run (H rows R0..R1), all left of rows i..i+B-1, added to those rows
+  /// of V: P(c, i..i+B-1) are neighbours in packed row c.
+  template <int B, int R0, int R1>
+  DYNCAL_ALWAYS_INLINE void run_left(int i, int b, int e, const Scalar* H, Scalar (&a)[B][N]) const noexcept {
+    if constexpr (kAsmV<B>) {
+      v_left_float6<R0, R1>(&a[0][0], p_ + row_[b] + i, P - 1 - b, H + b * N, e - b);
       return;
     }
-    int c = b;
-    const int lower_end = e < i ? e : i;
-    if (c < lower_end) {  // P(c, i) and P(c, i + 1) are neighbours in row c
-      const Scalar* q = p_ + row_[c] + i;
-      const Scalar* h = H + c * N;
-      for (; c < lower_end; ++c, h += N) {
-        mac2<R0, R1>(q[0], q[1], h, a0, a1);
-        q += P - 1 - c;
-      }
-    }
-    for (; c < e && c < i + 2; ++c) {  // the 2 x 2 diagonal corner
-      const Scalar pii = p_[row_[i] + i], pij = p_[row_[i] + i + 1], pjj = p_[row_[i + 1] + i + 1];
-      if (c == i) {
-        mac2<R0, R1>(pii, pij, H + c * N, a0, a1);
-      } else {
-        mac2<R0, R1>(pij, pjj, H + c * N, a0, a1);
-      }
-    }
-    if (c < e) {  // rows i and i + 1, contiguous
-      const Scalar* r0 = p_ + row_[i] + c;
-      const Scalar* r1 = p_ + row_[i + 1] + c;
-      const Scalar* h = H + c * N;
-      for (; c < e; ++c, h += N) mac2<R0, R1>(*r0++, *r1++, h, a0, a1);
+    const Scalar* h = H + b * N;
+    const Scalar* q = p_ + row_[b] + i;
+    int stride = P - 1 - b;
+    for (int n = e - b; n > 0; --n, h += N) {
+      Scalar p[B];
+      DYNCAL_UNROLL
+      for (int r = 0; r < B; ++r) p[r] = q[r];
+      mac<B, R0, R1>(p, h, a);
+      q += stride--;
     }
   }
 
-  template <int Code>
-  DYNCAL_ALWAYS_INLINE void dispatch2(int code, int i, int b, int e, const Scalar* H, Scalar* a0,
-                                      Scalar* a1) const noexcept {
+  /// As run_left for columns [b, e) right of the block: the B rows of P are contiguous there.
+  template <int B, int R0, int R1>
+  DYNCAL_ALWAYS_INLINE void run_right(int i, int b, int e, const Scalar* H, Scalar (&a)[B][N]) const noexcept {
+    if constexpr (kAsmV<B>) {
+      v_right_float6<R0, R1>(&a[0][0], p_ + row_[i] + b, p_ + row_[i + 1] + b, p_ + row_[i + 2] + b,
+                             p_ + row_[i + 3] + b, H + b * N, e - b);
+      return;
+    }
+    const Scalar* h = H + b * N;
+    const Scalar* q[B];
+    DYNCAL_UNROLL
+    for (int r = 0; r < B; ++r) q[r] = p_ + row_[i + r] + b;
+    for (int n = e - b; n > 0; --n, h += N) {
+      Scalar p[B];
+      DYNCAL_UNROLL
+      for (int r = 0; r < B; ++r) p[r] = *q[r]++;
+      mac<B, R0, R1>(p, h, a);
+    }
+  }
+
+  /// Any columns [b, e): the parts left of, inside (the B x B diagonal corner) and right of the block.
+  template <int B, int R0, int R1>
+  DYNCAL_ALWAYS_INLINE void run_any(int i, int b, int e, const Scalar* H, const Scalar (&corner)[B][B],
+                                    Scalar (&a)[B][N]) const noexcept {
+    int c = b;
+    if (c < i) {
+      const int end = e < i ? e : i;
+      run_left<B, R0, R1>(i, c, end, H, a);
+      c = end;
+    }
+    const int corner_end = e < i + B ? e : i + B;
+    if constexpr (kAsmV<B>) {
+      if (c < corner_end) v_dense_float6<R0, R1>(&a[0][0], corner[c - i], H + c * N, corner_end - c);
+      c = corner_end;
+    }
+    for (; c < corner_end; ++c) mac<B, R0, R1>(corner[c - i], H + c * N, a);
+    if (c < e) run_right<B, R0, R1>(i, c, e, H, a);
+  }
+
+  template <int K>
+  using Row = std::integral_constant<int, K>;
+
+  /// Calls f(Row<R0>, Row<R1>) for a run's code: code < N means rows 0..code of H, code >= N the
+  /// single row code - N. The rows are compile-time constants, so f's loops unroll.
+  template <int Code = 0, class F>
+  static DYNCAL_ALWAYS_INLINE void with_rows(int code, F&& f) noexcept {
     if constexpr (Code < 2 * N) {
       if (code == Code) {
         if constexpr (Code < N) {
-          run2<0, Code>(i, b, e, H, a0, a1);
+          f(Row<0>{}, Row<Code>{});
         } else {
-          run2<Code - N, Code - N>(i, b, e, H, a0, a1);
+          f(Row<Code - N>{}, Row<Code - N>{});
         }
       } else {
-        dispatch2<Code + 1>(code, i, b, e, H, a0, a1);
+        with_rows<Code + 1>(code, f);
       }
     }
   }
 
-  /// V = P H^T (rows of v_), two rows of P at a time, skipping H's structural zeros.
+  /// The term block (right of rows i..i+B-1, M columns per joint) added to those rows of V.
+  template <int B, int M>
+  DYNCAL_ALWAYS_INLINE void terms(int i, const Scalar* H, Scalar (&a)[B][N]) const noexcept {
+    constexpr int b = P - M * N;
+    const Scalar* q[B];
+    DYNCAL_UNROLL
+    for (int r = 0; r < B; ++r) q[r] = p_ + row_[i + r] + b;
+    DYNCAL_UNROLL
+    for (int j = 0; j < N; ++j) {
+      DYNCAL_UNROLL
+      for (int t = 0; t < M; ++t) {
+        const Scalar hj = H[(b + j * M + t) * N + j];
+        DYNCAL_UNROLL
+        for (int r = 0; r < B; ++r) a[r][j] += q[r][j * M + t] * hj;
+      }
+    }
+  }
+
+  /// Rows i..i+B-1 of V = P H^T, accumulated over the runs of H's structure (in registers; with
+  /// the ARM kernels in `a`, which each kernel loads and stores with one VLDM / VSTM).
+  template <int B>
+  DYNCAL_ALWAYS_INLINE void block_v(int i, const Scalar* H) noexcept {
+    Scalar corner[B][B];  // corner[s][r] = P(i + r, i + s)
+    for (int r = 0; r < B; ++r) {
+      for (int s = r; s < B; ++s) corner[s][r] = corner[r][s] = p_[row_[i + r] + i + s];
+    }
+    Scalar a[B][N];
+    DYNCAL_UNROLL
+    for (int r = 0; r < B; ++r) {
+      DYNCAL_UNROLL
+      for (int k = 0; k < N; ++k) a[r][k] = Scalar(0);
+    }
+    const int term_begin = P - term_columns_ * N;
+    const bool fast_terms = term_columns_ > 0 && i + B <= term_begin;
+    const int runs = fast_terms ? num_base_runs_ : num_runs_;
+    // Runs are in column order: wholly left of the block, overlapping it, wholly right of it.
+    int n = 0;
+    for (; n < runs && runs_[n].end <= i; ++n) {
+      const Run& u = runs_[n];
+      with_rows(u.code, [&](auto r0, auto r1) DYNCAL_ALWAYS_INLINE_LAMBDA {
+        run_left<B, decltype(r0)::value, decltype(r1)::value>(i, u.begin, u.end, H, a);
+      });
+    }
+    for (; n < runs && runs_[n].begin < i + B; ++n) {
+      const Run& u = runs_[n];
+      with_rows(u.code, [&](auto r0, auto r1) DYNCAL_ALWAYS_INLINE_LAMBDA {
+        run_any<B, decltype(r0)::value, decltype(r1)::value>(i, u.begin, u.end, H, corner, a);
+      });
+    }
+    for (; n < runs; ++n) {
+      const Run& u = runs_[n];
+      with_rows(u.code, [&](auto r0, auto r1) DYNCAL_ALWAYS_INLINE_LAMBDA {
+        run_right<B, decltype(r0)::value, decltype(r1)::value>(i, u.begin, u.end, H, a);
+      });
+    }
+    if (fast_terms) {
+      switch (term_columns_) {
+        case 1:
+          terms<B, 1>(i, H, a);
+          break;
+        case 2:
+          terms<B, 2>(i, H, a);
+          break;
+        case 3:
+          terms<B, 3>(i, H, a);
+          break;
+        default:
+          terms<B, 4>(i, H, a);
+          break;
+      }
+    }
+    DYNCAL_UNROLL
+    for (int r = 0; r < B; ++r) {
+      DYNCAL_UNROLL
+      for (int k = 0; k < N; ++k) v_[i + r][k] = a[r][k];
+    }
+  }
+
+  /// V = P H^T (rows of v_), kBlock rows of P at a time, skipping H's structural zeros.
   void compute_v(const Scalar* H) noexcept {
     int i = 0;
-    for (; i + 1 < P; i += 2) {
-      Scalar a0[N], a1[N];
-      DYNCAL_UNROLL
-      for (int k = 0; k < N; ++k) a0[k] = a1[k] = Scalar(0);
-      for (int n = 0; n < num_runs_; ++n) dispatch2<0>(runs_[n].code, i, runs_[n].begin, runs_[n].end, H, a0, a1);
-      DYNCAL_UNROLL
-      for (int k = 0; k < N; ++k) {
-        v_[i][k] = a0[k];
-        v_[i + 1][k] = a1[k];
-      }
-    }
-    if (i < P) {  // odd P: the last row alone
-      DYNCAL_UNROLL
-      for (int k = 0; k < N; ++k) v_[i][k] = Scalar(0);
-      for (int c = 0; c < P; ++c) {
-        const Scalar pic = (*this)(i, c);
-        DYNCAL_UNROLL
-        for (int k = structure_.first[c]; k <= structure_.last[c]; ++k) v_[i][k] += pic * H[c * N + k];
-      }
-    }
+    for (; i + kBlock <= P; i += kBlock) block_v<kBlock>(i, H);
+    for (; i < P; ++i) block_v<1>(i, H);
   }
 
   /// P <- s (P - W W^T) over the upper triangle, three rows at a time (W_i of three rows in
   /// registers, W_j loaded once per column for all three).
   template <bool Scaled>
   void downdate(Scalar s) noexcept {
+    if constexpr (kArmFloatKernels && std::is_same_v<Scalar, float> && N == 6) {
+      for (int i = 0; i < P; ++i) downdate_row_float6<Scaled>(p_ + index(i, i), v_[i], v_[i], P - i, s);
+      return;
+    }
     int i = 0;
     for (; i + 2 < P; i += 3) {
       Scalar w0[N], w1[N], w2[N];
@@ -352,6 +523,9 @@ class PackedCovariance {
   RegressorStructure<P> structure_ = RegressorStructure<P>::dense(N);
   Run runs_[P] = {};
   int num_runs_ = 0;
+  int num_base_runs_ = 0;  ///< runs before the term block
+  int term_columns_ = 0;   ///< columns per joint in the trailing term block (0: none)
+  static constexpr int kMaxTermColumns = 4;
   /// row_[i] = index(i, i) - i: P(i, j) = p_[row_[i] + j] for j >= i.
   static constexpr struct RowOffsets {
     int v[P];
@@ -360,8 +534,8 @@ class PackedCovariance {
     }
     constexpr int operator[](int i) const { return v[i]; }
   } row_{};
-  std::uint16_t outside_[P * N] = {};  ///< positions in H (column-major) outside the structure
-  int num_outside_ = 0;
+  std::uint8_t zero_columns_[P] = {};  ///< columns of H that the structure declares all zero
+  int num_zero_columns_ = 0;
 };
 
 }  // namespace dyncal
