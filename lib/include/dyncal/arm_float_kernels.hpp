@@ -9,19 +9,22 @@
 namespace dyncal {
 
 #if defined(__thumb2__) && defined(__ARM_FP) && (__ARM_FP & 4) && defined(__ARM_FEATURE_FMA)
+#define DYNCAL_ARM_FLOAT_KERNELS 1
 inline constexpr bool kArmFloatKernels = true;
 #else
+#define DYNCAL_ARM_FLOAT_KERNELS 0
 inline constexpr bool kArmFloatKernels = false;
 #endif
 
-/// p[j] <- s (p[j] - wi . wj[j]) for j = 0..count - 1 (count >= 1): p is row i of packed P from
-/// its diagonal, wi row i of W and wj rows i.. of W (6 floats each, contiguous). Scaled selects
-/// the factor s. Only available when kArmFloatDowndateKernel.
+/// p[j] <- s (p[j] - w_i . w_(i+j)) for j = 0..count - 1 (count >= 1): p is row i of packed P from
+/// its diagonal, w rows i.. of W (6 floats each, contiguous; the first is w_i). Scaled selects
+/// the factor s. Only available when kArmFloatKernels.
 template <bool Scaled>
-inline void downdate_row_float6(float* p, const float* wi, const float* wj, int count, float s) noexcept {
-#if defined(__thumb2__) && defined(__ARM_FP) && (__ARM_FP & 4) && defined(__ARM_FEATURE_FMA)
+inline void downdate_row_float6(float* p, const float* w, int count, float s) noexcept {
+#if DYNCAL_ARM_FLOAT_KERNELS
   int groups = count / 3;
   const int rest = count - 3 * groups;
+  const float* wj = w;
   __asm__ volatile(
       "vmov.f32 s27, %[s]\n\t"
       "vldmia %[wi], {s0-s5}\n\t"
@@ -95,11 +98,11 @@ inline void downdate_row_float6(float* p, const float* wi, const float* wj, int 
       "vstmia %[p], {s24-s25}\n"
       "4:\n"
       : [p] "+r"(p), [wj] "+r"(wj), [n] "+r"(groups)
-      : [wi] "r"(wi), [rest] "r"(rest), [s] "t"(s), [scaled] "i"(Scaled ? 1 : 0)
+      : [wi] "r"(w), [rest] "r"(rest), [s] "t"(s), [scaled] "i"(Scaled ? 1 : 0)
       : "s0", "s1", "s2", "s3", "s4", "s5", "s6", "s7", "s8", "s9", "s10", "s11", "s12", "s13", "s14", "s15", "s16",
         "s17", "s18", "s19", "s20", "s21", "s22", "s23", "s24", "s25", "s26", "s27", "cc", "memory");
 #else
-  (void)p, (void)wi, (void)wj, (void)count, (void)s;
+  (void)p, (void)w, (void)count, (void)s;
 #endif
 }
 
@@ -157,7 +160,7 @@ constexpr int v_window() noexcept {
 /// (the distance to the next packed row), h = H's column c0 (six floats).
 template <int R0, int R1>
 inline void v_left_float6(float* acc, const float* q, int stride, const float* h, int n) noexcept {
-#if defined(__thumb2__) && defined(__ARM_FP) && (__ARM_FP & 4) && defined(__ARM_FEATURE_FMA)
+#if DYNCAL_ARM_FLOAT_KERNELS
   h += v_window<R0, R1>();
   __asm__ volatile(DYNCAL_V_MACROS
                    "vldmia %[acc], {s0-s23}\n"
@@ -180,7 +183,7 @@ inline void v_left_float6(float* acc, const float* q, int stride, const float* h
 /// As v_left_float6 with the four P values of each column contiguous, column after column (q).
 template <int R0, int R1>
 inline void v_dense_float6(float* acc, const float* q, const float* h, int n) noexcept {
-#if defined(__thumb2__) && defined(__ARM_FP) && (__ARM_FP & 4) && defined(__ARM_FEATURE_FMA)
+#if DYNCAL_ARM_FLOAT_KERNELS
   h += v_window<R0, R1>();
   __asm__ volatile(DYNCAL_V_MACROS
                    "vldmia %[acc], {s0-s23}\n"
@@ -202,7 +205,7 @@ inline void v_dense_float6(float* acc, const float* q, const float* h, int n) no
 template <int R0, int R1>
 inline void v_right_float6(float* acc, const float* q0, const float* q1, const float* q2, const float* q3,
                            const float* h, int n) noexcept {
-#if defined(__thumb2__) && defined(__ARM_FP) && (__ARM_FP & 4) && defined(__ARM_FEATURE_FMA)
+#if DYNCAL_ARM_FLOAT_KERNELS
   h += v_window<R0, R1>();
   __asm__ volatile(DYNCAL_V_MACROS
                    "vldmia %[acc], {s0-s23}\n"

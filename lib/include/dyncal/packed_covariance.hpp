@@ -456,7 +456,7 @@ class PackedCovariance {
   template <bool Scaled>
   void downdate(Scalar s) noexcept {
     if constexpr (kArmFloatKernels && std::is_same_v<Scalar, float> && N == 6) {
-      for (int i = 0; i < P; ++i) downdate_row_float6<Scaled>(p_ + index(i, i), v_[i], v_[i], P - i, s);
+      for (int i = 0; i < P; ++i) downdate_row_float6<Scaled>(p_ + index(i, i), v_[i], P - i, s);
       return;
     }
     int i = 0;
