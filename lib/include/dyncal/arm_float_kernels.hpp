@@ -22,15 +22,13 @@ inline constexpr bool kArmFloatKernels = false;
 template <bool Scaled>
 inline void downdate_row_float6(float* p, const float* w, int count, float s) noexcept {
 #if DYNCAL_ARM_FLOAT_KERNELS
-  int groups = count / 3;
+  const int groups = count / 3;
+  int pairs = groups / 2;  // two groups of three columns per pass of the loop
+  const int odd = groups & 1;
   const int rest = count - 3 * groups;
   const float* wj = w;
   __asm__ volatile(
-      "vmov.f32 s27, %[s]\n\t"
-      "vldmia %[wi], {s0-s5}\n\t"
-      "cmp %[n], #0\n\t"
-      "beq 2f\n"
-      "1:\n\t"
+      ".macro dyn_dd_group\n\t"
       "vldmia %[wj]!, {s6-s23}\n\t"
       "vldmia %[p], {s24-s26}\n\t"
       "vfms.f32 s24, s0, s6\n\t"
@@ -57,8 +55,20 @@ inline void downdate_row_float6(float* p, const float* w, int count, float s) no
       "vmul.f32 s26, s26, s27\n\t"
       ".endif\n\t"
       "vstmia %[p]!, {s24-s26}\n\t"
+      ".endm\n\t"
+      "vmov.f32 s27, %[s]\n\t"
+      "vldmia %[wi], {s0-s5}\n\t"
+      "cmp %[n], #0\n\t"
+      "beq 5f\n"
+      "1:\n\t"
+      "dyn_dd_group\n\t"
+      "dyn_dd_group\n\t"
       "subs %[n], %[n], #1\n\t"
       "bne 1b\n"
+      "5:\n\t"
+      "cmp %[odd], #0\n\t"
+      "beq 2f\n\t"
+      "dyn_dd_group\n"
       "2:\n\t"
       "cmp %[rest], #1\n\t"
       "blt 4f\n\t"
@@ -96,13 +106,132 @@ inline void downdate_row_float6(float* p, const float* w, int count, float s) no
       "vmul.f32 s25, s25, s27\n\t"
       ".endif\n\t"
       "vstmia %[p], {s24-s25}\n"
-      "4:\n"
-      : [p] "+r"(p), [wj] "+r"(wj), [n] "+r"(groups)
-      : [wi] "r"(w), [rest] "r"(rest), [s] "t"(s), [scaled] "i"(Scaled ? 1 : 0)
+      "4:\n\t"
+      ".purgem dyn_dd_group\n"
+      : [p] "+r"(p), [wj] "+r"(wj), [n] "+r"(pairs)
+      : [wi] "r"(w), [rest] "r"(rest), [odd] "r"(odd), [s] "t"(s), [scaled] "i"(Scaled ? 1 : 0)
       : "s0", "s1", "s2", "s3", "s4", "s5", "s6", "s7", "s8", "s9", "s10", "s11", "s12", "s13", "s14", "s15", "s16",
         "s17", "s18", "s19", "s20", "s21", "s22", "s23", "s24", "s25", "s26", "s27", "cc", "memory");
 #else
   (void)p, (void)w, (void)count, (void)s;
+#endif
+}
+
+/// W = V L^-T for count >= 1 rows of V (6 floats each, in place) by forward substitution:
+/// w_k = (v_k - sum_(t<k) L(k, t) w_t) / L(k, k), with c packed by rows (21 floats):
+/// c[k(k+1)/2 + t] = L(k, t) for t < k and c[k(k+1)/2 + k] = 1 / L(k, k). Row i's diagonal
+/// p_ii - |w_i|^2 must stay positive: pd = &P(0, 0) in packed storage, the next diagonal
+/// `stride` (= P) floats on, one less each row. Returns false at the first row where it does not
+/// (or is NaN); rows before it are already W. Only available when kArmFloatKernels.
+inline bool w_rows_float6(float* v, const float* c, const float* pd, int stride, int count) noexcept {
+#if DYNCAL_ARM_FLOAT_KERNELS
+  int ok = 1;
+  __asm__ volatile(
+      "vldmia %[c], {s0-s20}\n"
+      "1:\n\t"
+      "vldmia %[v], {s21-s26}\n\t"
+      "vmul.f32 s21, s21, s0\n\t"  // w0
+      "vfms.f32 s22, s1, s21\n\t"  // w1
+      "vmul.f32 s22, s22, s2\n\t"
+      "vfms.f32 s23, s3, s21\n\t"  // w2
+      "vfms.f32 s23, s4, s22\n\t"
+      "vmul.f32 s23, s23, s5\n\t"
+      "vfms.f32 s24, s6, s21\n\t"  // w3
+      "vfms.f32 s24, s7, s22\n\t"
+      "vfms.f32 s24, s8, s23\n\t"
+      "vmul.f32 s24, s24, s9\n\t"
+      "vfms.f32 s25, s10, s21\n\t"  // w4
+      "vfms.f32 s25, s11, s22\n\t"
+      "vfms.f32 s25, s12, s23\n\t"
+      "vfms.f32 s25, s13, s24\n\t"
+      "vmul.f32 s25, s25, s14\n\t"
+      "vfms.f32 s26, s15, s21\n\t"  // w5
+      "vfms.f32 s26, s16, s22\n\t"
+      "vfms.f32 s26, s17, s23\n\t"
+      "vfms.f32 s26, s18, s24\n\t"
+      "vfms.f32 s26, s19, s25\n\t"
+      "vmul.f32 s26, s26, s20\n\t"
+      "vstmia %[v]!, {s21-s26}\n\t"
+      "vldr s27, [%[pd]]\n\t"
+      "vfms.f32 s27, s21, s21\n\t"
+      "vfms.f32 s27, s22, s22\n\t"
+      "vfms.f32 s27, s23, s23\n\t"
+      "vfms.f32 s27, s24, s24\n\t"
+      "vfms.f32 s27, s25, s25\n\t"
+      "vfms.f32 s27, s26, s26\n\t"
+      "vcmp.f32 s27, #0\n\t"
+      "vmrs APSR_nzcv, fpscr\n\t"
+      "ble 2f\n\t"  // not > 0, or unordered (NaN)
+      "add %[pd], %[pd], %[st], lsl #2\n\t"
+      "sub %[st], %[st], #1\n\t"
+      "subs %[n], %[n], #1\n\t"
+      "bne 1b\n\t"
+      "b 3f\n"
+      "2:\n\t"
+      "mov %[ok], #0\n"
+      "3:\n"
+      : [v] "+r"(v), [pd] "+r"(pd), [st] "+r"(stride), [n] "+r"(count), [ok] "+r"(ok)
+      : [c] "r"(c)
+      : "s0", "s1", "s2", "s3", "s4", "s5", "s6", "s7", "s8", "s9", "s10", "s11", "s12", "s13", "s14", "s15", "s16",
+        "s17", "s18", "s19", "s20", "s21", "s22", "s23", "s24", "s25", "s26", "s27", "cc", "memory");
+  return ok != 0;
+#else
+  (void)v, (void)c, (void)pd, (void)stride, (void)count;
+  return false;
+#endif
+}
+
+/// out[i] = w_i . z for count >= 1 rows of W (6 floats each); returns the sum of out (non-finite
+/// if any out[i] is). Only available when kArmFloatKernels.
+inline float dot_rows_float6(const float* w, const float* z, float* out, int count) noexcept {
+#if DYNCAL_ARM_FLOAT_KERNELS
+  float sum = 0.0f;
+  int pairs = count / 2;
+  const int odd = count & 1;
+  __asm__ volatile(
+      "vldmia %[z], {s0-s5}\n\t"
+      "cmp %[n], #0\n\t"
+      "beq 2f\n"
+      "1:\n\t"
+      "vldmia %[w]!, {s6-s17}\n\t"
+      "vmul.f32 s18, s6, s0\n\t"
+      "vmul.f32 s19, s12, s0\n\t"
+      "vfma.f32 s18, s7, s1\n\t"
+      "vfma.f32 s19, s13, s1\n\t"
+      "vfma.f32 s18, s8, s2\n\t"
+      "vfma.f32 s19, s14, s2\n\t"
+      "vfma.f32 s18, s9, s3\n\t"
+      "vfma.f32 s19, s15, s3\n\t"
+      "vfma.f32 s18, s10, s4\n\t"
+      "vfma.f32 s19, s16, s4\n\t"
+      "vfma.f32 s18, s11, s5\n\t"
+      "vfma.f32 s19, s17, s5\n\t"
+      "vstmia %[out]!, {s18-s19}\n\t"
+      "vadd.f32 %[sum], %[sum], s18\n\t"
+      "vadd.f32 %[sum], %[sum], s19\n\t"
+      "subs %[n], %[n], #1\n\t"
+      "bne 1b\n"
+      "2:\n\t"
+      "cmp %[odd], #0\n\t"
+      "beq 3f\n\t"
+      "vldmia %[w], {s6-s11}\n\t"
+      "vmul.f32 s18, s6, s0\n\t"
+      "vfma.f32 s18, s7, s1\n\t"
+      "vfma.f32 s18, s8, s2\n\t"
+      "vfma.f32 s18, s9, s3\n\t"
+      "vfma.f32 s18, s10, s4\n\t"
+      "vfma.f32 s18, s11, s5\n\t"
+      "vstr s18, [%[out]]\n\t"
+      "vadd.f32 %[sum], %[sum], s18\n"
+      "3:\n"
+      : [w] "+r"(w), [out] "+r"(out), [n] "+r"(pairs), [sum] "+t"(sum)
+      : [z] "r"(z), [odd] "r"(odd)
+      : "s0", "s1", "s2", "s3", "s4", "s5", "s6", "s7", "s8", "s9", "s10", "s11", "s12", "s13", "s14", "s15", "s16",
+        "s17", "s18", "s19", "cc", "memory");
+  return sum;
+#else
+  (void)w, (void)z, (void)out, (void)count;
+  return 0.0f;
 #endif
 }
 
@@ -112,6 +241,102 @@ inline void downdate_row_float6(float* p, const float* w, int count, float s) no
 
 // Assembler text shared by the V kernels: a[r][k] (acc[6 r + k], s(6 r + k)) += p_r (s24 + r) * H(k, c)
 // for the rows k = R0..R1 of H's column c at [h]; H(k, c) goes through s28..s31 (four at a time).
+// Assembler text shared by the S kernels: S (lower, packed by rows, S(k, t) in s(k(k+1)/2 + t),
+// s0..s20) += H(k, c) V(c, 0..k) with V's row c in s21..s26.
+#define DYNCAL_S_MACROS                            \
+  ".altmacro\n\t"                                  \
+  ".macro dyn_sf a, b, hh\n\t"                     \
+  "vfma.f32 s\\a, s\\b, s\\hh\n\t"                 \
+  ".endm\n\t"                                      \
+  ".macro dyn_s_row k, hh\n\t"                     \
+  ".irp t, 0,1,2,3,4,5\n\t"                        \
+  ".if \\t <= \\k\n\t"                             \
+  "dyn_sf %%(\\k*(\\k+1)/2+\\t), %%(21+\\t), \\hh\n\t" \
+  ".endif\n\t"                                     \
+  ".endr\n\t"                                      \
+  ".endm\n\t"                                      \
+  ".macro dyn_ldv base, last\n\t"                  \
+  ".if \\last == 21\n\t"                           \
+  "vldmia \\base, {s21}\n\t"                       \
+  ".else\n\t"                                      \
+  "vldmia \\base, {s21-s\\last}\n\t"               \
+  ".endif\n\t"                                     \
+  ".endm\n\t"                                      \
+  ".macro dyn_ldh base, last\n\t"                  \
+  ".if \\last == 27\n\t"                           \
+  "vldmia \\base, {s27}\n\t"                       \
+  ".else\n\t"                                      \
+  "vldmia \\base, {s27-s\\last}\n\t"               \
+  ".endif\n\t"                                     \
+  ".endm\n\t"
+#define DYNCAL_S_PURGE ".purgem dyn_ldh\n\t.purgem dyn_ldv\n\t.purgem dyn_s_row\n\t.purgem dyn_sf\n\t.noaltmacro\n"
+
+/// S += H(R0..R1, c) V(c, .) restricted to S's lower triangle (S(k, t), t <= k, packed by rows in
+/// s, 21 floats) for n >= 1 columns c of one run: v = V's row c0 (6 floats per row), h = H's
+/// column c0 (6 floats per column).
+template <int R0, int R1>
+inline void s_run_float6(float* s, const float* v, const float* h, int n) noexcept {
+#if DYNCAL_ARM_FLOAT_KERNELS
+  if (R1 - R0 < 5) h += R0;
+  __asm__ volatile(DYNCAL_S_MACROS
+                   "vldmia %[s], {s0-s20}\n"
+                   "1:\n\t"
+                   "dyn_ldv %[v], %%(21+%c[r1])\n\t"
+                   "add %[v], %[v], #24\n\t"
+                   ".if (%c[r1] - %c[r0]) < 5\n\t"
+                   "dyn_ldh %[h], %%(27+%c[r1]-%c[r0])\n\t"
+                   ".irp kk, 0,1,2,3,4,5\n\t"
+                   ".if (\\kk >= %c[r0]) && (\\kk <= %c[r1])\n\t"
+                   "dyn_s_row \\kk, %%(27+\\kk-%c[r0])\n\t"
+                   ".endif\n\t"
+                   ".endr\n\t"
+                   "add %[h], %[h], #24\n\t"
+                   ".else\n\t"
+                   "vldmia %[h]!, {s27-s31}\n\t"
+                   ".irp kk, 0,1,2,3,4\n\t"
+                   "dyn_s_row \\kk, %%(27+\\kk)\n\t"
+                   ".endr\n\t"
+                   "vldmia %[h]!, {s27}\n\t"
+                   "dyn_s_row 5, 27\n\t"
+                   ".endif\n\t"
+                   "subs %[n], %[n], #1\n\t"
+                   "bne 1b\n\t"
+                   "vstmia %[s], {s0-s20}\n\t" DYNCAL_S_PURGE
+                   : [v] "+r"(v), [h] "+r"(h), [n] "+r"(n)
+                   : [s] "r"(s), [r0] "i"(R0), [r1] "i"(R1)
+                   : DYNCAL_S0_S31, "cc", "memory");
+#else
+  (void)s, (void)v, (void)h, (void)n;
+#endif
+}
+
+/// As s_run_float6 for a term block: m >= 1 columns per joint j = 0..5, joint j's on row j only;
+/// v and h at the block's first column.
+inline void s_terms_float6(float* s, const float* v, const float* h, int m) noexcept {
+#if DYNCAL_ARM_FLOAT_KERNELS
+  int count;
+  __asm__ volatile(DYNCAL_S_MACROS
+                   "vldmia %[s], {s0-s20}\n\t"
+                   ".irp j, 0,1,2,3,4,5\n\t"
+                   "mov %[cnt], %[m]\n"
+                   "1:\n\t"
+                   "dyn_ldv %[v], %%(21+\\j)\n\t"
+                   "add %[v], %[v], #24\n\t"
+                   "vldr s27, [%[h], #4*\\j]\n\t"
+                   "add %[h], %[h], #24\n\t"
+                   "dyn_s_row \\j, 27\n\t"
+                   "subs %[cnt], %[cnt], #1\n\t"
+                   "bne 1b\n\t"
+                   ".endr\n\t"
+                   "vstmia %[s], {s0-s20}\n\t" DYNCAL_S_PURGE
+                   : [v] "+r"(v), [h] "+r"(h), [cnt] "=&r"(count)
+                   : [s] "r"(s), [m] "r"(m)
+                   : DYNCAL_S0_S31, "cc", "memory");
+#else
+  (void)s, (void)v, (void)h, (void)m;
+#endif
+}
+
 #define DYNCAL_V_MACROS                          \
   ".altmacro\n\t"                                \
   ".macro dyn_vf a, p, hh\n\t"                   \
@@ -226,8 +451,57 @@ inline void v_right_float6(float* acc, const float* q0, const float* q1, const f
 #endif
 }
 
+/// The term block (M = 1 or 2 columns per joint, joint j's on row j only) added to V's rows
+/// i..i+3 (acc, 24 floats): acc[r][j] += sum_t P(i + r, b + j M + t) h[j M + t]. q = &P(i, b) in
+/// packed storage, stride = P - 1 - i (the distance to &P(i + 1, b), one less each row), h the
+/// block's 6 M nonzero entries of H.
+template <int M>
+inline void v_terms_float6(float* acc, const float* q, int stride, const float* h) noexcept {
+#if DYNCAL_ARM_FLOAT_KERNELS
+  static_assert(M == 1 || M == 2, "one or two term columns per joint");
+  __asm__ volatile(
+      ".altmacro\n\t"
+      ".macro dyn_tf a, p, hh\n\t"
+      "vfma.f32 s\\a, s\\p, s\\hh\n\t"
+      ".endm\n\t"
+      ".if %c[m] == 1\n\t"
+      "vldmia %[h], {s0-s5}\n\t"
+      ".else\n\t"
+      "vldmia %[h], {s0-s11}\n\t"
+      ".endif\n\t"
+      ".rept 4\n\t"
+      "vldmia %[acc], {s12-s17}\n\t"
+      ".if %c[m] == 1\n\t"
+      "vldmia %[q], {s18-s23}\n\t"
+      ".else\n\t"
+      "vldmia %[q], {s18-s29}\n\t"
+      ".endif\n\t"
+      ".irp j, 0,1,2,3,4,5\n\t"
+      ".irp t, 0,1\n\t"
+      ".if \\t < %c[m]\n\t"
+      "dyn_tf %%(12+\\j), %%(18+\\j*%c[m]+\\t), %%(\\j*%c[m]+\\t)\n\t"
+      ".endif\n\t"
+      ".endr\n\t"
+      ".endr\n\t"
+      "vstmia %[acc]!, {s12-s17}\n\t"
+      "add %[q], %[q], %[st], lsl #2\n\t"
+      "sub %[st], %[st], #1\n\t"
+      ".endr\n\t"
+      ".purgem dyn_tf\n\t"
+      ".noaltmacro\n"
+      : [acc] "+r"(acc), [q] "+r"(q), [st] "+r"(stride)
+      : [h] "r"(h), [m] "i"(M)
+      : "s0", "s1", "s2", "s3", "s4", "s5", "s6", "s7", "s8", "s9", "s10", "s11", "s12", "s13", "s14", "s15", "s16",
+        "s17", "s18", "s19", "s20", "s21", "s22", "s23", "s24", "s25", "s26", "s27", "s28", "s29", "cc", "memory");
+#else
+  (void)acc, (void)q, (void)stride, (void)h;
+#endif
+}
+
 #undef DYNCAL_V_MACROS
 #undef DYNCAL_V_PURGE
+#undef DYNCAL_S_MACROS
+#undef DYNCAL_S_PURGE
 #undef DYNCAL_S0_S31
 
 }  // namespace dyncal

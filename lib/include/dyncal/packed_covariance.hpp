@@ -149,22 +149,25 @@ class PackedCovariance {
     compute_v(h);
     // S = H V + diag(r), lower triangle: S_ks = sum over columns c with H(k, c) != 0.
     Scalar S[N][N];
-    for (int k = 0; k < N; ++k) {
-      for (int s = 0; s <= k; ++s) S[k][s] = Scalar(0);
-      S[k][k] = r[k];
-    }
-    for (int n = 0; n < num_runs_; ++n) {
-      const Run& u = runs_[n];
-      with_rows(u.code, [&](auto r0, auto r1) DYNCAL_ALWAYS_INLINE_LAMBDA {
-        for (int c = u.begin; c < u.end; ++c) {
-          DYNCAL_UNROLL
-          for (int k = decltype(r0)::value; k <= decltype(r1)::value; ++k) {
-            const Scalar hk = h[c * N + k];
-            DYNCAL_UNROLL
-            for (int t = 0; t <= k; ++t) S[k][t] += hk * v_[c][t];
-          }
-        }
-      });
+    if constexpr (kAsmW) {
+      float packed[N * (N + 1) / 2] = {};
+      for (int k = 0; k < N; ++k) packed[k * (k + 1) / 2 + k] = r[k];
+      const int runs = term_columns_ > 0 ? num_base_runs_ : num_runs_;
+      for (int n = 0; n < runs; ++n) {
+        const Run& u = runs_[n];
+        with_rows(u.code, [&](auto r0, auto r1) DYNCAL_ALWAYS_INLINE_LAMBDA {
+          s_run_float6<decltype(r0)::value, decltype(r1)::value>(packed, v_[u.begin], h + u.begin * N, u.end - u.begin);
+        });
+      }
+      if (term_columns_ > 0) {
+        const int b = P - term_columns_ * N;
+        s_terms_float6(packed, v_[b], h + b * N, term_columns_);
+      }
+      for (int k = 0; k < N; ++k) {
+        for (int t = 0; t <= k; ++t) S[k][t] = packed[k * (k + 1) / 2 + t];
+      }
+    } else {
+      s_runs(h, r, S);
     }
     for (int k = 0; k < N; ++k) {
       for (int s = 0; s <= k; ++s) {
@@ -199,21 +202,17 @@ class PackedCovariance {
       z[k] = x * inv_d_[k];
     }
     // W = V L^-T row by row (in place), the parameter change W z, and the updated diagonal.
-    for (int i = 0; i < P; ++i) {
-      Scalar* w = v_[i];
-      Scalar dphi = Scalar(0), ww = Scalar(0);
-      DYNCAL_UNROLL
+    if constexpr (kAsmW) {
+      // L and 1 / diag(L) (21 values) stay in FPU registers for all rows; dphi_i = w_i . z after.
+      float c[N * (N + 1) / 2];
       for (int k = 0; k < N; ++k) {
-        Scalar x = w[k];
-        DYNCAL_UNROLL
-        for (int t = 0; t < k; ++t) x -= S[k][t] * w[t];
-        x *= inv_d_[k];
-        w[k] = x;
-        dphi += x * z[k];
-        ww += x * x;
+        for (int t = 0; t < k; ++t) c[k * (k + 1) / 2 + t] = S[k][t];
+        c[k * (k + 1) / 2 + k] = inv_d_[k];
       }
-      if (!(p_[index(i, i)] - ww > Scalar(0)) || !std::isfinite(dphi)) return UpdateStatus::not_positive_definite;
-      dphi_[i] = dphi;
+      if (!w_rows_float6(&v_[0][0], c, p_, P, P)) return UpdateStatus::not_positive_definite;
+      if (!std::isfinite(dot_rows_float6(&v_[0][0], z, dphi_, P))) return UpdateStatus::not_positive_definite;
+    } else if (!w_rows(S, z)) {
+      return UpdateStatus::not_positive_definite;
     }
     if (scale == Scalar(1)) {
       downdate<false>(Scalar(1));
@@ -264,6 +263,52 @@ class PackedCovariance {
     std::memcpy(&b, &x, sizeof b);
     return b;
   }
+
+  /// S = H V + diag(r) (lower triangle) over H's runs: S_kt = sum of H(k, c) V(c, t), t <= k.
+  void s_runs(const Scalar* h, const MeasVector& r, Scalar (&S)[N][N]) const noexcept {
+    for (int k = 0; k < N; ++k) {
+      for (int t = 0; t <= k; ++t) S[k][t] = Scalar(0);
+      S[k][k] = r[k];
+    }
+    for (int n = 0; n < num_runs_; ++n) {
+      const Run& u = runs_[n];
+      with_rows(u.code, [&](auto r0, auto r1) DYNCAL_ALWAYS_INLINE_LAMBDA {
+        for (int c = u.begin; c < u.end; ++c) {
+          DYNCAL_UNROLL
+          for (int k = decltype(r0)::value; k <= decltype(r1)::value; ++k) {
+            const Scalar hk = h[c * N + k];
+            DYNCAL_UNROLL
+            for (int t = 0; t <= k; ++t) S[k][t] += hk * v_[c][t];
+          }
+        }
+      });
+    }
+  }
+
+  /// W = V L^-T row by row (in place, L in S's lower triangle) and dphi = W z; false if some
+  /// updated diagonal p_ii - |w_i|^2 is not positive or some dphi_i is not finite.
+  bool w_rows(const Scalar (&S)[N][N], const Scalar (&z)[N]) noexcept {
+    for (int i = 0; i < P; ++i) {
+      Scalar* w = v_[i];
+      Scalar dphi = Scalar(0), ww = Scalar(0);
+      DYNCAL_UNROLL
+      for (int k = 0; k < N; ++k) {
+        Scalar x = w[k];
+        DYNCAL_UNROLL
+        for (int t = 0; t < k; ++t) x -= S[k][t] * w[t];
+        x *= inv_d_[k];
+        w[k] = x;
+        dphi += x * z[k];
+        ww += x * x;
+      }
+      if (!(p_[index(i, i)] - ww > Scalar(0)) || !std::isfinite(dphi)) return false;
+      dphi_[i] = dphi;
+    }
+    return true;
+  }
+
+  /// The ARMv7E-M float kernels for S, W and dphi (six measurements).
+  static constexpr bool kAsmW = kArmFloatKernels && std::is_same_v<Scalar, float> && N == 6;
 
   struct Run {
     std::uint8_t begin, end, code;
@@ -392,11 +437,16 @@ class PackedCovariance {
     for (int r = 0; r < B; ++r) {
       for (int s = r; s < B; ++s) corner[s][r] = corner[r][s] = p_[row_[i + r] + i + s];
     }
-    Scalar a[B][N];
-    DYNCAL_UNROLL
-    for (int r = 0; r < B; ++r) {
+    // The ARM kernels accumulate straight into V's rows (zeroed by compute_v; B rows of N are
+    // contiguous); the portable loops in a local array the compiler keeps in registers.
+    Scalar local[kAsmV<B> ? 1 : B][N];
+    Scalar(&a)[B][N] = *reinterpret_cast<Scalar(*)[B][N]>(kAsmV<B> ? &v_[i][0] : &local[0][0]);
+    if constexpr (!kAsmV<B>) {
       DYNCAL_UNROLL
-      for (int k = 0; k < N; ++k) a[r][k] = Scalar(0);
+      for (int r = 0; r < B; ++r) {
+        DYNCAL_UNROLL
+        for (int k = 0; k < N; ++k) a[r][k] = Scalar(0);
+      }
     }
     const int term_begin = P - term_columns_ * N;
     const bool fast_terms = term_columns_ > 0 && i + B <= term_begin;
@@ -421,7 +471,13 @@ class PackedCovariance {
         run_right<B, decltype(r0)::value, decltype(r1)::value>(i, u.begin, u.end, H, a);
       });
     }
-    if (fast_terms) {
+    if (fast_terms && kAsmV<B> && term_columns_ <= 2) {
+      if (term_columns_ == 1) {
+        v_terms_float6<1>(&a[0][0], p_ + row_[i] + term_begin, P - 1 - i, h_terms_);
+      } else {
+        v_terms_float6<2>(&a[0][0], p_ + row_[i] + term_begin, P - 1 - i, h_terms_);
+      }
+    } else if (fast_terms) {
       switch (term_columns_) {
         case 1:
           terms<B, 1>(i, H, a);
@@ -437,15 +493,23 @@ class PackedCovariance {
           break;
       }
     }
-    DYNCAL_UNROLL
-    for (int r = 0; r < B; ++r) {
+    if constexpr (!kAsmV<B>) {
       DYNCAL_UNROLL
-      for (int k = 0; k < N; ++k) v_[i + r][k] = a[r][k];
+      for (int r = 0; r < B; ++r) {
+        DYNCAL_UNROLL
+        for (int k = 0; k < N; ++k) v_[i + r][k] = a[r][k];
+      }
     }
   }
 
   /// V = P H^T (rows of v_), kBlock rows of P at a time, skipping H's structural zeros.
   void compute_v(const Scalar* H) noexcept {
+    if constexpr (kAsmV<kBlock>) {
+      std::memset(v_, 0, sizeof v_);
+      // The term block's nonzero entries, joint by joint: H(j, b + j M + t) at h_terms_[j M + t].
+      const int b = P - term_columns_ * N;
+      for (int c = 0; c < term_columns_ * N; ++c) h_terms_[c] = H[(b + c) * N + c / term_columns_];
+    }
     int i = 0;
     for (; i + kBlock <= P; i += kBlock) block_v<kBlock>(i, H);
     for (; i < P; ++i) block_v<1>(i, H);
@@ -516,16 +580,17 @@ class PackedCovariance {
     }
   }
 
+  static constexpr int kMaxTermColumns = 4;
   Scalar p_[kPacked] = {};
   Scalar v_[P][N] = {};  ///< V = P H^T, then W = V L^-T
   Scalar dphi_[P] = {};
+  Scalar h_terms_[kMaxTermColumns * N] = {};  ///< the term block's nonzero entries (ARM kernels)
   Scalar inv_d_[N] = {};
   RegressorStructure<P> structure_ = RegressorStructure<P>::dense(N);
   Run runs_[P] = {};
   int num_runs_ = 0;
   int num_base_runs_ = 0;  ///< runs before the term block
   int term_columns_ = 0;   ///< columns per joint in the trailing term block (0: none)
-  static constexpr int kMaxTermColumns = 4;
   /// row_[i] = index(i, i) - i: P(i, j) = p_[row_[i] + j] for j >= i.
   static constexpr struct RowOffsets {
     int v[P];
