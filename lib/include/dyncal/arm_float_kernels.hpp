@@ -16,17 +16,18 @@ inline constexpr bool kArmFloatKernels = true;
 inline constexpr bool kArmFloatKernels = false;
 #endif
 
-/// p[j] <- s (p[j] - w_i . w_(i+j)) for j = 0..count - 1 (count >= 1): p is row i of packed P from
-/// its diagonal, w rows i.. of W (6 floats each, contiguous; the first is w_i). Scaled selects
-/// the factor s. Only available when kArmFloatKernels.
+/// P <- s (P - W W^T) over the whole upper triangle: p = packed P (rows 0..rows-1 from their
+/// diagonals, one after another), w = W (rows x 6 floats). Row by row, three columns at a time
+/// (one VLDM of three W rows = 18 floats; VLDM / VSTM of three P elements), the row loop in
+/// assembler too (count = rows - i kept as 3 groups + rest). Scaled selects the factor s.
+/// Only available when kArmFloatKernels.
 template <bool Scaled>
-inline void downdate_row_float6(float* p, const float* w, int count, float s) noexcept {
+inline void downdate_float6(float* p, const float* w, int rows, float s) noexcept {
 #if DYNCAL_ARM_FLOAT_KERNELS
-  const int groups = count / 3;
-  int pairs = groups / 2;  // two groups of three columns per pass of the loop
-  const int odd = groups & 1;
-  const int rest = count - 3 * groups;
-  const float* wj = w;
+  int groups = rows / 3;
+  int rest = rows - 3 * groups;
+  const float* wj;
+  int n;
   __asm__ volatile(
       ".macro dyn_dd_group\n\t"
       "vldmia %[wj]!, {s6-s23}\n\t"
@@ -56,9 +57,11 @@ inline void downdate_row_float6(float* p, const float* w, int count, float s) no
       ".endif\n\t"
       "vstmia %[p]!, {s24-s26}\n\t"
       ".endm\n\t"
-      "vmov.f32 s27, %[s]\n\t"
+      "vmov.f32 s27, %[s]\n"
+      "0:\n\t"  // row i: w_i in s0..s5, columns i..rows-1 = 3 groups + rest
       "vldmia %[wi], {s0-s5}\n\t"
-      "cmp %[n], #0\n\t"
+      "mov %[wj], %[wi]\n\t"
+      "lsrs %[n], %[g], #1\n\t"
       "beq 5f\n"
       "1:\n\t"
       "dyn_dd_group\n\t"
@@ -66,7 +69,7 @@ inline void downdate_row_float6(float* p, const float* w, int count, float s) no
       "subs %[n], %[n], #1\n\t"
       "bne 1b\n"
       "5:\n\t"
-      "cmp %[odd], #0\n\t"
+      "tst %[g], #1\n\t"
       "beq 2f\n\t"
       "dyn_dd_group\n"
       "2:\n\t"
@@ -84,7 +87,7 @@ inline void downdate_row_float6(float* p, const float* w, int count, float s) no
       ".if %c[scaled]\n\t"
       "vmul.f32 s24, s24, s27\n\t"
       ".endif\n\t"
-      "vstr s24, [%[p]]\n\t"
+      "vstmia %[p]!, {s24}\n\t"
       "b 4f\n"
       "3:\n\t"
       "vldmia %[wj], {s6-s17}\n\t"
@@ -105,15 +108,23 @@ inline void downdate_row_float6(float* p, const float* w, int count, float s) no
       "vmul.f32 s24, s24, s27\n\t"
       "vmul.f32 s25, s25, s27\n\t"
       ".endif\n\t"
-      "vstmia %[p], {s24-s25}\n"
-      "4:\n\t"
+      "vstmia %[p]!, {s24-s25}\n"
+      "4:\n\t"  // next row: one column fewer
+      "add %[wi], %[wi], #24\n\t"
+      "subs %[rest], %[rest], #1\n\t"
+      "bpl 6f\n\t"
+      "movs %[rest], #2\n\t"
+      "subs %[g], %[g], #1\n"
+      "6:\n\t"
+      "subs %[rows], %[rows], #1\n\t"
+      "bne 0b\n\t"
       ".purgem dyn_dd_group\n"
-      : [p] "+r"(p), [wj] "+r"(wj), [n] "+r"(pairs)
-      : [wi] "r"(w), [rest] "r"(rest), [odd] "r"(odd), [s] "t"(s), [scaled] "i"(Scaled ? 1 : 0)
+      : [p] "+r"(p), [wi] "+r"(w), [wj] "=&r"(wj), [n] "=&r"(n), [g] "+r"(groups), [rest] "+r"(rest), [rows] "+r"(rows)
+      : [s] "t"(s), [scaled] "i"(Scaled ? 1 : 0)
       : "s0", "s1", "s2", "s3", "s4", "s5", "s6", "s7", "s8", "s9", "s10", "s11", "s12", "s13", "s14", "s15", "s16",
         "s17", "s18", "s19", "s20", "s21", "s22", "s23", "s24", "s25", "s26", "s27", "cc", "memory");
 #else
-  (void)p, (void)w, (void)count, (void)s;
+  (void)p, (void)w, (void)rows, (void)s;
 #endif
 }
 
@@ -243,31 +254,31 @@ inline float dot_rows_float6(const float* w, const float* z, float* out, int cou
 // for the rows k = R0..R1 of H's column c at [h]; H(k, c) goes through s28..s31 (four at a time).
 // Assembler text shared by the S kernels: S (lower, packed by rows, S(k, t) in s(k(k+1)/2 + t),
 // s0..s20) += H(k, c) V(c, 0..k) with V's row c in s21..s26.
-#define DYNCAL_S_MACROS                            \
-  ".altmacro\n\t"                                  \
-  ".macro dyn_sf a, b, hh\n\t"                     \
-  "vfma.f32 s\\a, s\\b, s\\hh\n\t"                 \
-  ".endm\n\t"                                      \
-  ".macro dyn_s_row k, hh\n\t"                     \
-  ".irp t, 0,1,2,3,4,5\n\t"                        \
-  ".if \\t <= \\k\n\t"                             \
+#define DYNCAL_S_MACROS                                \
+  ".altmacro\n\t"                                      \
+  ".macro dyn_sf a, b, hh\n\t"                         \
+  "vfma.f32 s\\a, s\\b, s\\hh\n\t"                     \
+  ".endm\n\t"                                          \
+  ".macro dyn_s_row k, hh\n\t"                         \
+  ".irp t, 0,1,2,3,4,5\n\t"                            \
+  ".if \\t <= \\k\n\t"                                 \
   "dyn_sf %%(\\k*(\\k+1)/2+\\t), %%(21+\\t), \\hh\n\t" \
-  ".endif\n\t"                                     \
-  ".endr\n\t"                                      \
-  ".endm\n\t"                                      \
-  ".macro dyn_ldv base, last\n\t"                  \
-  ".if \\last == 21\n\t"                           \
-  "vldmia \\base, {s21}\n\t"                       \
-  ".else\n\t"                                      \
-  "vldmia \\base, {s21-s\\last}\n\t"               \
-  ".endif\n\t"                                     \
-  ".endm\n\t"                                      \
-  ".macro dyn_ldh base, last\n\t"                  \
-  ".if \\last == 27\n\t"                           \
-  "vldmia \\base, {s27}\n\t"                       \
-  ".else\n\t"                                      \
-  "vldmia \\base, {s27-s\\last}\n\t"               \
-  ".endif\n\t"                                     \
+  ".endif\n\t"                                         \
+  ".endr\n\t"                                          \
+  ".endm\n\t"                                          \
+  ".macro dyn_ldv base, last\n\t"                      \
+  ".if \\last == 21\n\t"                               \
+  "vldmia \\base, {s21}\n\t"                           \
+  ".else\n\t"                                          \
+  "vldmia \\base, {s21-s\\last}\n\t"                   \
+  ".endif\n\t"                                         \
+  ".endm\n\t"                                          \
+  ".macro dyn_ldh base, last\n\t"                      \
+  ".if \\last == 27\n\t"                               \
+  "vldmia \\base, {s27}\n\t"                           \
+  ".else\n\t"                                          \
+  "vldmia \\base, {s27-s\\last}\n\t"                   \
+  ".endif\n\t"                                         \
   ".endm\n\t"
 #define DYNCAL_S_PURGE ".purgem dyn_ldh\n\t.purgem dyn_ldv\n\t.purgem dyn_s_row\n\t.purgem dyn_sf\n\t.noaltmacro\n"
 

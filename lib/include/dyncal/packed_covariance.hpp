@@ -265,7 +265,7 @@ class PackedCovariance {
   }
 
   /// S = H V + diag(r) (lower triangle) over H's runs: S_kt = sum of H(k, c) V(c, t), t <= k.
-  void s_runs(const Scalar* h, const MeasVector& r, Scalar (&S)[N][N]) const noexcept {
+  DYNCAL_ALWAYS_INLINE void s_runs(const Scalar* h, const MeasVector& r, Scalar (&S)[N][N]) const noexcept {
     for (int k = 0; k < N; ++k) {
       for (int t = 0; t <= k; ++t) S[k][t] = Scalar(0);
       S[k][k] = r[k];
@@ -430,23 +430,36 @@ class PackedCovariance {
   }
 
   /// Rows i..i+B-1 of V = P H^T, accumulated over the runs of H's structure (in registers; with
-  /// the ARM kernels in `a`, which each kernel loads and stores with one VLDM / VSTM).
+  /// the ARM kernels in V's rows, which each kernel loads and stores with one VLDM / VSTM).
   template <int B>
   DYNCAL_ALWAYS_INLINE void block_v(int i, const Scalar* H) noexcept {
-    Scalar corner[B][B];  // corner[s][r] = P(i + r, i + s)
-    for (int r = 0; r < B; ++r) {
-      for (int s = r; s < B; ++s) corner[s][r] = corner[r][s] = p_[row_[i + r] + i + s];
-    }
-    // The ARM kernels accumulate straight into V's rows (zeroed by compute_v; B rows of N are
-    // contiguous); the portable loops in a local array the compiler keeps in registers.
-    Scalar local[kAsmV<B> ? 1 : B][N];
-    Scalar(&a)[B][N] = *reinterpret_cast<Scalar(*)[B][N]>(kAsmV<B> ? &v_[i][0] : &local[0][0]);
-    if constexpr (!kAsmV<B>) {
+    if constexpr (kAsmV<B>) {
+      // The ARM kernels accumulate straight into V's rows (zeroed by compute_v; B rows of N are
+      // contiguous in v_).
+      accumulate_v<B>(i, H, *reinterpret_cast<Scalar(*)[B][N]>(&v_[i][0]));
+    } else {
+      // The portable loops in a local array the compiler keeps in registers.
+      Scalar a[B][N];
       DYNCAL_UNROLL
       for (int r = 0; r < B; ++r) {
         DYNCAL_UNROLL
         for (int k = 0; k < N; ++k) a[r][k] = Scalar(0);
       }
+      accumulate_v<B>(i, H, a);
+      DYNCAL_UNROLL
+      for (int r = 0; r < B; ++r) {
+        DYNCAL_UNROLL
+        for (int k = 0; k < N; ++k) v_[i + r][k] = a[r][k];
+      }
+    }
+  }
+
+  /// a += rows i..i+B-1 of P H^T, over the runs of H's structure and the term block.
+  template <int B>
+  DYNCAL_ALWAYS_INLINE void accumulate_v(int i, const Scalar* H, Scalar (&a)[B][N]) const noexcept {
+    Scalar corner[B][B];  // corner[s][r] = P(i + r, i + s)
+    for (int r = 0; r < B; ++r) {
+      for (int s = r; s < B; ++s) corner[s][r] = corner[r][s] = p_[row_[i + r] + i + s];
     }
     const int term_begin = P - term_columns_ * N;
     const bool fast_terms = term_columns_ > 0 && i + B <= term_begin;
@@ -471,13 +484,17 @@ class PackedCovariance {
         run_right<B, decltype(r0)::value, decltype(r1)::value>(i, u.begin, u.end, H, a);
       });
     }
-    if (fast_terms && kAsmV<B> && term_columns_ <= 2) {
-      if (term_columns_ == 1) {
-        v_terms_float6<1>(&a[0][0], p_ + row_[i] + term_begin, P - 1 - i, h_terms_);
-      } else {
-        v_terms_float6<2>(&a[0][0], p_ + row_[i] + term_begin, P - 1 - i, h_terms_);
+    if constexpr (kAsmV<B>) {
+      if (fast_terms && term_columns_ <= 2) {
+        if (term_columns_ == 1) {
+          v_terms_float6<1>(&a[0][0], p_ + row_[i] + term_begin, P - 1 - i, h_terms_);
+        } else {
+          v_terms_float6<2>(&a[0][0], p_ + row_[i] + term_begin, P - 1 - i, h_terms_);
+        }
+        return;
       }
-    } else if (fast_terms) {
+    }
+    if (fast_terms) {
       switch (term_columns_) {
         case 1:
           terms<B, 1>(i, H, a);
@@ -491,13 +508,6 @@ class PackedCovariance {
         default:
           terms<B, 4>(i, H, a);
           break;
-      }
-    }
-    if constexpr (!kAsmV<B>) {
-      DYNCAL_UNROLL
-      for (int r = 0; r < B; ++r) {
-        DYNCAL_UNROLL
-        for (int k = 0; k < N; ++k) v_[i + r][k] = a[r][k];
       }
     }
   }
@@ -520,7 +530,7 @@ class PackedCovariance {
   template <bool Scaled>
   void downdate(Scalar s) noexcept {
     if constexpr (kArmFloatKernels && std::is_same_v<Scalar, float> && N == 6) {
-      for (int i = 0; i < P; ++i) downdate_row_float6<Scaled>(p_ + index(i, i), v_[i], P - i, s);
+      downdate_float6<Scaled>(p_, &v_[0][0], P, s);
       return;
     }
     int i = 0;
@@ -584,7 +594,6 @@ class PackedCovariance {
   Scalar p_[kPacked] = {};
   Scalar v_[P][N] = {};  ///< V = P H^T, then W = V L^-T
   Scalar dphi_[P] = {};
-  Scalar h_terms_[kMaxTermColumns * N] = {};  ///< the term block's nonzero entries (ARM kernels)
   Scalar inv_d_[N] = {};
   RegressorStructure<P> structure_ = RegressorStructure<P>::dense(N);
   Run runs_[P] = {};
@@ -601,6 +610,8 @@ class PackedCovariance {
   } row_{};
   std::uint8_t zero_columns_[P] = {};  ///< columns of H that the structure declares all zero
   int num_zero_columns_ = 0;
+  /// The term block's nonzero entries (ARM kernels only).
+  Scalar h_terms_[kAsmV<kBlock> ? kMaxTermColumns * N : 1] = {};
 };
 
 }  // namespace dyncal

@@ -95,6 +95,53 @@ bool store_round_trip() {
   }
 }
 
+// The KF's refusal on the target's own arithmetic (on the M4F, the assembler kernels'), run on the
+// image's filter after the replay: P0 = 2^26 I and a regressor with one 1 per row (in a column the
+// structure allows there) with r = 2^-30 make six updated diagonals exactly 0 (2^26 + 2^-30
+// rounds to 2^26, L = 2^13), which must be refused with the estimate and P untouched; with
+// r = 2^24 the same sample is accepted and those variances shrink (to 0.8 * 2^24).
+bool refusal_check() {
+#if DYNCAL_FW_UPDATER != 0
+  return true;
+#else
+  {
+    using Model = dyncal::replay::LinearModel;
+    constexpr int P = Estimator::kNumParams;
+    auto& filter = g_est.filter;
+    const auto structure = Model::structure();
+    const auto p0 = Model::ParamVector<Scalar>::Constant(Scalar(67108864));  // 2^26
+    if (filter.reset(Model::ParamVector<Scalar>::Zero(), p0, structure) != dyncal::UpdateStatus::ok) return false;
+    auto& K = g_est.K;
+    K.setZero();
+    int column[6];
+    for (int k = 0, c = 0; k < 6; ++k) {
+      while (c < P && !(structure.first[c] <= k && k <= structure.last[c])) ++c;
+      if (c == P) return false;
+      column[k] = c;
+      K(k, c++) = Scalar(1);
+    }
+    using V = Eigen::Matrix<Scalar, 6, 1>;
+    const V y = V::Constant(Scalar(1));
+    const dyncal::UpdateStatus refused = filter.update(K, y, V::Constant(Scalar(1) / Scalar(1073741824)));
+    Model::ParamVector<Scalar> variances;
+    filter.covariance().diagonal(variances);
+    const bool untouched = filter.estimate() == Model::ParamVector<Scalar>::Zero() && variances == p0;
+    const dyncal::UpdateStatus accepted = filter.update(K, y, V::Constant(Scalar(16777216)));  // r = 2^24
+    filter.covariance().diagonal(variances);
+    bool shrunk = true;
+    for (int k = 0; k < 6; ++k) shrunk = shrunk && variances[column[k]] < p0[0] && variances[column[k]] > Scalar(0);
+    sh::write("  zero posterior variance: ");
+    sh::write(dyncal::to_string(refused));
+    sh::write(untouched ? ", state untouched" : ", STATE CHANGED");
+    sh::write("; with r = 2^24: ");
+    sh::write(dyncal::to_string(accepted));
+    sh::write(shrunk ? ", variances shrink\n" : ", VARIANCES WRONG\n");
+    return refused == dyncal::UpdateStatus::not_positive_definite && untouched &&
+           accepted == dyncal::UpdateStatus::ok && shrunk;
+  }
+#endif
+}
+
 }  // namespace
 
 int main() {
@@ -142,6 +189,7 @@ int main() {
   sh::write(" bytes of ");
   sh::write_int(sh::StackUsage::reserved_bytes());
   sh::write(" reserved\n");
-  const bool ok = difference < kTolerance && c.accepted > data::kCount * 9 / 10 && stored;
+  const bool refusals = refusal_check();
+  const bool ok = difference < kTolerance && c.accepted > data::kCount * 9 / 10 && stored && refusals;
   return ok ? 0 : 1;
 }
