@@ -145,4 +145,32 @@ TEST(SurveyMethods, PhysicallyConsistentLsHasPositiveDefinitePseudoInertiasAndFi
   EXPECT_LT(pseudo_inertia_min_eigenvalues(set_standard())[2], 0.0);
 }
 
+// The closed loop IDIM-IV builds its instruments from (issue 5): the drive's known control law on
+// a plant with the set parameters must retrace the recorded states exactly.
+TEST(SurveyClosedLoop, SimulationWithTheSetParametersRetracesTheRecordedStates) {
+  const SurveyData& d = data(FrictionModel::eq7);
+  std::array<double, 6> Fc{}, beta{};
+  for (int j = 0; j < 6; ++j) {
+    Fc[j] = d.scenario.friction[j].Fc;
+    beta[j] = d.scenario.friction[j].beta;
+  }
+  const Eigen::VectorXd phi = set_standard();
+  const auto sim = simulate_closed_loop(load_robot(default_robots_dir(), "er20"), d,
+                                        std::vector<double>(phi.data(), phi.data() + phi.size()), Fc, beta);
+  ASSERT_EQ(static_cast<Eigen::Index>(sim.size()), d.q.rows());
+  double worst = 0;
+  for (Eigen::Index s = 0; s < d.q.rows(); ++s)
+    for (int j = 0; j < 6; ++j) worst = std::max(worst, std::fabs(sim[static_cast<size_t>(s)].q[j] - d.q(s, j)));
+  EXPECT_LT(worst, 1e-9);
+  // A plant 20 % heavier in every link does not retrace them (the test can fail).
+  const Eigen::VectorXd heavier = 1.2 * phi;
+  const auto other =
+      simulate_closed_loop(load_robot(default_robots_dir(), "er20"), d,
+                           std::vector<double>(heavier.data(), heavier.data() + heavier.size()), Fc, beta);
+  double moved = 0;
+  for (Eigen::Index s = 0; s < d.q.rows(); ++s)
+    for (int j = 0; j < 6; ++j) moved = std::max(moved, std::fabs(other[static_cast<size_t>(s)].q[j] - d.q(s, j)));
+  EXPECT_GT(moved, 1e-6);
+}
+
 }  // namespace
