@@ -307,7 +307,7 @@ class PackedCovariance {
     return true;
   }
 
-  /// The ARMv7E-M float kernels for S, W and dphi (six measurements).
+  /// The ARMv7E-M float kernels for S, W, dphi and the downdate (six measurements).
   static constexpr bool kAsmW = kArmFloatKernels && std::is_same_v<Scalar, float> && N == 6;
 
   struct Run {
@@ -516,9 +516,11 @@ class PackedCovariance {
   void compute_v(const Scalar* H) noexcept {
     if constexpr (kAsmV<kBlock>) {
       std::memset(v_, 0, sizeof v_);
-      // The term block's nonzero entries, joint by joint: H(j, b + j M + t) at h_terms_[j M + t].
+      // The term block's nonzero entries, joint by joint: H(j, b + j M + t) at h_terms_[j M + t]
+      // (v_terms_float6 takes one or two columns per joint; wider blocks use the portable pass).
       const int b = P - term_columns_ * N;
-      for (int c = 0; c < term_columns_ * N; ++c) h_terms_[c] = H[(b + c) * N + c / term_columns_];
+      if (term_columns_ <= 2)
+        for (int c = 0; c < term_columns_ * N; ++c) h_terms_[c] = H[(b + c) * N + c / term_columns_];
     }
     int i = 0;
     for (; i + kBlock <= P; i += kBlock) block_v<kBlock>(i, H);
@@ -529,7 +531,7 @@ class PackedCovariance {
   /// registers, W_j loaded once per column for all three).
   template <bool Scaled>
   void downdate(Scalar s) noexcept {
-    if constexpr (kArmFloatKernels && std::is_same_v<Scalar, float> && N == 6) {
+    if constexpr (kAsmW) {
       downdate_float6<Scaled>(p_, &v_[0][0], P, s);
       return;
     }
