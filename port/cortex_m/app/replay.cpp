@@ -104,41 +104,39 @@ bool refusal_check() {
 #if DYNCAL_FW_UPDATER != 0
   return true;
 #else
-  {
-    using Model = dyncal::replay::LinearModel;
-    constexpr int P = Estimator::kNumParams;
-    auto& filter = g_est.filter;
-    const auto structure = Model::structure();
-    const auto p0 = Model::ParamVector<Scalar>::Constant(Scalar(67108864));  // 2^26
-    if (filter.reset(Model::ParamVector<Scalar>::Zero(), p0, structure) != dyncal::UpdateStatus::ok) return false;
-    auto& K = g_est.K;
-    K.setZero();
-    int column[6];
-    for (int k = 0, c = 0; k < 6; ++k) {
-      while (c < P && !(structure.first[c] <= k && k <= structure.last[c])) ++c;
-      if (c == P) return false;
-      column[k] = c;
-      K(k, c++) = Scalar(1);
-    }
-    using V = Eigen::Matrix<Scalar, 6, 1>;
-    const V y = V::Constant(Scalar(1));
-    const dyncal::UpdateStatus refused = filter.update(K, y, V::Constant(Scalar(1) / Scalar(1073741824)));
-    Model::ParamVector<Scalar> variances;
-    filter.covariance().diagonal(variances);
-    const bool untouched = filter.estimate() == Model::ParamVector<Scalar>::Zero() && variances == p0;
-    const dyncal::UpdateStatus accepted = filter.update(K, y, V::Constant(Scalar(16777216)));  // r = 2^24
-    filter.covariance().diagonal(variances);
-    bool shrunk = true;
-    for (int k = 0; k < 6; ++k) shrunk = shrunk && variances[column[k]] < p0[0] && variances[column[k]] > Scalar(0);
-    sh::write("  zero posterior variance: ");
-    sh::write(dyncal::to_string(refused));
-    sh::write(untouched ? ", state untouched" : ", STATE CHANGED");
-    sh::write("; with r = 2^24: ");
-    sh::write(dyncal::to_string(accepted));
-    sh::write(shrunk ? ", variances shrink\n" : ", VARIANCES WRONG\n");
-    return refused == dyncal::UpdateStatus::not_positive_definite && untouched &&
-           accepted == dyncal::UpdateStatus::ok && shrunk;
+  using Model = dyncal::replay::LinearModel;
+  constexpr int P = Estimator::kNumParams;
+  auto& filter = g_est.filter;
+  const auto structure = Model::structure();
+  const auto p0 = Model::ParamVector<Scalar>::Constant(Scalar(67108864));  // 2^26
+  if (filter.reset(Model::ParamVector<Scalar>::Zero(), p0, structure) != dyncal::UpdateStatus::ok) return false;
+  auto& K = g_est.K;
+  K.setZero();
+  int column[6];
+  for (int k = 0, c = 0; k < 6; ++k) {
+    while (c < P && !(structure.first[c] <= k && k <= structure.last[c])) ++c;
+    if (c == P) return false;
+    column[k] = c;
+    K(k, c++) = Scalar(1);
   }
+  using V = Eigen::Matrix<Scalar, 6, 1>;
+  const V y = V::Constant(Scalar(1));
+  const dyncal::UpdateStatus refused = filter.update(K, y, V::Constant(Scalar(1) / Scalar(1073741824)));
+  Model::ParamVector<Scalar> variances;
+  filter.covariance().diagonal(variances);
+  const bool untouched = filter.estimate() == Model::ParamVector<Scalar>::Zero() && variances == p0;
+  const dyncal::UpdateStatus accepted = filter.update(K, y, V::Constant(Scalar(16777216)));  // r = 2^24
+  filter.covariance().diagonal(variances);
+  bool shrunk = true;
+  for (int k = 0; k < 6; ++k) shrunk = shrunk && variances[column[k]] < p0[0] && variances[column[k]] > Scalar(0);
+  sh::write("  zero posterior variance: ");
+  sh::write(dyncal::to_string(refused));
+  sh::write(untouched ? ", state untouched" : ", STATE CHANGED");
+  sh::write("; with r = 2^24: ");
+  sh::write(dyncal::to_string(accepted));
+  sh::write(shrunk ? ", variances shrink\n" : ", VARIANCES WRONG\n");
+  return refused == dyncal::UpdateStatus::not_positive_definite && untouched && accepted == dyncal::UpdateStatus::ok &&
+         shrunk;
 #endif
 }
 
