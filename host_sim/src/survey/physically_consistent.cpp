@@ -31,14 +31,9 @@ Eigen::Matrix4d cholesky_factor(const double* th) {
 constexpr int kOffRow[6] = {1, 2, 2, 3, 3, 3};
 constexpr int kOffCol[6] = {0, 0, 1, 0, 1, 2};
 
-/// theta of the nearest positive definite pseudo-inertia to J (eigenvalues floored).
+/// theta of the nearest positive definite pseudo-inertia to J.
 void theta_from_pseudo_inertia(const Eigen::Matrix4d& J, double* th) {
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> es(J);
-  Eigen::Vector4d ev = es.eigenvalues();
-  const double floor = 1e-4 * std::max(ev.maxCoeff(), 1e-9);
-  ev = ev.cwiseMax(floor);
-  const Eigen::Matrix4d Jp = es.eigenvectors() * ev.asDiagonal() * es.eigenvectors().transpose();
-  const Eigen::Matrix4d L = Jp.llt().matrixL();
+  const Eigen::Matrix4d L = nearest_positive_definite(J).llt().matrixL();
   for (int i = 0; i < 4; ++i) th[i] = std::log(L(i, i));
   for (int k = 0; k < 6; ++k) th[4 + k] = L(kOffRow[k], kOffCol[k]);
 }

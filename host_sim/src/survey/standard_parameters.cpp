@@ -81,6 +81,22 @@ Eigen::Matrix4d pseudo_inertia(const double* p) {
   return J;
 }
 
+Eigen::Matrix4d nearest_positive_definite(const Eigen::Matrix4d& J) {
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> es(J);
+  const Eigen::Vector4d ev = es.eigenvalues();
+  const double floor = 1e-4 * std::max(ev.maxCoeff(), 1e-9);
+  if (ev.minCoeff() >= floor) return J;
+  return es.eigenvectors() * ev.cwiseMax(floor).asDiagonal() * es.eigenvectors().transpose();
+}
+
+Eigen::VectorXd nearest_consistent(const Eigen::VectorXd& phi) {
+  Eigen::VectorXd out = phi;
+  for (int l = 0; l < kLinks; ++l) {
+    standard_from_pseudo_inertia(nearest_positive_definite(pseudo_inertia(phi.data() + 10 * l)), out.data() + 10 * l);
+  }
+  return out;
+}
+
 void standard_from_pseudo_inertia(const Eigen::Matrix4d& J, double* p) {
   const Eigen::Matrix3d S = J.topLeftCorner<3, 3>();
   const Eigen::Matrix3d I = S.trace() * Eigen::Matrix3d::Identity() - S;

@@ -41,6 +41,12 @@ std::array<double, 10> physical_parameters(const double* phi10);
 /// Pseudo-inertia J = [Sigma h; h^T m] (4 x 4) of one link (Wensing et al. 2017): Sigma the second
 /// moment about the link frame origin; physically consistent iff J is positive definite.
 Eigen::Matrix4d pseudo_inertia(const double* phi10);
+/// The nearest positive definite matrix to a pseudo-inertia J (Frobenius norm): eigenvalues floored
+/// at 1e-4 of the largest one (and 1e-13), eigenvectors kept.
+Eigen::Matrix4d nearest_positive_definite(const Eigen::Matrix4d& J);
+/// Every link of phi (60) replaced by its nearest physically consistent parameters (links already
+/// consistent with the floor above are kept as they are).
+Eigen::VectorXd nearest_consistent(const Eigen::VectorXd& phi);
 /// The 10 standard parameters of a pseudo-inertia (inverse of pseudo_inertia).
 void standard_from_pseudo_inertia(const Eigen::Matrix4d& J, double* phi10);
 

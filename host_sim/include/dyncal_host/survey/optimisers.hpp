@@ -1,0 +1,43 @@
+#pragma once
+// The survey's optimisation methods (Sec. 3.4) on the standard parameters and the friction
+// parameters within search ranges, with each link's pseudo-inertia kept positive definite
+// (physical feasibility, Wensing et al. 2017): gradient-based (NLopt SLSQP, least-squares
+// objective), a genetic algorithm and a particle filter (both on the Eq. 25 objective, no initial
+// values: only the ranges). Deterministic for a seed; budgets are evaluation counts, not times.
+
+#include <cstdint>
+
+#include "dyncal_host/survey/methods.hpp"
+#include "dyncal_host/survey/objective.hpp"
+
+namespace dyncal::host::survey {
+
+struct OptimiserSettings {
+  double range_width = 0.4;    ///< inertial ranges: CAD value +- range_width x |CAD value| (search_ranges)
+  double k_e = 1.0;            ///< Eq. 25 weight of the residual standard deviation
+  std::uint64_t seed = 1;      ///< GA and particle filter
+  int population = 120;        ///< GA population / particle count
+  int generations = 1500;      ///< GA generations / particle-filter iterations
+  int max_evaluations = 3000;  ///< gradient-based: objective evaluations
+};
+
+/// Gradient-based: NLopt SLSQP from the CAD values on sum_j ||e_j / sigma_j||^2 / S (variables
+/// scaled to their ranges), one inequality lambda_min(J_l) >= 0 per link with its analytic gradient.
+Estimate gradient_descent(const SurveyData& data, FrictionModel model, const MethodSettings& settings,
+                          const OptimiserSettings& options = {});
+
+/// Real-coded genetic algorithm (Deb 2000 constraint handling: feasible beats infeasible, less
+/// violation beats more): binary tournaments, simulated binary crossover (eta 15, p 0.9), polynomial
+/// mutation (eta 20, p 1/D), (mu + lambda) survival; population uniform in the ranges.
+Estimate genetic_algorithm(const SurveyData& data, FrictionModel model, const MethodSettings& settings,
+                           const OptimiserSettings& options = {});
+
+/// Particle filter for static parameters (Liu and West 2001): particles uniform in the ranges;
+/// each iteration weights them by exp(-J / T) with T set so that the effective sample size is half
+/// the particle count (adaptive tempering; infeasible particles weigh nothing), resamples
+/// (systematic) and moves them by the shrinkage kernel a x + (1 - a) mean + N(0, h^2 Cov)
+/// (discount 0.98). Returns the best feasible particle seen.
+Estimate particle_filter(const SurveyData& data, FrictionModel model, const MethodSettings& settings,
+                         const OptimiserSettings& options = {});
+
+}  // namespace dyncal::host::survey

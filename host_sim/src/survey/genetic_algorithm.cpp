@@ -1,0 +1,110 @@
+// Real-coded genetic algorithm (survey Sec. 3.4 (2)) on the Eq. 25 objective within the search
+// ranges. Operators: Deb and Agrawal 1995 (simulated binary crossover, polynomial mutation);
+// constraints: Deb 2000 (feasibility rules, no penalty factor).
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "bounded_problem.hpp"
+#include "dyncal_host/input_error.hpp"
+
+namespace dyncal::host::survey {
+namespace {
+
+struct Individual {
+  Eigen::VectorXd u;  // unit coordinates
+  double f = 0, violation = 0;
+};
+
+/// Deb's rules: feasible beats infeasible; two feasible: lower objective; two infeasible: lower violation.
+bool better(const Individual& a, const Individual& b) {
+  if ((a.violation == 0) != (b.violation == 0)) return a.violation == 0;
+  return a.violation == 0 ? a.f < b.f : a.violation < b.violation;
+}
+
+constexpr double kEtaCrossover = 15, kEtaMutation = 20, kCrossoverProbability = 0.9;
+
+/// Simulated binary crossover of one variable within [0, 1] (bounded form, Deb and Agrawal).
+void sbx(double& a, double& b, std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  if (U(rng) > 0.5 || std::fabs(a - b) < 1e-14) return;
+  const double y1 = std::min(a, b), y2 = std::max(a, b), r = U(rng);
+  auto child = [&](double spread_to_bound) {
+    const double beta = 1.0 + 2.0 * spread_to_bound / (y2 - y1);
+    const double alpha = 2.0 - std::pow(beta, -(kEtaCrossover + 1));
+    const double bq = r <= 1.0 / alpha ? std::pow(r * alpha, 1.0 / (kEtaCrossover + 1))
+                                       : std::pow(1.0 / (2.0 - r * alpha), 1.0 / (kEtaCrossover + 1));
+    return bq;
+  };
+  const double c1 = 0.5 * ((y1 + y2) - child(y1) * (y2 - y1));
+  const double c2 = 0.5 * ((y1 + y2) + child(1.0 - y2) * (y2 - y1));
+  const bool swap = U(rng) < 0.5;
+  a = std::clamp(swap ? c2 : c1, 0.0, 1.0);
+  b = std::clamp(swap ? c1 : c2, 0.0, 1.0);
+}
+
+/// Polynomial mutation of one variable within [0, 1].
+void mutate(double& y, std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  const double r = U(rng), m = 1.0 / (kEtaMutation + 1);
+  double dq;
+  if (r < 0.5) {
+    dq = std::pow(2 * r + (1 - 2 * r) * std::pow(1 - y, kEtaMutation + 1), m) - 1;
+  } else {
+    dq = 1 - std::pow(2 * (1 - r) + 2 * (r - 0.5) * std::pow(y, kEtaMutation + 1), m);
+  }
+  y = std::clamp(y + dq, 0.0, 1.0);
+}
+
+}  // namespace
+
+Estimate genetic_algorithm(const SurveyData& data, FrictionModel model, const MethodSettings& settings,
+                           const OptimiserSettings& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (options.population < 4 || options.generations < 1) throw InputError("genetic algorithm: population >= 4");
+  const detail::BoundedProblem problem(data, model, settings, options);
+  const int D = problem.free_dimension(), N = options.population;
+  std::mt19937_64 rng(options.seed);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  auto evaluate = [&](Individual& ind) {
+    const Eigen::VectorXd x = problem.full(ind.u.data());
+    ind.f = problem.eq25(x);
+    ind.violation = problem.violation(x);
+  };
+  std::vector<Individual> pop(static_cast<size_t>(N));
+  for (auto& ind : pop) {
+    ind.u.resize(D);
+    for (int k = 0; k < D; ++k) ind.u[k] = U(rng);
+    evaluate(ind);
+  }
+  std::uniform_int_distribution<int> pick(0, N - 1);
+  auto tournament = [&]() -> const Individual& {
+    const Individual& a = pop[static_cast<size_t>(pick(rng))];
+    const Individual& b = pop[static_cast<size_t>(pick(rng))];
+    return better(a, b) ? a : b;
+  };
+  const double p_mutation = 1.0 / D;
+  std::vector<Individual> all;
+  for (int g = 0; g < options.generations; ++g) {
+    all = pop;
+    for (int i = 0; i < N; i += 2) {
+      Individual c1 = tournament(), c2 = tournament();
+      if (U(rng) < kCrossoverProbability) {
+        for (int k = 0; k < D; ++k) sbx(c1.u[k], c2.u[k], rng);
+      }
+      for (Individual* c : {&c1, &c2}) {
+        for (int k = 0; k < D; ++k)
+          if (U(rng) < p_mutation) mutate(c->u[k], rng);
+        evaluate(*c);
+        all.push_back(std::move(*c));
+      }
+    }
+    // (mu + lambda): the best N of parents and children survive.
+    std::stable_sort(all.begin(), all.end(), better);
+    all.resize(static_cast<size_t>(N));
+    pop.swap(all);
+  }
+  return problem.estimate(problem.full(pop.front().u.data()), "genetic algorithm", t0, options.generations);
+}
+
+}  // namespace dyncal::host::survey

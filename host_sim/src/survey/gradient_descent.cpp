@@ -1,0 +1,143 @@
+// Gradient-based optimisation (survey Sec. 3.4 (1)) with NLopt's SLSQP.
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <nlopt.hpp>
+
+#include "bounded_problem.hpp"
+#include "dyncal_host/input_error.hpp"
+#include "dyncal_host/survey/standard_parameters.hpp"
+#include "er20/robot.hpp"
+
+namespace dyncal::host::survey {
+namespace {
+
+struct Context {
+  const detail::BoundedProblem* problem;
+  int evaluations = 0;
+};
+
+double cost(const std::vector<double>& u, std::vector<double>& grad, void* data) {
+  auto* c = static_cast<Context*>(data);
+  const detail::BoundedProblem& p = *c->problem;
+  ++c->evaluations;
+  const Eigen::VectorXd x = p.full(u.data());
+  Eigen::VectorXd g(x.size());
+  const double J = p.objective().least_squares(x.data(), grad.empty() ? nullptr : g.data());
+  for (size_t k = 0; k < grad.size(); ++k)
+    grad[k] = g[p.free_index(static_cast<int>(k))] * p.scale(static_cast<int>(k), x);
+  return J;
+}
+
+struct LinkConstraint {
+  const detail::BoundedProblem* problem;
+  int link;
+  double margin;  // lambda_min >= margin
+};
+
+/// margin - lambda_min(J_link) <= 0.
+double link_constraint(const std::vector<double>& u, std::vector<double>& grad, void* data) {
+  const auto* c = static_cast<LinkConstraint*>(data);
+  const detail::BoundedProblem& p = *c->problem;
+  const Eigen::VectorXd x = p.full(u.data());
+  double g10[10];
+  const double lam = pseudo_inertia_min_eigenvalue(x.data() + 10 * c->link, g10);
+  for (size_t k = 0; k < grad.size(); ++k) {
+    const int i = p.free_index(static_cast<int>(k));
+    grad[k] = (i / 10 == c->link && i < kStandard) ? -g10[i % 10] * p.scale(static_cast<int>(k), x) : 0.0;
+  }
+  return c->margin - lam;
+}
+
+/// SLSQP from x0 (full decision vector); returns the solution, adds the evaluations to `evaluations`.
+Eigen::VectorXd solve_slsqp(const detail::BoundedProblem& problem, const Eigen::VectorXd& x0,
+                            const OptimiserSettings& options, int& evaluations) {
+  const int D = problem.free_dimension();
+  nlopt::opt opt(nlopt::LD_SLSQP, static_cast<unsigned>(D));
+  opt.set_lower_bounds(std::vector<double>(static_cast<size_t>(D), 0.0));
+  opt.set_upper_bounds(std::vector<double>(static_cast<size_t>(D), 1.0));
+  Context ctx{&problem};
+  opt.set_min_objective(cost, &ctx);
+  std::vector<LinkConstraint> links;
+  for (int l = 0; l < kLinks; ++l) {
+    // A margin of 1e-6 of the CAD pseudo-inertia's size keeps the result strictly inside the cone.
+    links.push_back({&problem, l, 1e-6 * pseudo_inertia(problem.cad().data() + 10 * l).norm()});
+  }
+  for (auto& c : links) opt.add_inequality_constraint(link_constraint, &c, 0.0);
+  opt.set_ftol_rel(1e-15);
+  opt.set_xtol_rel(1e-14);
+  opt.set_maxeval(options.max_evaluations);
+  const Eigen::VectorXd u0 = problem.unit(x0);
+  std::vector<double> u(u0.data(), u0.data() + D);
+  double f = 0;
+  try {
+    opt.optimize(u, f);
+  } catch (const nlopt::roundoff_limited&) {
+    // SLSQP stopped on rounding: u holds its best point, which is what we report.
+  } catch (const std::exception& ex) {
+    throw InputError(std::string("gradient descent (NLopt SLSQP) failed: ") + ex.what());
+  }
+  evaluations += ctx.evaluations;
+  return problem.full(u.data());
+}
+
+/// Eq. 4 start from an Eq. 7 solution x7: per joint, qds from a log-spaced scan of its range
+/// (64 values), with Fc, Fs - Fc and beta the least-squares fit of the joint's residual
+/// tau_j - Y_j phi at each qds (variable projection); inertial parameters kept.
+Eigen::VectorXd stribeck_start(const SurveyData& d, const Eigen::VectorXd& x7, const SearchRanges& r4) {
+  Eigen::VectorXd x = r4.lo;
+  x.head(kStandard) = x7.head(kStandard);
+  const Eigen::Index S = d.q.rows();
+  Eigen::MatrixXd residual(S, 6);
+  Eigen::Matrix<double, 6, kStandard> Ys;
+  using Vec6 = Eigen::Matrix<double, 6, 1>;
+  for (Eigen::Index s = 0; s < S; ++s) {
+    dyncal::generated::er20::Robot::standard_regressor(Vec6(d.q.row(s).transpose()), Vec6(d.qd.row(s).transpose()),
+                                                       Vec6(d.qdd.row(s).transpose()), Ys);
+    residual.row(s) = d.tau.row(s) - (Ys * x7.head(kStandard)).transpose();
+  }
+  constexpr int kScan = 64;
+  for (int j = 0; j < 6; ++j) {
+    const int b = kStandard + 4 * j;
+    double best = INFINITY;
+    for (int k = 0; k < kScan; ++k) {
+      const double qds = r4.lo[b + 2] * std::pow(r4.hi[b + 2] / r4.lo[b + 2], k / (kScan - 1.0));
+      Eigen::MatrixXd A(S, 3);
+      for (Eigen::Index s = 0; s < S; ++s) {
+        const double v = d.qd(s, j), sg = v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0);
+        A.row(s) << sg, sg * std::exp(-(v / qds) * (v / qds)), v;
+      }
+      const Eigen::Vector3d p = A.colPivHouseholderQr().solve(residual.col(j));
+      const double sse = (A * p - residual.col(j)).squaredNorm();
+      if (sse < best) {
+        best = sse;
+        x[b] = std::clamp(p[0], r4.lo[b], r4.hi[b]);
+        x[b + 1] = std::clamp(p[0] + p[1], r4.lo[b + 1], r4.hi[b + 1]);
+        x[b + 2] = qds;
+        x[b + 3] = std::clamp(p[2], r4.lo[b + 3], r4.hi[b + 3]);
+      }
+    }
+  }
+  return x;
+}
+
+}  // namespace
+
+Estimate gradient_descent(const SurveyData& data, FrictionModel model, const MethodSettings& settings,
+                          const OptimiserSettings& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  int evaluations = 0;
+  // Eq. 7 from the CAD values, friction in the middle of its range.
+  const detail::BoundedProblem linear(data, FrictionModel::eq7, settings, options);
+  Eigen::VectorXd x0 = linear.full(std::vector<double>(static_cast<size_t>(linear.free_dimension()), 0.5).data());
+  x0.head(kStandard) = linear.cad();
+  Eigen::VectorXd x = solve_slsqp(linear, x0, options, evaluations);
+  if (model == FrictionModel::eq7) return linear.estimate(x, "gradient descent", t0, evaluations);
+  // Eq. 4 from the Eq. 7 solution and a Stribeck start per joint.
+  const detail::BoundedProblem nonlinear(data, model, settings, options);
+  x = stribeck_start(data, x, search_ranges(data, model, nonlinear.cad(), options.range_width));
+  x = solve_slsqp(nonlinear, x, options, evaluations);
+  return nonlinear.estimate(x, "gradient descent", t0, evaluations);
+}
+
+}  // namespace dyncal::host::survey

@@ -1,0 +1,130 @@
+// Particle filter for static parameters (survey Sec. 3.4 (3)) as a sequential Monte Carlo sampler
+// (Del Moral, Doucet and Jasra 2006): particles drawn uniformly from the feasible search box are
+// carried through the tempered targets p_b(x) ~ exp(-b J(x)) on that box, J the Eq. 25 objective,
+// b rising from 0. Each step raises b so that the effective sample size of the incremental weights
+// is half the particle count (adaptive tempering), resamples (systematic), and rejuvenates every
+// particle by random-walk Metropolis moves whose proposal covariance is the particles' own
+// (scale 2.38 / sqrt(D), adapted towards an acceptance rate of 0.234).
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "bounded_problem.hpp"
+#include "dyncal_host/input_error.hpp"
+#include "dyncal_host/survey/standard_parameters.hpp"
+
+namespace dyncal::host::survey {
+namespace {
+
+constexpr int kMovesPerStep = 5;
+constexpr double kTargetAcceptance = 0.234;
+
+/// Next inverse temperature b' > b with ESS(exp(-(b' - b) f)) = N / 2 (bisection on b' - b).
+double next_inverse_temperature(const Eigen::VectorXd& f, double b) {
+  const double fmin = f.minCoeff();
+  const double N = static_cast<double>(f.size());
+  auto ess = [&](double db) {
+    const Eigen::ArrayXd w = (-(f.array() - fmin) * db).exp();
+    return w.sum() * w.sum() / w.square().sum();
+  };
+  double lo = 0, hi = 1.0 / std::max(f.maxCoeff() - fmin, 1e-300);
+  while (ess(hi) > 0.5 * N && hi < 1e300) hi *= 2;
+  for (int it = 0; it < 60; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (ess(mid) > 0.5 * N ? lo : hi) = mid;
+  }
+  return b + hi;
+}
+
+}  // namespace
+
+Estimate particle_filter(const SurveyData& data, FrictionModel model, const MethodSettings& settings,
+                         const OptimiserSettings& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (options.population < 4 || options.generations < kMovesPerStep) {
+    throw InputError("particle filter: >= 4 particles and >= 5 evaluations per particle");
+  }
+  const detail::BoundedProblem problem(data, model, settings, options);
+  const int D = problem.free_dimension(), N = options.population;
+  std::mt19937_64 rng(options.seed);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  // Initial particles: uniform on the feasible part of the box. Feasibility is per link and the
+  // box is a product, so each link's variables are drawn until that link is consistent.
+  Eigen::MatrixXd X(D, N);
+  std::vector<std::vector<int>> link_vars(kLinks + 1);  // free variables of each link; last: friction
+  for (int k = 0; k < D; ++k) link_vars[static_cast<size_t>(std::min(problem.free_index(k) / 10, kLinks))].push_back(k);
+  Eigen::VectorXd f(N);
+  for (int i = 0; i < N; ++i) {
+    for (int k = 0; k < D; ++k) X(k, i) = U(rng);
+    for (int l = 0; l < kLinks; ++l) {
+      for (int tries = 0; tries < 100000; ++tries) {
+        const Eigen::VectorXd x = problem.full(X.col(i).data());
+        if (pseudo_inertia_min_eigenvalue(x.data() + 10 * l, nullptr) > 0) break;
+        for (int k : link_vars[static_cast<size_t>(l)]) X(k, i) = U(rng);
+      }
+    }
+    const Eigen::VectorXd x = problem.full(X.col(i).data());
+    if (problem.violation(x) > 0) throw InputError("particle filter: no feasible point found in the search ranges");
+    f[i] = problem.eq25(x);
+  }
+  Eigen::Index best_i;
+  f.minCoeff(&best_i);
+  Eigen::VectorXd best_u = X.col(best_i);
+  double best_f = f[best_i];
+  double b = 0, scale = 2.38 / std::sqrt(static_cast<double>(D));
+  const int steps = options.generations / kMovesPerStep;
+  for (int step = 0; step < steps; ++step) {
+    const double b_next = next_inverse_temperature(f, b);
+    Eigen::VectorXd w = (-(f.array() - f.minCoeff()) * (b_next - b)).exp().matrix();
+    w /= w.sum();
+    b = b_next;
+    // Systematic resampling.
+    Eigen::MatrixXd Xr(D, N);
+    Eigen::VectorXd fr(N);
+    const double u0 = U(rng) / N;
+    double cum = w[0];
+    int src = 0;
+    for (int i = 0; i < N; ++i) {
+      while (cum < u0 + static_cast<double>(i) / N && src < N - 1) cum += w[++src];
+      Xr.col(i) = X.col(src);
+      fr[i] = f[src];
+    }
+    X.swap(Xr);
+    f.swap(fr);
+    // Proposal covariance from the resampled particles.
+    const Eigen::VectorXd mean = X.rowwise().mean();
+    const Eigen::MatrixXd C = X.colwise() - mean;
+    Eigen::MatrixXd cov = C * C.transpose() / std::max(N - 1, 1);
+    cov.diagonal().array() += 1e-14;
+    const Eigen::MatrixXd L = Eigen::LLT<Eigen::MatrixXd>(cov).matrixL();
+    int accepted = 0;
+    for (int move = 0; move < kMovesPerStep; ++move) {
+      for (int i = 0; i < N; ++i) {
+        Eigen::VectorXd z(D);
+        for (int k = 0; k < D; ++k) z[k] = normal(rng);
+        const Eigen::VectorXd u = X.col(i) + scale * (L * z);
+        const double logu = std::log(U(rng));
+        if ((u.array() < 0).any() || (u.array() > 1).any()) continue;  // outside the box: density 0
+        const Eigen::VectorXd x = problem.full(u.data());
+        if (problem.violation(x) > 0) continue;
+        const double fu = problem.eq25(x);
+        if (logu < -b * (fu - f[i])) {
+          X.col(i) = u;
+          f[i] = fu;
+          ++accepted;
+          if (fu < best_f) {
+            best_f = fu;
+            best_u = u;
+          }
+        }
+      }
+    }
+    const double rate = static_cast<double>(accepted) / (kMovesPerStep * N);
+    scale *= std::exp(rate - kTargetAcceptance);
+  }
+  return problem.estimate(problem.full(best_u.data()), "particle filter", t0, steps);
+}
+
+}  // namespace dyncal::host::survey
