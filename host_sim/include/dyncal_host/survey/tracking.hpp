@@ -1,0 +1,37 @@
+#pragma once
+// Following a changing parameter (survey Sec. 6.2, Fig. 4, Table 2's last row): the viscous
+// coefficient beta of one joint changes with the sample count N while the recursive Eq. 7 methods
+// (Kalman filter Eq. 19, exponential forgetting Eq. 23, the lib/ updaters) run over the samples.
+
+#include <string>
+#include <vector>
+
+#include "dyncal_host/survey/methods.hpp"
+
+namespace dyncal::host::survey {
+
+/// How beta changes over the run of S samples: from beta0 to 1.5 beta0, starting at N = S / 4:
+/// step (at once), ramp (slope change: linearly until N = S), second order (quadratically).
+enum class ChangeProfile { step, ramp, second_order };
+const char* to_string(ChangeProfile p);
+
+struct TrackingResult {
+  std::string method;
+  ChangeProfile profile = ChangeProfile::step;
+  /// Mean |beta_hat(N) - beta(N)| over the samples from the change's start, relative to the
+  /// change 0.5 beta0.
+  double relative_error = 0;
+  std::vector<double> beta, beta_hat;  ///< per sample [Nm s/rad]
+};
+
+/// The recorded states of `d` (an Eq. 7 run) with the torque the plant needs to follow them when
+/// joint `joint`'s (1-based) beta follows `profile`: tau + (beta(N) - beta0) qd_j. Runs the Kalman
+/// filter (R = sigma^2) and exponential forgetting with factor `mu` over it, one result each.
+std::vector<TrackingResult> track_viscous_friction(const SurveyData& d, const MethodSettings& settings,
+                                                   ChangeProfile profile, int joint, double mu);
+
+/// Table 2: 'A' follows a slope change, 'B' a step change only, 'C' neither. Follows: relative
+/// error below 0.2 (Table 2's level-A bound on relative parameter errors).
+char follow_level(double ramp_relative_error, double step_relative_error);
+
+}  // namespace dyncal::host::survey

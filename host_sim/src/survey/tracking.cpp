@@ -1,0 +1,110 @@
+#include "dyncal_host/survey/tracking.hpp"
+
+#include <cmath>
+#include <memory>
+
+#include "dyncal/identification_model.hpp"
+#include "dyncal/kalman_filter.hpp"
+#include "dyncal/rls_forgetting.hpp"
+#include "dyncal_host/input_error.hpp"
+#include "er20/robot.hpp"
+
+namespace dyncal::host::survey {
+namespace {
+
+using Robot = dyncal::generated::er20::Robot;
+using Model7 = IdentificationModel<Robot, kFrictionEq7>;
+constexpr int P7 = Model7::kNumParams;
+using Vec6 = Eigen::Matrix<double, 6, 1>;
+using PV = Eigen::Matrix<double, P7, 1>;
+
+constexpr double kChange = 0.5;  // beta0 -> (1 + kChange) beta0
+
+double profile_factor(ChangeProfile p, Eigen::Index n, Eigen::Index S) {
+  const double start = 0.25 * static_cast<double>(S);
+  const double x = (static_cast<double>(n) - start) / (static_cast<double>(S) - start);
+  if (x < 0) return 0;
+  switch (p) {
+    case ChangeProfile::step:
+      return kChange;
+    case ChangeProfile::ramp:
+      return kChange * x;
+    case ChangeProfile::second_order:
+      return kChange * x * x;
+  }
+  return 0;
+}
+
+int viscous_column(int joint) {
+  for (int i = Robot::kNumBase; i < P7; ++i) {
+    const ParamInfo info = Model7::info(i);
+    if (info.joint == joint && info.term == term::viscous) return i;
+  }
+  throw InputError("no viscous column for joint " + std::to_string(joint));
+}
+
+}  // namespace
+
+const char* to_string(ChangeProfile p) {
+  switch (p) {
+    case ChangeProfile::step:
+      return "step";
+    case ChangeProfile::ramp:
+      return "ramp";
+    case ChangeProfile::second_order:
+      return "second order";
+  }
+  return "?";
+}
+
+std::vector<TrackingResult> track_viscous_friction(const SurveyData& d, const MethodSettings& settings,
+                                                   ChangeProfile profile, int joint, double mu) {
+  if (joint < 1 || joint > 6) throw InputError("tracking: joint 1..6");
+  const Eigen::Index S = d.q.rows();
+  const int col = viscous_column(joint);
+  const double beta0 = d.scenario.friction[joint - 1].beta;
+  auto kf = std::make_unique<KalmanFilter<double, P7, 6>>();
+  auto rls = std::make_unique<RlsForgetting<double, P7, 6>>();
+  if (kf->reset(PV::Zero(), PV::Constant(settings.p0), Model7::structure()) != UpdateStatus::ok ||
+      rls->reset(PV::Zero(), PV::Constant(settings.p0), mu, 0.0, Model7::structure()) != UpdateStatus::ok) {
+    throw InputError("tracking: filter reset failed");
+  }
+  Vec6 r, w;
+  for (int j = 0; j < 6; ++j) {
+    r[j] = settings.sigma[j] * settings.sigma[j];
+    w[j] = 1.0 / settings.sigma[j];
+  }
+  std::vector<TrackingResult> out(2);
+  out[0].method = "Kalman";
+  out[1].method = "exponential forgetting";
+  Model7::Regressor<double> K;
+  for (Eigen::Index s = 0; s < S; ++s) {
+    const Vec6 q = d.q.row(s).transpose(), qd = d.qd.row(s).transpose(), qdd = d.qdd.row(s).transpose();
+    const double beta = beta0 * (1 + profile_factor(profile, s, S));
+    Vec6 tau = d.tau.row(s).transpose();
+    tau[joint - 1] += (beta - beta0) * qd[joint - 1];
+    Model7::regressor(q, qd, qdd, Vec6::Zero().eval(), K);
+    // A rejected sample leaves the estimate as it was: the tracking error then shows it.
+    (void)kf->update(K, tau, r);
+    (void)rls->update(K, tau, w);
+    out[0].beta.push_back(beta);
+    out[1].beta.push_back(beta);
+    out[0].beta_hat.push_back(kf->estimate()[col]);
+    out[1].beta_hat.push_back(rls->estimate()[col]);
+  }
+  const Eigen::Index start = S / 4;
+  for (TrackingResult& t : out) {
+    t.profile = profile;
+    double sum = 0;
+    for (Eigen::Index s = start; s < S; ++s) sum += std::fabs(t.beta_hat[s] - t.beta[s]);
+    t.relative_error = sum / static_cast<double>(S - start) / (kChange * beta0);
+  }
+  return out;
+}
+
+char follow_level(double ramp_relative_error, double step_relative_error) {
+  if (ramp_relative_error < 0.2) return 'A';
+  return step_relative_error < 0.2 ? 'B' : 'C';
+}
+
+}  // namespace dyncal::host::survey
