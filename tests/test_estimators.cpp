@@ -200,7 +200,10 @@ TEST(KalmanFilter, FloatBlockUpdateWithZeroColumnFollowsDouble) {
     ASSERT_EQ(kf_d->update(K, s.tau[i], r), UpdateStatus::ok);
     ASSERT_EQ(kf_f->update(K.cast<float>(), s.tau[i].cast<float>(), r.cast<float>()), UpdateStatus::ok);
   }
-  // Torque predicted over the samples by the float and the double estimate (float: ~7 digits).
+  // Torque predicted over the samples by the float and the double estimate. Float carries ~7 digits,
+  // but the covariance form loses them in proportion to the prior/posterior variance ratio (1e4 to
+  // ~1e-2 here): measured 1.46e-3 with -march=native on an AMD EPYC (znver4 code), below 1e-3 on the
+  // Intel host of earlier runs; the bound leaves room for the instruction selection of either.
   double diff = 0, norm = 0;
   for (size_t i = 0; i < s.K.size(); ++i) {
     const JointVec t_d = s.K[i] * kf_d->estimate();
@@ -208,7 +211,7 @@ TEST(KalmanFilter, FloatBlockUpdateWithZeroColumnFollowsDouble) {
     diff += (t_f - t_d).squaredNorm();
     norm += t_d.squaredNorm();
   }
-  EXPECT_LT(std::sqrt(diff / norm), 1e-3);
+  EXPECT_LT(std::sqrt(diff / norm), 3e-3);
   Eigen::Matrix<float, N, P> K = s.K[5].cast<float>();
   K(2, 0) = 1.0f;
   const ParamVecF before = kf_f->estimate();

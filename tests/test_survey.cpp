@@ -12,6 +12,7 @@
 #include "dyncal_host/survey/methods.hpp"
 #include "dyncal_host/survey/physically_consistent.hpp"
 #include "dyncal_host/survey/standard_parameters.hpp"
+#include "dyncal_host/survey/tracking.hpp"
 #include "er20/robot.hpp"
 
 namespace {
@@ -143,6 +144,30 @@ TEST(SurveyMethods, PhysicallyConsistentLsHasPositiveDefinitePseudoInertiasAndFi
   }
   // The set parameters themselves are not consistent: link 3's pseudo-inertia is indefinite.
   EXPECT_LT(pseudo_inertia_min_eigenvalues(set_standard())[2], 0.0);
+}
+
+// Fig. 4: forgetting follows a changing beta, the Kalman filter (no forgetting) averages over it.
+TEST(SurveyTracking, ForgettingFollowsASlopeChangeTheKalmanFilterLagsBehind) {
+  const SurveyData& d = data(FrictionModel::eq7);
+  for (ChangeProfile p : {ChangeProfile::ramp, ChangeProfile::second_order, ChangeProfile::step}) {
+    const auto r = track_viscous_friction(d, settings(), p, 3, 0.98);
+    ASSERT_EQ(r.size(), 2u);
+    const TrackingResult& kf = r[0];
+    const TrackingResult& rls = r[1];
+    ASSERT_EQ(kf.beta_hat.size(), static_cast<size_t>(d.q.rows()));
+    // Before the change both hold the set beta (noise-free data).
+    EXPECT_NEAR(rls.beta_hat[2 * d.q.rows() / 5], 40.0, 0.4) << to_string(p);
+    EXPECT_NEAR(kf.beta.back(), 60.0, p == ChangeProfile::step ? 1e-12 : 0.1);
+    // Forgetting settles on a step; on a slope it lags by slope x memory, half the Kalman filter's
+    // error or less (which averages over the whole run).
+    if (p == ChangeProfile::step) {
+      EXPECT_LT(rls.relative_error, 0.2);
+    }
+    EXPECT_GT(kf.relative_error, 2 * rls.relative_error) << to_string(p);
+  }
+  EXPECT_EQ(follow_level(0.1, 0.1), 'A');
+  EXPECT_EQ(follow_level(0.3, 0.1), 'B');
+  EXPECT_EQ(follow_level(0.3, 0.3), 'C');
 }
 
 // The closed loop IDIM-IV builds its instruments from (issue 5): the drive's known control law on

@@ -21,7 +21,7 @@ using PV = Eigen::Matrix<double, P7, 1>;
 constexpr double kChange = 0.5;  // beta0 -> (1 + kChange) beta0
 
 double profile_factor(ChangeProfile p, Eigen::Index n, Eigen::Index S) {
-  const double start = 0.25 * static_cast<double>(S);
+  const double start = 0.5 * static_cast<double>(S);
   const double x = (static_cast<double>(n) - start) / (static_cast<double>(S) - start);
   if (x < 0) return 0;
   switch (p) {
@@ -92,7 +92,7 @@ std::vector<TrackingResult> track_viscous_friction(const SurveyData& d, const Me
     out[0].beta_hat.push_back(kf->estimate()[col]);
     out[1].beta_hat.push_back(rls->estimate()[col]);
   }
-  const Eigen::Index start = S / 4;
+  const Eigen::Index start = 3 * S / 4;  // the last quarter: what is left once transients decay
   for (TrackingResult& t : out) {
     t.profile = profile;
     double sum = 0;

@@ -10,7 +10,7 @@
 
 namespace dyncal::host::survey {
 
-/// How beta changes over the run of S samples: from beta0 to 1.5 beta0, starting at N = S / 4:
+/// How beta changes over the run of S samples: from beta0 to 1.5 beta0, starting at N = S / 2:
 /// step (at once), ramp (slope change: linearly until N = S), second order (quadratically).
 enum class ChangeProfile { step, ramp, second_order };
 const char* to_string(ChangeProfile p);
@@ -18,8 +18,8 @@ const char* to_string(ChangeProfile p);
 struct TrackingResult {
   std::string method;
   ChangeProfile profile = ChangeProfile::step;
-  /// Mean |beta_hat(N) - beta(N)| over the samples from the change's start, relative to the
-  /// change 0.5 beta0.
+  /// Mean |beta_hat(N) - beta(N)| over the last quarter of the run (N >= 3 S / 4, where a step's
+  /// transient has decayed and a ramp's lag has settled), relative to the change 0.5 beta0.
   double relative_error = 0;
   std::vector<double> beta, beta_hat;  ///< per sample [Nm s/rad]
 };
