@@ -14,6 +14,7 @@
 #include "dyncal_host/survey/standard_parameters.hpp"
 #include "dyncal_host/survey/tracking.hpp"
 #include "er20/robot.hpp"
+#include "support/survey_fixture.hpp"
 
 namespace {
 
@@ -22,24 +23,14 @@ using namespace dyncal::host::survey;
 using Robot = dyncal::generated::er20::Robot;
 using Vec6 = Eigen::Matrix<double, 6, 1>;
 
-const std::array<double, 6> kTauMax{1200, 1300, 600, 110, 110, 60};
+const std::array<double, 6>& kTauMax = dyncal::test::kEr20TauMax;
 
 const SurveyData& data(FrictionModel model) {
-  static std::map<FrictionModel, SurveyData> cache;
-  auto it = cache.find(model);
-  if (it == cache.end()) {
-    SurveyDataOptions o;
-    o.friction = model;
-    o.periods = 1;
-    it = cache.emplace(model, simulate_survey_data(load_robot(default_robots_dir(), "er20"), o)).first;
-  }
-  return it->second;
+  return dyncal::test::survey_data(model);
 }
 
 MethodSettings settings() {
-  MethodSettings s;
-  s.prior = cad_prior(0.2, 1);
-  return s;
+  return dyncal::test::survey_settings();
 }
 
 TEST(SurveyParameters, BaseMapReproducesTheBaseRegressorTorque) {
