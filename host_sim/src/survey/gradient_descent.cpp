@@ -7,7 +7,6 @@
 #include "bounded_problem.hpp"
 #include "dyncal_host/input_error.hpp"
 #include "dyncal_host/survey/standard_parameters.hpp"
-#include "er20/robot.hpp"
 
 namespace dyncal::host::survey {
 namespace {
@@ -81,46 +80,6 @@ Eigen::VectorXd solve_slsqp(const detail::BoundedProblem& problem, const Eigen::
   return problem.full(u.data());
 }
 
-/// Eq. 4 start from an Eq. 7 solution x7: per joint, qds from a log-spaced scan of its range
-/// (64 values), with Fc, Fs - Fc and beta the least-squares fit of the joint's residual
-/// tau_j - Y_j phi at each qds (variable projection); inertial parameters kept.
-Eigen::VectorXd stribeck_start(const SurveyData& d, const Eigen::VectorXd& x7, const SearchRanges& r4) {
-  Eigen::VectorXd x = r4.lo;
-  x.head(kStandard) = x7.head(kStandard);
-  const Eigen::Index S = d.q.rows();
-  Eigen::MatrixXd residual(S, 6);
-  Eigen::Matrix<double, 6, kStandard> Ys;
-  using Vec6 = Eigen::Matrix<double, 6, 1>;
-  for (Eigen::Index s = 0; s < S; ++s) {
-    dyncal::generated::er20::Robot::standard_regressor(Vec6(d.q.row(s).transpose()), Vec6(d.qd.row(s).transpose()),
-                                                       Vec6(d.qdd.row(s).transpose()), Ys);
-    residual.row(s) = d.tau.row(s) - (Ys * x7.head(kStandard)).transpose();
-  }
-  constexpr int kScan = 64;
-  for (int j = 0; j < 6; ++j) {
-    const int b = kStandard + 4 * j;
-    double best = INFINITY;
-    for (int k = 0; k < kScan; ++k) {
-      const double qds = r4.lo[b + 2] * std::pow(r4.hi[b + 2] / r4.lo[b + 2], k / (kScan - 1.0));
-      Eigen::MatrixXd A(S, 3);
-      for (Eigen::Index s = 0; s < S; ++s) {
-        const double v = d.qd(s, j), sg = v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0);
-        A.row(s) << sg, sg * std::exp(-(v / qds) * (v / qds)), v;
-      }
-      const Eigen::Vector3d p = A.colPivHouseholderQr().solve(residual.col(j));
-      const double sse = (A * p - residual.col(j)).squaredNorm();
-      if (sse < best) {
-        best = sse;
-        x[b] = std::clamp(p[0], r4.lo[b], r4.hi[b]);
-        x[b + 1] = std::clamp(p[0] + p[1], r4.lo[b + 1], r4.hi[b + 1]);
-        x[b + 2] = qds;
-        x[b + 3] = std::clamp(p[2], r4.lo[b + 3], r4.hi[b + 3]);
-      }
-    }
-  }
-  return x;
-}
-
 }  // namespace
 
 Estimate gradient_descent(const SurveyData& data, FrictionModel model, const MethodSettings& settings,
@@ -131,11 +90,19 @@ Estimate gradient_descent(const SurveyData& data, FrictionModel model, const Met
   const detail::BoundedProblem linear(data, FrictionModel::eq7, settings, options);
   Eigen::VectorXd x0 = linear.full(std::vector<double>(static_cast<size_t>(linear.free_dimension()), 0.5).data());
   x0.head(kStandard) = linear.cad();
-  Eigen::VectorXd x = solve_slsqp(linear, x0, options, evaluations);
-  if (model == FrictionModel::eq7) return linear.estimate(x, "gradient descent", t0, evaluations);
-  // Eq. 4 from the Eq. 7 solution and a Stribeck start per joint.
+  const Eigen::VectorXd linear_solution = solve_slsqp(linear, x0, options, evaluations);
+  if (model == FrictionModel::eq7) return linear.estimate(linear_solution, "gradient descent", t0, evaluations);
+  Eigen::VectorXd x;
+  // Eq. 4 from the Eq. 7 solution and each joint's Stribeck start.
   const detail::BoundedProblem nonlinear(data, model, settings, options);
-  x = stribeck_start(data, x, search_ranges(data, model, nonlinear.cad(), options.range_width));
+  const SearchRanges r4 = search_ranges(data, model, nonlinear.cad(), options.range_width);
+  const std::vector<double> f4 = stribeck_start(data, linear_solution.head(kStandard));
+  x = r4.lo;
+  x.head(kStandard) = linear_solution.head(kStandard);
+  for (size_t i = 0; i < f4.size(); ++i) {
+    const Eigen::Index k = kStandard + static_cast<Eigen::Index>(i);
+    x[k] = std::clamp(f4[i], r4.lo[k], r4.hi[k]);
+  }
   x = solve_slsqp(nonlinear, x, options, evaluations);
   return nonlinear.estimate(x, "gradient descent", t0, evaluations);
 }

@@ -198,11 +198,53 @@ SearchRanges search_ranges(const SurveyData& d, FrictionModel model, const Eigen
     r.hi[b + kf - 1] = beta;
     if (kf == 4) {
       r.hi[b + 1] = tau;
-      r.lo[b + 2] = std::max(1e-3, 0.01 * qd);
-      r.hi[b + 2] = std::max(r.lo[b + 2], qd);
+      const auto qds = stribeck_velocity_range(d, j);
+      r.lo[b + 2] = qds[0];
+      r.hi[b + 2] = qds[1];
     }
   }
   return r;
+}
+
+std::array<double, 2> stribeck_velocity_range(const SurveyData& d, int j) {
+  const double qd = d.qd.col(j).cwiseAbs().maxCoeff();
+  const double lo = std::max(1e-3, 0.01 * qd);
+  return {lo, std::max(lo, qd)};
+}
+
+std::vector<double> stribeck_start(const SurveyData& d, const Eigen::VectorXd& phi) {
+  const Eigen::Index S = d.q.rows();
+  Eigen::MatrixXd residual(S, 6);
+  Eigen::Matrix<double, 6, kStandard> Ys;
+  for (Eigen::Index s = 0; s < S; ++s) {
+    Robot::standard_regressor(Vec6(d.q.row(s).transpose()), Vec6(d.qd.row(s).transpose()),
+                              Vec6(d.qdd.row(s).transpose()), Ys);
+    residual.row(s) = d.tau.row(s) - (Ys * phi.head(kStandard)).transpose();
+  }
+  constexpr int kScan = 64;
+  std::vector<double> out(24, 0.0);
+  for (int j = 0; j < 6; ++j) {
+    const auto range = stribeck_velocity_range(d, j);
+    double best = INFINITY;
+    Eigen::MatrixXd A(S, 3);
+    for (int k = 0; k < kScan; ++k) {
+      const double qds = range[0] * std::pow(range[1] / range[0], k / (kScan - 1.0));
+      for (Eigen::Index s = 0; s < S; ++s) {
+        const double v = d.qd(s, j), u = v / qds;
+        A.row(s) << sgn(v), sgn(v) * std::exp(-u * u), v;
+      }
+      const Eigen::Vector3d p = A.colPivHouseholderQr().solve(residual.col(j));
+      const double sse = (A * p - residual.col(j)).squaredNorm();
+      if (sse < best) {
+        best = sse;
+        out[4 * j] = std::max(p[0], 0.0);
+        out[4 * j + 1] = std::max(p[0] + p[1], 0.0);
+        out[4 * j + 2] = qds;
+        out[4 * j + 3] = std::max(p[2], 0.0);
+      }
+    }
+  }
+  return out;
 }
 
 double pseudo_inertia_min_eigenvalue(const double* phi10, double* gradient10) {

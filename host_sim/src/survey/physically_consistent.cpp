@@ -7,6 +7,7 @@
 
 #include "dyncal/nonlinear_friction.hpp"
 #include "dyncal_host/input_error.hpp"
+#include "dyncal_host/survey/objective.hpp"
 #include "dyncal_host/survey/standard_parameters.hpp"
 #include "er20/robot.hpp"
 
@@ -218,7 +219,8 @@ Estimate physically_consistent_ls(const SurveyData& d, FrictionModel model, cons
   int iterations = solve(lin, x, options);
   Residuals nl(kInertial + 6 * kf, static_cast<int>(6 * S + kStandard));
   if (model == FrictionModel::eq4) {
-    // Stage 2, Eq. 4 friction from stage 1: Fs = Fc, qds = 0.1 rad/s, every sample's row.
+    // Stage 2, Eq. 4 friction from stage 1's inertial parameters and each joint's Stribeck start
+    // (stribeck_start: no set value used), every sample's row.
     nl.model = model;
     nl.kf = kf;
     nl.A = A.leftCols(kStandard);
@@ -229,9 +231,9 @@ Estimate physically_consistent_ls(const SurveyData& d, FrictionModel model, cons
     nl.prior_w = prior_w;
     Eigen::VectorXd x4(kInertial + 6 * kf);
     x4.head(kInertial) = x.head(kInertial);
+    const std::vector<double> f4 = stribeck_start(d, nl.standard(x4));
     for (int j = 0; j < 6; ++j) {
-      const double fc = x[kInertial + 2 * j], beta = x[kInertial + 2 * j + 1];
-      x4.segment(kInertial + kf * j, kf) << fc, fc, std::log(0.1), beta;
+      x4.segment(kInertial + kf * j, kf) << f4[4 * j], f4[4 * j + 1], std::log(f4[4 * j + 2]), f4[4 * j + 3];
     }
     iterations += solve(nl, x4, options);
     x = x4;

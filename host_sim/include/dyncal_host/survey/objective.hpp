@@ -61,6 +61,17 @@ struct SearchRanges {
 };
 SearchRanges search_ranges(const SurveyData& data, FrictionModel model, const Eigen::VectorXd& cad, double width);
 
+/// Range of the Stribeck velocity qds of joint j (0-based) that search_ranges uses:
+/// [max(1e-3, 0.01 max |qd_j|), max |qd_j|] [rad/s].
+std::array<double, 2> stribeck_velocity_range(const SurveyData& data, int j);
+
+/// Eq. 4 friction of every joint fitted to its residual tau_j - Y_j phi (phi: 60 standard
+/// parameters), a start for the nonlinear solvers that uses no set value: qds from 64 log-spaced
+/// values over stribeck_velocity_range, and at each Fc, Fs - Fc, beta by linear least squares
+/// (variable projection, Golub and Pereyra 1973); the qds with the least squared residual wins.
+/// Joint-major (Fc, Fs, qds, beta).
+std::vector<double> stribeck_start(const SurveyData& data, const Eigen::VectorXd& phi);
+
 /// Physical feasibility (Wensing et al. 2017): each link's pseudo-inertia positive definite.
 /// Returns sum over links of max(0, -lambda_min(J_l)) / ||J_l(cad)||_F (0: feasible), and each
 /// link's lambda_min if `lambda_min` is given.
