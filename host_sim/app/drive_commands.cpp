@@ -12,6 +12,7 @@
 #include "dyncal/modbus_map.hpp"
 #include "dyncal_host/calibrate.hpp"
 #include "dyncal_host/drive/drive_server.hpp"
+#include "dyncal_host/excite.hpp"
 #include "dyncal_host/identify.hpp"
 #include "dyncal_host/identify_report.hpp"
 #include "dyncal_host/input_error.hpp"
@@ -36,7 +37,7 @@ struct Settings {
   int flash_delay_ms = 0;
   // calibrate
   dyncal::host::CalibrateOptions cal;
-  std::string model = "eq7,rotor_inertia,offset", report;
+  std::string model = "eq7,rotor_inertia,offset", report, trajectory;
   bool no_flash = false, quiet = false;
   // flash
   std::string params;
@@ -82,6 +83,17 @@ int run_calibrate(Settings& s) {
   s.cal.terms = dyncal::host::parse_model(s.model);
   s.cal.flash = !s.no_flash;
   s.cal.progress = !s.quiet && isatty(2);  // the bar redraws with \r: only on a terminal
+  if (!s.trajectory.empty()) {
+    std::ifstream in(s.trajectory);
+    if (!in) throw InputError("cannot read '" + s.trajectory + "'");
+    nlohmann::json j;
+    try {
+      j = nlohmann::json::parse(in);
+    } catch (const nlohmann::json::exception& e) {
+      throw InputError(s.trajectory + ": invalid JSON: " + e.what());
+    }
+    s.cal.excitation = dyncal::host::trajectory_from_json(robot, j);
+  }
   const auto r = dyncal::host::calibrate(robot, s.cal, std::cerr);
   dyncal::host::print_calibrate_report(std::cout, r);
   if (!s.report.empty()) {
@@ -208,6 +220,7 @@ void add_drive_commands(CLI::App& app, std::function<int()>& run, const std::str
   cal->add_option("--verify-periods", s->cal.verify_periods, "periods of the fresh verification trajectory")
       ->capture_default_str();
   cal->add_option("--seed", s->cal.seed, "trajectory seed")->capture_default_str();
+  cal->add_option("--trajectory", s->trajectory, "play this excitation (a dyncal excite file) instead of a random one");
   cal->add_option("--mu", s->cal.rls_mu, "RLS forgetting factor")->capture_default_str();
   cal->add_option("--min-speed", s->cal.identify.min_speed_fraction,
                   "fit only rows where |qd_j| >= this fraction of joint j's top speed (stiction)")

@@ -2,10 +2,12 @@
 #include <CLI/CLI.hpp>
 #include <fstream>
 #include <functional>
+#include <iomanip>
 #include <iostream>
 
 #include "drive_commands.hpp"
 #include "dyncal_host/diagnose.hpp"
+#include "dyncal_host/excite.hpp"
 #include "dyncal_host/identify.hpp"
 #include "dyncal_host/identify_report.hpp"
 #include "dyncal_host/input_error.hpp"
@@ -87,6 +89,27 @@ int main(int argc, char** argv) {
   std::string diag_plots;
   diagnose->add_option("--plots", diag_plots, "write SVG plots (gnuplot) into this directory");
 
+  dyncal::host::ExciteOptions xopt;
+  std::string excite_out, excite_criterion = "cond", excite_model = "eq7", excite_robot = "er20";
+  auto* excite = app.add_subcommand(
+      "excite", "design an excitation trajectory (Fourier series, Eq. 27) minimising cond(K) (Eq. 26) or -log det");
+  excite->add_option("--robot", excite_robot, "robot (er20, tx40)")->capture_default_str();
+  excite->add_option("--robots-dir", robots_dir, "directory holding the robot descriptions");
+  excite->add_option("--omega-f", xopt.f_f, "fundamental frequency [Hz]")->capture_default_str();
+  excite->add_option("--harmonics", xopt.harmonics, "L")->capture_default_str();
+  excite->add_option("--criterion", excite_criterion, "cond | logdet")
+      ->check(CLI::IsMember({"cond", "logdet"}))
+      ->capture_default_str();
+  excite
+      ->add_option("--model", excite_model, "K of eq7 (linear friction) or eq4 (Stribeck, at the robot file's values)")
+      ->check(CLI::IsMember({"eq7", "eq4"}))
+      ->capture_default_str();
+  excite->add_option("--margin", xopt.margin, "fraction of every limit the motion may use")->capture_default_str();
+  excite->add_option("--candidates", xopt.candidates, "random starts; the best is optimised")->capture_default_str();
+  excite->add_option("--evaluations", xopt.max_evaluations, "criterion evaluations")->capture_default_str();
+  excite->add_option("--seed", xopt.seed, "seed of the random starts")->capture_default_str();
+  excite->add_option("--out", excite_out, "trajectory file to write (JSON; dyncal calibrate --trajectory)")->required();
+
   dyncal::host::survey::SurveyOptions sopt;
   std::string survey_json, survey_check;
   double survey_tolerance = 1e-3;
@@ -112,6 +135,32 @@ int main(int argc, char** argv) {
 
   try {
     if (run) return run();
+    if (app.got_subcommand(excite)) {
+      const auto robot = dyncal::host::load_robot(robots_dir, excite_robot);
+      xopt.criterion = excite_criterion == "logdet" ? dyncal::host::ExcitationCriterion::logdet
+                                                    : dyncal::host::ExcitationCriterion::cond;
+      xopt.model = excite_model == "eq4" ? dyncal::host::FrictionModel::eq4 : dyncal::host::FrictionModel::eq7;
+      const auto r = dyncal::host::design_excitation(robot, xopt);
+      nlohmann::json j = dyncal::host::trajectory_to_json(robot, r.trajectory);
+      j["design"] = {
+          {"criterion", excite_criterion}, {"model", excite_model},        {"cond", r.cond},       {"logdet", r.logdet},
+          {"start_cond", r.start_cond},    {"evaluations", r.evaluations}, {"margin", xopt.margin}};
+      write_json(excite_out, j);
+      std::cout << std::fixed << std::setprecision(2) << "excitation for " << robot.name
+                << ": Eq. 27, L = " << xopt.harmonics << ", f_f = " << xopt.f_f << " Hz, K of " << excite_model
+                << ", columns unit-scaled\n"
+                << "cond(K): best of " << xopt.candidates << " random starts " << r.start_cond << " -> optimised "
+                << r.cond << " (" << excite_criterion << ", " << r.evaluations << " evaluations); log det " << r.logdet
+                << "\n"
+                << "joint   position   velocity   acceleration   (fraction of the limit)\n";
+      for (int i = 0; i < 6; ++i) {
+        std::cout << std::setw(5) << i + 1 << std::setw(11) << r.position_use[static_cast<size_t>(i)] << std::setw(11)
+                  << r.velocity_use[static_cast<size_t>(i)] << std::setw(15)
+                  << r.acceleration_use[static_cast<size_t>(i)] << "\n";
+      }
+      std::cout << "written to " << excite_out << "\n";
+      return 0;
+    }
     if (app.got_subcommand(survey)) {
       const auto robot = dyncal::host::load_robot(robots_dir, "er20");
       const nlohmann::json published = read_json(robots_dir + "/er20/survey_published.json");

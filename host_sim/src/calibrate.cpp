@@ -13,6 +13,7 @@
 #include "dyncal/identification_model.hpp"
 #include "dyncal/kalman_filter.hpp"
 #include "dyncal/rls_forgetting.hpp"
+#include "dyncal_host/excite.hpp"
 #include "dyncal_host/input_error.hpp"
 #include "dyncal_host/term_sets.hpp"
 #include "er20/robot.hpp"
@@ -160,7 +161,6 @@ linux_port::Trajectory default_excitation(const RobotDescription& robot, double 
   if (!(f_f > 0) || harmonics < 1 || harmonics > mm::kMaxHarmonics || candidates < 1) {
     throw InputError("excitation: f_f must be > 0, harmonics 1..8, candidates >= 1");
   }
-  using Model = IdentificationModel<Robot, kFrictionEq7>;
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   linux_port::Trajectory best;
@@ -176,36 +176,10 @@ linux_port::Trajectory default_excitation(const RobotDescription& robot, double 
         t.b(j, l) = u(rng) / (l + 1);
       }
     }
-    // Scale each joint to 80 % of its tightest limit (position half-range, velocity, acceleration).
-    Vec qmin = Vec::Constant(1e300), qmax = Vec::Constant(-1e300), vmax = Vec::Zero(), amax = Vec::Zero();
-    for (int k = 0; k < grid; ++k) {
-      Vec q, qd, qdd;
-      t.evaluate(t.period() * k / grid, q, qd, qdd);
-      qmin = qmin.cwiseMin(q);
-      qmax = qmax.cwiseMax(q);
-      vmax = vmax.cwiseMax(qd.cwiseAbs());
-      amax = amax.cwiseMax(qdd.cwiseAbs());
-    }
-    for (int j = 0; j < 6; ++j) {
-      const double half_range = 0.5 * (robot.q_max[j] - robot.q_min[j]);
-      const double s = 0.8 * std::min({half_range / (0.5 * (qmax[j] - qmin[j])), robot.qd_max[j] / vmax[j],
-                                       robot.qdd_max[j] / amax[j]});
-      t.a.row(j) *= s;
-      t.b.row(j) *= s;
-      // Centre the motion in the joint range.
-      t.q0[j] = 0.5 * (robot.q_max[j] + robot.q_min[j]) - s * 0.5 * (qmax[j] + qmin[j]);
-    }
-    Eigen::MatrixXd W(6 * grid, Model::kNumParams);
-    Model::Regressor<double> K;
-    for (int k = 0; k < grid; ++k) {
-      Vec q, qd, qdd;
-      t.evaluate(t.period() * k / grid, q, qd, qdd);
-      Model::regressor(q, qd, qdd, Vec::Zero().eval(), K);
-      W.middleRows(6 * k, 6) = K;
-    }
-    for (Eigen::Index i = 0; i < W.cols(); ++i) W.col(i).normalize();
-    const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(W).singularValues();
-    const double cnd = sv[0] / sv[sv.size() - 1];
+    // Each joint within 80 % of its tightest limit (position half-range, velocity, acceleration).
+    fit_to_limits(robot, t, 0.8, grid);
+    double cnd = 0;
+    excitation_quality(robot, t, FrictionModel::eq7, grid, &cnd, nullptr);
     if (cnd < best_cond) {
       best_cond = cnd;
       best = t;
@@ -287,10 +261,16 @@ CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions&
   CalibrateResult r;
   std::ostream* prog = o.progress ? &progress : nullptr;
   // 1. Excitation: stream, then online estimators sample by sample and the batch fit.
-  const auto excitation = default_excitation(robot, o.f_f, o.harmonics, o.candidates, o.seed, &r.trajectory_cond);
-  progress << "excitation: Fourier series (Eq. 27), L = " << o.harmonics << ", f_f = " << o.f_f << " Hz, " << o.periods
-           << " periods at " << o.sample_rate_hz << " Hz, cond(K) = " << std::setprecision(3) << r.trajectory_cond
-           << "\n";
+  linux_port::Trajectory excitation;
+  if (o.excitation) {
+    excitation = *o.excitation;
+    excitation_quality(robot, excitation, FrictionModel::eq7, 400, &r.trajectory_cond, nullptr);
+  } else {
+    excitation = default_excitation(robot, o.f_f, o.harmonics, o.candidates, o.seed, &r.trajectory_cond);
+  }
+  progress << "excitation: Fourier series (Eq. 27), L = " << excitation.harmonics << ", f_f = " << excitation.f_f
+           << " Hz" << (o.excitation ? " (designed)" : "") << ", " << o.periods << " periods at " << o.sample_rate_hz
+           << " Hz, cond(K) = " << std::setprecision(3) << r.trajectory_cond << "\n";
   SampleSink sink;
   with_term_set<Online>(o.terms, Vec(robot.qd_max), o, sink);
   const JointLog log =

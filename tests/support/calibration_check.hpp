@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <sstream>
 
 #include "dyncal/identification_model.hpp"
@@ -18,8 +19,10 @@ namespace dyncal::host {
 /// Runs calibrate() on the fixture drive `env` (scenario file `scenario`) and compares with the
 /// scenario's true parameters: friction within friction_tol, measurable parameters within
 /// measurable_tol (relative), the rest within 1 % of the torque. Prints the comparison table.
+/// `excitation`: a designed trajectory to play (dyncal excite); empty: calibrate's random choice.
 inline void calibrate_and_compare(const char* env, const std::string& scenario_file, double friction_tol,
-                                  double measurable_tol) {
+                                  double measurable_tol,
+                                  const std::optional<dyncal::linux_port::Trajectory>& excitation = std::nullopt) {
   const std::string uri = fixture_drive_uri(env);
   ASSERT_FALSE(uri.empty()) << "run through ctest";
   const auto robot = load_robot(default_robots_dir(), "er20");
@@ -28,6 +31,7 @@ inline void calibrate_and_compare(const char* env, const std::string& scenario_f
   o.uri = uri;
   o.terms = parse_model("eq7,rotor_inertia,offset");
   o.progress = false;
+  o.excitation = excitation;
   std::ostringstream progress;
   const CalibrateResult r = calibrate(robot, o, progress);
   ASSERT_TRUE(r.flashed) << r.flash_message;
@@ -41,7 +45,8 @@ inline void calibrate_and_compare(const char* env, const std::string& scenario_f
   using Model = dyncal::IdentificationModel<dyncal::generated::er20::Robot,
                                             dyncal::kFrictionEq7 | dyncal::term::rotor_inertia | dyncal::term::offset>;
   ASSERT_EQ(Model::kNumParams, static_cast<int>(truth.size()));
-  const auto traj = default_excitation(robot, o.f_f, o.harmonics, o.candidates, o.seed, nullptr);
+  const auto traj =
+      excitation ? *excitation : default_excitation(robot, o.f_f, o.harmonics, o.candidates, o.seed, nullptr);
   Model::ParamVector<double> phi_true;
   for (int i = 0; i < Model::kNumParams; ++i) phi_true[i] = truth[static_cast<size_t>(i)].value;
   Eigen::Matrix<double, 6, Model::kNumParams> col_ss = Eigen::Matrix<double, 6, Model::kNumParams>::Zero();

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <functional>
 #include <iosfwd>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,9 @@ struct CalibrateOptions {
   int periods = 2;         ///< excitation periods streamed and identified
   int verify_periods = 1;  ///< periods of the fresh verification trajectory
   int candidates = 16;     ///< random trajectories tried; the one with the smallest cond(K) plays
+  /// A designed excitation (dyncal excite) to play instead of the random candidates; f_f and
+  /// harmonics are then the trajectory's own.
+  std::optional<linux_port::Trajectory> excitation;
   std::uint64_t seed = 1;
   double online_cutoff_hz = 20;  ///< causal low-pass of the online path
   double rls_mu = 0.9999;

@@ -1,6 +1,7 @@
 // Gradient-based optimisation (survey Sec. 3.4 (1)) with NLopt's SLSQP.
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <nlopt.hpp>
 
@@ -12,8 +13,11 @@ namespace dyncal::host::survey {
 namespace {
 
 struct Context {
-  const detail::BoundedProblem* problem;
+  const detail::BoundedProblem* problem = nullptr;
+  std::array<double, kLinks> margin{};  // lambda_min(J_l) >= margin[l]
   int evaluations = 0;
+  double best = INFINITY;  // the lowest cost at a feasible point, and that point
+  std::vector<double> best_u;
 };
 
 double cost(const std::vector<double>& u, std::vector<double>& grad, void* data) {
@@ -25,6 +29,15 @@ double cost(const std::vector<double>& u, std::vector<double>& grad, void* data)
   const double J = p.objective().least_squares(x.data(), grad.empty() ? nullptr : g.data());
   for (size_t k = 0; k < grad.size(); ++k)
     grad[k] = g[p.free_index(static_cast<int>(k))] * p.scale(static_cast<int>(k), x);
+  if (J < c->best) {
+    bool feasible = true;
+    for (int l = 0; l < kLinks && feasible; ++l)
+      feasible = pseudo_inertia_min_eigenvalue(x.data() + 10 * l, nullptr) >= c->margin[static_cast<size_t>(l)];
+    if (feasible) {
+      c->best = J;
+      c->best_u = u;
+    }
+  }
   return J;
 }
 
@@ -55,26 +68,29 @@ Eigen::VectorXd solve_slsqp(const detail::BoundedProblem& problem, const Eigen::
   nlopt::opt opt(nlopt::LD_SLSQP, static_cast<unsigned>(D));
   opt.set_lower_bounds(std::vector<double>(static_cast<size_t>(D), 0.0));
   opt.set_upper_bounds(std::vector<double>(static_cast<size_t>(D), 1.0));
-  Context ctx{&problem};
+  Context ctx;
+  ctx.problem = &problem;
   opt.set_min_objective(cost, &ctx);
   std::vector<LinkConstraint> links;
   for (int l = 0; l < kLinks; ++l) {
     // A margin of 1e-6 of the CAD pseudo-inertia's size keeps the result strictly inside the cone.
-    links.push_back({&problem, l, 1e-6 * pseudo_inertia(problem.cad().data() + 10 * l).norm()});
+    ctx.margin[static_cast<size_t>(l)] = 1e-6 * pseudo_inertia(problem.cad().data() + 10 * l).norm();
+    links.push_back({&problem, l, ctx.margin[static_cast<size_t>(l)]});
   }
   for (auto& c : links) opt.add_inequality_constraint(link_constraint, &c, 0.0);
-  opt.set_ftol_rel(1e-15);
-  opt.set_xtol_rel(1e-14);
+  opt.set_ftol_rel(1e-12);
+  opt.set_xtol_rel(1e-10);
   opt.set_maxeval(options.max_evaluations);
   const Eigen::VectorXd u0 = problem.unit(x0);
   std::vector<double> u(u0.data(), u0.data() + D);
   double f = 0;
   try {
     opt.optimize(u, f);
-  } catch (const nlopt::roundoff_limited&) {
-    // SLSQP stopped on rounding: u holds its best point, which is what we report.
   } catch (const std::exception& ex) {
-    throw InputError(std::string("gradient descent (NLopt SLSQP) failed: ") + ex.what());
+    // Stopped on rounding, or SLSQP's line search gave up ("more than iter SQP iterations"): the
+    // best feasible point it evaluated is the answer; with none, the method failed.
+    if (ctx.best_u.empty()) throw InputError(std::string("gradient descent (NLopt SLSQP) failed: ") + ex.what());
+    u = ctx.best_u;
   }
   evaluations += ctx.evaluations;
   return problem.full(u.data());
