@@ -42,6 +42,8 @@ json joint3_json(const Estimate& e, const Eigen::MatrixXd& tau) {
 /// Forgetting factor of the tracking study: a memory of 1 / (1 - mu) = 50 samples (0.5 s at 100 Hz),
 /// short against the change (half the run); the identification runs keep MethodSettings::mu.
 constexpr double kTrackingMu = 0.98;
+/// The tracking run: 4 periods (4 000 samples, 40 s), quick or not; the change spans the second half.
+constexpr int kTrackingPeriods = 4;
 
 struct Method {
   const char* name;
@@ -125,7 +127,7 @@ json run_survey(const RobotDescription& robot, const SurveyOptions& o) {
   // Fig. 4: beta of joint 3 changing over the samples of the noisy Eq. 7 run.
   SurveyDataOptions topt;
   topt.torque_noise = true;
-  topt.periods = o.quick ? 1 : 2;
+  topt.periods = kTrackingPeriods;
   topt.seed = o.seed;
   const SurveyData td = simulate_survey_data(robot, topt);
   result["tracking"]["mu"] = kTrackingMu;
@@ -221,9 +223,9 @@ void print_survey(std::ostream& out, const json& r, const json& pub) {
       << " period(s) of a Fourier excitation (Eq. 27, L = 5, f_f = 0.1 Hz), "
       << "seed " << s["seed"].get<std::uint64_t>() << "; CAD prior: set values x (1 + U(-"
       << s["prior_error"].get<double>() << ", +" << s["prior_error"].get<double>() << "))\n"
-      << "cond(K) of the excitation (best of 16 random; Eq. 26, unit-scaled columns, Eq. 7 model): "
-      << fmt(r["models"]["eq7"]["trajectory_cond"].get<double>(), 2) << " (survey: 4.6 for Eq. 7, 5.7 for Eq. 4;\n"
-      << "dyncal excite designs 4.84 and 5.55, which this plant cannot follow: docs/survey.md)\n"
+      << "cond(K) of the designed excitations (dyncal excite; Eq. 26, unit-scaled columns): "
+      << fmt(r["models"]["eq7"]["trajectory_cond"].get<double>(), 2) << " for Eq. 7, "
+      << fmt(r["models"]["eq4"]["trajectory_cond"].get<double>(), 2) << " for Eq. 4 (survey: 4.6 and 5.7)\n"
       << "e_d as the survey: standard parameters as the method gives them (base-parameter methods: the\n"
       << "minimum-norm ones, as a pseudo-inverse returns); 'e_d prior': with the CAD prior in the directions\n"
       << "the data cannot see; e_b: base-parameter error (needs no prior). e_T: |signed mean|, as the\n"
@@ -236,7 +238,8 @@ void print_survey(std::ostream& out, const json& r, const json& pub) {
   je_table(out, "Table 9: J_e without and with noise, nonlinear model (Eq. 4)", r["models"]["eq4"],
            pub["table9_nonlinear"]);
   if (r.contains("tracking")) {
-    out << "\nFig. 4: following beta of joint 3 (40 -> 60 Nm s/rad from half the run on, Table 7 noise);\n"
+    out << "\nFig. 4: following beta of joint 3 (40 -> 60 Nm s/rad over the second half of a 4-period run,\n"
+        << "Table 7 noise);\n"
         << "mean |beta_hat - beta| / 20 over the last quarter of the run (follows: < 0.2), forgetting mu = "
         << r["tracking"]["mu"].get<double>() << "\n";
     out << std::left << std::setw(kName) << "method" << std::right << std::setw(10) << "step" << std::setw(10) << "ramp"

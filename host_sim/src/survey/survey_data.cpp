@@ -11,6 +11,7 @@
 #include "dyncal/parameter_table.hpp"
 #include "dyncal/table_check.hpp"
 #include "dyncal_host/calibrate.hpp"
+#include "dyncal_host/excite.hpp"
 #include "dyncal_host/input_error.hpp"
 #include "er20/robot.hpp"
 
@@ -55,11 +56,12 @@ std::vector<std::uint8_t> set_parameter_table(const Scenario& s) {
 
 /// Plays `trajectory` once (`periods`) on a drive with `scenario`, active table `table`, and
 /// returns the plant samples. plant_standard / gains: overrides (empty / nullptr: the drive's own).
-std::vector<SimulatedDrive::PlantSample> play(
-    const RobotDescription& robot, const Scenario& scenario, const DriveTrajectory& trajectory, int periods,
-    double rate_hz, const std::vector<std::uint8_t>& table, const std::vector<double>& plant_standard,
-    const std::array<double, kDriveJoints>* kp, const std::array<double, kDriveJoints>* kd,
-    std::array<double, kDriveJoints>* kp_out = nullptr, std::array<double, kDriveJoints>* kd_out = nullptr) {
+std::vector<SimulatedDrive::PlantSample> play(const RobotDescription& robot, const Scenario& scenario,
+                                              const DriveTrajectory& trajectory, int periods, double rate_hz,
+                                              const std::vector<std::uint8_t>& table,
+                                              const std::vector<double>& plant_standard,
+                                              const std::array<double, kDriveJoints>* kp,
+                                              const std::array<double, kDriveJoints>* kd) {
   const std::string path = scratch_table_path(scenario.seed);
   std::filesystem::remove(path);
   std::vector<SimulatedDrive::PlantSample> out;
@@ -79,11 +81,35 @@ std::vector<SimulatedDrive::PlantSample> play(
       drive.step();
       if (!drive.ring().empty()) drive.ack(drive.ring().back().seq + 1);  // only the plant log is used
     }
-    if (kp_out) *kp_out = drive.kp();
-    if (kd_out) *kd_out = drive.kd();
   }
   std::filesystem::remove(path);
   return out;
+}
+
+/// The drive's PD gains (natural frequency bandwidth_hz, damping) set from the smallest diagonal
+/// inertia each joint sees along the trajectory instead of at its start pose: without rotor inertia
+/// the arm's inertia about joint 1 changes several-fold as it folds, and a discrete PD loop tuned
+/// at a heavy pose goes unstable at a light one.
+void gains_along(const DriveTrajectory& trajectory, const Scenario& scenario, std::array<double, kDriveJoints>& kp,
+                 std::array<double, kDriveJoints>& kd) {
+  using Vec = Eigen::Matrix<double, 6, 1>;
+  Eigen::Matrix<double, Robot::kNumStandard, 1> phi;
+  for (int i = 0; i < Robot::kNumStandard; ++i) phi[i] = dyncal::generated::er20::kNominalStandard[i];
+  Vec m_min = Vec::Constant(INFINITY);
+  constexpr int kGrid = 400;
+  for (int k = 0; k < kGrid; ++k) {
+    Vec q, qd, qdd;
+    trajectory.evaluate(trajectory.period() * k / kGrid, q, qd, qdd);
+    Eigen::Matrix<double, 6, 6> M;
+    Robot::mass_matrix(q, phi, M);
+    m_min = m_min.cwiseMin(M.diagonal());
+  }
+  const double w = 2.0 * M_PI * scenario.bandwidth_hz;
+  for (int j = 0; j < kDriveJoints; ++j) {
+    const double m = m_min[j] + scenario.effects[j].rotor_inertia;
+    kp[j] = m * w * w;
+    kd[j] = 2.0 * scenario.damping * m * w;
+  }
 }
 
 }  // namespace
@@ -102,9 +128,14 @@ SurveyData simulate_survey_data(const RobotDescription& robot, const SurveyDataO
     d.scenario.effects[j].rotor_inertia = 0.0;  // the survey's model (Eq. 2) has none
   }
   d.table = set_parameter_table(d.scenario);
-  // Best of 16 random Eq. 27 trajectories (L = 5, f_f = 0.1 Hz) by cond(K). dyncal excite's designed
-  // ones (cond 4.84 / 5.55) drive this plant (no rotor inertia, RK4 at 1 kHz) unstable: docs/survey.md.
-  const auto traj = default_excitation(robot, 0.1, 5, 16, o.seed, &d.trajectory_cond);
+  // The survey's optimal trajectory (Sec. 6.1, Fig. 2): Eq. 27 with L = 5, f_f = 0.1 Hz, cond(K) of
+  // the run's own friction model minimised (dyncal excite's design).
+  ExciteOptions xo;
+  xo.model = o.friction;
+  xo.seed = o.seed;
+  const ExciteResult designed = design_excitation(robot, xo);
+  const auto& traj = designed.trajectory;
+  d.trajectory_cond = designed.cond;
   d.trajectory.f_f = traj.f_f;
   d.trajectory.harmonics = traj.harmonics;
   for (int j = 0; j < kDriveJoints; ++j) {
@@ -115,8 +146,8 @@ SurveyData simulate_survey_data(const RobotDescription& robot, const SurveyDataO
     }
   }
   d.sample_rate_hz = o.sample_rate_hz;
-  const auto samples =
-      play(robot, d.scenario, d.trajectory, o.periods, o.sample_rate_hz, d.table, {}, nullptr, nullptr, &d.kp, &d.kd);
+  gains_along(d.trajectory, d.scenario, d.kp, d.kd);
+  const auto samples = play(robot, d.scenario, d.trajectory, o.periods, o.sample_rate_hz, d.table, {}, &d.kp, &d.kd);
   // A plant faster than the robot's velocity limit has left the simulation's valid range (an
   // unstable integration): refuse the record instead of identifying from it.
   for (const auto& p : samples) {

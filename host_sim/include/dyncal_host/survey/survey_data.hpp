@@ -30,8 +30,10 @@ struct SurveyData {
   Eigen::MatrixXd tau_cmd;                      ///< commanded torque tau_jc [Nm] (noise-free)
   Scenario scenario;                            ///< friction, noise and seed the drive ran
   DriveTrajectory trajectory;                   ///< the excitation
-  double trajectory_cond = 0;                   ///< cond(K) of the excitation (Eq. 26, unit-scaled columns)
-  std::array<double, kDriveJoints> kp{}, kd{};  ///< the drive's PD gains (its known control law)
+  double trajectory_cond = 0;                   ///< cond(K) of the designed excitation for the run's
+                                                ///< friction model (Eq. 26, unit-scaled columns)
+  std::array<double, kDriveJoints> kp{}, kd{};  ///< the drive's PD gains (its known control law), set
+                                                ///< from the lightest inertia along the trajectory
   std::vector<std::uint8_t> table;              ///< the drive's active table (feed-forward: set parameters)
   double sample_rate_hz = 0;
 };
