@@ -158,6 +158,12 @@ TEST(SurveyTracking, ForgettingFollowsASlopeChangeTheKalmanFilterLagsBehind) {
       EXPECT_LT(rls.relative_error, 0.2);
     }
     EXPECT_GT(kf.relative_error, 2 * rls.relative_error) << to_string(p);
+    // Noise-free: the error is the lag; forgetting's is below Table 2's bound on a step and a ramp.
+    EXPECT_NEAR(rls.relative_lag, rls.relative_error, 0.5 * rls.relative_error) << to_string(p);
+    if (p != ChangeProfile::second_order) {
+      EXPECT_LT(rls.relative_lag, 0.2) << to_string(p);
+    }
+    EXPECT_GT(kf.relative_lag, 0.2) << to_string(p);
   }
   EXPECT_EQ(follow_level(0.1, 0.1), 'A');
   EXPECT_EQ(follow_level(0.3, 0.1), 'B');

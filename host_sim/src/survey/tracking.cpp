@@ -1,5 +1,6 @@
 #include "dyncal_host/survey/tracking.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 
@@ -95,16 +96,25 @@ std::vector<TrackingResult> track_viscous_friction(const SurveyData& d, const Me
   const Eigen::Index start = 3 * S / 4;  // the last quarter: what is left once transients decay
   for (TrackingResult& t : out) {
     t.profile = profile;
-    double sum = 0;
-    for (Eigen::Index s = start; s < S; ++s) sum += std::fabs(t.beta_hat[s] - t.beta[s]);
-    t.relative_error = sum / static_cast<double>(S - start) / (kChange * beta0);
+    double sum = 0, sum_abs = 0, sum_sq = 0;
+    for (Eigen::Index s = start; s < S; ++s) {
+      const double e = t.beta_hat[s] - t.beta[s];
+      sum += e;
+      sum_abs += std::fabs(e);
+      sum_sq += e * e;
+    }
+    const double n = static_cast<double>(S - start), change = kChange * beta0;
+    const double mean = sum / n;
+    t.relative_lag = std::fabs(mean) / change;
+    t.relative_scatter = std::sqrt(std::max(0.0, sum_sq / n - mean * mean)) / change;
+    t.relative_error = sum_abs / n / change;
   }
   return out;
 }
 
-char follow_level(double ramp_relative_error, double step_relative_error) {
-  if (ramp_relative_error < 0.2) return 'A';
-  return step_relative_error < 0.2 ? 'B' : 'C';
+char follow_level(double ramp_relative_lag, double step_relative_lag) {
+  if (ramp_relative_lag < 0.2) return 'A';
+  return step_relative_lag < 0.2 ? 'B' : 'C';
 }
 
 }  // namespace dyncal::host::survey

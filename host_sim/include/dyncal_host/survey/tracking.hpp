@@ -18,9 +18,11 @@ const char* to_string(ChangeProfile p);
 struct TrackingResult {
   std::string method;
   ChangeProfile profile = ChangeProfile::step;
-  /// Mean |beta_hat(N) - beta(N)| over the last quarter of the run (N >= 3 S / 4, where a step's
-  /// transient has decayed and a ramp's lag has settled), relative to the change 0.5 beta0.
-  double relative_error = 0;
+  /// Over the last quarter of the run (N >= 3 S / 4: a step's transient has decayed, a ramp's lag
+  /// has settled), relative to the change 0.5 beta0: the lag |mean(beta_hat - beta)| (what tracking
+  /// is about), the scatter std(beta_hat - beta) (the noise the memory lets through), and the
+  /// mean |beta_hat - beta| (both).
+  double relative_lag = 0, relative_scatter = 0, relative_error = 0;
   std::vector<double> beta, beta_hat;  ///< per sample [Nm s/rad]
 };
 
@@ -30,8 +32,8 @@ struct TrackingResult {
 std::vector<TrackingResult> track_viscous_friction(const SurveyData& d, const MethodSettings& settings,
                                                    ChangeProfile profile, int joint, double mu);
 
-/// Table 2: 'A' follows a slope change, 'B' a step change only, 'C' neither. Follows: relative
-/// error below 0.2 (Table 2's level-A bound on relative parameter errors).
-char follow_level(double ramp_relative_error, double step_relative_error);
+/// Table 2: 'A' follows a slope change, 'B' a step change only, 'C' neither. Follows: relative lag
+/// below 0.2 (Table 2's level-A bound on relative parameter errors).
+char follow_level(double ramp_relative_lag, double step_relative_lag);
 
 }  // namespace dyncal::host::survey
