@@ -254,8 +254,31 @@ void SimulatedDrive::step() {
     }
     qdd = M.ldlt().solve(rhs);
   };
-  const double hstep = dt / scenario_.substeps;
-  for (int k = 0; k < scenario_.substeps; ++k) {
+  // Explicit RK4 is stable for a damping rate lambda while h lambda < 2.78. The viscous friction of
+  // a light link (no rotor inertia, or a light plant under test) can exceed that at the nominal
+  // substep: substeps grow with lambda_max(M^-1 B), B = diag(beta), at the step's start.
+  int substeps = scenario_.substeps;
+  {
+    Mat M;
+    Robot::mass_matrix(s.q, s.phi_true, M);
+    M.diagonal() += s.ia;
+    const Eigen::LLT<Mat> llt(M);
+    if (llt.info() == Eigen::Success) {
+      Mat B = Mat::Zero();
+      for (int j = 0; j < kDriveJoints; ++j) {
+        const JointEffects& e = scenario_.effects[j];
+        double beta = scenario_.friction[j].beta;
+        if (e.viscous_drift != 0) beta *= 1.0 + e.viscous_drift;
+        B(j, j) = std::max(beta, 0.0);
+      }
+      // lambda_max(M^-1 B) = lambda_max(L^-1 B L^-T), bounded by its largest row sum.
+      const Mat A = llt.matrixL().solve(llt.matrixL().solve(B).transpose());
+      const double lambda = A.cwiseAbs().rowwise().sum().maxCoeff();
+      substeps = std::max(substeps, static_cast<int>(std::ceil(dt * lambda / 2.0)));
+    }
+  }
+  const double hstep = dt / substeps;
+  for (int k = 0; k < substeps; ++k) {
     Vec a1, a2, a3, a4;
     accel(s.q, s.qd, a1);
     if (k == 0 && record && plant_log) {

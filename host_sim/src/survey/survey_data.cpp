@@ -86,6 +86,20 @@ std::vector<SimulatedDrive::PlantSample> play(const RobotDescription& robot, con
   return out;
 }
 
+/// A plant faster than the robot's velocity limit has left the simulation's valid range (an
+/// unstable integration): refuse the record instead of identifying from it.
+void require_valid_plant(const RobotDescription& robot, const std::vector<SimulatedDrive::PlantSample>& samples) {
+  for (const auto& p : samples) {
+    for (int j = 0; j < kDriveJoints; ++j) {
+      if (!(std::fabs(p.qd[j]) <= robot.qd_max[j])) {
+        throw InputError("survey data: the simulated plant left its valid range at t = " + std::to_string(p.t) +
+                         " s (joint " + std::to_string(j + 1) + " at " + std::to_string(p.qd[j]) + " rad/s, limit " +
+                         std::to_string(robot.qd_max[j]) + ")");
+      }
+    }
+  }
+}
+
 /// The drive's PD gains (natural frequency bandwidth_hz, damping) set from the smallest diagonal
 /// inertia each joint sees along the trajectory instead of at its start pose: without rotor inertia
 /// the arm's inertia about joint 1 changes several-fold as it folds, and a discrete PD loop tuned
@@ -148,17 +162,7 @@ SurveyData simulate_survey_data(const RobotDescription& robot, const SurveyDataO
   d.sample_rate_hz = o.sample_rate_hz;
   gains_along(d.trajectory, d.scenario, d.kp, d.kd);
   const auto samples = play(robot, d.scenario, d.trajectory, o.periods, o.sample_rate_hz, d.table, {}, &d.kp, &d.kd);
-  // A plant faster than the robot's velocity limit has left the simulation's valid range (an
-  // unstable integration): refuse the record instead of identifying from it.
-  for (const auto& p : samples) {
-    for (int j = 0; j < kDriveJoints; ++j) {
-      if (!(std::fabs(p.qd[j]) <= robot.qd_max[j])) {
-        throw InputError("survey data: the simulated plant left its valid range at t = " + std::to_string(p.t) +
-                         " s (joint " + std::to_string(j + 1) + " at " + std::to_string(p.qd[j]) + " rad/s, limit " +
-                         std::to_string(robot.qd_max[j]) + ")");
-      }
-    }
-  }
+  require_valid_plant(robot, samples);
   const Eigen::Index S = static_cast<Eigen::Index>(samples.size());
   d.t.resize(S);
   d.q.resize(S, kDriveJoints);
@@ -166,6 +170,10 @@ SurveyData simulate_survey_data(const RobotDescription& robot, const SurveyDataO
   d.qdd.resize(S, kDriveJoints);
   d.tau.resize(S, kDriveJoints);
   d.tau_cmd.resize(S, kDriveJoints);
+  d.q_meas.resize(S, kDriveJoints);
+  if (!(o.position_noise_std >= 0)) throw InputError("survey data: position noise >= 0");
+  std::mt19937_64 rng(o.seed ^ 0x9e3779b97f4a7c15ULL);  // independent of the drive's torque noise
+  std::normal_distribution<double> normal(0.0, 1.0);
   for (Eigen::Index s = 0; s < S; ++s) {
     const auto& p = samples[static_cast<size_t>(s)];
     d.t[s] = p.t;
@@ -175,6 +183,7 @@ SurveyData simulate_survey_data(const RobotDescription& robot, const SurveyDataO
       d.qdd(s, j) = p.qdd[j];
       d.tau(s, j) = p.tau_measured[j];
       d.tau_cmd(s, j) = p.tau_cmd[j];
+      d.q_meas(s, j) = p.q[j] + (o.position_noise_std > 0 ? o.position_noise_std * normal(rng) : 0.0);
     }
   }
   return d;
@@ -194,8 +203,10 @@ std::vector<SimulatedDrive::PlantSample> simulate_closed_loop(const RobotDescrip
   }
   const int periods = static_cast<int>(
       std::lround(static_cast<double>(data.t.size()) / (data.trajectory.period() * data.sample_rate_hz)));
-  return play(robot, s, data.trajectory, std::max(periods, 1), data.sample_rate_hz, data.table, phi_standard, &data.kp,
-              &data.kd);
+  auto samples = play(robot, s, data.trajectory, std::max(periods, 1), data.sample_rate_hz, data.table, phi_standard,
+                      &data.kp, &data.kd);
+  require_valid_plant(robot, samples);
+  return samples;
 }
 
 }  // namespace dyncal::host::survey

@@ -20,12 +20,14 @@ struct SurveyDataOptions {
   double sample_rate_hz = 100;                  ///< survey: 100 Hz
   int periods = 2;                              ///< excitation periods recorded (10 s each at f_f = 0.1 Hz)
   std::uint64_t seed = 1;                       ///< noise and excitation seed
+  double position_noise_std = 0;                ///< Gaussian noise on the measured position q_meas [rad]
 };
 
 /// One recorded run. S samples; matrices are S x 6, joint j in column j - 1.
 struct SurveyData {
   Eigen::VectorXd t;                            ///< [s]
   Eigen::MatrixXd q, qd, qdd;                   ///< exact plant state at the samples (q_m, qd_m, qdd_m of Fig. 3)
+  Eigen::MatrixXd q_meas;                       ///< measured position: q plus position_noise_std noise
   Eigen::MatrixXd tau;                          ///< measured torque tau_jm [Nm] (with noise if chosen)
   Eigen::MatrixXd tau_cmd;                      ///< commanded torque tau_jc [Nm] (noise-free)
   Scenario scenario;                            ///< friction, noise and seed the drive ran

@@ -1,0 +1,37 @@
+#pragma once
+// IDIM-IV (survey Eq. 17; Gautier, Janot and Vandanjon 2013): the instrumental-variable estimate
+// phi = (Z^T K)^-1 Z^T tau, K the Eq. 7 regressor of the measured (differentiated) states and Z the
+// same regressor of the states a closed-loop simulation of the drive's known control law produces
+// with the previous estimate as the plant, iterated to convergence. Z does not see the noise of the
+// measured positions, so the noise does not bias the estimate as it biases least squares.
+
+#include "dyncal_host/robot_description.hpp"
+#include "dyncal_host/survey/methods.hpp"
+
+namespace dyncal::host::survey {
+
+struct IdimIvOptions {
+  bool filter = true;       ///< low-pass the measured positions before differentiating (Table 10)
+  double cutoff_hz = 20;    ///< survey Sec. 6.4: 20 Hz
+  int filter_order = 4;     ///< fourth-order Butterworth (zero phase)
+  int max_iterations = 20;  ///< closed-loop simulations at most
+  double tolerance = 1e-3;  ///< stop when |phi_k+1 - phi_k| <= tolerance |phi_k|
+};
+
+/// q, qd, qdd from the measured positions: optionally filtered (zero-phase Butterworth), then
+/// central differences (S x 6 each).
+void measured_states(const SurveyData& d, const IdimIvOptions& options, Eigen::MatrixXd& q, Eigen::MatrixXd& qd,
+                     Eigen::MatrixXd& qdd);
+
+/// The pseudo-inverse (Eq. 15) on the measured states: the least-squares reference of Table 10.
+Estimate pseudo_inverse_measured(const SurveyData& d, const MethodSettings& settings, const IdimIvOptions& options);
+
+/// IDIM-IV from the pseudo-inverse's estimate. Each iteration's plant: the standard parameters
+/// most probable under the CAD prior given the base parameters (standard_from_base), projected onto
+/// the physically consistent set, with Fc, beta >= 0. Estimate::iterations: closed-loop
+/// simulations run; Estimate::note says whether it converged. Throws InputError if a simulation
+/// leaves its valid range.
+Estimate idim_iv(const RobotDescription& robot, const SurveyData& d, const MethodSettings& settings,
+                 const IdimIvOptions& options);
+
+}  // namespace dyncal::host::survey

@@ -1,0 +1,141 @@
+#include "dyncal_host/survey/idim_iv.hpp"
+
+#include <Eigen/Dense>
+#include <chrono>
+
+#include "dyncal/identification_model.hpp"
+#include "dyncal_host/butterworth.hpp"
+#include "dyncal_host/input_error.hpp"
+#include "dyncal_host/signal.hpp"
+#include "dyncal_host/survey/standard_parameters.hpp"
+#include "er20/robot.hpp"
+
+namespace dyncal::host::survey {
+namespace {
+
+using Robot = dyncal::generated::er20::Robot;
+using Model7 = IdentificationModel<Robot, kFrictionEq7>;
+constexpr int P7 = Model7::kNumParams;
+using Vec6 = Eigen::Matrix<double, 6, 1>;
+using PV = Eigen::Matrix<double, P7, 1>;
+
+/// Stacked Eq. 7 regressor (6 S x 48) of states given as S x 6 matrices.
+Eigen::MatrixXd stacked(const Eigen::MatrixXd& q, const Eigen::MatrixXd& qd, const Eigen::MatrixXd& qdd) {
+  Eigen::MatrixXd W(6 * q.rows(), P7);
+  Model7::Regressor<double> K;
+  for (Eigen::Index s = 0; s < q.rows(); ++s) {
+    Model7::regressor(Vec6(q.row(s).transpose()), Vec6(qd.row(s).transpose()), Vec6(qdd.row(s).transpose()),
+                      Vec6::Zero().eval(), K);
+    W.middleRows(6 * s, 6) = K;
+  }
+  return W;
+}
+
+Eigen::VectorXd stacked_torque(const Eigen::MatrixXd& tau) {
+  Eigen::VectorXd y(6 * tau.rows());
+  for (Eigen::Index s = 0; s < tau.rows(); ++s) y.segment<6>(6 * s) = tau.row(s).transpose();
+  return y;
+}
+
+/// Each joint's rows weighted by 1 / sigma_j (Table 7 noise): the joints' torques differ in scale.
+void weight_rows(Eigen::MatrixXd& W, Eigen::VectorXd& y, const std::array<double, 6>& sigma) {
+  for (Eigen::Index i = 0; i < W.rows(); ++i) {
+    const double w = 1.0 / sigma[static_cast<size_t>(i % 6)];
+    W.row(i) *= w;
+    y[i] *= w;
+  }
+}
+
+Estimate estimate_from(const PV& phi, const char* method) {
+  Estimate e;
+  e.method = method;
+  e.model = FrictionModel::eq7;
+  e.base = phi.head<Robot::kNumBase>();
+  e.friction.assign(12, 0.0);
+  for (int i = Robot::kNumBase; i < P7; ++i) {
+    const ParamInfo info = Model7::info(i);
+    e.friction[static_cast<size_t>(2 * (info.joint - 1) + (info.term == term::coulomb ? 0 : 1))] = phi[i];
+  }
+  return e;
+}
+
+}  // namespace
+
+void measured_states(const SurveyData& d, const IdimIvOptions& o, Eigen::MatrixXd& q, Eigen::MatrixXd& qd,
+                     Eigen::MatrixXd& qdd) {
+  if (d.q_meas.rows() != d.q.rows() || d.q.rows() < 3) throw InputError("IDIM-IV: no measured positions");
+  q = d.q_meas;
+  if (o.filter) ButterworthLowPass(o.filter_order, o.cutoff_hz, d.sample_rate_hz).filtfilt(q);
+  const double dt = 1.0 / d.sample_rate_hz;
+  qd = central_difference(q, dt);
+  qdd = central_difference(qd, dt);
+}
+
+Estimate pseudo_inverse_measured(const SurveyData& d, const MethodSettings& settings, const IdimIvOptions& o) {
+  const auto t0 = std::chrono::steady_clock::now();
+  Eigen::MatrixXd q, qd, qdd;
+  measured_states(d, o, q, qd, qdd);
+  Eigen::MatrixXd K = stacked(q, qd, qdd);
+  Eigen::VectorXd y = stacked_torque(d.tau);
+  weight_rows(K, y, settings.sigma);
+  const PV phi = K.colPivHouseholderQr().solve(y);
+  Estimate e = estimate_from(phi, "pseudo-inverse");
+  e.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  complete_estimate(e, d, settings);
+  return e;
+}
+
+Estimate idim_iv(const RobotDescription& robot, const SurveyData& d, const MethodSettings& settings,
+                 const IdimIvOptions& o) {
+  const auto t0 = std::chrono::steady_clock::now();
+  Eigen::MatrixXd q, qd, qdd;
+  measured_states(d, o, q, qd, qdd);
+  Eigen::MatrixXd K = stacked(q, qd, qdd);
+  Eigen::VectorXd y = stacked_torque(d.tau);
+  weight_rows(K, y, settings.sigma);
+  // The first instruments come from the CAD plant with IDIM-OLS's friction: OLS on noisy positions
+  // underestimates the inertias (errors in variables), and a plant lighter than the real one can
+  // make the drive's fixed-gain loop unstable in simulation.
+  PV phi = K.colPivHouseholderQr().solve(y);
+  int iterations = 0;
+  bool converged = false;
+  while (iterations < o.max_iterations && !converged) {
+    // The plant of this iterate: consistent standard parameters and non-negative friction.
+    const Estimate cur = estimate_from(phi, "IDIM-IV");
+    const Eigen::VectorXd phi_std = nearest_consistent(
+        iterations == 0 ? settings.prior : standard_from_base(cur.base, settings.prior, settings.prior_relative_std));
+    std::array<double, kDriveJoints> Fc{}, beta{};
+    for (int j = 0; j < 6; ++j) {
+      Fc[j] = std::max(0.0, cur.friction[static_cast<size_t>(2 * j)]);
+      beta[j] = std::max(0.0, cur.friction[static_cast<size_t>(2 * j + 1)]);
+    }
+    const auto sim =
+        simulate_closed_loop(robot, d, std::vector<double>(phi_std.data(), phi_std.data() + kStandard), Fc, beta);
+    ++iterations;
+    if (static_cast<Eigen::Index>(sim.size()) != d.q.rows()) throw InputError("IDIM-IV: simulation length differs");
+    // Instruments: the simulated positions through the same filter and differentiation as the measured ones.
+    SurveyData simulated;
+    simulated.sample_rate_hz = d.sample_rate_hz;
+    simulated.q.resize(d.q.rows(), 6);
+    for (Eigen::Index s = 0; s < d.q.rows(); ++s)
+      for (int j = 0; j < 6; ++j) simulated.q(s, j) = sim[static_cast<size_t>(s)].q[j];
+    simulated.q_meas = simulated.q;
+    Eigen::MatrixXd qs, qds, qdds;
+    measured_states(simulated, o, qs, qds, qdds);
+    Eigen::MatrixXd Z = stacked(qs, qds, qdds);
+    Eigen::VectorXd unused = Eigen::VectorXd::Zero(Z.rows());
+    weight_rows(Z, unused, settings.sigma);
+    const PV next = (Z.transpose() * K).colPivHouseholderQr().solve(Z.transpose() * y);
+    if (!next.allFinite()) throw InputError("IDIM-IV: the instrumental estimate is not finite");
+    converged = (next - phi).norm() <= o.tolerance * phi.norm();
+    phi = next;
+  }
+  Estimate e = estimate_from(phi, "IDIM-IV");
+  e.iterations = iterations;
+  e.note = converged ? "converged" : "not converged in " + std::to_string(iterations) + " iterations";
+  e.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  complete_estimate(e, d, settings);
+  return e;
+}
+
+}  // namespace dyncal::host::survey
