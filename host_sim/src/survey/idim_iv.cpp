@@ -46,17 +46,14 @@ void weight_rows(Eigen::MatrixXd& W, Eigen::VectorXd& y, const std::array<double
   }
 }
 
-Estimate estimate_from(const PV& phi, const char* method) {
-  Estimate e;
-  e.method = method;
-  e.model = FrictionModel::eq7;
-  e.base = phi.head<Robot::kNumBase>();
-  e.friction.assign(12, 0.0);
-  for (int i = Robot::kNumBase; i < P7; ++i) {
-    const ParamInfo info = Model7::info(i);
-    e.friction[static_cast<size_t>(2 * (info.joint - 1) + (info.term == term::coulomb ? 0 : 1))] = phi[i];
-  }
-  return e;
+/// The weighted least-squares system of the measured states: K (6 S x 48) and tau (6 S).
+void measured_system(const SurveyData& d, const IdimIvOptions& o, const MethodSettings& settings, Eigen::MatrixXd& K,
+                     Eigen::VectorXd& y) {
+  Eigen::MatrixXd q, qd, qdd;
+  measured_states(d, o, q, qd, qdd);
+  K = stacked(q, qd, qdd);
+  y = stacked_torque(d.tau);
+  weight_rows(K, y, settings.sigma);
 }
 
 }  // namespace
@@ -73,13 +70,10 @@ void measured_states(const SurveyData& d, const IdimIvOptions& o, Eigen::MatrixX
 
 Estimate pseudo_inverse_measured(const SurveyData& d, const MethodSettings& settings, const IdimIvOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
-  Eigen::MatrixXd q, qd, qdd;
-  measured_states(d, o, q, qd, qdd);
-  Eigen::MatrixXd K = stacked(q, qd, qdd);
-  Eigen::VectorXd y = stacked_torque(d.tau);
-  weight_rows(K, y, settings.sigma);
-  const PV phi = K.colPivHouseholderQr().solve(y);
-  Estimate e = estimate_from(phi, "pseudo-inverse");
+  Eigen::MatrixXd K;
+  Eigen::VectorXd y;
+  measured_system(d, o, settings, K, y);
+  Estimate e = eq7_estimate(K.colPivHouseholderQr().solve(y), "pseudo-inverse");
   e.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   complete_estimate(e, d, settings);
   return e;
@@ -88,11 +82,9 @@ Estimate pseudo_inverse_measured(const SurveyData& d, const MethodSettings& sett
 Estimate idim_iv(const RobotDescription& robot, const SurveyData& d, const MethodSettings& settings,
                  const IdimIvOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
-  Eigen::MatrixXd q, qd, qdd;
-  measured_states(d, o, q, qd, qdd);
-  Eigen::MatrixXd K = stacked(q, qd, qdd);
-  Eigen::VectorXd y = stacked_torque(d.tau);
-  weight_rows(K, y, settings.sigma);
+  Eigen::MatrixXd K;
+  Eigen::VectorXd y;
+  measured_system(d, o, settings, K, y);
   // The first instruments come from the CAD plant with IDIM-OLS's friction: OLS on noisy positions
   // underestimates the inertias (errors in variables), and a plant lighter than the real one can
   // make the drive's fixed-gain loop unstable in simulation.
@@ -101,7 +93,7 @@ Estimate idim_iv(const RobotDescription& robot, const SurveyData& d, const Metho
   bool converged = false;
   while (iterations < o.max_iterations && !converged) {
     // The plant of this iterate: consistent standard parameters and non-negative friction.
-    const Estimate cur = estimate_from(phi, "IDIM-IV");
+    const Estimate cur = eq7_estimate(phi, "IDIM-IV");
     const Eigen::VectorXd phi_std = nearest_consistent(
         iterations == 0 ? settings.prior : standard_from_base(cur.base, settings.prior, settings.prior_relative_std));
     std::array<double, kDriveJoints> Fc{}, beta{};
@@ -130,7 +122,7 @@ Estimate idim_iv(const RobotDescription& robot, const SurveyData& d, const Metho
     converged = (next - phi).norm() <= o.tolerance * phi.norm();
     phi = next;
   }
-  Estimate e = estimate_from(phi, "IDIM-IV");
+  Estimate e = eq7_estimate(phi, "IDIM-IV");
   e.iterations = iterations;
   e.note = converged ? "converged" : "not converged in " + std::to_string(iterations) + " iterations";
   e.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

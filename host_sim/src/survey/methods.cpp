@@ -29,8 +29,10 @@ Vec6 row(const Eigen::MatrixXd& m, Eigen::Index s) {
   return m.row(s).transpose();
 }
 
-/// Eq. 7 estimate (Model7 order) into base + joint-major (Fc, beta).
-Estimate from_model7(const Eigen::Matrix<double, P7, 1>& phi, const char* method) {
+}  // namespace
+
+Estimate eq7_estimate(const Eigen::VectorXd& phi, const char* method) {
+  if (phi.size() != P7) throw InputError("an Eq. 7 estimate has " + std::to_string(P7) + " parameters");
   Estimate e;
   e.method = method;
   e.model = FrictionModel::eq7;
@@ -42,8 +44,6 @@ Estimate from_model7(const Eigen::Matrix<double, P7, 1>& phi, const char* method
   }
   return e;
 }
-
-}  // namespace
 
 void complete_estimate(Estimate& e, const SurveyData& d, const MethodSettings& settings) {
   if (e.standard.size() != kStandard) {
@@ -73,7 +73,7 @@ Estimate pseudo_inverse(const SurveyData& d, const MethodSettings& settings) {
     y.segment<6>(6 * s) = row(d.tau, s);
   }
   const Eigen::Matrix<double, P7, 1> phi = W.colPivHouseholderQr().solve(y);
-  Estimate e = from_model7(phi, "pseudo-inverse");
+  Estimate e = eq7_estimate(phi, "pseudo-inverse");
   e.seconds = seconds_since(t0);
   complete_estimate(e, d, settings);
   return e;
@@ -91,7 +91,7 @@ Estimate run_linear_recursive(const SurveyData& d, const MethodSettings& setting
     Model7::regressor(row(d.q, s), row(d.qd, s), row(d.qdd, s), Vec6::Zero().eval(), K);
     if (update(filter, K, row(d.tau, s)) != UpdateStatus::ok) ++rejected;
   }
-  Estimate e = from_model7(filter.estimate(), method);
+  Estimate e = eq7_estimate(filter.estimate(), method);
   e.seconds = seconds_since(t0);
   if (rejected) e.note = std::to_string(rejected) + " samples rejected";
   complete_estimate(e, d, settings);

@@ -20,6 +20,11 @@ struct MethodSettings {
   double p0 = 1e6;                                            ///< initial covariance of unknown parameters
 };
 
+/// An Eq. 7 estimate from the parameter vector of IdentificationModel<er20, Eq. 7> (48: the 36 base
+/// parameters, then Fc, beta of each joint): base + joint-major (Fc, beta). Throws InputError on
+/// another size.
+Estimate eq7_estimate(const Eigen::VectorXd& phi, const char* method);
+
 /// Fills standard, standard_prior and tau_hat of `e` from its base and friction parameters.
 void complete_estimate(Estimate& e, const SurveyData& data, const MethodSettings& settings);
 
