@@ -166,6 +166,14 @@ TEST(SurveyTracking, ForgettingFollowsASlopeChangeTheKalmanFilterLagsBehind) {
     }
     EXPECT_GT(kf.relative_lag, 0.2) << to_string(p);
   }
+  // Eq. 4 run: the extended Kalman filter (Eq. 21) and its forgetting form (Eq. 24) on a step.
+  o.friction = FrictionModel::eq4;
+  const SurveyData d4 = simulate_survey_data(load_robot(default_robots_dir(), "er20"), o);
+  const auto r4 = track_viscous_friction(d4, settings(), ChangeProfile::step, 3, 0.98);
+  ASSERT_EQ(r4.size(), 2u);
+  EXPECT_EQ(r4[0].method, "extended Kalman");
+  EXPECT_LT(r4[1].relative_lag, 0.2);
+  EXPECT_GT(r4[0].relative_lag, 2 * r4[1].relative_lag);
   EXPECT_EQ(follow_level(0.1, 0.1), 'A');
   EXPECT_EQ(follow_level(0.3, 0.1), 'B');
   EXPECT_EQ(follow_level(0.3, 0.3), 'C');

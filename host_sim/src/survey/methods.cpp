@@ -19,7 +19,7 @@ using Robot = dyncal::generated::er20::Robot;
 using Model7 = IdentificationModel<Robot, kFrictionEq7>;
 constexpr int P7 = Model7::kNumParams;
 using Vec6 = Eigen::Matrix<double, 6, 1>;
-using Ekf = ExtendedKalmanFilter<double, Robot, NonlinearFrictionModel::eq4>;
+using Ekf = SurveyEkf;
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -125,8 +125,7 @@ Estimate exponential_forgetting(const SurveyData& d, const MethodSettings& setti
       "exponential forgetting", t0);
 }
 
-Estimate extended_kalman_filter(const SurveyData& d, const MethodSettings& settings, double mu) {
-  const auto t0 = std::chrono::steady_clock::now();
+std::unique_ptr<SurveyEkf> make_survey_ekf(const MethodSettings& settings, double mu) {
   auto ekf = std::make_unique<Ekf>();
   Ekf::ParamVector phi0 = Ekf::ParamVector::Zero(), p0 = Ekf::ParamVector::Constant(settings.p0);
   for (int j = 0; j < 6; ++j) {
@@ -135,6 +134,12 @@ Estimate extended_kalman_filter(const SurveyData& d, const MethodSettings& setti
     p0[Ekf::column(2, j)] = 0.01;
   }
   if (ekf->reset(phi0, p0, mu) != UpdateStatus::ok) throw InputError("EKF reset failed");
+  return ekf;
+}
+
+Estimate extended_kalman_filter(const SurveyData& d, const MethodSettings& settings, double mu) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto ekf = make_survey_ekf(settings, mu);
   Vec6 r;
   for (int j = 0; j < 6; ++j) r[j] = settings.sigma[j] * settings.sigma[j];
   int rejected = 0;

@@ -44,6 +44,54 @@ int viscous_column(int joint) {
   throw InputError("no viscous column for joint " + std::to_string(joint));
 }
 
+/// Lag, scatter and mean |error| of each result over the last quarter of the run (what is left
+/// once a step's transient has decayed and a ramp's lag has settled).
+void summarise(std::vector<TrackingResult>& out, ChangeProfile profile, double beta0) {
+  for (TrackingResult& t : out) {
+    const Eigen::Index S = static_cast<Eigen::Index>(t.beta.size()), start = 3 * S / 4;
+    t.profile = profile;
+    double sum = 0, sum_abs = 0, sum_sq = 0;
+    for (Eigen::Index s = start; s < S; ++s) {
+      const double e = t.beta_hat[static_cast<size_t>(s)] - t.beta[static_cast<size_t>(s)];
+      sum += e;
+      sum_abs += std::fabs(e);
+      sum_sq += e * e;
+    }
+    const double n = static_cast<double>(S - start), change = kChange * beta0;
+    const double mean = sum / n;
+    t.relative_lag = std::fabs(mean) / change;
+    t.relative_scatter = std::sqrt(std::max(0.0, sum_sq / n - mean * mean)) / change;
+    t.relative_error = sum_abs / n / change;
+  }
+}
+
+/// Eq. 4 run: the extended Kalman filter (Eq. 21) and its forgetting form (Eq. 24).
+std::vector<TrackingResult> track_nonlinear(const SurveyData& d, const MethodSettings& settings, ChangeProfile profile,
+                                            int joint, double mu, double beta0) {
+  const Eigen::Index S = d.q.rows();
+  const auto ekf = make_survey_ekf(settings, 1.0), fekf = make_survey_ekf(settings, mu);
+  const int col = SurveyEkf::column(3, joint - 1);  // beta: the fourth Eq. 4 parameter
+  Vec6 r;
+  for (int j = 0; j < 6; ++j) r[j] = settings.sigma[j] * settings.sigma[j];
+  std::vector<TrackingResult> out(2);
+  out[0].method = "extended Kalman";
+  out[1].method = "exponential forgetting (Eq. 4)";
+  for (Eigen::Index s = 0; s < S; ++s) {
+    const Vec6 q = d.q.row(s).transpose(), qd = d.qd.row(s).transpose(), qdd = d.qdd.row(s).transpose();
+    const double beta = beta0 * (1 + profile_factor(profile, s, S));
+    Vec6 tau = d.tau.row(s).transpose();
+    tau[joint - 1] += (beta - beta0) * qd[joint - 1];
+    // A rejected sample leaves the estimate as it was: the tracking error then shows it.
+    (void)ekf->update(q, qd, qdd, tau, r);
+    (void)fekf->update(q, qd, qdd, tau, r);
+    for (int k = 0; k < 2; ++k) out[static_cast<size_t>(k)].beta.push_back(beta);
+    out[0].beta_hat.push_back(ekf->estimate()[col]);
+    out[1].beta_hat.push_back(fekf->estimate()[col]);
+  }
+  summarise(out, profile, beta0);
+  return out;
+}
+
 }  // namespace
 
 const char* to_string(ChangeProfile p) {
@@ -62,8 +110,10 @@ std::vector<TrackingResult> track_viscous_friction(const SurveyData& d, const Me
                                                    ChangeProfile profile, int joint, double mu) {
   if (joint < 1 || joint > 6) throw InputError("tracking: joint 1..6");
   const Eigen::Index S = d.q.rows();
-  const int col = viscous_column(joint);
   const double beta0 = d.scenario.friction[joint - 1].beta;
+  const bool nonlinear = d.scenario.friction[joint - 1].model == FrictionModel::eq4;
+  if (nonlinear) return track_nonlinear(d, settings, profile, joint, mu, beta0);
+  const int col = viscous_column(joint);
   auto kf = std::make_unique<KalmanFilter<double, P7, 6>>();
   auto rls = std::make_unique<RlsForgetting<double, P7, 6>>();
   if (kf->reset(PV::Zero(), PV::Constant(settings.p0), Model7::structure()) != UpdateStatus::ok ||
@@ -93,22 +143,7 @@ std::vector<TrackingResult> track_viscous_friction(const SurveyData& d, const Me
     out[0].beta_hat.push_back(kf->estimate()[col]);
     out[1].beta_hat.push_back(rls->estimate()[col]);
   }
-  const Eigen::Index start = 3 * S / 4;  // the last quarter: what is left once transients decay
-  for (TrackingResult& t : out) {
-    t.profile = profile;
-    double sum = 0, sum_abs = 0, sum_sq = 0;
-    for (Eigen::Index s = start; s < S; ++s) {
-      const double e = t.beta_hat[s] - t.beta[s];
-      sum += e;
-      sum_abs += std::fabs(e);
-      sum_sq += e * e;
-    }
-    const double n = static_cast<double>(S - start), change = kChange * beta0;
-    const double mean = sum / n;
-    t.relative_lag = std::fabs(mean) / change;
-    t.relative_scatter = std::sqrt(std::max(0.0, sum_sq / n - mean * mean)) / change;
-    t.relative_error = sum_abs / n / change;
-  }
+  summarise(out, profile, beta0);
   return out;
 }
 

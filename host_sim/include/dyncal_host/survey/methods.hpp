@@ -6,9 +6,12 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <memory>
 
+#include "dyncal/extended_kalman_filter.hpp"
 #include "dyncal_host/survey/estimate.hpp"
 #include "dyncal_host/survey/survey_data.hpp"
+#include "er20/robot.hpp"
 
 namespace dyncal::host::survey {
 
@@ -34,6 +37,11 @@ Estimate pseudo_inverse(const SurveyData& data, const MethodSettings& settings);
 Estimate kalman_filter(const SurveyData& data, const MethodSettings& settings);
 /// Eq. 7 model, lib/ RlsForgetting (weights 1/sigma, forgetting factor mu).
 Estimate exponential_forgetting(const SurveyData& data, const MethodSettings& settings);
+using SurveyEkf = ExtendedKalmanFilter<double, generated::er20::Robot, NonlinearFrictionModel::eq4>;
+/// The study's EKF (mu = 1: Eq. 21, mu < 1: Eq. 24), reset to its start: base parameters 0 with
+/// covariance p0, friction Fc = Fs = 10 Nm, qds = 0.3 +- 0.1 rad/s, beta = 0. Throws InputError.
+std::unique_ptr<SurveyEkf> make_survey_ekf(const MethodSettings& settings, double mu);
+
 /// Eq. 4 model, lib/ ExtendedKalmanFilter; mu = 1: Eq. 21, mu < 1: Eq. 24. Friction prior:
 /// Fc = Fs = 10 Nm, qds = 0.3 +- 0.1 rad/s, beta = 0 (no knowledge of the set values).
 Estimate extended_kalman_filter(const SurveyData& data, const MethodSettings& settings, double mu);

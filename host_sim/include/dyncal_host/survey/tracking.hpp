@@ -26,9 +26,10 @@ struct TrackingResult {
   std::vector<double> beta, beta_hat;  ///< per sample [Nm s/rad]
 };
 
-/// The recorded states of `d` (an Eq. 7 run) with the torque the plant needs to follow them when
-/// joint `joint`'s (1-based) beta follows `profile`: tau + (beta(N) - beta0) qd_j. Runs the Kalman
-/// filter (R = sigma^2) and exponential forgetting with factor `mu` over it, one result each.
+/// The recorded states of `d` with the torque the plant needs to follow them when joint `joint`'s
+/// (1-based) beta follows `profile`: tau + (beta(N) - beta0) qd_j. On an Eq. 7 run: the Kalman filter
+/// (R = sigma^2, Eq. 19) and exponential forgetting (Eq. 23) with factor `mu`; on an Eq. 4 run: the
+/// extended Kalman filter (Eq. 21) and its forgetting form (Eq. 24, `mu`). One result each.
 std::vector<TrackingResult> track_viscous_friction(const SurveyData& d, const MethodSettings& settings,
                                                    ChangeProfile profile, int joint, double mu);
 
