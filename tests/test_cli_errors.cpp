@@ -1,4 +1,5 @@
-// `dyncal identify` on malformed input: one clear line on stderr naming the problem, exit code 2.
+// `dyncal identify` and `dyncal calibrate --trajectory` on malformed input: one clear line on
+// stderr naming the problem, exit code 2; `dyncal excite` writes a file calibrate accepts.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -93,6 +94,23 @@ TEST(CliErrors, MissingTimeColumn) {
 
 TEST(CliErrors, MissingFile) {
   expect_error("identify --robot er20 --data /nonexistent/log.csv", "cannot read");
+}
+
+// The trajectory file is checked before any drive is contacted (the URI below serves nothing).
+TEST(CliErrors, TrajectoryFileBeyondALimitIsRefused) {
+  const auto path = std::filesystem::temp_directory_path() / ("dyncal_test_traj_" + std::to_string(::getpid()));
+  // Joint 2 at 50 rad/s: beyond its position range and velocity limit (2.97 rad/s).
+  std::ofstream(path) << R"({"robot": "er20", "f_f": 0.1, "harmonics": 1, "q0": [0, 0, 0, 0, 0, 0],
+    "a": [[0.1], [50], [0.1], [0.1], [0.1], [0.1]], "b": [[0], [0], [0], [0], [0], [0]]})";
+  expect_error("calibrate --drive tcp://127.0.0.1:1 --trajectory " + path.string(), "joint 2 exceeds its");
+  expect_error("calibrate --drive tcp://127.0.0.1:1 --trajectory /nonexistent/t.json", "cannot read");
+  // A designed file passes the check: the error is then the missing drive.
+  const auto made = run_dyncal("excite --evaluations 20 --out " + path.string());
+  ASSERT_EQ(made.exit_code, 0) << made.err;
+  const auto played = run_dyncal("calibrate --drive tcp://127.0.0.1:1 --trajectory " + path.string());
+  EXPECT_EQ(played.exit_code, 2);
+  EXPECT_EQ(played.err.find("trajectory"), std::string::npos) << played.err;
+  std::filesystem::remove(path);
 }
 
 }  // namespace
