@@ -1,10 +1,12 @@
 // Particle filter for static parameters (survey Sec. 3.4 (3)) as a sequential Monte Carlo sampler
 // (Del Moral, Doucet and Jasra 2006): particles drawn uniformly from the feasible search box are
-// carried through the tempered targets p_b(x) ~ exp(-b J(x)) on that box, J the Eq. 25 objective,
-// b rising from 0. Each step raises b so that the effective sample size of the incremental weights
-// is half the particle count (adaptive tempering), resamples (systematic), and rejuvenates every
+// carried through the tempered targets p_b(x) ~ exp(-b J(x)) on that box, J the negative
+// log-likelihood of the torques under the assumed (Table 7) noise, b rising from 0 to 1 (the
+// posterior). Each step raises b so that the effective sample size of the incremental weights is
+// half the particle count (adaptive tempering), resamples (systematic), and rejuvenates every
 // particle by random-walk Metropolis moves whose proposal covariance is the particles' own
-// (scale 2.38 / sqrt(D), adapted towards an acceptance rate of 0.234).
+// (scale 2.38 / sqrt(D), adapted towards an acceptance rate of 0.234); at b = 1 the moves go on
+// until the budget is spent. The estimate is the posterior mean.
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
@@ -55,6 +57,10 @@ Estimate particle_filter(const SurveyData& data, FrictionModel model, const Meth
   Eigen::MatrixXd X(D, N);
   std::vector<std::vector<int>> link_vars(kLinks + 1);  // free variables of each link; last: friction
   for (int k = 0; k < D; ++k) link_vars[static_cast<size_t>(std::min(problem.free_index(k) / 10, kLinks))].push_back(k);
+  // Negative log-likelihood of the torques under the assumed noise (Table 7 sigma_j, Gaussian):
+  // (S / 2) sum_j ||e_j / sigma_j||^2 / S; the target at b = 1 is the posterior on the ranges.
+  const double half_samples = 0.5 * static_cast<double>(data.q.rows());
+  auto cost = [&](const Eigen::VectorXd& x) { return half_samples * problem.objective().least_squares(x.data()); };
   Eigen::VectorXd f(N);
   for (int i = 0; i < N; ++i) {
     for (int k = 0; k < D; ++k) X(k, i) = U(rng);
@@ -67,16 +73,12 @@ Estimate particle_filter(const SurveyData& data, FrictionModel model, const Meth
     }
     const Eigen::VectorXd x = problem.full(X.col(i).data());
     if (problem.violation(x) > 0) throw InputError("particle filter: no feasible point found in the search ranges");
-    f[i] = problem.eq25(x);
+    f[i] = cost(x);
   }
-  Eigen::Index best_i;
-  f.minCoeff(&best_i);
-  Eigen::VectorXd best_u = X.col(best_i);
-  double best_f = f[best_i];
   double b = 0, scale = 2.38 / std::sqrt(static_cast<double>(D));
   const int steps = options.generations / kMovesPerStep;
   for (int step = 0; step < steps; ++step) {
-    const double b_next = next_inverse_temperature(f, b);
+    const double b_next = std::min(1.0, b < 1.0 ? next_inverse_temperature(f, b) : 1.0);
     Eigen::VectorXd w = (-(f.array() - f.minCoeff()) * (b_next - b)).exp().matrix();
     w /= w.sum();
     b = b_next;
@@ -109,22 +111,20 @@ Estimate particle_filter(const SurveyData& data, FrictionModel model, const Meth
         if ((u.array() < 0).any() || (u.array() > 1).any()) continue;  // outside the box: density 0
         const Eigen::VectorXd x = problem.full(u.data());
         if (problem.violation(x) > 0) continue;
-        const double fu = problem.eq25(x);
+        const double fu = cost(x);
         if (logu < -b * (fu - f[i])) {
           X.col(i) = u;
           f[i] = fu;
           ++accepted;
-          if (fu < best_f) {
-            best_f = fu;
-            best_u = u;
-          }
         }
       }
     }
     const double rate = static_cast<double>(accepted) / (kMovesPerStep * N);
     scale *= std::exp(rate - kTargetAcceptance);
   }
-  return problem.estimate(problem.full(best_u.data()), "particle filter", t0, steps);
+  // The posterior mean (feasible: the consistent set and the box are convex in these coordinates).
+  const Eigen::VectorXd posterior_mean = X.rowwise().mean();
+  return problem.estimate(problem.full(posterior_mean.data()), "particle filter", t0, steps);
 }
 
 }  // namespace dyncal::host::survey

@@ -2,8 +2,9 @@
 // The survey's optimisation methods (Sec. 3.4) on the standard parameters and the friction
 // parameters within search ranges, with each link's pseudo-inertia kept positive definite
 // (physical feasibility, Wensing et al. 2017): gradient-based (NLopt SLSQP, least-squares
-// objective), a genetic algorithm and a particle filter (both on the Eq. 25 objective, no initial
-// values: only the ranges). Deterministic for a seed; budgets are evaluation counts, not times.
+// objective), a genetic algorithm (Eq. 25 objective) and a particle filter (the posterior under the
+// assumed noise); the last two need no initial values, only the ranges. Deterministic for a seed;
+// budgets are evaluation counts, not times.
 
 #include <cstdint>
 
@@ -32,11 +33,11 @@ Estimate gradient_descent(const SurveyData& data, FrictionModel model, const Met
 Estimate genetic_algorithm(const SurveyData& data, FrictionModel model, const MethodSettings& settings,
                            const OptimiserSettings& options = {});
 
-/// Particle filter for static parameters (Liu and West 2001): particles uniform in the ranges;
-/// each iteration weights them by exp(-J / T) with T set so that the effective sample size is half
-/// the particle count (adaptive tempering; infeasible particles weigh nothing), resamples
-/// (systematic) and moves them by the shrinkage kernel a x + (1 - a) mean + N(0, h^2 Cov)
-/// (discount 0.98). Returns the best feasible particle seen.
+/// Particle filter for static parameters: a sequential Monte Carlo sampler (Del Moral, Doucet and
+/// Jasra 2006) from the uniform distribution on the feasible ranges to the posterior of the torques
+/// under the assumed noise (MethodSettings::sigma), with adaptive tempering, systematic resampling
+/// and random-walk Metropolis moves (particles' covariance). `generations` counts evaluations per
+/// particle (5 moves a step). Returns the posterior mean.
 Estimate particle_filter(const SurveyData& data, FrictionModel model, const MethodSettings& settings,
                          const OptimiserSettings& options = {});
 
