@@ -71,9 +71,35 @@ void extremes(const linux_port::Trajectory& t, int grid, Vec& qmin, Vec& qmax, V
   }
 }
 
+/// cond(K) and log det of `t` with the Eq. 4 Jacobian at `friction`'s values (unused for Eq. 7).
+void quality(const RobotDescription& robot, const linux_port::Trajectory& t, FrictionModel model,
+             const Scenario& friction, int grid, double* cond, double* logdet) {
+  if (model != FrictionModel::eq7 && model != FrictionModel::eq4) throw InputError("excitation: model eq7 or eq4");
+  Eigen::MatrixXd W;
+  if (robot.name == dyncal::generated::er20::Robot::kName) {
+    W = stacked_regressor<dyncal::generated::er20::Robot>(t, model, friction, grid);
+  } else if (robot.name == dyncal::generated::tx40::Robot::kName) {
+    W = stacked_regressor<dyncal::generated::tx40::Robot>(t, model, friction, grid);
+  } else {
+    throw InputError("excitation: no generated model for robot '" + robot.name + "'");
+  }
+  // Eigenvalues of the (column-normalised) information matrix: cond(K) = sqrt(lambda_max / lambda_min).
+  const Eigen::MatrixXd G = W.transpose() * W / static_cast<double>(W.rows());
+  const Eigen::VectorXd ev = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(G, Eigen::EigenvaluesOnly).eigenvalues();
+  const double lo = ev[0], hi = ev[ev.size() - 1];
+  if (cond) *cond = lo > 0 ? std::sqrt(hi / lo) : std::numeric_limits<double>::infinity();
+  if (logdet) *logdet = lo > 0 ? ev.array().log().sum() : -std::numeric_limits<double>::infinity();
+}
+
+/// The robot file's friction values when the model needs them (Eq. 4), read once.
+Scenario friction_of(const RobotDescription& robot, FrictionModel model) {
+  return model == FrictionModel::eq4 ? default_scenario(robot) : Scenario{};
+}
+
 struct Design {
   const RobotDescription* robot = nullptr;
   const ExciteOptions* options = nullptr;
+  Scenario friction;  // read once, not per evaluation
   int evaluations = 0;
   double best = std::numeric_limits<double>::infinity();
   linux_port::Trajectory best_trajectory;
@@ -103,7 +129,7 @@ struct Design {
     }
     fit_to_limits(*robot, t, options->margin, options->grid);
     double cond = 0, logdet = 0;
-    excitation_quality(*robot, t, options->model, options->grid, &cond, &logdet);
+    quality(*robot, t, options->model, friction, options->grid, &cond, &logdet);
     const double v = options->criterion == ExcitationCriterion::cond ? std::log(cond) : -logdet;
     const double f = std::isfinite(v) ? v : 1e300;
     if (f < best) {
@@ -140,23 +166,7 @@ void fit_to_limits(const RobotDescription& robot, linux_port::Trajectory& t, dou
 
 void excitation_quality(const RobotDescription& robot, const linux_port::Trajectory& t, FrictionModel model, int grid,
                         double* cond, double* logdet) {
-  if (model != FrictionModel::eq7 && model != FrictionModel::eq4) throw InputError("excitation: model eq7 or eq4");
-  Scenario friction;
-  if (model == FrictionModel::eq4) friction = default_scenario(robot);
-  Eigen::MatrixXd W;
-  if (robot.name == dyncal::generated::er20::Robot::kName) {
-    W = stacked_regressor<dyncal::generated::er20::Robot>(t, model, friction, grid);
-  } else if (robot.name == dyncal::generated::tx40::Robot::kName) {
-    W = stacked_regressor<dyncal::generated::tx40::Robot>(t, model, friction, grid);
-  } else {
-    throw InputError("excitation: no generated model for robot '" + robot.name + "'");
-  }
-  // Eigenvalues of the (column-normalised) information matrix: cond(K) = sqrt(lambda_max / lambda_min).
-  const Eigen::MatrixXd G = W.transpose() * W / static_cast<double>(W.rows());
-  const Eigen::VectorXd ev = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(G, Eigen::EigenvaluesOnly).eigenvalues();
-  const double lo = ev[0], hi = ev[ev.size() - 1];
-  if (cond) *cond = lo > 0 ? std::sqrt(hi / lo) : std::numeric_limits<double>::infinity();
-  if (logdet) *logdet = lo > 0 ? ev.array().log().sum() : -std::numeric_limits<double>::infinity();
+  quality(robot, t, model, friction_of(robot, model), grid, cond, logdet);
 }
 
 void limit_use(const RobotDescription& robot, const linux_port::Trajectory& t, std::array<double, 6>& position,
@@ -179,6 +189,7 @@ ExciteResult design_excitation(const RobotDescription& robot, const ExciteOption
   Design d;
   d.robot = &robot;
   d.options = &o;
+  d.friction = friction_of(robot, o.model);
   const int L = o.harmonics, D = 12 * L;
   // Random starts: coefficients uniform in +-1 / l (the spectrum of a smooth motion), seeded.
   std::mt19937_64 rng(o.seed);
@@ -196,7 +207,7 @@ ExciteResult design_excitation(const RobotDescription& robot, const ExciteOption
     }
   }
   ExciteResult r;
-  excitation_quality(robot, d.best_trajectory, o.model, o.grid, &r.start_cond, nullptr);
+  quality(robot, d.best_trajectory, o.model, d.friction, o.grid, &r.start_cond, nullptr);
   // Subplex (Rowan 1990): derivative-free; the criterion is not smooth where eigenvalues cross.
   nlopt::opt opt(nlopt::LN_SBPLX, static_cast<unsigned>(D));
   opt.set_min_objective(nlopt_value, &d);
@@ -215,7 +226,7 @@ ExciteResult design_excitation(const RobotDescription& robot, const ExciteOption
   }
   r.trajectory = d.best_trajectory;
   r.evaluations = d.evaluations;
-  excitation_quality(robot, r.trajectory, o.model, o.grid, &r.cond, &r.logdet);
+  quality(robot, r.trajectory, o.model, d.friction, o.grid, &r.cond, &r.logdet);
   limit_use(robot, r.trajectory, r.position_use, r.velocity_use, r.acceleration_use);
   return r;
 }

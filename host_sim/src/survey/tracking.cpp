@@ -1,6 +1,7 @@
 #include "dyncal_host/survey/tracking.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <memory>
 
@@ -65,31 +66,46 @@ void summarise(std::vector<TrackingResult>& out, ChangeProfile profile, double b
   }
 }
 
-/// Eq. 4 run: the extended Kalman filter (Eq. 21) and its forgetting form (Eq. 24).
-std::vector<TrackingResult> track_nonlinear(const SurveyData& d, const MethodSettings& settings, ChangeProfile profile,
-                                            int joint, double mu, double beta0) {
+/// Runs the recorded states of `d` with joint `joint`'s beta changed by `profile` through
+/// `update(q, qd, qdd, tau, beta_hat)`, which feeds both filters and writes their two beta
+/// estimates; one result per filter, named `names`.
+template <class Update>
+std::vector<TrackingResult> run_changed_beta(const SurveyData& d, ChangeProfile profile, int joint, double beta0,
+                                             const std::array<const char*, 2>& names, Update update) {
   const Eigen::Index S = d.q.rows();
-  const auto ekf = make_survey_ekf(settings, 1.0), fekf = make_survey_ekf(settings, mu);
-  const int col = SurveyEkf::column(3, joint - 1);  // beta: the fourth Eq. 4 parameter
-  Vec6 r;
-  for (int j = 0; j < 6; ++j) r[j] = settings.sigma[j] * settings.sigma[j];
   std::vector<TrackingResult> out(2);
-  out[0].method = "extended Kalman";
-  out[1].method = "exponential forgetting (Eq. 4)";
+  for (size_t k = 0; k < 2; ++k) out[k].method = names[k];
   for (Eigen::Index s = 0; s < S; ++s) {
     const Vec6 q = d.q.row(s).transpose(), qd = d.qd.row(s).transpose(), qdd = d.qdd.row(s).transpose();
     const double beta = beta0 * (1 + profile_factor(profile, s, S));
     Vec6 tau = d.tau.row(s).transpose();
     tau[joint - 1] += (beta - beta0) * qd[joint - 1];
-    // A rejected sample leaves the estimate as it was: the tracking error then shows it.
-    (void)ekf->update(q, qd, qdd, tau, r);
-    (void)fekf->update(q, qd, qdd, tau, r);
-    for (int k = 0; k < 2; ++k) out[static_cast<size_t>(k)].beta.push_back(beta);
-    out[0].beta_hat.push_back(ekf->estimate()[col]);
-    out[1].beta_hat.push_back(fekf->estimate()[col]);
+    std::array<double, 2> beta_hat{};
+    update(q, qd, qdd, tau, beta_hat);
+    for (size_t k = 0; k < 2; ++k) {
+      out[k].beta.push_back(beta);
+      out[k].beta_hat.push_back(beta_hat[k]);
+    }
   }
   summarise(out, profile, beta0);
   return out;
+}
+
+/// Eq. 4 run: the extended Kalman filter (Eq. 21) and its forgetting form (Eq. 24).
+std::vector<TrackingResult> track_nonlinear(const SurveyData& d, const MethodSettings& settings, ChangeProfile profile,
+                                            int joint, double mu, double beta0) {
+  const auto ekf = make_survey_ekf(settings, 1.0), fekf = make_survey_ekf(settings, mu);
+  const int col = SurveyEkf::column(3, joint - 1);  // beta: the fourth Eq. 4 parameter
+  Vec6 r;
+  for (int j = 0; j < 6; ++j) r[j] = settings.sigma[j] * settings.sigma[j];
+  return run_changed_beta(
+      d, profile, joint, beta0, {"extended Kalman", "exponential forgetting (Eq. 4)"},
+      [&](const Vec6& q, const Vec6& qd, const Vec6& qdd, const Vec6& tau, std::array<double, 2>& beta_hat) {
+        // A rejected sample leaves the estimate as it was: the tracking error then shows it.
+        (void)ekf->update(q, qd, qdd, tau, r);
+        (void)fekf->update(q, qd, qdd, tau, r);
+        beta_hat = {ekf->estimate()[col], fekf->estimate()[col]};
+      });
 }
 
 }  // namespace
@@ -109,7 +125,6 @@ const char* to_string(ChangeProfile p) {
 std::vector<TrackingResult> track_viscous_friction(const SurveyData& d, const MethodSettings& settings,
                                                    ChangeProfile profile, int joint, double mu) {
   if (joint < 1 || joint > 6) throw InputError("tracking: joint 1..6");
-  const Eigen::Index S = d.q.rows();
   const double beta0 = d.scenario.friction[joint - 1].beta;
   const bool nonlinear = d.scenario.friction[joint - 1].model == FrictionModel::eq4;
   if (nonlinear) return track_nonlinear(d, settings, profile, joint, mu, beta0);
@@ -125,26 +140,16 @@ std::vector<TrackingResult> track_viscous_friction(const SurveyData& d, const Me
     r[j] = settings.sigma[j] * settings.sigma[j];
     w[j] = 1.0 / settings.sigma[j];
   }
-  std::vector<TrackingResult> out(2);
-  out[0].method = "Kalman";
-  out[1].method = "exponential forgetting";
   Model7::Regressor<double> K;
-  for (Eigen::Index s = 0; s < S; ++s) {
-    const Vec6 q = d.q.row(s).transpose(), qd = d.qd.row(s).transpose(), qdd = d.qdd.row(s).transpose();
-    const double beta = beta0 * (1 + profile_factor(profile, s, S));
-    Vec6 tau = d.tau.row(s).transpose();
-    tau[joint - 1] += (beta - beta0) * qd[joint - 1];
-    Model7::regressor(q, qd, qdd, Vec6::Zero().eval(), K);
-    // A rejected sample leaves the estimate as it was: the tracking error then shows it.
-    (void)kf->update(K, tau, r);
-    (void)rls->update(K, tau, w);
-    out[0].beta.push_back(beta);
-    out[1].beta.push_back(beta);
-    out[0].beta_hat.push_back(kf->estimate()[col]);
-    out[1].beta_hat.push_back(rls->estimate()[col]);
-  }
-  summarise(out, profile, beta0);
-  return out;
+  return run_changed_beta(
+      d, profile, joint, beta0, {"Kalman", "exponential forgetting"},
+      [&](const Vec6& q, const Vec6& qd, const Vec6& qdd, const Vec6& tau, std::array<double, 2>& beta_hat) {
+        Model7::regressor(q, qd, qdd, Vec6::Zero().eval(), K);
+        // A rejected sample leaves the estimate as it was: the tracking error then shows it.
+        (void)kf->update(K, tau, r);
+        (void)rls->update(K, tau, w);
+        beta_hat = {kf->estimate()[col], rls->estimate()[col]};
+      });
 }
 
 char follow_level(double ramp_relative_lag, double step_relative_lag) {
