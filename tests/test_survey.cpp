@@ -8,6 +8,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "dyncal_host/input_error.hpp"
 #include "dyncal_host/robot_description.hpp"
 #include "dyncal_host/survey/idim_iv.hpp"
 #include "dyncal_host/survey/methods.hpp"
@@ -87,16 +88,41 @@ TEST(SurveyIndices, PerfectEstimateHasZeroErrorAndNoiseShowsInTheStd) {
 }
 
 TEST(SurveyMethods, PseudoInverseKalmanAndForgettingRecoverBaseParametersFromNoiseFreeData) {
-  const SurveyData& d = data(FrictionModel::eq7);
-  for (const Estimate& e :
-       {pseudo_inverse(d, settings()), kalman_filter(d, settings()), exponential_forgetting(d, settings())}) {
+  for (FrictionModel m : {FrictionModel::eq7, FrictionModel::eq8, FrictionModel::eq9}) {
+    SCOPED_TRACE(model_key(m));
+    const SurveyData& d = data(m);
+    for (const Estimate& e : {pseudo_inverse(d, settings(), m), kalman_filter(d, settings(), m),
+                              exponential_forgetting(d, settings(), m)}) {
+      const Indices x = evaluate(e, d.scenario, d.tau, kTauMax);
+      EXPECT_LT(x.e_b, 1e-4) << e.method;  // base parameters: identifiable, so recovered
+      EXPECT_LT(x.e_f, 1e-4) << e.method;
+      EXPECT_LT(x.e_T_std, 1e-6) << e.method;
+      // Standard parameters are not identifiable: the minimum-norm ones are far off (survey Table 5).
+      EXPECT_GT(x.e_d, 1.0) << e.method;
+      EXPECT_LT(x.e_d_prior, 0.5) << e.method;
+    }
+  }
+}
+
+TEST(SurveyMethods, LinearMethodsRefuseNonlinearModelsAndTheEkfLinearOnes) {
+  EXPECT_THROW(pseudo_inverse(data(FrictionModel::eq7), settings(), FrictionModel::eq4), InputError);
+  EXPECT_THROW(kalman_filter(data(FrictionModel::eq7), settings(), FrictionModel::eq5), InputError);
+  EXPECT_THROW(extended_kalman_filter(data(FrictionModel::eq4), settings(), 1.0, FrictionModel::eq7), InputError);
+}
+
+TEST(SurveyMethods, EkfOnEq5AndEq6FitsTheTorqueOfNoiseFreeData) {
+  for (FrictionModel m : {FrictionModel::eq5, FrictionModel::eq6}) {
+    SCOPED_TRACE(model_key(m));
+    const SurveyData& d = data(m);
+    const Estimate e = extended_kalman_filter(d, settings(), 1.0, m);
+    EXPECT_TRUE(e.note.empty()) << e.note;  // no sample rejected
     const Indices x = evaluate(e, d.scenario, d.tau, kTauMax);
-    EXPECT_LT(x.e_b, 1e-4) << e.method;  // base parameters: identifiable, so recovered
-    EXPECT_LT(x.e_f, 1e-4) << e.method;
-    EXPECT_LT(x.e_T_std, 1e-6) << e.method;
-    // Standard parameters are not identifiable: the minimum-norm ones are far off (survey Table 5).
-    EXPECT_GT(x.e_d, 1.0) << e.method;
-    EXPECT_LT(x.e_d_prior, 0.5) << e.method;
+    // Torque fitted (measured: 5.0e-4 on Eq. 5, 0.011 on Eq. 6, whose tanh steepness f4 starts at
+    // 3.3 s/rad against the set 20 and converges slowly); Eq. 5's base parameters recovered (0.036).
+    EXPECT_LT(x.e_T_std, 0.02) << e.method;
+    if (m == FrictionModel::eq5) {
+      EXPECT_LT(x.e_b, 0.1) << e.method;
+    }
   }
 }
 
@@ -115,7 +141,9 @@ TEST(SurveyMethods, ForgettingEkfFitsStribeckFrictionFromNoiseFreeData) {
 }
 
 TEST(SurveyMethods, PhysicallyConsistentLsHasPositiveDefinitePseudoInertiasAndFitsTheData) {
-  for (FrictionModel m : {FrictionModel::eq7, FrictionModel::eq4}) {
+  for (FrictionModel m : {FrictionModel::eq7, FrictionModel::eq8, FrictionModel::eq9, FrictionModel::eq4,
+                          FrictionModel::eq5, FrictionModel::eq6}) {
+    SCOPED_TRACE(model_key(m));
     const SurveyData& d = data(m);
     const Estimate e = physically_consistent_ls(d, m, settings());
     // Positive definite by construction (J = L L^T, diag(L) = exp(.)): from the factor itself, and
@@ -127,7 +155,11 @@ TEST(SurveyMethods, PhysicallyConsistentLsHasPositiveDefinitePseudoInertiasAndFi
     const Indices x = evaluate(e, d.scenario, d.tau, kTauMax);
     // The set link 3 is not physically consistent (robots/er20), so the fit cannot be exact.
     EXPECT_LT(x.e_T_std, 1e-3);
-    EXPECT_LT(x.e_f, 0.05);
+    // Eq. 5 and 6 carry small terms (Eq. 5's high-speed drop f4 = 0.1 Fc is nearly collinear with
+    // f1 over this excitation; Eq. 6's f2 = Fs - Fc) that absorb part of link 3's inconsistency:
+    // measured e_f 0.18 and 0.20, the others <= 0.02.
+    const bool small_terms = m == FrictionModel::eq5 || m == FrictionModel::eq6;
+    EXPECT_LT(x.e_f, small_terms ? 0.25 : 0.05);
     EXPECT_LT(x.e_d, 0.3);
     EXPECT_LT(x.J_e, 1.0);  // survey Table 2 level A
     // The prior alone (projected onto the consistent set) is worse than the estimate.

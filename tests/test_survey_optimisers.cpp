@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <map>
 
 #include "dyncal_host/input_error.hpp"
@@ -40,8 +41,12 @@ Eigen::VectorXd near_set(FrictionModel m) {
   return x;
 }
 
+constexpr FrictionModel kAllModels[] = {FrictionModel::eq7, FrictionModel::eq8, FrictionModel::eq9,
+                                        FrictionModel::eq4, FrictionModel::eq5, FrictionModel::eq6};
+
 TEST(SurveyObjective, MomentsEqualTheResidualComputedSampleBySample) {
-  for (FrictionModel m : {FrictionModel::eq7, FrictionModel::eq4}) {
+  for (FrictionModel m : kAllModels) {
+    SCOPED_TRACE(model_key(m));
     const SurveyData& d = data(m);
     const TorqueObjective obj(d, m, kSigma);
     const Eigen::VectorXd x = near_set(m);
@@ -53,7 +58,9 @@ TEST(SurveyObjective, MomentsEqualTheResidualComputedSampleBySample) {
                                 Vec6(d.qdd.row(s).transpose()), Ys);
       const Vec6 tau = Ys * x.head(kStandard);
       for (int j = 0; j < 6; ++j) {
-        e(s, j) = (d.tau(s, j) - tau[j] - friction_torque(m, x.data() + kStandard + kf * j, d.qd(s, j))) / kSigma[j];
+        e(s, j) =
+            (d.tau(s, j) - tau[j] - friction_torque(m, x.data() + kStandard + kf * j, d.qd(s, j), d.tau_load(s, j))) /
+            kSigma[j];
       }
     }
     std::array<double, 6> mean{}, var{};
@@ -72,7 +79,8 @@ TEST(SurveyObjective, MomentsEqualTheResidualComputedSampleBySample) {
 }
 
 TEST(SurveyObjective, GradientsMatchCentralDifferences) {
-  for (FrictionModel m : {FrictionModel::eq7, FrictionModel::eq4}) {
+  for (FrictionModel m : kAllModels) {
+    SCOPED_TRACE(model_key(m));
     const TorqueObjective obj(data(m), m, kSigma);
     const Eigen::VectorXd x = near_set(m);
     Eigen::VectorXd g_ls(x.size()), g_25(x.size());
@@ -125,21 +133,36 @@ void expect_feasible_in_ranges(const Estimate& e, const SurveyData& d, FrictionM
 }
 
 TEST(SurveyOptimisers, GradientDescentRecoversFrictionAndFitsNoiseFreeData) {
-  for (FrictionModel m : {FrictionModel::eq7, FrictionModel::eq4}) {
+  for (FrictionModel m : kAllModels) {
+    SCOPED_TRACE(model_key(m));
     const SurveyData& d = data(m);
     const Estimate e = gradient_descent(d, m, settings());
     expect_feasible_in_ranges(e, d, m, settings());
     const Indices x = evaluate(e, d.scenario, d.tau, kTauMax);
     const auto f = set_friction(d.scenario, m);
-    const int kf = static_cast<int>(f.size()) / 6;
+    const int kf = friction_count(m);
+    // Each joint's friction curve over the run's velocities within 2 % (RMS) of the set one, also
+    // where parameters trade off (Eq. 5's f1 and f4, Eq. 8's Fc and fp).
     for (int j = 0; j < 6; ++j) {
-      EXPECT_NEAR(e.friction[kf * j], f[kf * j], 0.02 * f[kf * j]) << "Fc" << j + 1;
-      EXPECT_NEAR(e.friction[kf * j + kf - 1], f[kf * j + kf - 1], 0.02 * f[kf * j + kf - 1]) << "beta" << j + 1;
+      double diff = 0, ref = 0;
+      for (Eigen::Index s = 0; s < d.q.rows(); ++s) {
+        const double set = friction_torque(m, f.data() + kf * j, d.qd(s, j), d.tau_load(s, j));
+        diff += std::pow(friction_torque(m, e.friction.data() + kf * j, d.qd(s, j), d.tau_load(s, j)) - set, 2);
+        ref += set * set;
+      }
+      EXPECT_LT(std::sqrt(diff / ref), 0.02) << "joint " << j + 1;
     }
     // The set link 3 is not consistent, so a feasible fit leaves a small residual (survey: 6e-4).
     EXPECT_LT(x.e_T_std, 5e-3);
-    EXPECT_LT(x.e_f, 0.05);
-    EXPECT_LT(x.J_e, 1.0);  // survey Table 2 level A
+    // Eq. 7 and 4 as the survey's: friction within 5 % on average, J_e level A (Table 2). Eq. 5's
+    // f1 and f4 are nearly collinear over this excitation (exp(-1 / (f5 |qd|)) varies slowly), so
+    // only its torque fit and Coulomb level are asserted (measured e_f 0.55).
+    if (m == FrictionModel::eq7 || m == FrictionModel::eq4) {
+      EXPECT_LT(x.e_f, 0.05);
+    }
+    if (m != FrictionModel::eq5) {
+      EXPECT_LT(x.J_e, 1.0);
+    }
   }
 }
 

@@ -165,8 +165,8 @@ int main(int argc, char** argv) {
       const auto robot = dyncal::host::load_robot(robots_dir, "er20");
       const nlohmann::json published = read_json(robots_dir + "/er20/survey_published.json");
       const nlohmann::json result = dyncal::host::survey::run_survey(robot, sopt);
-      dyncal::host::survey::print_survey(std::cout, result, published);
       if (!survey_json.empty()) write_json(survey_json, result);
+      dyncal::host::survey::print_survey(std::cout, result, published);
       if (!survey_check.empty()) {
         const std::string diff =
             dyncal::host::survey::compare_survey(result, read_json(survey_check), survey_tolerance);

@@ -20,8 +20,7 @@ BoundedProblem::BoundedProblem(const SurveyData& data, FrictionModel model, cons
   for (int i = 0; i < static_cast<int>(ranges_.lo.size()); ++i) {
     if (ranges_.fixed(i)) continue;
     free_.push_back(i);
-    logarithmic_.push_back(model == FrictionModel::eq4 && i >= kStandard && (i - kStandard) % kf == 2 &&
-                           ranges_.lo[i] > 0);
+    logarithmic_.push_back(i >= kStandard && is_scale_parameter(model, (i - kStandard) % kf) && ranges_.lo[i] > 0);
   }
 }
 

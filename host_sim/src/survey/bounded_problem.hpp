@@ -1,9 +1,9 @@
 #pragma once
 // What the three optimisers share (private to host_sim/src/survey): the objective over the free
 // variables mapped to the unit box of their search ranges (linearly; logarithmically for the
-// Stribeck velocity qds, a scale parameter), feasibility, and the Estimate of a solution. The
-// inertial ranges are centred on the CAD values projected onto the physically consistent set, so
-// the feasible part of the box is never empty.
+// scale parameters: velocities and inverse velocities of the friction models), feasibility, and the Estimate of a
+// solution. The inertial ranges are centred on the CAD values projected onto the physically consistent set, so the
+// feasible part of the box is never empty.
 
 #include <chrono>
 #include <string>

@@ -2,7 +2,6 @@
 
 #include <cmath>
 
-#include "dyncal/nonlinear_friction.hpp"
 #include "dyncal_host/input_error.hpp"
 #include "dyncal_host/survey/standard_parameters.hpp"
 
@@ -22,39 +21,6 @@ double mean_relative_error(const double* set, const double* est, int n, int* cou
 }
 
 }  // namespace
-
-std::vector<std::string> friction_parameter_names(FrictionModel model) {
-  switch (model) {
-    case FrictionModel::eq7:
-      return {"Fc", "beta"};
-    case FrictionModel::eq4:
-      return {"Fc", "Fs", "qds", "beta"};
-    default:
-      throw InputError("the survey study runs Eq. 7 and Eq. 4");
-  }
-}
-
-std::vector<double> set_friction(const Scenario& s, FrictionModel model) {
-  std::vector<double> out;
-  for (int j = 0; j < kDriveJoints; ++j) {
-    const JointFriction& f = s.friction[j];
-    if (model == FrictionModel::eq7) {
-      out.insert(out.end(), {f.Fc, f.beta});
-    } else if (model == FrictionModel::eq4) {
-      out.insert(out.end(), {f.Fc, f.Fs, f.qds, f.beta});
-    } else {
-      throw InputError("the survey study runs Eq. 7 and Eq. 4");
-    }
-  }
-  return out;
-}
-
-double friction_torque(FrictionModel model, const double* theta, double qd) {
-  if (model == FrictionModel::eq4) {
-    return NonlinearFriction<NonlinearFrictionModel::eq4>::torque(theta, qd, static_cast<double*>(nullptr));
-  }
-  return theta[0] * (qd > 0 ? 1.0 : (qd < 0 ? -1.0 : 0.0)) + theta[1] * qd;
-}
 
 Indices evaluate(const Estimate& est, const Scenario& scenario, const Eigen::MatrixXd& tau,
                  const std::array<double, 6>& tau_max) {

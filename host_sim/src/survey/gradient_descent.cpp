@@ -108,19 +108,15 @@ Estimate gradient_descent(const SurveyData& data, FrictionModel model, const Met
   x0.head(kStandard) = linear.cad();
   const Eigen::VectorXd linear_solution = solve_slsqp(linear, x0, options, evaluations);
   if (model == FrictionModel::eq7) return linear.estimate(linear_solution, "gradient descent", t0, evaluations);
-  Eigen::VectorXd x;
-  // Eq. 4 from the Eq. 7 solution and each joint's Stribeck start.
-  const detail::BoundedProblem nonlinear(data, model, settings, options);
-  const SearchRanges r4 = search_ranges(data, model, nonlinear.cad(), options.range_width);
-  const std::vector<double> f4 = stribeck_start(data, linear_solution.head(kStandard));
-  x = r4.lo;
+  // Another model from the Eq. 7 solution's inertial parameters and each joint's friction start.
+  const detail::BoundedProblem problem(data, model, settings, options);
+  const std::vector<double> f = friction_start(data, model, linear_solution.head(kStandard));
+  Eigen::VectorXd x(kStandard + static_cast<Eigen::Index>(f.size()));
   x.head(kStandard) = linear_solution.head(kStandard);
-  for (size_t i = 0; i < f4.size(); ++i) {
-    const Eigen::Index k = kStandard + static_cast<Eigen::Index>(i);
-    x[k] = std::clamp(f4[i], r4.lo[k], r4.hi[k]);
-  }
-  x = solve_slsqp(nonlinear, x, options, evaluations);
-  return nonlinear.estimate(x, "gradient descent", t0, evaluations);
+  x.tail(static_cast<Eigen::Index>(f.size())) =
+      Eigen::Map<const Eigen::VectorXd>(f.data(), static_cast<Eigen::Index>(f.size()));
+  x = solve_slsqp(problem, x, options, evaluations);
+  return problem.estimate(x, "gradient descent", t0, evaluations);
 }
 
 }  // namespace dyncal::host::survey

@@ -14,7 +14,6 @@ namespace {
 
 using Robot = dyncal::generated::er20::Robot;
 using Vec6 = Eigen::Matrix<double, 6, 1>;
-constexpr int kLocal = kStandard + 2;  // [phi | Fc_j | beta_j]
 /// exp(-(|qd| / qds)^2) < 1e-18 beyond |qd| = 6.5 qds: those rows carry no Stribeck term.
 constexpr double kStribeckReach = 6.5;
 
@@ -22,59 +21,129 @@ double sgn(double v) {
   return v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0);
 }
 
+/// Standard regressor rows of every sample: Ys[s] is 6 x 60.
+std::vector<Eigen::Matrix<double, 6, kStandard>> standard_rows(const SurveyData& d) {
+  std::vector<Eigen::Matrix<double, 6, kStandard>> Y(static_cast<size_t>(d.q.rows()));
+  for (Eigen::Index s = 0; s < d.q.rows(); ++s) {
+    Robot::standard_regressor(Vec6(d.q.row(s).transpose()), Vec6(d.qd.row(s).transpose()),
+                              Vec6(d.qdd.row(s).transpose()), Y[static_cast<size_t>(s)]);
+  }
+  return Y;
+}
+
 }  // namespace
 
 TorqueObjective::TorqueObjective(const SurveyData& d, FrictionModel model, const std::array<double, 6>& sigma)
-    : model_(model) {
-  if (model != FrictionModel::eq7 && model != FrictionModel::eq4) {
-    throw InputError("the optimisation objective takes Eq. 7 or Eq. 4 friction");
-  }
-  kf_ = model == FrictionModel::eq4 ? 4 : 2;
+    : model_(model), kf_(friction_count(model)) {
   const Eigen::Index S = d.q.rows();
   if (S < 1) throw InputError("the optimisation objective needs samples");
+  if (d.tau_load.rows() != S) throw InputError("the optimisation objective needs the run's load torque");
   n_ = static_cast<double>(S);
-  std::array<Eigen::MatrixXd, 6> A;
-  for (auto& a : A) a.resize(S, kLocal);
-  Eigen::Matrix<double, 6, kStandard> Ys;
-  for (Eigen::Index s = 0; s < S; ++s) {
-    Robot::standard_regressor(Vec6(d.q.row(s).transpose()), Vec6(d.qd.row(s).transpose()),
-                              Vec6(d.qdd.row(s).transpose()), Ys);
-    for (int j = 0; j < 6; ++j) {
-      const double w = 1.0 / sigma[j];
-      A[j].row(s).head<kStandard>() = w * Ys.row(j);
-      A[j](s, kStandard) = w * sgn(d.qd(s, j));
-      A[j](s, kStandard + 1) = w * d.qd(s, j);
-    }
+  for (int k = 0; k < kf_; ++k) {
+    if (is_linear_parameter(model, k)) linear_.push_back(k);
   }
+  const int L = kStandard + static_cast<int>(linear_.size());
+  const auto Y = standard_rows(d);
   for (int j = 0; j < 6; ++j) {
     Joint& J = joints_[j];
-    const Eigen::VectorXd tau = d.tau.col(j) / sigma[j];
-    J.G = A[j].transpose() * A[j];
-    J.h = A[j].transpose() * tau;
-    J.a = A[j].colwise().sum().transpose();
     J.w = 1.0 / sigma[j];
-    J.tt = tau.squaredNorm();
-    J.ts = tau.sum();
-    if (model == FrictionModel::eq4) {
-      std::vector<Eigen::Index> order(static_cast<size_t>(S));
-      std::iota(order.begin(), order.end(), Eigen::Index{0});
-      std::stable_sort(order.begin(), order.end(),
-                       [&](Eigen::Index a, Eigen::Index b) { return std::fabs(d.qd(a, j)) < std::fabs(d.qd(b, j)); });
-      J.A_sorted.resize(S, kLocal);
-      J.tau_sorted.resize(S);
-      J.qd_sorted.resize(S);
-      for (Eigen::Index k = 0; k < S; ++k) {
-        const Eigen::Index s = order[static_cast<size_t>(k)];
-        J.A_sorted.row(k) = A[j].row(s);
-        J.tau_sorted[k] = tau[s];
-        J.qd_sorted[k] = d.qd(s, j);
+    Eigen::MatrixXd A(S, L);
+    for (Eigen::Index s = 0; s < S; ++s) {
+      A.row(s).head<kStandard>() = J.w * Y[static_cast<size_t>(s)].row(j);
+      for (size_t i = 0; i < linear_.size(); ++i) {
+        A(s, kStandard + static_cast<Eigen::Index>(i)) =
+            J.w * linear_column(model, linear_[i], d.qd(s, j), d.tau_load(s, j));
       }
     }
+    const Eigen::VectorXd tau = d.tau.col(j) * J.w;
+    J.G = A.transpose() * A;
+    J.h = A.transpose() * tau;
+    J.a = A.colwise().sum().transpose();
+    J.tt = tau.squaredNorm();
+    J.ts = tau.sum();
+    J.first = 0;
+    while (J.first < kStandard && A.col(J.first).cwiseAbs().maxCoeff() == 0.0) ++J.first;
+    if (is_linear(model)) continue;
+    std::vector<Eigen::Index> order(static_cast<size_t>(S));
+    std::iota(order.begin(), order.end(), Eigen::Index{0});
+    std::stable_sort(order.begin(), order.end(),
+                     [&](Eigen::Index a, Eigen::Index b) { return std::fabs(d.qd(a, j)) < std::fabs(d.qd(b, j)); });
+    J.A_sorted.resize(S, L - J.first);
+    J.tau_sorted.resize(S);
+    J.qd_sorted.resize(S);
+    for (Eigen::Index k = 0; k < S; ++k) {
+      const Eigen::Index s = order[static_cast<size_t>(k)];
+      J.A_sorted.row(k) = A.row(s).tail(L - J.first);
+      J.tau_sorted[k] = tau[s];
+      J.qd_sorted[k] = d.qd(s, j);
+    }
+    J.aq_sorted = J.qd_sorted.abs();
+    J.sg_sorted = J.qd_sorted.unaryExpr([](double v) { return sgn(v); });
+    J.inv_aq_sorted = J.aq_sorted.max(1e-300).inverse();
   }
 }
 
 int TorqueObjective::dimension() const {
   return kStandard + 6 * kf_;
+}
+
+Eigen::Index TorqueObjective::reach(const Joint& J, const double* theta) const {
+  const Eigen::Index S = J.qd_sorted.size();
+  if (model_ != FrictionModel::eq4) return S;
+  const double v = kStribeckReach * std::max(theta[2], 1e-3);
+  return std::lower_bound(J.aq_sorted.data(), J.aq_sorted.data() + S, v) - J.aq_sorted.data();
+}
+
+void TorqueObjective::nonlinear_part(const Joint& J, const double* th, Eigen::Index k, Eigen::ArrayXd& n,
+                                     Eigen::ArrayXXd* dn) const {
+  const auto aq = J.aq_sorted.head(k), sg = J.sg_sorted.head(k), qd = J.qd_sorted.head(k);
+  const double w = J.w;
+  if (dn) dn->setZero(k, kf_);
+  switch (model_) {
+    case FrictionModel::eq4: {  // (Fs - Fc) sgn exp(-(qd / qds)^2)
+      const double c = th[1] - th[0], qds = std::max(th[2], 1e-3);
+      const Eigen::ArrayXd u2 = (aq / qds).square();
+      const Eigen::ArrayXd E = w * sg * (-u2).exp();
+      n = c * E;
+      if (dn) {
+        dn->col(0) = -E;
+        dn->col(1) = E;
+        if (th[2] > 1e-3) dn->col(2) = c * E * 2 * u2 / qds;
+      }
+      break;
+    }
+    case FrictionModel::eq5: {  // -f2 sgn exp(-|qd| / f3) - f4 sgn exp(-1 / (f5 |qd|))
+      const double f3 = std::max(th[2], 1e-3), f5 = std::max(th[4], 1e-3);
+      const Eigen::ArrayXd e3 = w * sg * (-aq / f3).exp();
+      const Eigen::ArrayXd inv = J.inv_aq_sorted.head(k);
+      const Eigen::ArrayXd e5 = w * sg * (-inv / f5).exp();
+      n = -th[1] * e3 - th[3] * e5;
+      if (dn) {
+        dn->col(1) = -e3;
+        if (th[2] > 1e-3) dn->col(2) = -th[1] * e3 * aq / (f3 * f3);
+        dn->col(3) = -e5;
+        if (th[4] > 1e-3) dn->col(4) = -th[3] * e5 * inv / (f5 * f5);
+      }
+      break;
+    }
+    case FrictionModel::eq6: {  // (f1 + f2 sech(f3 qd)) tanh(f4 qd), by exponentials of -|x|
+      const double f3 = std::max(th[2], 1e-3), f4 = std::max(th[3], 1e-3);
+      const Eigen::ArrayXd E3 = (-f3 * aq).exp(), E4 = (-2 * f4 * aq).exp();
+      const Eigen::ArrayXd sech = 2 * E3 / (1 + E3.square());
+      const Eigen::ArrayXd t4 = sg * (1 - E4) / (1 + E4);
+      const Eigen::ArrayXd a = th[0] + th[1] * sech;
+      n = w * a * t4;
+      if (dn) {
+        dn->col(0) = w * t4;
+        dn->col(1) = w * sech * t4;
+        if (th[2] > 1e-3) dn->col(2) = -w * th[1] * sech * (1 - E3.square()) / (1 + E3.square()) * aq * t4;
+        if (th[3] > 1e-3) dn->col(3) = w * a * (1 - t4.square()) * qd;
+      }
+      break;
+    }
+    default:
+      n.setZero(k);
+  }
 }
 
 void TorqueObjective::residual_moments(const double* x, std::array<double, 6>& mean, std::array<double, 6>& var,
@@ -85,64 +154,49 @@ void TorqueObjective::residual_moments(const double* x, std::array<double, 6>& m
     d_mean->setZero(6, D);
     d_var->setZero(6, D);
   }
-  Eigen::Matrix<double, kLocal, 1> z;
+  const int L = kStandard + static_cast<int>(linear_.size());
+  Eigen::VectorXd z(L);
   z.head<kStandard>() = Eigen::Map<const Eigen::Matrix<double, kStandard, 1>>(x);
+  Eigen::ArrayXd n;
+  Eigen::ArrayXXd dn;
   for (int j = 0; j < 6; ++j) {
     const Joint& J = joints_[j];
     const double* f = x + kStandard + kf_ * j;
-    z[kStandard] = f[0];
-    z[kStandard + 1] = f[kf_ - 1];  // beta is last in both models
-    const Eigen::Matrix<double, kLocal, 1> Gz = J.G * z;
-    // Sum and sum of squares of the residual r = tau - A z - c s(qds).
+    for (size_t i = 0; i < linear_.size(); ++i) z[kStandard + static_cast<Eigen::Index>(i)] = f[linear_[i]];
+    const Eigen::VectorXd Gz = J.G * z;
+    // Sum and sum of squares of the residual r = tau - A z - n(theta).
     double sse = z.dot(Gz) - 2 * J.h.dot(z) + J.tt;
     double sum = J.ts - J.a.dot(z);
-    Eigen::Matrix<double, kLocal, 1> d_sse_z = 2 * (Gz - J.h), d_sum_z = -J.a;
-    double d_sse_c = 0, d_sse_qds = 0, d_sum_c = 0, d_sum_qds = 0;
-    if (model_ == FrictionModel::eq4) {
-      const double c = f[1] - f[0], qds = std::max(f[2], 1e-3);
-      // Only rows with |qd| < 6.5 qds carry the Stribeck term (rows sorted by |qd|).
-      Eigen::Index k = 0;
-      const Eigen::Index S = J.qd_sorted.size();
-      while (k < S && std::fabs(J.qd_sorted[k]) < kStribeckReach * qds) ++k;
-      Eigen::VectorXd s(k), sp(k);  // s = sgn exp(-(qd/qds)^2) / sigma_j, sp = ds/dqds
-      for (Eigen::Index i = 0; i < k; ++i) {
-        const double v = J.qd_sorted[i], u = v / qds;
-        s[i] = J.w * sgn(v) * std::exp(-u * u);
-        sp[i] = s[i] * 2 * u * u / qds;
-      }
+    Eigen::VectorXd d_sse_z = 2 * (Gz - J.h), d_sum_z = -J.a;
+    Eigen::VectorXd d_sse_th = Eigen::VectorXd::Zero(kf_), d_sum_th = Eigen::VectorXd::Zero(kf_);
+    if (!is_linear(model_)) {
+      const Eigen::Index k = reach(J, f);
+      nonlinear_part(J, f, k, n, grad ? &dn : nullptr);
       const auto Ak = J.A_sorted.topRows(k);
-      const auto tk = J.tau_sorted.head(k);
-      const Eigen::Matrix<double, kLocal, 1> As = Ak.transpose() * s;
-      const double st = s.dot(tk), ss = s.squaredNorm(), s_sum = s.sum();
-      const double sr = st - As.dot(z);  // s^T (tau - A z)
-      sse += -2 * c * sr + c * c * ss;
-      sum -= c * s_sum;
+      const Eigen::ArrayXd r = J.tau_sorted.head(k) - (Ak * z.tail(L - J.first)).array();
+      sse += -2 * (n * r).sum() + n.square().sum();
+      sum -= n.sum();
       if (grad) {
-        const Eigen::Matrix<double, kLocal, 1> Asp = Ak.transpose() * sp;
-        d_sse_z += 2 * c * As;
-        d_sse_c = -2 * sr + 2 * c * ss;
-        d_sse_qds = -2 * c * (sp.dot(tk) - Asp.dot(z)) + 2 * c * c * sp.dot(s);
-        d_sum_c = -s_sum;
-        d_sum_qds = -c * sp.sum();
+        d_sse_z.tail(L - J.first) += 2 * Ak.transpose() * n.matrix();
+        d_sse_th = 2 * dn.matrix().transpose() * (n - r).matrix();
+        d_sum_th = -dn.colwise().sum().transpose().matrix();
       }
     }
     mean[j] = sum / n_;
     var[j] = std::max(0.0, sse / n_ - mean[j] * mean[j]);
     if (!grad) continue;
-    // d var = d sse / n - 2 mean d mean; map local (z, c, qds) onto x.
+    // d var = d sse / n - 2 mean d mean; map local (z, theta) onto x.
     auto put = [&](int col, double dsum, double dsse) {
       (*d_mean)(j, col) += dsum / n_;
       (*d_var)(j, col) += dsse / n_ - 2 * mean[j] * dsum / n_;
     };
     for (int i = 0; i < kStandard; ++i) put(i, d_sum_z[i], d_sse_z[i]);
     const int base = kStandard + kf_ * j;
-    put(base, d_sum_z[kStandard], d_sse_z[kStandard]);                    // Fc (Eq. 7 column)
-    put(base + kf_ - 1, d_sum_z[kStandard + 1], d_sse_z[kStandard + 1]);  // beta
-    if (model_ == FrictionModel::eq4) {
-      put(base, -d_sum_c, -d_sse_c);  // c = Fs - Fc
-      put(base + 1, d_sum_c, d_sse_c);
-      put(base + 2, f[2] > 1e-3 ? d_sum_qds : 0.0, f[2] > 1e-3 ? d_sse_qds : 0.0);
+    for (size_t i = 0; i < linear_.size(); ++i) {
+      const Eigen::Index c = kStandard + static_cast<Eigen::Index>(i);
+      put(base + linear_[i], d_sum_z[c], d_sse_z[c]);
     }
+    for (int k = 0; k < kf_; ++k) put(base + k, d_sum_th[k], d_sse_th[k]);
   }
 }
 
@@ -178,9 +232,16 @@ double TorqueObjective::least_squares(const double* x, double* grad) const {
   return J;
 }
 
+std::array<double, 2> velocity_scale_range(const SurveyData& d, int j) {
+  const double qd = d.qd.col(j).cwiseAbs().maxCoeff();
+  const double lo = std::max(1e-3, 0.01 * qd);
+  return {lo, std::max(lo, qd)};
+}
+
 SearchRanges search_ranges(const SurveyData& d, FrictionModel model, const Eigen::VectorXd& cad, double width) {
   if (cad.size() != kStandard || !(width >= 0)) throw InputError("search ranges: 60 CAD values and a width >= 0");
-  const int kf = model == FrictionModel::eq4 ? 4 : 2;
+  const int kf = friction_count(model);
+  const std::vector<std::string> names = friction_parameter_names(model);
   SearchRanges r;
   r.lo.resize(kStandard + 6 * kf);
   r.hi.resize(kStandard + 6 * kf);
@@ -191,56 +252,72 @@ SearchRanges search_ranges(const SurveyData& d, FrictionModel model, const Eigen
   }
   for (int j = 0; j < 6; ++j) {
     const double tau = d.tau.col(j).cwiseAbs().maxCoeff(), qd = d.qd.col(j).cwiseAbs().maxCoeff();
-    const double beta = qd > 0 ? tau / qd : 0.0;
-    const int b = kStandard + kf * j;
-    r.lo.segment(b, kf).setZero();
-    r.hi[b] = tau;
-    r.hi[b + kf - 1] = beta;
-    if (kf == 4) {
-      r.hi[b + 1] = tau;
-      const auto qds = stribeck_velocity_range(d, j);
-      r.lo[b + 2] = qds[0];
-      r.hi[b + 2] = qds[1];
+    const auto v = velocity_scale_range(d, j);
+    for (int k = 0; k < kf; ++k) {
+      const int i = kStandard + kf * j + k;
+      const std::string& n = names[static_cast<size_t>(k)];
+      double lo = 0, hi = tau;  // Fc, Fs, f1
+      if (n == "beta") {
+        hi = qd > 0 ? tau / qd : 0.0;
+      } else if (n == "fp") {
+        hi = qd > 0 ? tau / std::cbrt(qd) : 0.0;
+        lo = -hi;
+      } else if (n == "fl") {
+        hi = 1.0;
+      } else if (is_scale_parameter(model, k)) {
+        lo = is_inverse_velocity(model, k) ? 1.0 / v[1] : v[0];
+        hi = is_inverse_velocity(model, k) ? 1.0 / v[0] : v[1];
+      } else if (n != "Fc" && n != "Fs" && n != "f1") {
+        lo = -tau;  // f2, f4 of Eq. 5; f2 of Eq. 6
+      }
+      r.lo[i] = lo;
+      r.hi[i] = hi;
     }
   }
   return r;
 }
 
-std::array<double, 2> stribeck_velocity_range(const SurveyData& d, int j) {
-  const double qd = d.qd.col(j).cwiseAbs().maxCoeff();
-  const double lo = std::max(1e-3, 0.01 * qd);
-  return {lo, std::max(lo, qd)};
-}
-
-std::vector<double> stribeck_start(const SurveyData& d, const Eigen::VectorXd& phi) {
+std::vector<double> friction_start(const SurveyData& d, FrictionModel model, const Eigen::VectorXd& phi) {
   const Eigen::Index S = d.q.rows();
+  const auto Y = standard_rows(d);
   Eigen::MatrixXd residual(S, 6);
-  Eigen::Matrix<double, 6, kStandard> Ys;
   for (Eigen::Index s = 0; s < S; ++s) {
-    Robot::standard_regressor(Vec6(d.q.row(s).transpose()), Vec6(d.qd.row(s).transpose()),
-                              Vec6(d.qdd.row(s).transpose()), Ys);
-    residual.row(s) = d.tau.row(s) - (Ys * phi.head(kStandard)).transpose();
+    residual.row(s) = d.tau.row(s) - (Y[static_cast<size_t>(s)] * phi.head(kStandard)).transpose();
   }
-  constexpr int kScan = 64;
-  std::vector<double> out(24, 0.0);
+  const int kf = friction_count(model);
+  std::vector<int> scale, amplitude;
+  for (int k = 0; k < kf; ++k) (is_scale_parameter(model, k) ? scale : amplitude).push_back(k);
+  const int per_axis = scale.size() == 1 ? 64 : (scale.size() == 2 ? 16 : 1);
+  const int points = scale.size() == 2 ? per_axis * per_axis : per_axis;
+  const SearchRanges ranges = search_ranges(d, model, Eigen::VectorXd::Zero(kStandard), 0.0);
+  std::vector<double> out(static_cast<size_t>(6 * kf), 0.0);
   for (int j = 0; j < 6; ++j) {
-    const auto range = stribeck_velocity_range(d, j);
+    const int b = kStandard + kf * j;
     double best = INFINITY;
-    Eigen::MatrixXd A(S, 3);
-    for (int k = 0; k < kScan; ++k) {
-      const double qds = range[0] * std::pow(range[1] / range[0], k / (kScan - 1.0));
-      for (Eigen::Index s = 0; s < S; ++s) {
-        const double v = d.qd(s, j), u = v / qds;
-        A.row(s) << sgn(v), sgn(v) * std::exp(-u * u), v;
+    Eigen::MatrixXd A(S, static_cast<Eigen::Index>(amplitude.size()));
+    std::vector<double> th(static_cast<size_t>(kf), 0.0), g(static_cast<size_t>(kf));
+    for (int p = 0; p < points; ++p) {
+      // Grid point p: scale parameter i at index (p / per_axis^i) % per_axis, log-spaced.
+      int rest = p;
+      for (int k : scale) {
+        const double lo = ranges.lo[b + k], hi = ranges.hi[b + k];
+        th[static_cast<size_t>(k)] = lo * std::pow(hi / lo, (rest % per_axis) / (per_axis - 1.0));
+        rest /= per_axis;
       }
-      const Eigen::Vector3d p = A.colPivHouseholderQr().solve(residual.col(j));
-      const double sse = (A * p - residual.col(j)).squaredNorm();
-      if (sse < best) {
-        best = sse;
-        out[4 * j] = std::max(p[0], 0.0);
-        out[4 * j + 1] = std::max(p[0] + p[1], 0.0);
-        out[4 * j + 2] = qds;
-        out[4 * j + 3] = std::max(p[2], 0.0);
+      for (Eigen::Index s = 0; s < S; ++s) {
+        friction_torque(model, th.data(), d.qd(s, j), d.tau_load(s, j), g.data());
+        for (size_t c = 0; c < amplitude.size(); ++c)
+          A(s, static_cast<Eigen::Index>(c)) = g[static_cast<size_t>(amplitude[c])];
+      }
+      const Eigen::VectorXd a = A.colPivHouseholderQr().solve(residual.col(j));
+      const double sse = (A * a - residual.col(j)).squaredNorm();
+      if (!(sse < best)) continue;
+      best = sse;
+      for (size_t c = 0; c < amplitude.size(); ++c)
+        th[static_cast<size_t>(amplitude[c])] = a[static_cast<Eigen::Index>(c)];
+      for (int k = 0; k < kf; ++k) {
+        out[static_cast<size_t>(kf * j + k)] =
+            std::clamp(th[static_cast<size_t>(k)], ranges.lo[b + k], ranges.hi[b + k]);
       }
     }
   }

@@ -5,7 +5,6 @@
 #include <cmath>
 #include <unsupported/Eigen/LevenbergMarquardt>
 
-#include "dyncal/nonlinear_friction.hpp"
 #include "dyncal_host/input_error.hpp"
 #include "dyncal_host/survey/objective.hpp"
 #include "dyncal_host/survey/standard_parameters.hpp"
@@ -64,25 +63,25 @@ void standard_from_theta(const double* x, Eigen::VectorXd& phi, Eigen::Matrix<do
 }
 
 /// Residuals r = [A [phi(theta_L); F] + w f(theta_F, qd) - b ; prior_w (phi - prior)] over
-/// x = [theta_L (60) | friction]. Linear friction (Eq. 7): F = (Fc, beta) per joint are columns of
-/// A, and A, b can be compressed to their QR factor. Nonlinear friction (Eq. 4): one row per joint
-/// sample with its velocity and weight; qds enters as log(qds) (positive by construction).
+/// x = [theta_L (60) | friction]. Linear friction (Eq. 7, 8, 9): F per joint are columns of A, and
+/// A, b can be compressed to their QR factor. Nonlinear friction (Eq. 4, 5, 6): one row per joint
+/// sample with its velocity, load torque and weight; each scale parameter enters as its log
+/// (positive by construction).
 struct Residuals : Eigen::DenseFunctor<double> {
   FrictionModel model = FrictionModel::eq7;
   int kf = 2;                      // friction parameters per joint
   Eigen::MatrixXd A;               // rows x (60 [+ 12 linear friction]), scaled by 1 / sigma_j
   Eigen::VectorXd b;               // scaled torques
-  Eigen::VectorXd qd, w;           // Eq. 4 only: velocity and 1 / sigma of each row (joint = row % 6)
+  Eigen::VectorXd qd, load, w;     // nonlinear only: velocity, load torque, 1 / sigma of each row (joint = row % 6)
   Eigen::VectorXd prior, prior_w;  // prior mean, 1 / s_i (0: no prior term)
 
   Residuals(int inputs, int values) : Eigen::DenseFunctor<double>(inputs, values) {}
 
-  bool nonlinear() const { return model == FrictionModel::eq4; }
+  bool nonlinear() const { return !is_linear(model); }
 
-  /// Friction parameters of joint j in model form (qds from its log).
+  /// Friction parameters of joint j in model form (scale parameters from their logs).
   void friction_of(const double* xf, double* th) const {
-    for (int k = 0; k < kf; ++k) th[k] = xf[k];
-    if (nonlinear()) th[2] = std::exp(xf[2]);
+    for (int k = 0; k < kf; ++k) th[k] = is_scale_parameter(model, k) ? std::exp(xf[k]) : xf[k];
   }
 
   Eigen::VectorXd standard(const InputType& x) const {
@@ -99,9 +98,9 @@ struct Residuals : Eigen::DenseFunctor<double> {
       r.head(n) += A.rightCols(A.cols() - kStandard) * x.tail(x.size() - kInertial);
     } else {
       for (Eigen::Index i = 0; i < n; ++i) {
-        double th[4];
+        double th[6];
         friction_of(x.data() + kInertial + kf * (i % 6), th);
-        r[i] += w[i] * NonlinearFriction<NonlinearFrictionModel::eq4>::torque(th, qd[i], static_cast<double*>(nullptr));
+        r[i] += w[i] * friction_torque(model, th, qd[i], load[i]);
       }
     }
     r.tail(kStandard) = prior_w.cwiseProduct(phi - prior);
@@ -125,11 +124,13 @@ struct Residuals : Eigen::DenseFunctor<double> {
     }
     for (Eigen::Index i = 0; i < n; ++i) {
       const int j = static_cast<int>(i % 6);
-      double th[4], jf[4] = {0, 0, 0, 0};
+      double th[6], jf[6] = {0, 0, 0, 0, 0, 0};
       friction_of(x.data() + kInertial + kf * j, th);
-      NonlinearFriction<NonlinearFrictionModel::eq4>::torque(th, qd[i], jf);
-      jf[2] *= th[2];  // d / d log(qds)
-      for (int k = 0; k < kf; ++k) J(i, kInertial + kf * j + k) = w[i] * jf[k];
+      friction_torque(model, th, qd[i], load[i], jf);
+      for (int k = 0; k < kf; ++k) {
+        if (is_scale_parameter(model, k)) jf[k] *= th[k];  // d / d log(theta_k)
+        J(i, kInertial + kf * j + k) = w[i] * jf[k];
+      }
     }
     return 0;
   }
@@ -184,10 +185,13 @@ Estimate physically_consistent_ls(const SurveyData& d, FrictionModel model, cons
                                   const ConsistentSettings& options) {
   const auto t0 = std::chrono::steady_clock::now();
   const Eigen::Index S = d.q.rows();
-  const int kf = static_cast<int>(friction_parameter_names(model).size());
-  // Weighted standard regressor with the Eq. 7 friction columns (Fc, beta per joint).
-  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(6 * S, kStandard + 12);
-  Eigen::VectorXd b(6 * S), qd(6 * S), w(6 * S);
+  const int kf = friction_count(model);
+  // Weighted standard regressor with the linear friction columns: the model's own (Eq. 7, 8, 9),
+  // or Eq. 7's (Fc, beta per joint) as the first stage of a nonlinear model.
+  const FrictionModel linear = is_linear(model) ? model : FrictionModel::eq7;
+  const int kl = friction_count(linear);
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(6 * S, kStandard + 6 * kl);
+  Eigen::VectorXd b(6 * S), qd(6 * S), load(6 * S), w(6 * S);
   Eigen::Matrix<double, 6, kStandard> Ys;
   for (Eigen::Index s = 0; s < S; ++s) {
     Robot::standard_regressor(Vec6(d.q.row(s).transpose()), Vec6(d.qd.row(s).transpose()),
@@ -196,51 +200,53 @@ Estimate physically_consistent_ls(const SurveyData& d, FrictionModel model, cons
       const Eigen::Index i = 6 * s + j;
       w[i] = 1.0 / settings.sigma[j];
       qd[i] = d.qd(s, j);
+      load[i] = d.tau_load(s, j);
       A.row(i).head<kStandard>() = w[i] * Ys.row(j);
-      A(i, kStandard + 2 * j) = w[i] * (qd[i] > 0 ? 1.0 : (qd[i] < 0 ? -1.0 : 0.0));
-      A(i, kStandard + 2 * j + 1) = w[i] * qd[i];
+      for (int k = 0; k < kl; ++k) A(i, kStandard + kl * j + k) = w[i] * linear_column(linear, k, qd[i], load[i]);
       b[i] = w[i] * d.tau(s, j);
     }
   }
   const Eigen::VectorXd prior_w = prior_weights(settings.prior, settings.prior_relative_std);
-  // Stage 1, Eq. 7 friction: the data term compressed to its QR factor (72 rows instead of 6 S).
+  // Stage 1, linear friction: the data term compressed to its QR factor (60 + 6 kl rows, not 6 S).
   Eigen::HouseholderQR<Eigen::MatrixXd> qr(A);
   const Eigen::Index c = A.cols();
-  Residuals lin(kInertial + 12, static_cast<int>(c + kStandard));
+  Residuals lin(kInertial + 6 * kl, static_cast<int>(c + kStandard));
+  lin.model = linear;
+  lin.kf = kl;
   lin.A = qr.matrixQR().topRows(c).triangularView<Eigen::Upper>();
   lin.b = (qr.householderQ().transpose() * b).head(c);
   lin.prior = settings.prior;
   lin.prior_w = prior_w;
   // Start: the prior projected onto the consistent set, friction zero.
-  Eigen::VectorXd x = Eigen::VectorXd::Zero(kInertial + 12);
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(kInertial + 6 * kl);
   for (int l = 0; l < kLinks; ++l) {
     theta_from_pseudo_inertia(pseudo_inertia(settings.prior.data() + kLinkParams * l), x.data() + kLinkParams * l);
   }
   int iterations = solve(lin, x, options);
   Residuals nl(kInertial + 6 * kf, static_cast<int>(6 * S + kStandard));
-  if (model == FrictionModel::eq4) {
-    // Stage 2, Eq. 4 friction from stage 1's inertial parameters and each joint's Stribeck start
-    // (stribeck_start: no set value used), every sample's row.
+  if (!is_linear(model)) {
+    // Stage 2, nonlinear friction from stage 1's inertial parameters and each joint's friction
+    // start (friction_start: no set value used), every sample's row.
     nl.model = model;
     nl.kf = kf;
     nl.A = A.leftCols(kStandard);
     nl.b = b;
     nl.qd = qd;
+    nl.load = load;
     nl.w = w;
     nl.prior = settings.prior;
     nl.prior_w = prior_w;
     Eigen::VectorXd x4(kInertial + 6 * kf);
     x4.head(kInertial) = x.head(kInertial);
-    const std::vector<double> f4 = stribeck_start(d, nl.standard(x4));
-    for (int j = 0; j < 6; ++j) {
-      x4.segment(kInertial + kf * j, kf) << f4[4 * j], f4[4 * j + 1], std::log(f4[4 * j + 2]), f4[4 * j + 3];
+    const std::vector<double> f = friction_start(d, model, nl.standard(x4));
+    for (int i = 0; i < 6 * kf; ++i) {
+      x4[kInertial + i] =
+          is_scale_parameter(model, i % kf) ? std::log(f[static_cast<size_t>(i)]) : f[static_cast<size_t>(i)];
     }
     iterations += solve(nl, x4, options);
     x = x4;
-  } else if (model != FrictionModel::eq7) {
-    throw InputError("physically consistent LS: Eq. 7 or Eq. 4 friction");
   }
-  const Residuals& p = model == FrictionModel::eq4 ? nl : lin;
+  const Residuals& p = is_linear(model) ? lin : nl;
   Estimate e;
   e.method = "physically consistent LS";
   e.model = model;

@@ -2,6 +2,8 @@
 
 #include <unistd.h>
 
+#include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <random>
@@ -13,6 +15,7 @@
 #include "dyncal_host/calibrate.hpp"
 #include "dyncal_host/excite.hpp"
 #include "dyncal_host/input_error.hpp"
+#include "dyncal_host/survey/friction_parameters.hpp"
 #include "er20/robot.hpp"
 
 namespace dyncal::host::survey {
@@ -27,6 +30,29 @@ std::string scratch_table_path(std::uint64_t seed) {
   return (std::filesystem::temp_directory_path() / ("dyncal_survey_" + std::to_string(::getpid()) + "_" +
                                                     std::to_string(seed) + "_" + std::to_string(counter++) + ".bin"))
       .string();
+}
+
+/// The study's set friction of one joint for `model`, from robot.json's Eq. 4 values (Fc, Fs, qds,
+/// beta), so that the six curves share Coulomb level, static peak, Stribeck velocity and viscous
+/// slope: Eq. 5 f1 = Fc, f2 = Fc - Fs (the static peak: f1 - f2 = Fs at rest), f3 = qds, f4 =
+/// 0.1 Fc (a 10 % drop at high speed), f5 = 1 s/rad; Eq. 6 f1 = Fc, f2 = Fs - Fc, f3 = 1 / qds,
+/// f4 = 2 / qds; Eq. 8 fp = 0.1 Fc; Eq. 9 fl = 0.05 (5 % of the load torque).
+void set_study_friction(JointFriction& f, FrictionModel model) {
+  f.model = model;
+  if (model == FrictionModel::eq5) {
+    f.f1 = f.Fc;
+    f.f2 = f.Fc - f.Fs;
+    f.f3 = f.qds;
+    f.f4 = 0.1 * f.Fc;
+    f.f5 = 1.0;
+  } else if (model == FrictionModel::eq6) {
+    f.f1 = f.Fc;
+    f.f2 = f.Fs - f.Fc;
+    f.f3 = 1.0 / f.qds;
+    f.f4 = 2.0 / f.qds;
+  }
+  f.fp = model == FrictionModel::eq8 ? 0.1 * f.Fc : 0.0;
+  f.fl = model == FrictionModel::eq9 ? 0.05 : 0.0;
 }
 
 /// The control law's feed-forward table: the set base parameters and the set Fc, beta (Eq. 7 part
@@ -138,14 +164,16 @@ SurveyData simulate_survey_data(const RobotDescription& robot, const SurveyDataO
   d.scenario.encoder_counts = 0;  // exact q_m (Sec. 6.1 step 1); position noise is studied separately
   if (!o.torque_noise) d.scenario.tau_noise_std.fill(0.0);
   for (int j = 0; j < kDriveJoints; ++j) {
-    d.scenario.friction[j].model = o.friction;  // Fc, beta, Fs, qds of robot.json
+    set_study_friction(d.scenario.friction[j], o.friction);
     d.scenario.effects[j].rotor_inertia = 0.0;  // the survey's model (Eq. 2) has none
   }
   d.table = set_parameter_table(d.scenario);
   // The survey's optimal trajectory (Sec. 6.1, Fig. 2): Eq. 27 with L = 5, f_f = 0.1 Hz, cond(K) of
-  // the run's own friction model minimised (dyncal excite's design).
+  // the run's friction model minimised (dyncal excite's design): the survey designed for Eq. 7 and
+  // Eq. 4 only, so the other linear models (Eq. 8, 9) play Eq. 7's design and the other nonlinear
+  // ones (Eq. 5, 6) Eq. 4's.
   ExciteOptions xo;
-  xo.model = o.friction;
+  xo.model = is_linear(o.friction) ? FrictionModel::eq7 : FrictionModel::eq4;
   xo.seed = o.seed;
   const ExciteResult designed = design_excitation(robot, xo);
   const auto& traj = designed.trajectory;
@@ -186,7 +214,38 @@ SurveyData simulate_survey_data(const RobotDescription& robot, const SurveyDataO
       d.q_meas(s, j) = p.q[j] + (o.position_noise_std > 0 ? o.position_noise_std * normal(rng) : 0.0);
     }
   }
+  d.tau_load = load_torque(d.q, d.qd, d.qdd, d.tau);
   return d;
+}
+
+Eigen::MatrixXd load_torque(const Eigen::MatrixXd& q, const Eigen::MatrixXd& qd, const Eigen::MatrixXd& qdd,
+                            const Eigen::MatrixXd& tau) {
+  using Model9 = IdentificationModel<Robot, kFrictionEq9>;
+  const Eigen::Index S = q.rows();
+  Eigen::MatrixXd load = tau, W(6 * S, Model9::kNumParams);
+  Eigen::VectorXd y(6 * S);
+  Model9::Regressor<double> K;
+  using Vec6 = Eigen::Matrix<double, 6, 1>;
+  const double tol = 1e-9 * std::max(tau.cwiseAbs().maxCoeff(), 1e-300);
+  for (int it = 0; it < 50; ++it) {
+    for (Eigen::Index s = 0; s < S; ++s) {
+      Model9::regressor(Vec6(q.row(s).transpose()), Vec6(qd.row(s).transpose()), Vec6(qdd.row(s).transpose()),
+                        Vec6(load.row(s).transpose()), K);
+      W.middleRows(6 * s, 6) = K;
+      y.segment<6>(6 * s) = tau.row(s).transpose();
+    }
+    const Eigen::VectorXd phi = W.colPivHouseholderQr().solve(y);
+    Eigen::MatrixXd next(S, 6);
+    Eigen::Matrix<double, 6, Robot::kNumBase> Yb;
+    for (Eigen::Index s = 0; s < S; ++s) {
+      Robot::base_regressor(Vec6(q.row(s).transpose()), Vec6(qd.row(s).transpose()), Vec6::Zero().eval(), Yb);
+      next.row(s) = (Yb * phi.head<Robot::kNumBase>()).transpose();
+    }
+    const double change = (next - load).cwiseAbs().maxCoeff();
+    load = next;
+    if (change < tol) break;
+  }
+  return load;
 }
 
 std::vector<SimulatedDrive::PlantSample> simulate_closed_loop(const RobotDescription& robot, const SurveyData& data,

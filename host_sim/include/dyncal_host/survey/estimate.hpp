@@ -8,15 +8,9 @@
 #include <vector>
 
 #include "dyncal_host/drive/scenario.hpp"
+#include "dyncal_host/survey/friction_parameters.hpp"
 
 namespace dyncal::host::survey {
-
-/// Friction parameter names per joint of a model: Eq. 7 {Fc, beta}; Eq. 4 {Fc, Fs, qds, beta}.
-std::vector<std::string> friction_parameter_names(FrictionModel model);
-/// Set friction parameters, joint-major in friction_parameter_names order.
-std::vector<double> set_friction(const Scenario& scenario, FrictionModel model);
-/// Friction torque of joint j (0-based) for parameters theta (friction_parameter_names order).
-double friction_torque(FrictionModel model, const double* theta, double qd);
 
 struct Estimate {
   std::string method;

@@ -31,19 +31,27 @@ Estimate eq7_estimate(const Eigen::VectorXd& phi, const char* method);
 /// Fills standard, standard_prior and tau_hat of `e` from its base and friction parameters.
 void complete_estimate(Estimate& e, const SurveyData& data, const MethodSettings& settings);
 
-/// Eq. 7 model, least squares over every sample (QR of the stacked base regressor).
-Estimate pseudo_inverse(const SurveyData& data, const MethodSettings& settings);
-/// Eq. 7 model, lib/ KalmanFilter (R = sigma^2, prior 0 with covariance p0).
-Estimate kalman_filter(const SurveyData& data, const MethodSettings& settings);
-/// Eq. 7 model, lib/ RlsForgetting (weights 1/sigma, forgetting factor mu).
-Estimate exponential_forgetting(const SurveyData& data, const MethodSettings& settings);
+/// Linear model (Eq. 7, 8 or 9; lib/ IdentificationModel, Eq. 9's load torque SurveyData::tau_load),
+/// least squares over every sample (QR of the stacked base regressor). Throws InputError on another
+/// model.
+Estimate pseudo_inverse(const SurveyData& data, const MethodSettings& settings,
+                        FrictionModel model = FrictionModel::eq7);
+/// Linear model, lib/ KalmanFilter (R = sigma^2, prior 0 with covariance p0).
+Estimate kalman_filter(const SurveyData& data, const MethodSettings& settings,
+                       FrictionModel model = FrictionModel::eq7);
+/// Linear model, lib/ RlsForgetting (weights 1/sigma, forgetting factor mu).
+Estimate exponential_forgetting(const SurveyData& data, const MethodSettings& settings,
+                                FrictionModel model = FrictionModel::eq7);
 using SurveyEkf = ExtendedKalmanFilter<double, generated::er20::Robot, NonlinearFrictionModel::eq4>;
 /// The study's EKF (mu = 1: Eq. 21, mu < 1: Eq. 24), reset to its start: base parameters 0 with
 /// covariance p0, friction Fc = Fs = 10 Nm, qds = 0.3 +- 0.1 rad/s, beta = 0. Throws InputError.
 std::unique_ptr<SurveyEkf> make_survey_ekf(const MethodSettings& settings, double mu);
 
-/// Eq. 4 model, lib/ ExtendedKalmanFilter; mu = 1: Eq. 21, mu < 1: Eq. 24. Friction prior:
-/// Fc = Fs = 10 Nm, qds = 0.3 +- 0.1 rad/s, beta = 0 (no knowledge of the set values).
-Estimate extended_kalman_filter(const SurveyData& data, const MethodSettings& settings, double mu);
+/// Nonlinear model (Eq. 4, 5 or 6), lib/ ExtendedKalmanFilter; mu = 1: Eq. 21, mu < 1: Eq. 24.
+/// Friction start (no knowledge of the set values): Fc, Fs (Eq. 4) and f1 (Eq. 5, 6) 10 Nm, other
+/// amplitudes and beta 0, every velocity scale 0.3 rad/s +- a third (qds, f3 of Eq. 5 as velocities,
+/// f5 of Eq. 5 and f3, f4 of Eq. 6 as their inverses). Throws InputError on another model.
+Estimate extended_kalman_filter(const SurveyData& data, const MethodSettings& settings, double mu,
+                                FrictionModel model = FrictionModel::eq4);
 
 }  // namespace dyncal::host::survey

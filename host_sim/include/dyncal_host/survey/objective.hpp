@@ -10,17 +10,18 @@
 #include <array>
 #include <vector>
 
+#include "dyncal_host/survey/friction_parameters.hpp"
 #include "dyncal_host/survey/survey_data.hpp"
 
 namespace dyncal::host::survey {
 
 /// Decision vector x = [60 standard parameters (Khalil-Kleinfinger order, link-major) | friction
-/// joint-major]: Eq. 7 (Fc [Nm], beta [Nm s/rad]) per joint; Eq. 4 (Fc [Nm], Fs [Nm], qds [rad/s],
-/// beta [Nm s/rad]) per joint with delta_s = 2.
+/// joint-major in friction_parameter_names order] for any of the six models (Eq. 4-9; Eq. 4 with
+/// delta_s = 2, Eq. 9 with SurveyData::tau_load as the load torque).
 class TorqueObjective {
  public:
-  /// Throws InputError unless model is Eq. 7 or Eq. 4 and data has samples; sigma: per-joint weight
-  /// (the assumed noise, Table 7) [Nm].
+  /// Throws InputError unless data has samples; sigma: per-joint weight (the assumed noise,
+  /// Table 7) [Nm].
   TorqueObjective(const SurveyData& data, FrictionModel model, const std::array<double, 6>& sigma);
 
   FrictionModel model() const { return model_; }
@@ -38,39 +39,53 @@ class TorqueObjective {
   double least_squares(const double* x, double* grad = nullptr) const;
 
  private:
+  /// One joint's data. The friction parameters with a fixed column (is_linear_parameter) join the
+  /// standard parameters in A = [Y_j | columns] / sigma_j, reduced to sums; the rest of the friction
+  /// (the nonlinear part) is evaluated on the rows sorted by |qd|, only those below its reach for
+  /// Eq. 4 (exp(-(qd / qds)^2) < 1e-18 beyond 6.5 qds), all rows for Eq. 5 and 6.
   struct Joint {
-    Eigen::MatrixXd G;             // 62 x 62: A^T A, A = [Y_j | sgn(qd_j) | qd_j] / sigma_j
+    int first = 0;                 // first standard column joint j's torque depends on
+    Eigen::MatrixXd G;             // A^T A
     Eigen::VectorXd h, a;          // A^T tau, column sums of A
     double w = 1, tt = 0, ts = 0;  // 1 / sigma_j; tau^T tau, sum of tau (scaled)
-    Eigen::MatrixXd A_sorted;      // Eq. 4: rows of A by increasing |qd|  (S x 62)
-    Eigen::VectorXd tau_sorted, qd_sorted;
+    Eigen::MatrixXd A_sorted;      // nonlinear models: columns first.. of A, rows by |qd|
+    Eigen::ArrayXd tau_sorted, qd_sorted, aq_sorted, sg_sorted, inv_aq_sorted;
   };
+  /// Weighted nonlinear part n of rows [0, k) of joint J and, if dn is not null, dn / d theta (k x kf).
+  void nonlinear_part(const Joint& J, const double* theta, Eigen::Index k, Eigen::ArrayXd& n,
+                      Eigen::ArrayXXd* dn) const;
+  Eigen::Index reach(const Joint& J, const double* theta) const;
+
   FrictionModel model_;
   int kf_ = 2;
+  std::vector<int> linear_;  // friction parameters (per joint) with a fixed column, in column order
   double n_ = 0;
   std::array<Joint, 6> joints_;
 };
 
 /// Box [lo, hi] of every decision variable. Inertial: the CAD value +- width x |CAD value| (a
 /// structural zero stays fixed at 0). Friction, from the run itself (what a user can state without
-/// knowing the answer): Fc, Fs in [0, max |tau_j|]; beta in [0, max |tau_j| / max |qd_j|]; qds in
-/// [0.01, 1] x max |qd_j| (at least 1e-3 rad/s).
+/// knowing the answer), with tau_j = max |tau_j| and v_j = max |qd_j|: Coulomb-like levels (Fc, Fs,
+/// f1) in [0, tau_j]; the other amplitudes (f2, f4 of Eq. 5, f2 of Eq. 6) in [-tau_j, tau_j]; beta
+/// in [0, tau_j / v_j]; fp in [-1, 1] tau_j / v_j^(1/3); fl in [0, 1]; velocity scales (qds, f3 of
+/// Eq. 5) in velocity_scale_range, inverse ones (f5 of Eq. 5, f3 and f4 of Eq. 6) in its inverse.
 struct SearchRanges {
   Eigen::VectorXd lo, hi;
   bool fixed(int i) const { return lo[i] == hi[i]; }
 };
 SearchRanges search_ranges(const SurveyData& data, FrictionModel model, const Eigen::VectorXd& cad, double width);
 
-/// Range of the Stribeck velocity qds of joint j (0-based) that search_ranges uses:
-/// [max(1e-3, 0.01 max |qd_j|), max |qd_j|] [rad/s].
-std::array<double, 2> stribeck_velocity_range(const SurveyData& data, int j);
+/// Range of a velocity scale parameter of joint j (0-based): [max(1e-3, 0.01 v_j), v_j] [rad/s],
+/// v_j = max |qd_j| (two decades below the fastest motion).
+std::array<double, 2> velocity_scale_range(const SurveyData& data, int j);
 
-/// Eq. 4 friction of every joint fitted to its residual tau_j - Y_j phi (phi: 60 standard
-/// parameters), a start for the nonlinear solvers that uses no set value: qds from 64 log-spaced
-/// values over stribeck_velocity_range, and at each Fc, Fs - Fc, beta by linear least squares
-/// (variable projection, Golub and Pereyra 1973); the qds with the least squared residual wins.
-/// Joint-major (Fc, Fs, qds, beta).
-std::vector<double> stribeck_start(const SurveyData& data, const Eigen::VectorXd& phi);
+/// The friction of every joint fitted to its residual tau_j - Y_j phi (phi: 60 standard
+/// parameters), a start for the solvers that uses no set value: the scale parameters on a
+/// log-spaced grid over their ranges (64 points for one, 16 x 16 for two), and at each grid point the
+/// other parameters, on which the friction is linear there, by least squares (variable projection,
+/// Golub and Pereyra 1973); the grid point with the least squared residual wins. Each parameter is
+/// then clamped into its search range. Joint-major, friction_parameter_names order.
+std::vector<double> friction_start(const SurveyData& data, FrictionModel model, const Eigen::VectorXd& phi);
 
 /// Physical feasibility (Wensing et al. 2017): each link's pseudo-inertia positive definite.
 /// Returns sum over links of max(0, -lambda_min(J_l)) / ||J_l(cad)||_F (0: feasible), and each

@@ -14,7 +14,8 @@ struct ConsistentSettings {
   double relative_tolerance = 1e-10;  ///< on the cost and on x (MINPACK ftol, xtol)
 };
 
-/// Eq. 7 or Eq. 4 (`model`) friction; the standard parameters start from the CAD prior projected
+/// Any of the six friction models (`model`: Eq. 7, 8, 9 in one linear stage; Eq. 4, 5, 6 after an
+/// Eq. 7 stage, from friction_start); the standard parameters start from the CAD prior projected
 /// onto the consistent set. Estimate::standard and ::standard_prior are the consistent parameters.
 /// Throws InputError if the solver fails.
 Estimate physically_consistent_ls(const SurveyData& data, FrictionModel model, const MethodSettings& settings,

@@ -30,6 +30,7 @@ struct SurveyData {
   Eigen::MatrixXd q_meas;                       ///< measured position: q plus position_noise_std noise
   Eigen::MatrixXd tau;                          ///< measured torque tau_jm [Nm] (with noise if chosen)
   Eigen::MatrixXd tau_cmd;                      ///< commanded torque tau_jc [Nm] (noise-free)
+  Eigen::MatrixXd tau_load;                     ///< load torque of Eq. 9 [Nm] (see load_torque)
   Scenario scenario;                            ///< friction, noise and seed the drive ran
   DriveTrajectory trajectory;                   ///< the excitation
   double trajectory_cond = 0;                   ///< cond(K) of the designed excitation for the run's
@@ -42,6 +43,14 @@ struct SurveyData {
 
 /// Simulates the survey's platform for `robot` (er20). Throws InputError.
 SurveyData simulate_survey_data(const RobotDescription& robot, const SurveyDataOptions& options);
+
+/// Eq. 9's load torque as a user has it: the torque the joint holds against gravity and the
+/// velocity-product terms, Y_b(q, qd, 0) phi_b (the simulated drive's load torque h(q, qd); with the
+/// inertial term the friction would depend on the acceleration it causes), phi_b from an Eq. 9
+/// least-squares fit of (q, qd, qdd, tau) with its own load torque, from tau_load = tau, repeated
+/// until it changes by less than 1e-9 of max |tau| (at most 50 times). S x 6 [Nm].
+Eigen::MatrixXd load_torque(const Eigen::MatrixXd& q, const Eigen::MatrixXd& qd, const Eigen::MatrixXd& qdd,
+                            const Eigen::MatrixXd& tau);
 
 /// Runs the same drive (control law: `data`'s table and gains, trajectory and sampling) with a
 /// different plant: standard parameters `phi_standard` (60), Eq. 7 friction Fc, beta per joint, no
