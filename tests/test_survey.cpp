@@ -155,11 +155,17 @@ TEST(SurveyMethods, PhysicallyConsistentLsHasPositiveDefinitePseudoInertiasAndFi
     const Indices x = evaluate(e, d.scenario, d.tau, kTauMax);
     // The set link 3 is not physically consistent (robots/er20), so the fit cannot be exact.
     EXPECT_LT(x.e_T_std, 1e-3);
-    // Eq. 5 and 6 carry small terms (Eq. 5's high-speed drop f4 = 0.1 Fc is nearly collinear with
-    // f1 over this excitation; Eq. 6's f2 = Fs - Fc) that absorb part of link 3's inconsistency:
-    // measured e_f 0.18 and 0.20, the others <= 0.02.
-    const bool small_terms = m == FrictionModel::eq5 || m == FrictionModel::eq6;
-    EXPECT_LT(x.e_f, small_terms ? 0.25 : 0.05);
+    // Every joint's friction curve within 2 % (RMS) of the set one. The parameters themselves on the
+    // models whose terms do not trade off: Eq. 5's f1 and f4 are nearly collinear over this
+    // excitation, and Eq. 6's small f2 = Fs - Fc and its shape absorb part of link 3's
+    // inconsistency (measured e_f 0.31 and 0.26; Eq. 4, 7, 8, 9 <= 0.02).
+    const auto f = set_friction(d.scenario, m);
+    for (int j = 0; j < 6; ++j) {
+      EXPECT_LT(dyncal::test::friction_curve_error(d, m, e.friction, f, j), 0.02) << "joint " << j + 1;
+    }
+    if (m != FrictionModel::eq5 && m != FrictionModel::eq6) {
+      EXPECT_LT(x.e_f, 0.05);
+    }
     EXPECT_LT(x.e_d, 0.3);
     EXPECT_LT(x.J_e, 1.0);  // survey Table 2 level A
     // The prior alone (projected onto the consistent set) is worse than the estimate.

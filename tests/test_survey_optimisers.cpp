@@ -140,17 +140,10 @@ TEST(SurveyOptimisers, GradientDescentRecoversFrictionAndFitsNoiseFreeData) {
     expect_feasible_in_ranges(e, d, m, settings());
     const Indices x = evaluate(e, d.scenario, d.tau, kTauMax);
     const auto f = set_friction(d.scenario, m);
-    const int kf = friction_count(m);
     // Each joint's friction curve over the run's velocities within 2 % (RMS) of the set one, also
     // where parameters trade off (Eq. 5's f1 and f4, Eq. 8's Fc and fp).
     for (int j = 0; j < 6; ++j) {
-      double diff = 0, ref = 0;
-      for (Eigen::Index s = 0; s < d.q.rows(); ++s) {
-        const double set = friction_torque(m, f.data() + kf * j, d.qd(s, j), d.tau_load(s, j));
-        diff += std::pow(friction_torque(m, e.friction.data() + kf * j, d.qd(s, j), d.tau_load(s, j)) - set, 2);
-        ref += set * set;
-      }
-      EXPECT_LT(std::sqrt(diff / ref), 0.02) << "joint " << j + 1;
+      EXPECT_LT(dyncal::test::friction_curve_error(d, m, e.friction, f, j), 0.02) << "joint " << j + 1;
     }
     // The set link 3 is not consistent, so a feasible fit leaves a small residual (survey: 6e-4).
     EXPECT_LT(x.e_T_std, 5e-3);

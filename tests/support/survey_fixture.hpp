@@ -2,7 +2,9 @@
 // Shared by the survey tests: one noise-free survey run per friction model (one excitation
 // period, cached), the er20's maximum torques, and method settings with the seed-1 CAD prior.
 #include <array>
+#include <cmath>
 #include <map>
+#include <vector>
 
 #include "dyncal_host/robot_description.hpp"
 #include "dyncal_host/survey/methods.hpp"
@@ -28,6 +30,22 @@ inline host::survey::MethodSettings survey_settings() {
   host::survey::MethodSettings s;
   s.prior = host::survey::cad_prior(0.2, 1);
   return s;
+}
+
+/// RMS over the run's samples of joint j's (0-based) friction curve with parameters `est` minus the
+/// one with `set` (friction_parameter_names order, joint-major), relative to the set curve's RMS:
+/// what a fit recovers of the friction even where its parameters trade off.
+inline double friction_curve_error(const host::survey::SurveyData& d, host::FrictionModel model,
+                                   const std::vector<double>& est, const std::vector<double>& set, int j) {
+  const int kf = host::survey::friction_count(model);
+  double diff = 0, ref = 0;
+  for (Eigen::Index s = 0; s < d.q.rows(); ++s) {
+    const double a = host::survey::friction_torque(model, set.data() + kf * j, d.qd(s, j), d.tau_load(s, j));
+    const double b = host::survey::friction_torque(model, est.data() + kf * j, d.qd(s, j), d.tau_load(s, j));
+    diff += (b - a) * (b - a);
+    ref += a * a;
+  }
+  return std::sqrt(diff / ref);
 }
 
 }  // namespace dyncal::test

@@ -1,6 +1,7 @@
 #include "dyncal_host/survey/physically_consistent.hpp"
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <unsupported/Eigen/LevenbergMarquardt>
@@ -79,9 +80,31 @@ struct Residuals : Eigen::DenseFunctor<double> {
 
   bool nonlinear() const { return !is_linear(model); }
 
-  /// Friction parameters of joint j in model form (scale parameters from their logs).
-  void friction_of(const double* xf, double* th) const {
-    for (int k = 0; k < kf; ++k) th[k] = is_scale_parameter(model, k) ? std::exp(xf[k]) : xf[k];
+  Eigen::VectorXd log_lo, log_hi;  // nonlinear only, per friction variable: a scale parameter's log range
+
+  /// Friction parameters of joint j in model form from x, and d theta_k / d x_k if dth is given. A
+  /// scale parameter is lo (hi / lo)^s(z), s the logistic function: inside its search range (the
+  /// optimisers' ranges, from the run), positive by construction; where the data cannot fix it
+  /// (Eq. 6's f3 -> 0 makes f1 and f2 collinear) it cannot drift away. The others are x itself.
+  void friction_of(const Eigen::VectorXd& x, int j, double* th, double* dth = nullptr) const {
+    for (int k = 0; k < kf; ++k) {
+      const Eigen::Index i = kf * j + k;
+      const double z = x[kInertial + i];
+      if (nonlinear() && is_scale_parameter(model, k)) {
+        const double sg = 1.0 / (1.0 + std::exp(-z)), span = log_hi[i] - log_lo[i];
+        th[k] = std::exp(log_lo[i] + span * sg);
+        if (dth) dth[k] = th[k] * span * sg * (1 - sg);
+      } else {
+        th[k] = z;
+        if (dth) dth[k] = 1.0;
+      }
+    }
+  }
+
+  /// The variable x_k of a scale parameter's value theta (clamped just inside its range).
+  double scale_variable(Eigen::Index i, double theta) const {
+    const double t = std::clamp((std::log(theta) - log_lo[i]) / (log_hi[i] - log_lo[i]), 1e-6, 1 - 1e-6);
+    return std::log(t / (1 - t));
   }
 
   Eigen::VectorXd standard(const InputType& x) const {
@@ -99,7 +122,7 @@ struct Residuals : Eigen::DenseFunctor<double> {
     } else {
       for (Eigen::Index i = 0; i < n; ++i) {
         double th[6];
-        friction_of(x.data() + kInertial + kf * (i % 6), th);
+        friction_of(x, static_cast<int>(i % 6), th);
         r[i] += w[i] * friction_torque(model, th, qd[i], load[i]);
       }
     }
@@ -124,13 +147,10 @@ struct Residuals : Eigen::DenseFunctor<double> {
     }
     for (Eigen::Index i = 0; i < n; ++i) {
       const int j = static_cast<int>(i % 6);
-      double th[6], jf[6] = {0, 0, 0, 0, 0, 0};
-      friction_of(x.data() + kInertial + kf * j, th);
+      double th[6], dth[6], jf[6] = {0, 0, 0, 0, 0, 0};
+      friction_of(x, j, th, dth);
       friction_torque(model, th, qd[i], load[i], jf);
-      for (int k = 0; k < kf; ++k) {
-        if (is_scale_parameter(model, k)) jf[k] *= th[k];  // d / d log(theta_k)
-        J(i, kInertial + kf * j + k) = w[i] * jf[k];
-      }
+      for (int k = 0; k < kf; ++k) J(i, kInertial + kf * j + k) = w[i] * jf[k] * dth[k];
     }
     return 0;
   }
@@ -167,6 +187,94 @@ int solve(Residuals& p, Eigen::VectorXd& x, const ConsistentSettings& options) {
     throw InputError("physically consistent LS: Levenberg-Marquardt failed (status " + std::to_string(res) + ")");
   }
   return static_cast<int>(lm.iterations());
+}
+
+/// Levenberg-Marquardt on the normal equations for the nonlinear stage, using its structure: the
+/// data Jacobian is [A dphi/dtheta_L | F], A constant (A^T A formed once, 60 x 60) and F
+/// block-sparse (joint j's rows touch only joint j's friction parameters), so an iteration costs
+/// O(n 60 k_f) for n = 6 S rows, not the O(n (60 + 6 k_f)^2) of a dense QR. Marquardt's scaling
+/// (the diagonal of J^T J); stops when the cost falls by less than `relative_tolerance` of itself or
+/// the step is below `relative_tolerance` of |x|. Returns the iterations; throws InputError on a
+/// non-finite cost at the start.
+int solve_structured(const Residuals& p, Eigen::VectorXd& x, const ConsistentSettings& options) {
+  const Eigen::Index n = p.b.size(), S = n / 6;
+  const int kf = p.kf;
+  const Eigen::Index D = x.size();
+  std::array<Eigen::MatrixXd, 6> Aj;
+  for (int j = 0; j < 6; ++j) {
+    Aj[j].resize(S, kStandard);
+    for (Eigen::Index s = 0; s < S; ++s) Aj[j].row(s) = p.A.row(6 * s + j);
+  }
+  const Eigen::MatrixXd AtA = p.A.transpose() * p.A;
+  Eigen::VectorXd r(n + kStandard), r_new(n + kStandard);
+  auto cost_at = [&](const Eigen::VectorXd& at, Eigen::VectorXd& res) {
+    p(at, res);
+    return res.allFinite() ? res.squaredNorm() : INFINITY;
+  };
+  double cost = cost_at(x, r);
+  if (!std::isfinite(cost)) throw InputError("physically consistent LS: the start has no finite cost");
+  Eigen::MatrixXd H(D, D), F(S, kf), Dphi = Eigen::MatrixXd::Zero(kStandard, kInertial);
+  Eigen::VectorXd g(D), phi(kStandard);
+  double lambda = 1e-3;
+  const int max_iterations = options.max_evaluations;
+  int it = 0;
+  for (; it < max_iterations; ++it) {
+    // Gradient g = J^T r and Gauss-Newton matrix H = J^T J at x.
+    for (int l = 0; l < kLinks; ++l) {
+      Eigen::Matrix<double, kLinkParams, kLinkParams> jac;
+      standard_from_theta(x.data(), phi, &jac, l);
+      Dphi.block(kLinkParams * l, kLinkParams * l, kLinkParams, kLinkParams) = jac;
+    }
+    const Eigen::VectorXd u = p.A.transpose() * r.head(n) + p.prior_w.cwiseProduct(r.tail(kStandard));
+    g.head(kInertial) = Dphi.transpose() * u;
+    H.setZero();
+    H.topLeftCorner(kInertial, kInertial) =
+        Dphi.transpose() * (AtA + Eigen::MatrixXd(p.prior_w.cwiseAbs2().asDiagonal())) * Dphi;
+    for (int j = 0; j < 6; ++j) {
+      double th[6], dth[6], jf[6];
+      p.friction_of(x, j, th, dth);
+      Eigen::VectorXd rj(S);
+      for (Eigen::Index s = 0; s < S; ++s) {
+        const Eigen::Index i = 6 * s + j;
+        friction_torque(p.model, th, p.qd[i], p.load[i], jf);
+        for (int k = 0; k < kf; ++k) F(s, k) = p.w[i] * jf[k] * dth[k];
+        rj[s] = r[i];
+      }
+      const Eigen::Index c = kInertial + kf * j;
+      g.segment(c, kf) = F.transpose() * rj;
+      H.block(c, c, kf, kf) = F.transpose() * F;
+      H.block(0, c, kInertial, kf) = Dphi.transpose() * (Aj[j].transpose() * F);
+      H.block(c, 0, kf, kInertial) = H.block(0, c, kInertial, kf).transpose();
+    }
+    // Damped steps until the cost falls.
+    const Eigen::VectorXd scale = H.diagonal().cwiseMax(1e-12 * H.diagonal().maxCoeff());
+    bool accepted = false;
+    Eigen::VectorXd step;
+    double cost_new = cost;
+    while (lambda < 1e16) {
+      Eigen::MatrixXd Hd = H;
+      Hd.diagonal() += lambda * scale;
+      step = Hd.ldlt().solve(-g);
+      cost_new = step.allFinite() ? cost_at(x + step, r_new) : INFINITY;
+      if (cost_new < cost) {
+        accepted = true;
+        break;
+      }
+      lambda *= 4;
+    }
+    if (!accepted) break;  // no descent left: converged to rounding
+    x += step;
+    r.swap(r_new);
+    const double reduction = (cost - cost_new) / cost;
+    cost = cost_new;
+    lambda = std::max(lambda / 3, 1e-12);
+    if (reduction <= options.relative_tolerance ||
+        step.norm() <= options.relative_tolerance * (x.norm() + options.relative_tolerance)) {
+      ++it;
+      break;
+    }
+  }
+  return it;
 }
 
 }  // namespace
@@ -239,11 +347,14 @@ Estimate physically_consistent_ls(const SurveyData& d, FrictionModel model, cons
     Eigen::VectorXd x4(kInertial + 6 * kf);
     x4.head(kInertial) = x.head(kInertial);
     const std::vector<double> f = friction_start(d, model, nl.standard(x4));
-    for (int i = 0; i < 6 * kf; ++i) {
-      x4[kInertial + i] =
-          is_scale_parameter(model, i % kf) ? std::log(f[static_cast<size_t>(i)]) : f[static_cast<size_t>(i)];
+    const SearchRanges ranges = search_ranges(d, model, settings.prior, 0.0);
+    nl.log_lo = ranges.lo.tail(6 * kf).array().max(1e-300).log();
+    nl.log_hi = ranges.hi.tail(6 * kf).array().max(1e-300).log();
+    for (Eigen::Index i = 0; i < 6 * kf; ++i) {
+      const double v = f[static_cast<size_t>(i)];
+      x4[kInertial + i] = is_scale_parameter(model, static_cast<int>(i % kf)) ? nl.scale_variable(i, v) : v;
     }
-    iterations += solve(nl, x4, options);
+    iterations += solve_structured(nl, x4, options);
     x = x4;
   }
   const Residuals& p = is_linear(model) ? lin : nl;
@@ -254,7 +365,7 @@ Estimate physically_consistent_ls(const SurveyData& d, FrictionModel model, cons
   e.standard_prior = e.standard;
   e.base = base_map() * e.standard;
   e.friction.resize(static_cast<size_t>(6 * kf));
-  for (int j = 0; j < 6; ++j) p.friction_of(x.data() + kInertial + kf * j, e.friction.data() + kf * j);
+  for (int j = 0; j < 6; ++j) p.friction_of(x, j, e.friction.data() + kf * j);
   e.iterations = iterations;
   for (int l = 0; l < kLinks; ++l) {
     const Eigen::Matrix4d L = cholesky_factor(x.data() + kLinkParams * l);
