@@ -28,7 +28,9 @@ Estimate pseudo_inverse_measured(const SurveyData& d, const MethodSettings& sett
 
 /// IDIM-IV from the pseudo-inverse's estimate. Each iteration's plant: the standard parameters
 /// most probable under the CAD prior given the base parameters (standard_from_base), projected onto
-/// the physically consistent set, with Fc, beta >= 0. Estimate::iterations: closed-loop
+/// the physically consistent set, with Fc, beta >= 0. Converged when an iterate moves by at most
+/// options.tolerance of itself; once a step fails to halve the previous one, half steps (the map
+/// can cycle between two plants). Estimate::iterations: closed-loop
 /// simulations run; Estimate::note says whether it converged. Throws InputError if a simulation
 /// leaves its valid range.
 Estimate idim_iv(const RobotDescription& robot, const SurveyData& d, const MethodSettings& settings,
