@@ -100,6 +100,52 @@ TEST(SurveyObjective, GradientsMatchCentralDifferences) {
   }
 }
 
+TEST(SurveyObjective, FittedAmplitudesAreTheLeastSquaresOnesGivenTheRest) {
+  for (FrictionModel m : kAllModels) {
+    SCOPED_TRACE(model_key(m));
+    const TorqueObjective obj(data(m), m, kSigma);
+    Eigen::VectorXd x = near_set(m);
+    const Eigen::VectorXd before = x;
+    std::array<double, 6> mean{}, var{}, mean_ref{}, var_ref{};
+    obj.fit_amplitudes(x.data(), nullptr, nullptr, &mean, &var);
+    obj.residual_moments(x.data(), mean_ref, var_ref);
+    for (int j = 0; j < 6; ++j) {
+      EXPECT_NEAR(mean[j], mean_ref[j], 1e-9 * (1 + std::fabs(mean_ref[j]))) << j;
+      EXPECT_NEAR(var[j], var_ref[j], 1e-8 * (1 + var_ref[j])) << j;
+    }
+    // Clamped into bounds that exclude the optimum, the moments are still those of the result.
+    {
+      Eigen::VectorXd y = before, lo = before * 0.99, hi = before * 1.01;
+      for (Eigen::Index i = 0; i < y.size(); ++i) {
+        if (lo[i] > hi[i]) std::swap(lo[i], hi[i]);
+      }
+      obj.fit_amplitudes(y.data(), lo.data(), hi.data(), &mean, &var);
+      obj.residual_moments(y.data(), mean_ref, var_ref);
+      for (int j = 0; j < 6; ++j) {
+        EXPECT_NEAR(mean[j], mean_ref[j], 1e-9 * (1 + std::fabs(mean_ref[j]))) << "clamped " << j;
+        EXPECT_NEAR(var[j], var_ref[j], 1e-8 * (1 + var_ref[j])) << "clamped " << j;
+      }
+      for (Eigen::Index i = 0; i < y.size(); ++i) {
+        EXPECT_GE(y[i], lo[i]);
+        EXPECT_LE(y[i], hi[i]);
+      }
+    }
+    Eigen::VectorXd g(x.size());
+    const double ls = obj.least_squares(x.data(), g.data());
+    EXPECT_LT(ls, obj.least_squares(before.data()));
+    const int kf = obj.friction_per_joint();
+    for (Eigen::Index i = 0; i < x.size(); ++i) {
+      const bool amplitude = i >= kStandard && !is_scale_parameter(m, static_cast<int>((i - kStandard) % kf));
+      if (amplitude) {
+        // Stationary in every amplitude (relative to the gradient's size in a 10 % move of it).
+        EXPECT_NEAR(g[i] * 0.1 * std::fabs(x[i]), 0.0, 1e-9 * ls) << "variable " << i;
+      } else {
+        EXPECT_EQ(x[i], before[i]) << "variable " << i;  // standard and scale parameters untouched
+      }
+    }
+  }
+}
+
 TEST(SurveyObjective, MinEigenvalueGradientMatchesCentralDifferences) {
   // At CAD-like values (random 20 % errors): every link's smallest eigenvalue is simple there.
   const Eigen::VectorXd phi = cad_prior(0.2, 7);

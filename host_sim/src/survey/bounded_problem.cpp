@@ -53,6 +53,13 @@ Eigen::VectorXd BoundedProblem::unit(const Eigen::VectorXd& x) const {
   return u;
 }
 
+Eigen::VectorXd BoundedProblem::with_fitted_amplitudes(const Eigen::VectorXd& x, std::array<double, 6>& mean,
+                                                       std::array<double, 6>& var) const {
+  Eigen::VectorXd y = x;
+  objective_.fit_amplitudes(y.data(), ranges_.lo.data(), ranges_.hi.data(), &mean, &var);
+  return y;
+}
+
 Estimate BoundedProblem::estimate(const Eigen::VectorXd& x, const char* method,
                                   std::chrono::steady_clock::time_point t0, int iterations) const {
   Estimate e;

@@ -28,6 +28,12 @@ class BoundedProblem {
   int free_index(int k) const { return free_[k]; }
 
   double eq25(const Eigen::VectorXd& x) const { return objective_.eq25(x.data(), options_.k_e); }
+  /// x with each joint's friction amplitudes at their least-squares values given x's standard and
+  /// scale parameters (TorqueObjective::fit_amplitudes), clamped into their ranges; the residual
+  /// moments there into mean, var.
+  Eigen::VectorXd with_fitted_amplitudes(const Eigen::VectorXd& x, std::array<double, 6>& mean,
+                                         std::array<double, 6>& var) const;
+  double k_e() const { return options_.k_e; }
   const TorqueObjective& objective() const { return objective_; }
   /// Sum over links of the relative negative part of lambda_min of the pseudo-inertia (0: feasible).
   double violation(const Eigen::VectorXd& x) const { return feasibility_violation(x.data(), cad_); }

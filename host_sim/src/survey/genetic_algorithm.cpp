@@ -66,9 +66,15 @@ Estimate genetic_algorithm(const SurveyData& data, FrictionModel model, const Me
   const int D = problem.free_dimension(), N = options.population;
   std::mt19937_64 rng(options.seed);
   std::uniform_real_distribution<double> U(0.0, 1.0);
+  // Each individual's friction amplitudes are set to their least-squares values given its inertial
+  // and scale parameters, and written back (a Lamarckian repair: separable least squares): the
+  // search itself is over the inertial and scale parameters, where an amplitude that compensates a
+  // wrong Stribeck velocity can no longer hold a population in a wrong basin.
   auto evaluate = [&](Individual& ind) {
-    const Eigen::VectorXd x = problem.full(ind.u.data());
-    ind.f = problem.eq25(x);
+    std::array<double, 6> mean{}, var{};
+    const Eigen::VectorXd x = problem.with_fitted_amplitudes(problem.full(ind.u.data()), mean, var);
+    ind.u = problem.unit(x);
+    ind.f = TorqueObjective::eq25_of(mean, var, problem.k_e());
     ind.violation = problem.violation(x);
   };
   std::vector<Individual> pop(static_cast<size_t>(N));

@@ -232,6 +232,97 @@ double TorqueObjective::least_squares(const double* x, double* grad) const {
   return J;
 }
 
+void TorqueObjective::fit_amplitudes(double* x, const double* lo, const double* hi, std::array<double, 6>* mean,
+                                     std::array<double, 6>* var) const {
+  const Eigen::Map<const Eigen::Matrix<double, kStandard, 1>> phi(x);
+  const int nl = static_cast<int>(linear_.size());
+  std::vector<int> amp;
+  for (int k = 0; k < kf_; ++k) {
+    if (!is_scale_parameter(model_, k)) amp.push_back(k);
+  }
+  const int na = static_cast<int>(amp.size());
+  Eigen::ArrayXd n;
+  Eigen::ArrayXXd dn;
+  struct {
+    Eigen::VectorXd r;     // rigid-body residual on the rows the nonlinear part reaches
+    Eigen::MatrixXd D, L;  // there: the amplitudes' nonlinear and linear columns
+  } nonlinear;
+  for (int j = 0; j < 6; ++j) {
+    const Joint& J = joints_[j];
+    double* f = x + kStandard + kf_ * j;
+    // Column of each amplitude among the linear columns of A (-1: none).
+    std::vector<int> col(static_cast<size_t>(na), -1);
+    for (int a = 0; a < na; ++a) {
+      for (int i = 0; i < nl; ++i) {
+        if (linear_[static_cast<size_t>(i)] == amp[static_cast<size_t>(a)]) col[static_cast<size_t>(a)] = kStandard + i;
+      }
+    }
+    Eigen::MatrixXd M = Eigen::MatrixXd::Zero(na, na);
+    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(na);
+    for (int a = 0; a < na; ++a) {
+      const int ca = col[static_cast<size_t>(a)];
+      if (ca < 0) continue;
+      rhs[a] = J.h[ca] - J.G.row(ca).head<kStandard>().dot(phi);
+      for (int b = 0; b < na; ++b) {
+        if (col[static_cast<size_t>(b)] >= 0) M(a, b) = J.G(ca, col[static_cast<size_t>(b)]);
+      }
+    }
+    if (!is_linear(model_)) {
+      // The nonlinear part's columns on the rows it reaches: dn / d amplitude (independent of the
+      // amplitudes), plus their products with the linear columns and the rigid-body residual.
+      const Eigen::Index k = reach(J, f);
+      nonlinear_part(J, f, k, n, &dn);
+      const auto Ak = J.A_sorted.topRows(k);
+      const Eigen::VectorXd r =
+          J.tau_sorted.head(k).matrix() - Ak.leftCols(kStandard - J.first) * phi.tail(kStandard - J.first);
+      Eigen::MatrixXd Dk(k, na), Lk = Eigen::MatrixXd::Zero(k, na);
+      for (int a = 0; a < na; ++a) {
+        Dk.col(a) = dn.col(amp[static_cast<size_t>(a)]).matrix();
+        const int ca = col[static_cast<size_t>(a)];
+        if (ca >= 0) Lk.col(a) = Ak.col(ca - J.first);
+      }
+      // na x na Gram blocks of k-row columns: dot products (lazyProduct), not a packed GEMM.
+      const Eigen::MatrixXd LtD = Lk.transpose().lazyProduct(Dk);
+      M += LtD + LtD.transpose() + Dk.transpose().lazyProduct(Dk);
+      rhs += Dk.transpose() * r;
+      nonlinear = {r, Dk, Lk};
+    }
+    Eigen::VectorXd sol = M.completeOrthogonalDecomposition().solve(rhs);
+    for (int a = 0; a < na; ++a) {
+      const int i = kStandard + kf_ * j + amp[static_cast<size_t>(a)];
+      if (lo) sol[a] = std::max(sol[a], lo[i]);
+      if (hi) sol[a] = std::min(sol[a], hi[i]);
+      f[amp[static_cast<size_t>(a)]] = sol[a];
+    }
+    if (!mean || !var) continue;
+    // The residual moments at the new amplitudes without another pass over the samples: the linear
+    // columns from the reduced sums, the nonlinear part n = D a (linear in the amplitudes).
+    Eigen::VectorXd z(kStandard + nl);
+    z.head<kStandard>() = phi;
+    for (int i = 0; i < nl; ++i) z[kStandard + i] = f[linear_[static_cast<size_t>(i)]];
+    double sse = z.dot(J.G * z) - 2 * J.h.dot(z) + J.tt, sum = J.ts - J.a.dot(z);
+    if (!is_linear(model_)) {
+      const Eigen::VectorXd nk = nonlinear.D * sol;
+      sse += -2 * nk.dot(nonlinear.r - nonlinear.L * sol) + nk.squaredNorm();
+      sum -= nk.sum();
+    }
+    (*mean)[j] = sum / n_;
+    (*var)[j] = std::max(0.0, sse / n_ - (*mean)[j] * (*mean)[j]);
+  }
+}
+
+double TorqueObjective::eq25_of(const std::array<double, 6>& mean, const std::array<double, 6>& var, double k_e) {
+  double J = 0;
+  for (int j = 0; j < 6; ++j) J += std::fabs(mean[j]) + k_e * std::sqrt(var[j]);
+  return J;
+}
+
+double TorqueObjective::least_squares_of(const std::array<double, 6>& mean, const std::array<double, 6>& var) {
+  double J = 0;
+  for (int j = 0; j < 6; ++j) J += mean[j] * mean[j] + var[j];
+  return J;
+}
+
 std::array<double, 2> velocity_scale_range(const SurveyData& d, int j) {
   const double qd = d.qd.col(j).cwiseAbs().maxCoeff();
   const double lo = std::max(1e-3, 0.01 * qd);

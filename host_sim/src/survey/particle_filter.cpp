@@ -6,7 +6,12 @@
 // half the particle count (adaptive tempering), resamples (systematic), and rejuvenates every
 // particle by random-walk Metropolis moves whose proposal covariance is the particles' own
 // (scale 2.38 / sqrt(D), adapted towards an acceptance rate of 0.234); at b = 1 the moves go on
-// until the budget is spent. The estimate is the posterior mean.
+// until the budget is spent. The friction amplitudes (every friction parameter but the scale
+// parameters, in which the torque is linear once the scales are fixed) are not sampled: each
+// particle carries their least-squares values given its other parameters, which is their
+// conditional posterior mean under a flat prior, so the particles sample the other parameters'
+// profile posterior (Rao-Blackwellised, without the Laplace factor |B^T B|^-1/2 of the exact
+// marginal). The estimate is the posterior mean.
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
@@ -60,7 +65,15 @@ Estimate particle_filter(const SurveyData& data, FrictionModel model, const Meth
   // Negative log-likelihood of the torques under the assumed noise (Table 7 sigma_j, Gaussian):
   // (S / 2) sum_j ||e_j / sigma_j||^2 / S; the target at b = 1 is the posterior on the ranges.
   const double half_samples = 0.5 * static_cast<double>(data.q.rows());
-  auto cost = [&](const Eigen::VectorXd& x) { return half_samples * problem.objective().least_squares(x.data()); };
+  // Particle u with its amplitudes at their conditional least-squares values (written back to u),
+  // and its cost.
+  auto fitted = [&](Eigen::VectorXd& u, double& cost) {
+    std::array<double, 6> mean{}, var{};
+    const Eigen::VectorXd x = problem.with_fitted_amplitudes(problem.full(u.data()), mean, var);
+    u = problem.unit(x);
+    cost = half_samples * TorqueObjective::least_squares_of(mean, var);
+    return x;
+  };
   Eigen::VectorXd f(N);
   for (int i = 0; i < N; ++i) {
     for (int k = 0; k < D; ++k) X(k, i) = U(rng);
@@ -71,9 +84,10 @@ Estimate particle_filter(const SurveyData& data, FrictionModel model, const Meth
         for (int k : link_vars[static_cast<size_t>(l)]) X(k, i) = U(rng);
       }
     }
-    const Eigen::VectorXd x = problem.full(X.col(i).data());
+    Eigen::VectorXd ui = X.col(i);
+    const Eigen::VectorXd x = fitted(ui, f[i]);
+    X.col(i) = ui;
     if (problem.violation(x) > 0) throw InputError("particle filter: no feasible point found in the search ranges");
-    f[i] = cost(x);
   }
   double b = 0, scale = 2.38 / std::sqrt(static_cast<double>(D));
   const int steps = options.generations / kMovesPerStep;
@@ -106,12 +120,12 @@ Estimate particle_filter(const SurveyData& data, FrictionModel model, const Meth
       for (int i = 0; i < N; ++i) {
         Eigen::VectorXd z(D);
         for (int k = 0; k < D; ++k) z[k] = normal(rng);
-        const Eigen::VectorXd u = X.col(i) + scale * (L * z);
+        Eigen::VectorXd u = X.col(i) + scale * (L * z);
         const double logu = std::log(U(rng));
         if ((u.array() < 0).any() || (u.array() > 1).any()) continue;  // outside the box: density 0
-        const Eigen::VectorXd x = problem.full(u.data());
+        double fu = 0;
+        const Eigen::VectorXd x = fitted(u, fu);
         if (problem.violation(x) > 0) continue;
-        const double fu = cost(x);
         if (logu < -b * (fu - f[i])) {
           X.col(i) = u;
           f[i] = fu;

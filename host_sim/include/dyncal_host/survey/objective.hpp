@@ -38,6 +38,18 @@ class TorqueObjective {
   /// sum_j (mean_j^2 + var_j) = sum_j ||e_j / sigma_j||^2 / S; grad if not null.
   double least_squares(const double* x, double* grad = nullptr) const;
 
+  /// Sets, in x, each joint's friction amplitudes (every parameter but the scale parameters: the
+  /// friction is linear in them once the scales are fixed) to their least-squares values given the
+  /// standard parameters and scale parameters in x (separable least squares, Golub and Pereyra
+  /// 1973), exactly, from the same reduced sums; then clamps each into [lo[i], hi[i]] (full
+  /// decision-vector bounds, if given). With mean and var, also the residual moments at the result,
+  /// at no further pass over the samples.
+  void fit_amplitudes(double* x, const double* lo = nullptr, const double* hi = nullptr,
+                      std::array<double, 6>* mean = nullptr, std::array<double, 6>* var = nullptr) const;
+  /// Eq. 25 and the least-squares cost from residual moments (as eq25, least_squares).
+  static double eq25_of(const std::array<double, 6>& mean, const std::array<double, 6>& var, double k_e);
+  static double least_squares_of(const std::array<double, 6>& mean, const std::array<double, 6>& var);
+
  private:
   /// One joint's data. The friction parameters with a fixed column (is_linear_parameter) join the
   /// standard parameters in A = [Y_j | columns] / sigma_j, reduced to sums; the rest of the friction
