@@ -7,6 +7,7 @@
 
 #include "bounded_problem.hpp"
 #include "dyncal_host/input_error.hpp"
+#include "dyncal_host/survey/standard_parameters.hpp"
 
 namespace dyncal::host::survey {
 namespace {
@@ -81,8 +82,20 @@ Estimate genetic_algorithm(const SurveyData& data, FrictionModel model, const Me
   for (auto& ind : pop) {
     ind.u.resize(D);
     for (int k = 0; k < D; ++k) ind.u[k] = U(rng);
-    evaluate(ind);
   }
+  // One individual seeded from the data (no set value, no user start): the consistent CAD values and
+  // each joint's friction_start (scale parameters from a log-grid scan). Without it the population
+  // could lose the right decade of a Stribeck velocity early (Eq. 4 with noise: J_e 1.22 or 0.87
+  // depending on rounding, e_f 0.74 or 0.09).
+  {
+    Eigen::VectorXd seed(problem.objective().dimension());
+    seed.head(kStandard) = problem.cad();
+    const std::vector<double> f = friction_start(data, model, problem.cad());
+    seed.tail(static_cast<Eigen::Index>(f.size())) =
+        Eigen::Map<const Eigen::VectorXd>(f.data(), static_cast<Eigen::Index>(f.size()));
+    pop.front().u = problem.unit(seed);
+  }
+  for (auto& ind : pop) evaluate(ind);
   std::uniform_int_distribution<int> pick(0, N - 1);
   auto tournament = [&]() -> const Individual& {
     const Individual& a = pop[static_cast<size_t>(pick(rng))];
