@@ -8,6 +8,7 @@
 #include "drive_commands.hpp"
 #include "dyncal_host/diagnose.hpp"
 #include "dyncal_host/excite.hpp"
+#include "dyncal_host/friction_comparison.hpp"
 #include "dyncal_host/identify.hpp"
 #include "dyncal_host/identify_report.hpp"
 #include "dyncal_host/input_error.hpp"
@@ -70,6 +71,11 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   identify->add_option("--report", report, "write the report as JSON");
   identify->add_option("--params", params, "write the identified parameter table as JSON");
+  bool compare_friction = false;
+  identify->add_flag("--compare-friction", compare_friction,
+                     "fit each friction model (survey Eq. 4-9) with the --model's other terms and compare their "
+                     "torque error on the fitted part and on the last --validate-last (default 0.3) of the log "
+                     "(survey Table 12)");
 
   std::string diag_model = "eq7", diag_report;
   dyncal::host::DiagnoseOptions dopt;
@@ -205,6 +211,12 @@ int main(int argc, char** argv) {
       opt.terms = dyncal::host::parse_model(model);
       const auto log = format == "tx40" ? dyncal::host::read_tx40_log(data, robot.transmission, robot.joint_offsets)
                                         : dyncal::host::read_csv_log(data, robot.num_joints);
+      if (compare_friction) {
+        const double last = opt.validate_last > 0 ? opt.validate_last : 0.3;
+        const auto stacked = dyncal::host::prepare_stacked(robot, log, opt);
+        dyncal::host::print_friction_comparison(std::cout, dyncal::host::compare_friction_models(stacked, last), last);
+        return 0;
+      }
       const auto result = dyncal::host::identify(robot, log, opt);
       dyncal::host::print_identify_report(std::cout, result);
       if (!report.empty()) write_json(report, dyncal::host::identify_report_json(result));

@@ -323,10 +323,13 @@ double TorqueObjective::least_squares_of(const std::array<double, 6>& mean, cons
   return J;
 }
 
+std::array<double, 2> velocity_scale_range(double max_speed) {
+  const double lo = std::max(1e-3, 0.01 * max_speed);
+  return {lo, std::max(lo, max_speed)};
+}
+
 std::array<double, 2> velocity_scale_range(const SurveyData& d, int j) {
-  const double qd = d.qd.col(j).cwiseAbs().maxCoeff();
-  const double lo = std::max(1e-3, 0.01 * qd);
-  return {lo, std::max(lo, qd)};
+  return velocity_scale_range(d.qd.col(j).cwiseAbs().maxCoeff());
 }
 
 SearchRanges search_ranges(const SurveyData& d, FrictionModel model, const Eigen::VectorXd& cad, double width) {

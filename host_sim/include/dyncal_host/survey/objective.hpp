@@ -87,8 +87,10 @@ struct SearchRanges {
 };
 SearchRanges search_ranges(const SurveyData& data, FrictionModel model, const Eigen::VectorXd& cad, double width);
 
-/// Range of a velocity scale parameter of joint j (0-based): [max(1e-3, 0.01 v_j), v_j] [rad/s],
-/// v_j = max |qd_j| (two decades below the fastest motion).
+/// Range of a velocity scale parameter of a joint whose fastest motion is max_speed [rad/s]:
+/// [max(1e-3, 0.01 max_speed), max_speed] (two decades below the fastest motion); of joint j
+/// (0-based) of a run.
+std::array<double, 2> velocity_scale_range(double max_speed);
 std::array<double, 2> velocity_scale_range(const SurveyData& data, int j);
 
 /// The friction of every joint fitted to its residual tau_j - Y_j phi (phi: 60 standard

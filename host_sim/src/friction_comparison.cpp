@@ -1,0 +1,164 @@
+#include "dyncal_host/friction_comparison.hpp"
+
+#include <Eigen/Dense>
+#include <cctype>
+#include <cmath>
+#include <iomanip>
+#include <ostream>
+
+#include "dyncal_host/input_error.hpp"
+#include "dyncal_host/survey/friction_parameters.hpp"
+#include "dyncal_host/survey/objective.hpp"
+
+namespace dyncal::host {
+namespace {
+
+using survey::friction_count;
+using survey::friction_torque;
+using survey::is_scale_parameter;
+
+/// Mean and sample standard deviation of v.
+std::pair<double, double> moments(const Eigen::VectorXd& v) {
+  const double mean = v.mean();
+  return {mean,
+          std::sqrt((v.array() - mean).square().sum() / std::max<double>(1.0, static_cast<double>(v.size() - 1)))};
+}
+
+/// The stacked friction columns of `model` at the scale parameters in theta (joint-major, all
+/// parameters; the amplitudes' values are not used): column kf j + k is d tau_f,j / d theta_k on
+/// joint j's rows (the friction is linear in the amplitudes at fixed scales), zero for a scale
+/// parameter.
+Eigen::MatrixXd friction_columns(const StackedData& d, FrictionModel model, const std::vector<double>& theta,
+                                 const Eigen::VectorXd& load) {
+  const int N = static_cast<int>(d.qd.cols()), kf = friction_count(model);
+  const Eigen::Index S = d.qd.rows();
+  Eigen::MatrixXd F = Eigen::MatrixXd::Zero(S * N, N * kf);
+  double g[6];
+  for (Eigen::Index s = 0; s < S; ++s) {
+    for (int j = 0; j < N; ++j) {
+      const Eigen::Index row = s * N + j;
+      friction_torque(model, theta.data() + kf * j, d.qd(s, j), load[row], g);
+      for (int k = 0; k < kf; ++k) F(row, kf * j + k) = is_scale_parameter(model, k) ? 0.0 : g[k];
+    }
+  }
+  return F;
+}
+
+}  // namespace
+
+std::vector<FrictionModelFit> compare_friction_models(const StackedData& stacked, double validate_last) {
+  // Keep the non-friction columns.
+  StackedData d = stacked;
+  std::vector<Eigen::Index> keep;
+  std::string others;
+  for (size_t c = 0; c < stacked.names.size(); ++c) {
+    const std::string& n = stacked.names[c];
+    const bool friction = n.size() > 2 && n[0] == 'F' && (n[1] == 'c' || n[1] == 'v' || n[1] == 'p' || n[1] == 'l') &&
+                          std::isdigit(static_cast<unsigned char>(n[2]));
+    if (friction) continue;
+    keep.push_back(static_cast<Eigen::Index>(c));
+    if (n.rfind("Ia", 0) == 0 || n.rfind("offset", 0) == 0) others += (others.empty() ? "" : ",") + n;
+  }
+  d.W.resize(stacked.W.rows(), static_cast<Eigen::Index>(keep.size()));
+  for (size_t c = 0; c < keep.size(); ++c) d.W.col(static_cast<Eigen::Index>(c)) = stacked.W.col(keep[c]);
+  if (!(validate_last > 0 && validate_last < 1)) throw InputError("compare friction models: validate-last in (0, 1)");
+  const int N = static_cast<int>(d.qd.cols());
+  const Eigen::Index S = d.qd.rows(),
+                     fit_samples = static_cast<Eigen::Index>(std::floor((1 - validate_last) * static_cast<double>(S)));
+  if (fit_samples < 10 || S - fit_samples < 10) throw InputError("compare friction models: too few samples");
+  const Eigen::Index fit_rows = fit_samples * N, P = d.W.cols();
+  Eigen::VectorXd load = Eigen::VectorXd::Zero(S * N);
+  // Least squares of [W | F] on the fitted rows; the full residual.
+  auto solve = [&](const Eigen::MatrixXd& F, Eigen::VectorXd& coef) {
+    Eigen::MatrixXd A(S * N, P + F.cols());
+    A << d.W, F;
+    coef = A.topRows(fit_rows).colPivHouseholderQr().solve(d.y.head(fit_rows));
+    return Eigen::VectorXd(d.y - A * coef);
+  };
+  std::vector<FrictionModelFit> out;
+  Eigen::VectorXd coef7;
+  for (FrictionModel model : {FrictionModel::eq7, FrictionModel::eq8, FrictionModel::eq9, FrictionModel::eq4,
+                              FrictionModel::eq5, FrictionModel::eq6}) {
+    const int kf = friction_count(model);
+    std::vector<double> theta(static_cast<size_t>(N * kf), 0.0);
+    if (model == FrictionModel::eq9) load = d.W * coef7.head(P);  // the Eq. 7 fit's non-friction torque
+    Eigen::VectorXd coef, residual;
+    if (survey::is_linear(model)) {
+      residual = solve(friction_columns(d, model, theta, load), coef);
+    } else {
+      // Separable least squares from the Eq. 7 fit: scan each joint's scales against its
+      // non-friction residual, then fit every column at the chosen scales; two rounds.
+      Eigen::VectorXd base = coef7.head(P);
+      std::vector<int> scale, amp;
+      for (int k = 0; k < kf; ++k) (is_scale_parameter(model, k) ? scale : amp).push_back(k);
+      const int per_axis = scale.size() == 1 ? 64 : 16;
+      const int points = scale.size() == 1 ? per_axis : per_axis * per_axis;
+      for (int round = 0; round < 2; ++round) {
+        const Eigen::VectorXd target = d.y - d.W * base;
+        for (int j = 0; j < N; ++j) {
+          const auto v = survey::velocity_scale_range(d.qd.col(j).head(fit_samples).cwiseAbs().maxCoeff());
+          double best = INFINITY;
+          std::vector<double> th(static_cast<size_t>(kf), 0.0), g(static_cast<size_t>(kf));
+          Eigen::MatrixXd B(fit_samples, static_cast<Eigen::Index>(amp.size()));
+          Eigen::VectorXd r(fit_samples);
+          for (Eigen::Index s = 0; s < fit_samples; ++s) r[s] = target[s * N + j];
+          for (int p = 0; p < points; ++p) {
+            int rest = p;
+            for (int k : scale) {
+              const bool inverse = survey::is_inverse_velocity(model, k);
+              const double lo = inverse ? 1.0 / v[1] : v[0], hi = inverse ? 1.0 / v[0] : v[1];
+              th[static_cast<size_t>(k)] = lo * std::pow(hi / lo, (rest % per_axis) / (per_axis - 1.0));
+              rest /= per_axis;
+            }
+            for (Eigen::Index s = 0; s < fit_samples; ++s) {
+              friction_torque(model, th.data(), d.qd(s, j), 0.0, g.data());
+              for (size_t c = 0; c < amp.size(); ++c)
+                B(s, static_cast<Eigen::Index>(c)) = g[static_cast<size_t>(amp[c])];
+            }
+            const Eigen::VectorXd a = B.colPivHouseholderQr().solve(r);
+            const double sse = (B * a - r).squaredNorm();
+            if (!(sse < best)) continue;
+            best = sse;
+            for (int k : scale) theta[static_cast<size_t>(kf * j + k)] = th[static_cast<size_t>(k)];
+          }
+        }
+        residual = solve(friction_columns(d, model, theta, load), coef);
+        base = coef.head(P);
+      }
+    }
+    if (model == FrictionModel::eq7) coef7 = coef;
+    for (int j = 0; j < N; ++j) {
+      for (int k = 0; k < kf; ++k) {
+        if (!is_scale_parameter(model, k)) theta[static_cast<size_t>(kf * j + k)] = coef[P + kf * j + k];
+      }
+    }
+    FrictionModelFit f;
+    f.model = model;
+    f.others = others;
+    f.parameters = N * kf;
+    f.friction = theta;
+    std::tie(f.fit_mean, f.fit_std) = moments(residual.head(fit_rows));
+    std::tie(f.validation_mean, f.validation_std) = moments(residual.tail(S * N - fit_rows));
+    out.push_back(f);
+  }
+  return out;
+}
+
+void print_friction_comparison(std::ostream& out, const std::vector<FrictionModelFit>& fits, double validate_last) {
+  out << "friction models fitted with the rigid body and " << (fits.empty() ? "" : fits.front().others)
+      << " on the first " << std::fixed << std::setprecision(0) << 100 * (1 - validate_last)
+      << " % of the log; torque error [Nm] pooled over the joints\n";
+  out << std::left << std::setw(8) << "model" << std::right << std::setw(12) << "parameters" << std::setw(12)
+      << "fit mean" << std::setw(12) << "fit std" << std::setw(16) << "held-out mean" << std::setw(15) << "held-out std"
+      << "\n";
+  const FrictionModelFit* best = nullptr;
+  for (const auto& f : fits) {
+    out << std::left << std::setw(8) << survey::model_key(f.model) << std::right << std::setw(12) << f.parameters
+        << std::setprecision(3) << std::setw(12) << f.fit_mean << std::setw(12) << f.fit_std << std::setw(16)
+        << f.validation_mean << std::setw(15) << f.validation_std << "\n";
+    if (!best || f.validation_std < best->validation_std) best = &f;
+  }
+  if (best) out << "lowest held-out std: " << survey::model_key(best->model) << "\n";
+}
+
+}  // namespace dyncal::host
