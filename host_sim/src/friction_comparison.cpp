@@ -89,37 +89,19 @@ std::vector<FrictionModelFit> compare_friction_models(const StackedData& stacked
       // Separable least squares from the Eq. 7 fit: scan each joint's scales against its
       // non-friction residual, then fit every column at the chosen scales; two rounds.
       Eigen::VectorXd base = coef7.head(P);
-      std::vector<int> scale, amp;
-      for (int k = 0; k < kf; ++k) (is_scale_parameter(model, k) ? scale : amp).push_back(k);
-      const int per_axis = scale.size() == 1 ? 64 : 16;
-      const int points = scale.size() == 1 ? per_axis : per_axis * per_axis;
       for (int round = 0; round < 2; ++round) {
         const Eigen::VectorXd target = d.y - d.W * base;
         for (int j = 0; j < N; ++j) {
-          const auto v = survey::velocity_scale_range(d.qd.col(j).head(fit_samples).cwiseAbs().maxCoeff());
-          double best = INFINITY;
-          std::vector<double> th(static_cast<size_t>(kf), 0.0), g(static_cast<size_t>(kf));
-          Eigen::MatrixXd B(fit_samples, static_cast<Eigen::Index>(amp.size()));
-          Eigen::VectorXd r(fit_samples);
-          for (Eigen::Index s = 0; s < fit_samples; ++s) r[s] = target[s * N + j];
-          for (int p = 0; p < points; ++p) {
-            int rest = p;
-            for (int k : scale) {
-              const bool inverse = survey::is_inverse_velocity(model, k);
-              const double lo = inverse ? 1.0 / v[1] : v[0], hi = inverse ? 1.0 / v[0] : v[1];
-              th[static_cast<size_t>(k)] = lo * std::pow(hi / lo, (rest % per_axis) / (per_axis - 1.0));
-              rest /= per_axis;
-            }
-            for (Eigen::Index s = 0; s < fit_samples; ++s) {
-              friction_torque(model, th.data(), d.qd(s, j), 0.0, g.data());
-              for (size_t c = 0; c < amp.size(); ++c)
-                B(s, static_cast<Eigen::Index>(c)) = g[static_cast<size_t>(amp[c])];
-            }
-            const Eigen::VectorXd a = B.colPivHouseholderQr().solve(r);
-            const double sse = (B * a - r).squaredNorm();
-            if (!(sse < best)) continue;
-            best = sse;
-            for (int k : scale) theta[static_cast<size_t>(kf * j + k)] = th[static_cast<size_t>(k)];
+          Eigen::VectorXd r(fit_samples), load_j(fit_samples);
+          for (Eigen::Index s = 0; s < fit_samples; ++s) {
+            r[s] = target[s * N + j];
+            load_j[s] = load[s * N + j];
+          }
+          const Eigen::VectorXd qd = d.qd.col(j).head(fit_samples);
+          const std::vector<double> th =
+              survey::fit_joint_friction(model, qd, load_j, r, survey::velocity_scale_range(qd.cwiseAbs().maxCoeff()));
+          for (int k = 0; k < kf; ++k) {
+            if (is_scale_parameter(model, k)) theta[static_cast<size_t>(kf * j + k)] = th[static_cast<size_t>(k)];
           }
         }
         residual = solve(friction_columns(d, model, theta, load), coef);

@@ -42,6 +42,12 @@ TorqueObjective::TorqueObjective(const SurveyData& d, FrictionModel model, const
   for (int k = 0; k < kf_; ++k) {
     if (is_linear_parameter(model, k)) linear_.push_back(k);
   }
+  for (int k = 0; k < kf_; ++k) {
+    if (is_scale_parameter(model, k)) continue;
+    amplitudes_.push_back(k);
+    const auto it = std::find(linear_.begin(), linear_.end(), k);
+    amplitude_column_.push_back(it == linear_.end() ? -1 : kStandard + static_cast<int>(it - linear_.begin()));
+  }
   const int L = kStandard + static_cast<int>(linear_.size());
   const auto Y = standard_rows(d);
   for (int j = 0; j < 6; ++j) {
@@ -204,42 +210,36 @@ double TorqueObjective::eq25(const double* x, double k_e, double* grad) const {
   std::array<double, 6> mean{}, var{};
   Eigen::MatrixXd dm, dv;
   residual_moments(x, mean, var, grad ? &dm : nullptr, grad ? &dv : nullptr);
-  double J = 0;
-  Eigen::Map<Eigen::VectorXd> g(grad, grad ? dimension() : 0);
-  if (grad) g.setZero();
-  for (int j = 0; j < 6; ++j) {
-    const double sd = std::sqrt(var[j]);
-    J += std::fabs(mean[j]) + k_e * sd;
-    if (grad) {
+  if (grad) {
+    Eigen::Map<Eigen::VectorXd> g(grad, dimension());
+    g.setZero();
+    for (int j = 0; j < 6; ++j) {
+      const double sd = std::sqrt(var[j]);
       g += sgn(mean[j]) * dm.row(j).transpose();
       if (sd > 0) g += k_e / (2 * sd) * dv.row(j).transpose();
     }
   }
-  return J;
+  return eq25_of(mean, var, k_e);
 }
 
 double TorqueObjective::least_squares(const double* x, double* grad) const {
   std::array<double, 6> mean{}, var{};
   Eigen::MatrixXd dm, dv;
   residual_moments(x, mean, var, grad ? &dm : nullptr, grad ? &dv : nullptr);
-  double J = 0;
-  Eigen::Map<Eigen::VectorXd> g(grad, grad ? dimension() : 0);
-  if (grad) g.setZero();
-  for (int j = 0; j < 6; ++j) {
-    J += mean[j] * mean[j] + var[j];
-    if (grad) g += 2 * mean[j] * dm.row(j).transpose() + dv.row(j).transpose();
+  if (grad) {
+    Eigen::Map<Eigen::VectorXd> g(grad, dimension());
+    g.setZero();
+    for (int j = 0; j < 6; ++j) g += 2 * mean[j] * dm.row(j).transpose() + dv.row(j).transpose();
   }
-  return J;
+  return least_squares_of(mean, var);
 }
 
 void TorqueObjective::fit_amplitudes(double* x, const double* lo, const double* hi, std::array<double, 6>* mean,
                                      std::array<double, 6>* var) const {
   const Eigen::Map<const Eigen::Matrix<double, kStandard, 1>> phi(x);
   const int nl = static_cast<int>(linear_.size());
-  std::vector<int> amp;
-  for (int k = 0; k < kf_; ++k) {
-    if (!is_scale_parameter(model_, k)) amp.push_back(k);
-  }
+  const std::vector<int>& amp = amplitudes_;
+  const std::vector<int>& col = amplitude_column_;
   const int na = static_cast<int>(amp.size());
   Eigen::ArrayXd n;
   Eigen::ArrayXXd dn;
@@ -250,13 +250,6 @@ void TorqueObjective::fit_amplitudes(double* x, const double* lo, const double* 
   for (int j = 0; j < 6; ++j) {
     const Joint& J = joints_[j];
     double* f = x + kStandard + kf_ * j;
-    // Column of each amplitude among the linear columns of A (-1: none).
-    std::vector<int> col(static_cast<size_t>(na), -1);
-    for (int a = 0; a < na; ++a) {
-      for (int i = 0; i < nl; ++i) {
-        if (linear_[static_cast<size_t>(i)] == amp[static_cast<size_t>(a)]) col[static_cast<size_t>(a)] = kStandard + i;
-      }
-    }
     Eigen::MatrixXd M = Eigen::MatrixXd::Zero(na, na);
     Eigen::VectorXd rhs = Eigen::VectorXd::Zero(na);
     for (int a = 0; a < na; ++a) {
@@ -359,8 +352,9 @@ SearchRanges search_ranges(const SurveyData& d, FrictionModel model, const Eigen
       } else if (n == "fl") {
         hi = 1.0;
       } else if (is_scale_parameter(model, k)) {
-        lo = is_inverse_velocity(model, k) ? 1.0 / v[1] : v[0];
-        hi = is_inverse_velocity(model, k) ? 1.0 / v[0] : v[1];
+        const auto range = scale_parameter_range(model, k, v);
+        lo = range[0];
+        hi = range[1];
       } else if (n != "Fc" && n != "Fs" && n != "f1") {
         lo = -tau;  // f2, f4 of Eq. 5; f2 of Eq. 6
       }
@@ -371,6 +365,47 @@ SearchRanges search_ranges(const SurveyData& d, FrictionModel model, const Eigen
   return r;
 }
 
+std::array<double, 2> scale_parameter_range(FrictionModel model, int k, const std::array<double, 2>& v) {
+  if (is_inverse_velocity(model, k)) return {1.0 / v[1], 1.0 / v[0]};
+  return v;
+}
+
+std::vector<double> fit_joint_friction(FrictionModel model, const Eigen::VectorXd& qd, const Eigen::VectorXd& load,
+                                       const Eigen::VectorXd& target, const std::array<double, 2>& velocity_range) {
+  const Eigen::Index S = qd.size();
+  const int kf = friction_count(model);
+  std::vector<int> scale, amplitude;
+  for (int k = 0; k < kf; ++k) (is_scale_parameter(model, k) ? scale : amplitude).push_back(k);
+  const int per_axis = scale.size() == 1 ? 64 : (scale.size() == 2 ? 16 : 1);
+  const int points = scale.size() == 2 ? per_axis * per_axis : per_axis;
+  double best = INFINITY;
+  Eigen::MatrixXd A(S, static_cast<Eigen::Index>(amplitude.size()));
+  std::vector<double> th(static_cast<size_t>(kf), 0.0), g(static_cast<size_t>(kf)), out = th;
+  for (int p = 0; p < points; ++p) {
+    // Grid point p: scale parameter i at index (p / per_axis^i) % per_axis, log-spaced.
+    int rest = p;
+    for (int k : scale) {
+      const auto range = scale_parameter_range(model, k, velocity_range);
+      th[static_cast<size_t>(k)] = range[0] * std::pow(range[1] / range[0], (rest % per_axis) / (per_axis - 1.0));
+      rest /= per_axis;
+    }
+    // The columns: d tau_f / d amplitude, which does not depend on the amplitudes.
+    for (Eigen::Index s = 0; s < S; ++s) {
+      friction_torque(model, th.data(), qd[s], load[s], g.data());
+      for (size_t c = 0; c < amplitude.size(); ++c)
+        A(s, static_cast<Eigen::Index>(c)) = g[static_cast<size_t>(amplitude[c])];
+    }
+    const Eigen::VectorXd a = A.colPivHouseholderQr().solve(target);
+    const double sse = (A * a - target).squaredNorm();
+    if (!(sse < best)) continue;
+    best = sse;
+    for (size_t c = 0; c < amplitude.size(); ++c)
+      th[static_cast<size_t>(amplitude[c])] = a[static_cast<Eigen::Index>(c)];
+    out = th;
+  }
+  return out;
+}
+
 std::vector<double> friction_start(const SurveyData& d, FrictionModel model, const Eigen::VectorXd& phi) {
   const Eigen::Index S = d.q.rows();
   const auto Y = standard_rows(d);
@@ -379,40 +414,14 @@ std::vector<double> friction_start(const SurveyData& d, FrictionModel model, con
     residual.row(s) = d.tau.row(s) - (Y[static_cast<size_t>(s)] * phi.head(kStandard)).transpose();
   }
   const int kf = friction_count(model);
-  std::vector<int> scale, amplitude;
-  for (int k = 0; k < kf; ++k) (is_scale_parameter(model, k) ? scale : amplitude).push_back(k);
-  const int per_axis = scale.size() == 1 ? 64 : (scale.size() == 2 ? 16 : 1);
-  const int points = scale.size() == 2 ? per_axis * per_axis : per_axis;
   const SearchRanges ranges = search_ranges(d, model, Eigen::VectorXd::Zero(kStandard), 0.0);
   std::vector<double> out(static_cast<size_t>(6 * kf), 0.0);
   for (int j = 0; j < 6; ++j) {
+    const std::vector<double> th =
+        fit_joint_friction(model, d.qd.col(j), d.tau_load.col(j), residual.col(j), velocity_scale_range(d, j));
     const int b = kStandard + kf * j;
-    double best = INFINITY;
-    Eigen::MatrixXd A(S, static_cast<Eigen::Index>(amplitude.size()));
-    std::vector<double> th(static_cast<size_t>(kf), 0.0), g(static_cast<size_t>(kf));
-    for (int p = 0; p < points; ++p) {
-      // Grid point p: scale parameter i at index (p / per_axis^i) % per_axis, log-spaced.
-      int rest = p;
-      for (int k : scale) {
-        const double lo = ranges.lo[b + k], hi = ranges.hi[b + k];
-        th[static_cast<size_t>(k)] = lo * std::pow(hi / lo, (rest % per_axis) / (per_axis - 1.0));
-        rest /= per_axis;
-      }
-      for (Eigen::Index s = 0; s < S; ++s) {
-        friction_torque(model, th.data(), d.qd(s, j), d.tau_load(s, j), g.data());
-        for (size_t c = 0; c < amplitude.size(); ++c)
-          A(s, static_cast<Eigen::Index>(c)) = g[static_cast<size_t>(amplitude[c])];
-      }
-      const Eigen::VectorXd a = A.colPivHouseholderQr().solve(residual.col(j));
-      const double sse = (A * a - residual.col(j)).squaredNorm();
-      if (!(sse < best)) continue;
-      best = sse;
-      for (size_t c = 0; c < amplitude.size(); ++c)
-        th[static_cast<size_t>(amplitude[c])] = a[static_cast<Eigen::Index>(c)];
-      for (int k = 0; k < kf; ++k) {
-        out[static_cast<size_t>(kf * j + k)] =
-            std::clamp(th[static_cast<size_t>(k)], ranges.lo[b + k], ranges.hi[b + k]);
-      }
+    for (int k = 0; k < kf; ++k) {
+      out[static_cast<size_t>(kf * j + k)] = std::clamp(th[static_cast<size_t>(k)], ranges.lo[b + k], ranges.hi[b + k]);
     }
   }
   return out;

@@ -214,32 +214,48 @@ SurveyData simulate_survey_data(const RobotDescription& robot, const SurveyDataO
       d.q_meas(s, j) = p.q[j] + (o.position_noise_std > 0 ? o.position_noise_std * normal(rng) : 0.0);
     }
   }
-  d.tau_load = load_torque(d.q, d.qd, d.qdd, d.tau);
+  // Only Eq. 9 reads the load torque (the Table 12 stand-in computes its own from its states).
+  d.tau_load = o.friction == FrictionModel::eq9 ? load_torque(d.q, d.qd, d.qdd, d.tau)
+                                                : Eigen::MatrixXd::Zero(S, kDriveJoints).eval();
   return d;
 }
 
 Eigen::MatrixXd load_torque(const Eigen::MatrixXd& q, const Eigen::MatrixXd& qd, const Eigen::MatrixXd& qdd,
                             const Eigen::MatrixXd& tau) {
   using Model9 = IdentificationModel<Robot, kFrictionEq9>;
+  using Vec6 = Eigen::Matrix<double, 6, 1>;
   const Eigen::Index S = q.rows();
+  // The regressor once (load torque = tau to start) and the base regressor at qdd = 0; each round
+  // rewrites only the load columns.
   Eigen::MatrixXd load = tau, W(6 * S, Model9::kNumParams);
   Eigen::VectorXd y(6 * S);
   Model9::Regressor<double> K;
-  using Vec6 = Eigen::Matrix<double, 6, 1>;
+  std::vector<Eigen::Matrix<double, 6, Robot::kNumBase>> Y0(static_cast<size_t>(S));
+  for (Eigen::Index s = 0; s < S; ++s) {
+    Model9::regressor(Vec6(q.row(s).transpose()), Vec6(qd.row(s).transpose()), Vec6(qdd.row(s).transpose()),
+                      Vec6(load.row(s).transpose()), K);
+    W.middleRows(6 * s, 6) = K;
+    y.segment<6>(6 * s) = tau.row(s).transpose();
+    Robot::base_regressor(Vec6(q.row(s).transpose()), Vec6(qd.row(s).transpose()), Vec6::Zero().eval(),
+                          Y0[static_cast<size_t>(s)]);
+  }
+  std::vector<std::pair<int, int>> load_columns;  // (column, 0-based joint)
+  for (int i = Robot::kNumBase; i < Model9::kNumParams; ++i) {
+    const ParamInfo info = Model9::info(i);
+    if (info.term == term::load) load_columns.emplace_back(i, info.joint - 1);
+  }
   const double tol = 1e-9 * std::max(tau.cwiseAbs().maxCoeff(), 1e-300);
   for (int it = 0; it < 50; ++it) {
-    for (Eigen::Index s = 0; s < S; ++s) {
-      Model9::regressor(Vec6(q.row(s).transpose()), Vec6(qd.row(s).transpose()), Vec6(qdd.row(s).transpose()),
-                        Vec6(load.row(s).transpose()), K);
-      W.middleRows(6 * s, 6) = K;
-      y.segment<6>(6 * s) = tau.row(s).transpose();
+    if (it > 0) {
+      for (Eigen::Index s = 0; s < S; ++s) {
+        for (const auto& [c, j] : load_columns)
+          W(6 * s + j, c) = term_column(term::load, qd(s, j), qdd(s, j), load(s, j));
+      }
     }
     const Eigen::VectorXd phi = W.colPivHouseholderQr().solve(y);
     Eigen::MatrixXd next(S, 6);
-    Eigen::Matrix<double, 6, Robot::kNumBase> Yb;
     for (Eigen::Index s = 0; s < S; ++s) {
-      Robot::base_regressor(Vec6(q.row(s).transpose()), Vec6(qd.row(s).transpose()), Vec6::Zero().eval(), Yb);
-      next.row(s) = (Yb * phi.head<Robot::kNumBase>()).transpose();
+      next.row(s) = (Y0[static_cast<size_t>(s)] * phi.head<Robot::kNumBase>()).transpose();
     }
     const double change = (next - load).cwiseAbs().maxCoeff();
     load = next;

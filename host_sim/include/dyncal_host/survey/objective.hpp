@@ -70,7 +70,9 @@ class TorqueObjective {
 
   FrictionModel model_;
   int kf_ = 2;
-  std::vector<int> linear_;  // friction parameters (per joint) with a fixed column, in column order
+  std::vector<int> linear_;            // friction parameters (per joint) with a fixed column, in column order
+  std::vector<int> amplitudes_;        // friction parameters that are not scale parameters
+  std::vector<int> amplitude_column_;  // each amplitude's column in A (kStandard + its linear_ index), -1: none
   double n_ = 0;
   std::array<Joint, 6> joints_;
 };
@@ -93,12 +95,22 @@ SearchRanges search_ranges(const SurveyData& data, FrictionModel model, const Ei
 std::array<double, 2> velocity_scale_range(double max_speed);
 std::array<double, 2> velocity_scale_range(const SurveyData& data, int j);
 
-/// The friction of every joint fitted to its residual tau_j - Y_j phi (phi: 60 standard
-/// parameters), a start for the solvers that uses no set value: the scale parameters on a
-/// log-spaced grid over their ranges (64 points for one, 16 x 16 for two), and at each grid point the
+/// Range of scale parameter k of `model` for a joint's velocity_scale_range v: v itself for a
+/// velocity, [1 / v[1], 1 / v[0]] for an inverse velocity (is_inverse_velocity).
+std::array<double, 2> scale_parameter_range(FrictionModel model, int k, const std::array<double, 2>& v);
+
+/// One joint's friction of `model` fitted to `target` (its torque less everything but the
+/// friction) over its velocities qd [rad/s] and load torques load [Nm]: the scale parameters on a
+/// log grid over scale_parameter_range (64 points for one, 16 x 16 for two), and at each point the
 /// other parameters, on which the friction is linear there, by least squares (variable projection,
-/// Golub and Pereyra 1973); the grid point with the least squared residual wins. Each parameter is
-/// then clamped into its search range. Joint-major, friction_parameter_names order.
+/// Golub and Pereyra 1973); the grid point with the least squared residual wins. Returns the
+/// friction_parameter_names-ordered parameters, unclamped.
+std::vector<double> fit_joint_friction(FrictionModel model, const Eigen::VectorXd& qd, const Eigen::VectorXd& load,
+                                       const Eigen::VectorXd& target, const std::array<double, 2>& velocity_range);
+
+/// The friction of every joint fitted to its residual tau_j - Y_j phi (phi: 60 standard
+/// parameters) by fit_joint_friction, a start for the solvers that uses no set value, each parameter
+/// clamped into its search range. Joint-major, friction_parameter_names order.
 std::vector<double> friction_start(const SurveyData& data, FrictionModel model, const Eigen::VectorXd& phi);
 
 /// Physical feasibility (Wensing et al. 2017): each link's pseudo-inertia positive definite.

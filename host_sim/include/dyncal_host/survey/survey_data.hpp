@@ -30,7 +30,8 @@ struct SurveyData {
   Eigen::MatrixXd q_meas;                       ///< measured position: q plus position_noise_std noise
   Eigen::MatrixXd tau;                          ///< measured torque tau_jm [Nm] (with noise if chosen)
   Eigen::MatrixXd tau_cmd;                      ///< commanded torque tau_jc [Nm] (noise-free)
-  Eigen::MatrixXd tau_load;                     ///< load torque of Eq. 9 [Nm] (see load_torque)
+  Eigen::MatrixXd tau_load;                     ///< load torque of Eq. 9 [Nm] (load_torque) on an Eq. 9
+                                                ///< run, zeros on the others (only Eq. 9 reads it)
   Scenario scenario;                            ///< friction, noise and seed the drive ran
   DriveTrajectory trajectory;                   ///< the excitation
   double trajectory_cond = 0;                   ///< cond(K) of the designed excitation for the run's
