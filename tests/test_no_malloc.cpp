@@ -10,6 +10,7 @@
 
 #include "dyncal/causal_differentiator.hpp"
 #include "dyncal/extended_kalman_filter.hpp"
+#include "dyncal/friction_tracker.hpp"
 #include "dyncal/kalman_filter.hpp"
 #include "dyncal/rls_forgetting.hpp"
 #include "dyncal/streaming_least_squares.hpp"
@@ -67,6 +68,7 @@ struct Workspace {
   dyncal::RlsForgetting<Scalar, P, 6> rls;
   dyncal::KalmanFilter<Scalar, P, 6, dyncal::UdCovariance<Scalar, P>> kf_ud;
   dyncal::ExtendedKalmanFilter<Scalar, Er20, dyncal::NonlinearFrictionModel::eq4> ekf;
+  dyncal::FrictionTracker<Scalar, 6, dyncal::NonlinearFrictionAmplitudes<dyncal::NonlinearFrictionModel::eq4>> tracker;
   Eigen::Matrix<Scalar, 6, P> K;
   Eigen::Matrix<Scalar, 6, Er20::kNumStandard> Y;
   Eigen::Matrix<Scalar, Er20::kNumStandard, 1> phi_std;
@@ -90,6 +92,9 @@ void run_updaters(Workspace<Scalar>& w) {
   ASSERT_EQ(w.ekf.reset(Ekf::ParamVector::Constant(Scalar(1)), Ekf::ParamVector::Constant(Scalar(1e2)), Scalar(0.999)),
             dyncal::UpdateStatus::ok);
   ASSERT_EQ(w.rls.reset(PV::Zero(), PV::Constant(Scalar(1e4)), Scalar(0.999)), dyncal::UpdateStatus::ok);
+  using Tracker = decltype(w.tracker);
+  ASSERT_EQ(w.tracker.reset(Tracker::ParamVector::Constant(Scalar(0.2)), Scalar(1e4), Scalar(0.99)),
+            dyncal::UpdateStatus::ok);
   ASSERT_EQ(w.diff.reset(Scalar(0.01), Scalar(20)), dyncal::UpdateStatus::ok);
   JointVec qd_, q_, qdd_;
   for (int i = 0; i < 300; ++i) {
@@ -107,6 +112,7 @@ void run_updaters(Workspace<Scalar>& w) {
     ASSERT_EQ(w.rls.update(w.K, tau), dyncal::UpdateStatus::ok);
     ASSERT_EQ(w.kf_ud.update(w.K, tau, V::Ones()), dyncal::UpdateStatus::ok);
     ASSERT_EQ(w.ekf.update(q, qd, qdd, tau, V::Constant(Scalar(100))), dyncal::UpdateStatus::ok);
+    ASSERT_EQ(w.tracker.update(qd, zero, tau, V::Ones()), dyncal::UpdateStatus::ok);
     V fq, fqd, fqdd, ftau;
     const auto ds = w.diff.update(q, tau, fq, fqd, fqdd, ftau);
     ASSERT_TRUE(ds == dyncal::UpdateStatus::ok || ds == dyncal::UpdateStatus::not_ready);

@@ -217,6 +217,40 @@ TEST(SurveyTracking, ForgettingFollowsASlopeChangeTheKalmanFilterLagsBehind) {
   EXPECT_EQ(follow_level(0.3, 0.3), 'C');
 }
 
+// dyncal's hybrid: physically consistent LS calibrated before the change, then only the friction
+// amplitudes tracked. On noise-free data it holds beta before the change and follows a slope change
+// (Eq. 7 and Eq. 4 runs); on Table 7 noise its scatter is below full-model forgetting's at the same
+// mu, because the rigid-body part no longer has to be re-estimated from the forgotten data.
+TEST(SurveyTracking, ConsistentCalibrationPlusForgettingFollowsASlopeChangeWithLessScatter) {
+  const auto robot = load_robot(default_robots_dir(), "er20");
+  for (FrictionModel model : {FrictionModel::eq7, FrictionModel::eq4}) {
+    for (bool noise : {false, true}) {
+      SurveyDataOptions o;
+      o.friction = model;
+      o.periods = 4;
+      o.torque_noise = noise;
+      const SurveyData d = simulate_survey_data(robot, o);
+      const Estimate calibration = physically_consistent_ls(sample_rows(d, 0, d.q.rows() / 2), model, settings());
+      const TrackingResult ramp =
+          track_friction_after_calibration(d, calibration, settings(), ChangeProfile::ramp, 3, 0.98);
+      EXPECT_EQ(ramp.method.rfind(kConsistentForgetting, 0), 0u);
+      ASSERT_EQ(ramp.beta_hat.size(), static_cast<size_t>(d.q.rows()));
+      EXPECT_LT(ramp.relative_lag, 0.2) << model_key(model) << " noise " << noise;
+      if (!noise) {
+        EXPECT_NEAR(ramp.beta_hat[2 * d.q.rows() / 5], 40.0, 0.4) << model_key(model);
+        continue;
+      }
+      const auto full = track_viscous_friction(d, settings(), ChangeProfile::ramp, 3, 0.98);
+      EXPECT_LT(ramp.relative_scatter, 0.8 * full[1].relative_scatter) << model_key(model);
+    }
+  }
+  Estimate wrong = physically_consistent_ls(data(FrictionModel::eq7), FrictionModel::eq7, settings());
+  wrong.friction.pop_back();
+  EXPECT_THROW(
+      track_friction_after_calibration(data(FrictionModel::eq7), wrong, settings(), ChangeProfile::ramp, 3, 0.98),
+      InputError);
+}
+
 // Table 10's direction: on noisy measured positions differentiated without a filter, least squares
 // is biased (errors in variables) and IDIM-IV, whose instruments come from the closed-loop
 // simulation, is not; with the filter both are close.

@@ -284,4 +284,16 @@ std::vector<SimulatedDrive::PlantSample> simulate_closed_loop(const RobotDescrip
   return samples;
 }
 
+SurveyData sample_rows(const SurveyData& d, Eigen::Index from, Eigen::Index n) {
+  if (from < 0 || n < 0 || from + n > d.q.rows()) throw InputError("sample_rows: rows outside the run");
+  SurveyData r = d;
+  r.t = d.t.segment(from, n);
+  for (auto [dst, src] : {std::make_pair(&r.q, &d.q), std::make_pair(&r.qd, &d.qd), std::make_pair(&r.qdd, &d.qdd),
+                          std::make_pair(&r.q_meas, &d.q_meas), std::make_pair(&r.tau, &d.tau),
+                          std::make_pair(&r.tau_cmd, &d.tau_cmd), std::make_pair(&r.tau_load, &d.tau_load)}) {
+    *dst = src->middleRows(from, n);
+  }
+  return r;
+}
+
 }  // namespace dyncal::host::survey

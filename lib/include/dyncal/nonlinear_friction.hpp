@@ -21,6 +21,8 @@ template <>
 struct NonlinearFriction<NonlinearFrictionModel::eq4> {
   static constexpr int kNumParams = 4;
   static constexpr const char* kNames[kNumParams] = {"Fc", "Fs", "qds", "beta"};
+  /// Scale parameters (a velocity or an inverse velocity); the torque is linear in the others.
+  static constexpr bool kIsScale[kNumParams] = {false, false, true, false};
   template <typename Scalar>
   static void clamp_parameters(Scalar* theta) noexcept {
     if (!(theta[2] > Scalar(1e-3))) theta[2] = Scalar(1e-3);
@@ -52,6 +54,7 @@ template <>
 struct NonlinearFriction<NonlinearFrictionModel::eq5> {
   static constexpr int kNumParams = 6;
   static constexpr const char* kNames[kNumParams] = {"f1", "f2", "f3", "f4", "f5", "beta"};
+  static constexpr bool kIsScale[kNumParams] = {false, false, true, false, true, false};
   template <typename Scalar>
   static void clamp_parameters(Scalar* theta) noexcept {
     if (!(theta[2] > Scalar(1e-3))) theta[2] = Scalar(1e-3);
@@ -86,6 +89,7 @@ template <>
 struct NonlinearFriction<NonlinearFrictionModel::eq6> {
   static constexpr int kNumParams = 5;
   static constexpr const char* kNames[kNumParams] = {"f1", "f2", "f3", "f4", "beta"};
+  static constexpr bool kIsScale[kNumParams] = {false, false, true, true, false};
   template <typename Scalar>
   static void clamp_parameters(Scalar* theta) noexcept {
     if (!(theta[3] > Scalar(1e-3))) theta[3] = Scalar(1e-3);

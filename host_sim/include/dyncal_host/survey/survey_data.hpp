@@ -45,6 +45,10 @@ struct SurveyData {
 /// Simulates the survey's platform for `robot` (er20). Throws InputError.
 SurveyData simulate_survey_data(const RobotDescription& robot, const SurveyDataOptions& options);
 
+/// Rows [from, from + n) of every sampled signal of `d` (t, q, qd, qdd, q_meas, tau, tau_cmd,
+/// tau_load); the rest copied. Throws InputError unless 0 <= from, 0 <= n, from + n <= S.
+SurveyData sample_rows(const SurveyData& d, Eigen::Index from, Eigen::Index n);
+
 /// Eq. 9's load torque as a user has it: the torque the joint holds against gravity and the
 /// velocity-product terms, Y_b(q, qd, 0) phi_b (the simulated drive's load torque h(q, qd); with the
 /// inertial term the friction would depend on the acceleration it causes), phi_b from an Eq. 9

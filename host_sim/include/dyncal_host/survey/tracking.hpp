@@ -33,6 +33,22 @@ struct TrackingResult {
 std::vector<TrackingResult> track_viscous_friction(const SurveyData& d, const MethodSettings& settings,
                                                    ChangeProfile profile, int joint, double mu);
 
+inline constexpr const char* kConsistentForgetting = "physically consistent LS + forgetting";
+
+/// dyncal's hybrid kConsistentForgetting: a drive calibrated offline by
+/// physically consistent LS (`calibration`, any friction model) keeps its rigid-body part, consistent
+/// by construction, and its friction's scale parameters, and tracks the friction amplitudes (every
+/// friction parameter but the scale parameters: Eq. 7 Fc, beta; Eq. 4 Fc, Fs, beta) of all joints
+/// online: lib/ RlsForgetting (Eq. 23, factor `mu`, weights 1/sigma, start: the calibration's
+/// amplitudes with covariance p0) on tau - Y_b phi_b - the friction no amplitude multiplies. The
+/// survey's premise (Sec. 3.3): inertial parameters are fixed, friction changes with temperature
+/// and time. Run on `d` as track_viscous_friction (joint `joint`'s beta following `profile`); the
+/// result is named kConsistentForgetting, with " (Eq. N)" on a model other than Eq. 7.
+/// Throws InputError on a calibration of the wrong size or a joint outside 1..6.
+TrackingResult track_friction_after_calibration(const SurveyData& d, const Estimate& calibration,
+                                                const MethodSettings& settings, ChangeProfile profile, int joint,
+                                                double mu);
+
 /// Table 2: 'A' follows a slope change, 'B' a step change only, 'C' neither. Follows: relative lag
 /// below 0.2 (Table 2's level-A bound on relative parameter errors).
 char follow_level(double ramp_relative_lag, double step_relative_lag);
