@@ -1,7 +1,8 @@
 // The host half of the firmware replay check: the same replay code (port/replay/replay.hpp) run in
 // double over the committed drive samples must reproduce the reference estimates committed with
 // them (which the Cortex-M images compare their float / double runs against), and the replay must
-// make sense: the EKF with Eq. 4 friction fits the Stribeck data better than the linear Eq. 7 KF.
+// make sense: the EKF with Eq. 4 friction fits the Stribeck data better than the linear Eq. 7 KF,
+// and the friction tracker on the drive's own rigid-body parameters better than either.
 #include <gtest/gtest.h>
 
 #include <memory>
@@ -31,14 +32,16 @@ void replay_matches_reference(const double* reference, double& residual, int& re
 }
 
 TEST(FirmwareReplay, HostDoubleRunReproducesTheCommittedReference) {
-  double r_kf = 0, r_rls = 0, r_ekf = 0;
-  int x_kf = 0, x_rls = 0, x_ekf = 0;
+  double r_kf = 0, r_rls = 0, r_ekf = 0, r_friction = 0;
+  int x_kf = 0, x_rls = 0, x_ekf = 0, x_friction = 0;
   replay_matches_reference<Updater::kf>(data::kReferenceKf, r_kf, x_kf);
   replay_matches_reference<Updater::rls>(data::kReferenceRls, r_rls, x_rls);
   replay_matches_reference<Updater::ekf>(data::kReferenceEkf, r_ekf, x_ekf);
-  std::cout << "relative residual KF " << r_kf << " RLS " << r_rls << " EKF " << r_ekf << "; rejected " << x_kf << " "
-            << x_rls << " " << x_ekf << "\n";
+  replay_matches_reference<Updater::friction>(data::kReferenceFriction, r_friction, x_friction);
+  std::cout << "relative residual KF " << r_kf << " RLS " << r_rls << " EKF " << r_ekf << " friction tracker "
+            << r_friction << "; rejected " << x_kf << " " << x_rls << " " << x_ekf << " " << x_friction << "\n";
   EXPECT_LT(r_ekf, r_kf);
+  EXPECT_LT(r_friction, r_ekf);
   EXPECT_LT(r_kf, 0.1);
 }
 

@@ -1,7 +1,7 @@
 // Writes port/replay/er20_replay_data.hpp: a block of simulated er20 drive samples (the simulated
 // drive of host_sim with Eq. 4 Stribeck friction and the survey's Table 7 torque noise, recorded at
 // 100 Hz over two periods of the default excitation) and the host's double-precision replay of
-// the KF, RLS and EKF over them (the reference the firmware images compare against).
+// the KF, RLS, EKF and friction tracker over them (the reference the firmware images compare against).
 // Usage: dyncal_replay_data OUT.hpp   (CMake target `replay-data`).
 #include <cstdio>
 #include <filesystem>
@@ -90,10 +90,11 @@ int main(int argc, char** argv) {
     }
     std::filesystem::remove(table);
     const double* sigma = scenario.tau_noise_std.data();
-    dyncal::replay::Counts ck, cr, ce;
+    dyncal::replay::Counts ck, cr, ce, cf;
     const auto kf = reference<Updater::kf>(samples, sigma, ck);
     const auto rls = reference<Updater::rls>(samples, sigma, cr);
     const auto ekf = reference<Updater::ekf>(samples, sigma, ce);
+    const auto friction = reference<Updater::friction>(samples, sigma, cf);
 
     std::ostringstream o;
     o << "// GENERATED FILE - DO NOT EDIT.\n"
@@ -102,7 +103,8 @@ int main(int argc, char** argv) {
       << "// Table 7 torque noise, encoder quantisation), default excitation (cond(K) " << std::setprecision(4) << cond
       << "), " << kRate << " Hz, 2 periods.\n"
       << "// Reference estimates: port/replay/replay.hpp run in double on the host\n// (accepted updates: KF "
-      << ck.accepted << ", RLS " << cr.accepted << ", EKF " << ce.accepted << ").\n"
+      << ck.accepted << ", RLS " << cr.accepted << ", EKF " << ce.accepted << ", friction tracker " << cf.accepted
+      << ").\n"
       << "#pragma once\n\n// clang-format off\nnamespace dyncal::replay::data {\n\n"
       << "inline constexpr double kSamplePeriod = " << 1.0 / kRate << ";  // [s]\n"
       << "/// Torque noise standard deviation per joint [Nm] (survey Table 7): R = sigma^2.\n"
@@ -119,12 +121,13 @@ int main(int argc, char** argv) {
     write_array(o, "kReferenceKf", kf);
     write_array(o, "kReferenceRls", rls);
     write_array(o, "kReferenceEkf", ekf);
+    write_array(o, "kReferenceFriction", friction);
     o << "\n}  // namespace dyncal::replay::data\n// clang-format on\n";
     std::ofstream f(argv[1]);
     f << o.str();
     if (!f) throw std::runtime_error(std::string("cannot write ") + argv[1]);
     std::cerr << "wrote " << argv[1] << ": " << samples.size() << " samples; accepted KF " << ck.accepted << " RLS "
-              << cr.accepted << " EKF " << ce.accepted << "\n";
+              << cr.accepted << " EKF " << ce.accepted << " friction tracker " << cf.accepted << "\n";
     return 0;
   } catch (const std::exception& e) {
     std::cerr << "dyncal_replay_data: " << e.what() << "\n";

@@ -2,13 +2,15 @@
 // The firmware replay, shared by the Cortex-M images and the host: a block of recorded er20 drive
 // samples (q, tau at 100 Hz) goes through the causal differentiator, the generated regressor and
 // one updater — the Kalman filter (Eq. 19) or RLS with forgetting (Eq. 23) on the base parameters
-// + Eq. 7 friction, or the EKF (Eq. 21) on the base parameters + Eq. 4 (Stribeck) friction —
-// exactly as a drive would run them online. Templated on the scalar: float on the M4F, double on
-// the M7 and on the host (the reference). Static storage only; no heap.
+// + Eq. 7 friction, the EKF (Eq. 21) on the base parameters + Eq. 4 (Stribeck) friction, or the
+// friction tracker of a calibrated drive (FrictionTracker: Eq. 4 amplitudes with forgetting on top
+// of a fixed rigid-body calibration) — exactly as a drive would run them online. Templated on the scalar: float on the
+// M4F, double on the M7 and on the host (the reference). Static storage only; no heap.
 #include <cstdint>
 
 #include "dyncal/causal_differentiator.hpp"
 #include "dyncal/extended_kalman_filter.hpp"
+#include "dyncal/friction_tracker.hpp"
 #include "dyncal/identification_model.hpp"
 #include "dyncal/kalman_filter.hpp"
 #include "dyncal/rls_forgetting.hpp"
@@ -19,10 +21,19 @@ namespace dyncal::replay {
 using Robot = dyncal::generated::er20::Robot;
 using LinearModel = IdentificationModel<Robot, kFrictionEq7>;
 
-enum class Updater { kf, rls, ekf };
+enum class Updater { kf, rls, ekf, friction };
 
 constexpr const char* name(Updater u) {
-  return u == Updater::kf ? "KF" : (u == Updater::rls ? "RLS" : "EKF");
+  switch (u) {
+    case Updater::kf:
+      return "KF";
+    case Updater::rls:
+      return "RLS";
+    case Updater::ekf:
+      return "EKF";
+    default:
+      return "friction tracker";
+  }
 }
 
 /// Settings of the replay (the same on every target).
@@ -31,6 +42,9 @@ struct Settings {
   static constexpr double kPrior = 1e4;      ///< initial variance of every parameter
   static constexpr double kMu = 0.999;       ///< RLS forgetting factor
   static constexpr double kGate = 8.0;       ///< innovation gate [standard deviations]
+  /// The friction tracker's calibration (what a drive would have flashed): the robot file's
+  /// standard parameters, which the simulated drive runs, and its Stribeck velocity qds [rad/s].
+  static constexpr double kCalibratedQds = 0.1;
 };
 
 template <typename Scalar, Updater U>
@@ -111,6 +125,44 @@ struct Estimator<Scalar, Updater::ekf> {
       tau[j] += Filter::Friction::torque(phi + Filter::column(0, j), qd[j], static_cast<Scalar*>(nullptr));
   }
   const Eigen::Matrix<Scalar, kNumParams, 1>& estimate() const { return filter.estimate(); }
+};
+
+/// A calibrated drive tracking its friction: the rigid-body torque Y_b phi_b at the calibration's
+/// base parameters (fixed), the Eq. 4 amplitudes Fc, Fs, beta of every joint tracked by
+/// FrictionTracker with forgetting mu (qds fixed at the calibration's). Parameters: the tracker's,
+/// joint-major (Fc, Fs, qds, beta).
+template <typename Scalar>
+struct Estimator<Scalar, Updater::friction> {
+  using Tracker = FrictionTracker<Scalar, 6, NonlinearFrictionAmplitudes<NonlinearFrictionModel::eq4>>;
+  static constexpr int kNumParams = Tracker::ParamVector::RowsAtCompileTime;
+  Tracker tracker;
+  Eigen::Matrix<Scalar, Robot::kNumBase, 1> phi_b;
+  Eigen::Matrix<Scalar, 6, Robot::kNumBase> Yb;
+  UpdateStatus reset() {
+    Eigen::Matrix<Scalar, Robot::kNumStandard, 1> phi;
+    for (int i = 0; i < Robot::kNumStandard; ++i) phi[i] = Scalar(generated::er20::kNominalStandard[i]);
+    Robot::standard_to_base(phi, phi_b);
+    typename Tracker::ParamVector theta0 = Tracker::ParamVector::Zero();
+    for (int j = 0; j < 6; ++j) theta0[4 * j + 2] = Scalar(Settings::kCalibratedQds);
+    return tracker.reset(theta0, Scalar(Settings::kPrior), Scalar(Settings::kMu));
+  }
+  template <class V>
+  UpdateStatus update(const V& q, const V& qd, const V& qdd, const V& tau, const V& r) {
+    Robot::base_regressor(q, qd, qdd, Yb);
+    V w;
+    for (int j = 0; j < 6; ++j) w[j] = Scalar(1) / std::sqrt(r[j]);  // weights 1 / sigma_j
+    return tracker.update(qd, V::Zero().eval(), (tau - Yb * phi_b).eval(), w);
+  }
+  /// tau = Y_b phi_b + f(theta, qd) for tracker parameters theta (kNumParams).
+  template <class V>
+  void predict(const Scalar* theta, const V& q, const V& qd, const V& qdd, V& tau) {
+    Robot::base_regressor(q, qd, qdd, Yb);
+    tau.noalias() = Yb * phi_b;
+    for (int j = 0; j < 6; ++j)
+      tau[j] +=
+          NonlinearFriction<NonlinearFrictionModel::eq4>::torque(theta + 4 * j, qd[j], static_cast<Scalar*>(nullptr));
+  }
+  const typename Tracker::ParamVector& estimate() const { return tracker.parameters(); }
 };
 
 /// Counts of one replay.

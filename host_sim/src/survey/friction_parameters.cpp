@@ -62,11 +62,11 @@ int friction_count(FrictionModel model) {
 bool is_scale_parameter(FrictionModel model, int k) {
   switch (model) {
     case FrictionModel::eq4:
-      return k == 2;
+      return NonlinearFriction<NonlinearFrictionModel::eq4>::kIsScale[k];
     case FrictionModel::eq5:
-      return k == 2 || k == 4;
+      return NonlinearFriction<NonlinearFrictionModel::eq5>::kIsScale[k];
     case FrictionModel::eq6:
-      return k == 2 || k == 3;
+      return NonlinearFriction<NonlinearFrictionModel::eq6>::kIsScale[k];
     default:
       return false;
   }

@@ -1,6 +1,7 @@
 // Firmware application: replays the recorded er20 drive samples (port/replay/er20_replay_data.hpp,
 // const data in flash) through the causal differentiator, the generated regressor and one updater
-// (DYNCAL_FW_UPDATER: 0 KF, 1 RLS with forgetting, 2 EKF with Eq. 4 friction) — the same lib/ code
+// (DYNCAL_FW_UPDATER: 0 KF, 1 RLS with forgetting, 2 EKF with Eq. 4 friction, 3 the friction
+// tracker of a calibrated drive) — the same lib/ code
 // as the host — in float on the Cortex-M4F and double on the M7. Prints the instructions per update
 // and the estimate's agreement with the host's double run, writes the KF/RLS estimate to the flash
 // parameter store and reads it back, and exits 0 only when everything holds.
@@ -47,15 +48,17 @@ const double* reference() {
       return data::kReferenceKf;
     case dyncal::replay::Updater::rls:
       return data::kReferenceRls;
-    default:
+    case dyncal::replay::Updater::ekf:
       return data::kReferenceEkf;
+    default:
+      return data::kReferenceFriction;
   }
 }
 
-// Parameter store round trip (the linear models have a table layout; the EKF's Eq. 4 parameters
-// are not a table model and are not stored).
+// Parameter store round trip (the linear models have a table layout; the Eq. 4 parameters of the
+// EKF and the friction tracker are not a table model and are not stored).
 bool store_round_trip() {
-  if constexpr (kUpdater == dyncal::replay::Updater::ekf) {
+  if constexpr (kUpdater == dyncal::replay::Updater::ekf || kUpdater == dyncal::replay::Updater::friction) {
     return true;
   } else {
     static dyncal::ParameterTable table;  // one table: RAM is the budget
