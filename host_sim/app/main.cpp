@@ -120,7 +120,7 @@ int main(int argc, char** argv) {
   std::string survey_json, survey_check;
   double survey_tolerance = 1e-3;
   auto* survey = app.add_subcommand(
-      "survey", "reproduce the survey's simulation study on the er20 (Tables 5, 6, 8, 9, 11) next to its numbers");
+      "survey", "reproduce the survey's simulation study on the er20 (Tables 5, 6, 8-12, Fig. 4) next to its numbers");
   survey->add_option("--robots-dir", robots_dir, "directory holding the robot descriptions");
   survey->add_flag("--quick", sopt.quick, "one excitation period instead of two (CI)");
   survey->add_option("--seed", sopt.seed, "excitation, noise and CAD-prior seed")->capture_default_str();

@@ -218,6 +218,7 @@ std::string joint_list(const std::vector<int>& joints) {
 DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, const DiagnoseOptions& o) {
   IdentifyOptions io = o.identify;
   if (io.terms == 0) io.terms = kFrictionEq7;
+  io.load_regressor = true;  // the load-friction candidate's load torque h(q, qd)
   const StackedData d = prepare_stacked(robot, log, io);
   const int N = robot.num_joints;
   const Index S = d.t.size(), R = S * N;
@@ -277,7 +278,6 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
   const VectorXd oof_before = cv.predict_out_of_fold();
   std::vector<std::string> names = d.names;
 
-  // Rigid-body part of the prediction (load torque proxy for load-dependent friction).
   auto is_term = [](const std::string& n) {
     for (const char* p : {"Fc", "Fv", "Fp", "Ia", "offset"})
       if (n.rfind(p, 0) == 0 && n.size() > std::strlen(p) &&
@@ -288,7 +288,14 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
   VectorXd phi_rb = phi;
   for (size_t i = 0; i < names.size(); ++i)
     if (is_term(names[i])) phi_rb[static_cast<Index>(i)] = 0;
-  const VectorXd tau_rb = d.W * phi_rb;
+  // Two load torques for load-dependent friction, from the fitted rigid-body parameters: the torque
+  // the gear transmits, Y(q, qd, qdd) phi (a real gearbox's friction grows with it, inertial part
+  // included), and the load the joint holds, h(q, qd) = Y(q, qd, 0) phi (gravity and velocity
+  // products: what a model without an algebraic loop, such as the simulated drive, applies). The
+  // candidate takes whichever explains the residual better (counted as a search of 2).
+  const std::pair<const char*, VectorXd> load_torques[] = {
+      {"load: transmitted rigid-body torque", d.W * phi_rb},
+      {"load: gravity and velocity-product torque", d.W_load * phi_rb}};
   auto has = [&](const std::string& n) { return std::find(names.begin(), names.end(), n) != names.end(); };
 
   // The candidate library.
@@ -334,9 +341,21 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
       }));
       out.push_back(make("velocity_power", {j}, {"Fp" + J},
                          [&](Index s, MatrixXd& m) { m(s * N + j, 0) = std::cbrt(d.qd(s, j)); }));
-      out.push_back(make("load_friction", {j}, {"Fl" + J}, [&](Index s, MatrixXd& m) {
-        m(s * N + j, 0) = std::abs(tau_rb[s * N + j]) * sgn(d.qd(s, j));
-      }));
+      Candidate best_load;
+      double best_load_gain = -1;
+      for (const auto& [detail, tau_load] : load_torques) {
+        Candidate c = make(
+            "load_friction", {j}, {"Fl" + J},
+            [&](Index s, MatrixXd& m) { m(s * N + j, 0) = std::abs(tau_load[s * N + j]) * sgn(d.qd(s, j)); }, detail);
+        const VectorXd col = c.columns.col(0);
+        const double gain = std::pow(col.dot(residual), 2) / std::max(1e-300, col.squaredNorm());
+        if (gain > best_load_gain) {
+          best_load_gain = gain;
+          best_load = c;
+        }
+      }
+      best_load.searched = 2;
+      out.push_back(best_load);
       if (!has("Ia" + J))
         out.push_back(
             make("rotor_inertia", {j}, {"Ia" + J}, [&](Index s, MatrixXd& m) { m(s * N + j, 0) = d.qdd(s, j); }));
@@ -505,7 +524,8 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
     } else if (c.kind == "velocity_power") {
       ex << "friction grows with q_dot^(1/3), f1 = " << e.params[0] << " - velocity-power friction (Eq. 8)";
     } else if (c.kind == "load_friction") {
-      ex << "friction grows with the load torque, f1 = " << e.params[0] << " - load-dependent friction (Eq. 9)";
+      ex << "friction grows with the load torque (" << c.detail << "), f1 = " << e.params[0]
+         << " - load-dependent friction (Eq. 9)";
     } else if (c.kind == "rotor_inertia") {
       ex << "residual follows q_ddot, Ia = " << e.params[0] << " kg m^2 - rotor inertia";
     } else if (c.kind == "offset") {

@@ -21,6 +21,7 @@ struct IdentifyOptions {
   double rls_mu = 0.9999;           ///< forgetting factor of RLS (survey Eq. 23)
   double p0 = 1e6;                  ///< initial covariance diag of KF and RLS (prior ignorance)
   double min_speed_fraction = 0.0;  ///< fit only rows with |qd_j| >= this fraction of joint j's top speed
+  bool load_regressor = false;      ///< also stack Y(q, qd, 0) (StackedData::W_load): the load torque's regressor
 };
 
 struct JointMetrics {

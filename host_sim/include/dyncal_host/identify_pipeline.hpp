@@ -51,16 +51,21 @@ class IdentifyPipeline {
     Eigen::MatrixXd tau = log.tau;
     filter.filtfilt(tau);
     const Eigen::Index S = log.samples();
-    // Regressor columns over time: column (j * P + c) holds K(j, c) at every sample.
-    Eigen::MatrixXd Kt(S, N * P);
-    typename Model::template Regressor<double> K;
+    // Regressor columns over time: column (j * P + c) holds K(j, c) at every sample (parallel filtering).
     const JointVec zero = JointVec::Zero();
-    for (Eigen::Index s = 0; s < S; ++s) {
-      Model::regressor(JointVec(q.row(s).transpose()), JointVec(qd.row(s).transpose()),
-                       JointVec(qdd.row(s).transpose()), zero, K);
-      for (int j = 0; j < N; ++j) Kt.row(s).segment(j * P, P) = K.row(j);
-    }
-    filter.filtfilt(Kt);
+    auto regressor_over_time = [&](bool with_qdd) {
+      Eigen::MatrixXd Kt(S, N * P);
+      typename Model::template Regressor<double> K;
+      for (Eigen::Index s = 0; s < S; ++s) {
+        Model::regressor(JointVec(q.row(s).transpose()), JointVec(qd.row(s).transpose()),
+                         with_qdd ? JointVec(qdd.row(s).transpose()) : zero, zero, K);
+        for (int j = 0; j < N; ++j) Kt.row(s).segment(j * P, P) = K.row(j);
+      }
+      filter.filtfilt(Kt);
+      return Kt;
+    };
+    const Eigen::MatrixXd Kt = regressor_over_time(true);
+    const Eigen::MatrixXd Kt_load = opt_.load_regressor ? regressor_over_time(false) : Eigen::MatrixXd();
     int d = opt_.decimate > 0 ? opt_.decimate : static_cast<int>(std::floor(fs / (25.0 * opt_.cutoff_hz)));
     d = std::max(d, 1);
     // Drop one cut-off period at each end, where differentiation and filtering are one-sided.
@@ -71,6 +76,7 @@ class IdentifyPipeline {
     StackedData out;
     const Eigen::Index kept = (S - 2 * edge + d - 1) / d;
     out.W.resize(kept * N, P);
+    if (opt_.load_regressor) out.W_load.resize(kept * N, P);
     out.y.resize(kept * N);
     out.t.resize(kept);
     out.rate_hz = fs / d;
@@ -95,6 +101,7 @@ class IdentifyPipeline {
       out.qdd.row(k) = qdd.row(s);
       for (int j = 0; j < N; ++j) {
         out.W.row(k * N + j) = Kt.row(s).segment(j * P, P);
+        if (opt_.load_regressor) out.W_load.row(k * N + j) = Kt_load.row(s).segment(j * P, P);
         out.y[k * N + j] = tau(s, j);
         if (std::abs(qd(s, j)) < threshold[j]) out.fit_row[static_cast<size_t>(k * N + j)] = 0;
       }

@@ -13,6 +13,9 @@ namespace dyncal::host {
 /// Stacked, filtered and decimated identification data: row s * N + j is joint j at sample s.
 struct StackedData {
   Eigen::MatrixXd W;               ///< (S N) x P regressor
+  Eigen::MatrixXd W_load;          ///< (S N) x P regressor at qdd = 0, filtered and stacked as W (only with
+                                   ///< IdentifyOptions::load_regressor, else empty): its rigid-body columns times
+                                   ///< phi give the load torque h(q, qd), gravity and velocity products [Nm]
   Eigen::VectorXd y;               ///< (S N) torques [Nm]
   Eigen::VectorXd t;               ///< S sample times [s]
   double rate_hz = 0;              ///< after decimation
