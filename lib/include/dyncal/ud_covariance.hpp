@@ -137,9 +137,6 @@ class UdCovariance {
     return UpdateStatus::ok;
   }
 
-  /// P <- P / mu (exponential forgetting, survey Eq. 23), mu in (0, 1].
-  void scale(Scalar inverse_mu) noexcept { d_ *= inverse_mu; }
-
   /// trace(P) = sum_j d_j * sum_i U_ij^2.
   Scalar trace() const noexcept {
     Scalar t(0);
