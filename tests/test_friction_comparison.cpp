@@ -57,6 +57,27 @@ TEST(FrictionComparison, RealTx40FrictionIsNonlinear) {
   EXPECT_LT(best_nonlinear, 0.85 * eq7);
 }
 
+// Every nonlinear model reports, per joint, an interval for each scale parameter that holds the
+// chosen value and the same parameter as the fit used; linear models have none.
+TEST(FrictionComparison, NonlinearModelsReportTheirScaleParametersWithIntervals) {
+  for (const auto& f : fits()) {
+    if (survey::is_linear(f.model)) {
+      EXPECT_TRUE(f.scale_intervals.empty());
+      continue;
+    }
+    ASSERT_EQ(f.scale_intervals.size(), 6u);
+    const int kf = survey::friction_count(f.model);
+    for (size_t j = 0; j < 6; ++j) {
+      for (const survey::ScaleInterval& iv : f.scale_intervals[j]) {
+        EXPECT_TRUE(survey::is_scale_parameter(f.model, iv.parameter));
+        EXPECT_LE(iv.lo, iv.best);
+        EXPECT_LE(iv.best, iv.hi);
+        EXPECT_DOUBLE_EQ(f.friction[j * kf + static_cast<size_t>(iv.parameter)], iv.best);
+      }
+    }
+  }
+}
+
 TEST(FrictionComparison, RefusesAnEmptyValidationPart) {
   const auto robot = load_robot(default_robots_dir(), "tx40");
   const JointLog log = read_tx40_log(DYNCAL_TX40_DATA, robot.transmission, robot.joint_offsets);

@@ -13,6 +13,7 @@
 
 #include "dyncal/friction.hpp"
 #include "dyncal_host/input_error.hpp"
+#include "dyncal_host/signal.hpp"
 #include "dyncal_host/stacked_data.hpp"
 
 namespace dyncal::host {
@@ -245,23 +246,14 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
   for (Index s = 0; s < S; ++s) fold[s] = static_cast<int>((s / block) % folds);
   res.validation = "blocked " + std::to_string(folds) + "-fold cross-validation";
   const double duration = static_cast<double>(S) / d.rate_hz;
-  // Effective independent samples of joint j's residual: S / (1 + 2 sum rho_k), rho_k its
-  // autocorrelation, summed over the initial positive sequence (Geyer). The residual is low-passed
-  // and carries smooth model error, so counting every sample would make BIC overconfident.
-  auto effective_samples = [&](const VectorXd& residual) {
+  // Effective independent samples of each joint's residual (effective_samples): the residual is
+  // low-passed and carries smooth model error, so counting every sample would make BIC overconfident.
+  auto effective_samples_per_joint = [&](const VectorXd& residual) {
     VectorXd n(N);
     for (int j = 0; j < N; ++j) {
       VectorXd r(S);
       for (Index s = 0; s < S; ++s) r[s] = residual[s * N + j];
-      r.array() -= r.mean();
-      const double c0 = r.squaredNorm();
-      double tau = 1.0;
-      for (Index k = 1; k < S / 4 && c0 > 0; ++k) {
-        const double rho = r.head(S - k).dot(r.tail(S - k)) / c0;
-        if (rho <= 0) break;
-        tau += 2.0 * rho;
-      }
-      n[j] = static_cast<double>(S) / tau;
+      n[j] = effective_samples(r);
     }
     return n;
   };
@@ -429,7 +421,7 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
   for (int step = 0; step < o.max_effects; ++step) {
     const VectorXd residual = d.y - X * phi;
     std::vector<Candidate> cands = library(residual);
-    const VectorXd n_eff = effective_samples(residual);
+    const VectorXd n_eff = effective_samples_per_joint(residual);
     if (step == 0) res.effective_samples_per_joint = n_eff.mean();
     int best = -1;
     double best_score = 0;

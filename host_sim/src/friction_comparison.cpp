@@ -5,6 +5,7 @@
 #include <cmath>
 #include <iomanip>
 #include <ostream>
+#include <sstream>
 
 #include "dyncal_host/input_error.hpp"
 #include "dyncal_host/survey/friction_parameters.hpp"
@@ -81,6 +82,7 @@ std::vector<FrictionModelFit> compare_friction_models(const StackedData& stacked
                               FrictionModel::eq5, FrictionModel::eq6}) {
     const int kf = friction_count(model);
     std::vector<double> theta(static_cast<size_t>(N * kf), 0.0);
+    std::vector<std::vector<survey::ScaleInterval>> intervals;
     if (model == FrictionModel::eq9) load = d.W * coef7.head(P);  // the Eq. 7 fit's non-friction torque
     Eigen::VectorXd coef, residual;
     if (survey::is_linear(model)) {
@@ -89,6 +91,7 @@ std::vector<FrictionModelFit> compare_friction_models(const StackedData& stacked
       // Separable least squares from the Eq. 7 fit: scan each joint's scales against its
       // non-friction residual, then fit every column at the chosen scales; two rounds.
       Eigen::VectorXd base = coef7.head(P);
+      intervals.assign(static_cast<size_t>(N), {});
       for (int round = 0; round < 2; ++round) {
         const Eigen::VectorXd target = d.y - d.W * base;
         for (int j = 0; j < N; ++j) {
@@ -99,7 +102,8 @@ std::vector<FrictionModelFit> compare_friction_models(const StackedData& stacked
           }
           const Eigen::VectorXd qd = d.qd.col(j).head(fit_samples);
           const std::vector<double> th =
-              survey::fit_joint_friction(model, qd, load_j, r, survey::velocity_scale_range(qd.cwiseAbs().maxCoeff()));
+              survey::fit_joint_friction(model, qd, load_j, r, survey::velocity_scale_range(qd.cwiseAbs().maxCoeff()),
+                                         &intervals[static_cast<size_t>(j)]);
           for (int k = 0; k < kf; ++k) {
             if (is_scale_parameter(model, k)) theta[static_cast<size_t>(kf * j + k)] = th[static_cast<size_t>(k)];
           }
@@ -119,6 +123,7 @@ std::vector<FrictionModelFit> compare_friction_models(const StackedData& stacked
     f.others = others;
     f.parameters = N * kf;
     f.friction = theta;
+    f.scale_intervals = intervals;
     std::tie(f.fit_mean, f.fit_std) = moments(residual.head(fit_rows));
     std::tie(f.validation_mean, f.validation_std) = moments(residual.tail(S * N - fit_rows));
     out.push_back(f);
@@ -141,6 +146,25 @@ void print_friction_comparison(std::ostream& out, const std::vector<FrictionMode
     if (!best || f.validation_std < best->validation_std) best = &f;
   }
   if (best) out << "lowest held-out std: " << survey::model_key(best->model) << "\n";
+  out << "scale parameters of the nonlinear models per joint (95 % profile-likelihood interval on the fitted part;\n"
+      << "'<' or '>': the log does not bound it on that side within the searched range)\n";
+  for (const auto& f : fits) {
+    if (f.scale_intervals.empty()) continue;
+    const std::vector<std::string> names = survey::friction_parameter_names(f.model);
+    for (size_t k = 0; k < f.scale_intervals.front().size(); ++k) {
+      const int p = f.scale_intervals.front()[k].parameter;
+      out << std::left << std::setw(8) << survey::model_key(f.model) << std::setw(5) << names[static_cast<size_t>(p)]
+          << (survey::is_inverse_velocity(f.model, p) ? "[s/rad]" : "[rad/s]") << std::right;
+      for (size_t j = 0; j < f.scale_intervals.size(); ++j) {
+        const survey::ScaleInterval& iv = f.scale_intervals[j][k];
+        std::ostringstream cell;
+        cell << std::setprecision(2) << "  " << (j + 1) << ": " << iv.best << " [" << (iv.open_below ? "<" : "")
+             << iv.lo << ", " << (iv.open_above ? ">" : "") << iv.hi << "]";
+        out << cell.str();
+      }
+      out << "\n";
+    }
+  }
 }
 
 }  // namespace dyncal::host

@@ -15,4 +15,17 @@ Eigen::MatrixXd central_difference(const Eigen::MatrixXd& x, double dt) {
   return d;
 }
 
+double effective_samples(const Eigen::VectorXd& r) {
+  const Eigen::Index S = r.size();
+  const Eigen::VectorXd c = r.array() - r.mean();
+  const double c0 = c.squaredNorm();
+  double tau = 1.0;
+  for (Eigen::Index k = 1; k < S / 4 && c0 > 0; ++k) {
+    const double rho = c.head(S - k).dot(c.tail(S - k)) / c0;
+    if (rho <= 0) break;
+    tau += 2.0 * rho;
+  }
+  return static_cast<double>(S) / tau;
+}
+
 }  // namespace dyncal::host

@@ -9,6 +9,7 @@
 
 #include "dyncal_host/drive/scenario.hpp"
 #include "dyncal_host/stacked_data.hpp"
+#include "dyncal_host/survey/objective.hpp"
 
 namespace dyncal::host {
 
@@ -19,6 +20,9 @@ struct FrictionModelFit {
   double fit_mean = 0, fit_std = 0;                ///< torque error on the fitted rows [Nm], pooled over joints
   double validation_mean = 0, validation_std = 0;  ///< on the held-out final rows [Nm]
   std::vector<double> friction;                    ///< joint-major, survey::friction_parameter_names order
+  /// Nonlinear models: per joint, each scale parameter's 95 % profile-likelihood interval from the
+  /// last round's scan (survey::ScaleInterval; open where the log does not bound it).
+  std::vector<std::vector<survey::ScaleInterval>> scale_intervals;
 };
 
 /// `data`: stacked data of any built model; its friction columns (named Fc, Fv, Fp, Fl + joint) are
@@ -32,7 +36,8 @@ struct FrictionModelFit {
 std::vector<FrictionModelFit> compare_friction_models(const StackedData& data, double validate_last);
 
 /// Prints the comparison: one row per model, friction parameters, torque error mean / std [Nm] on
-/// the fitted part and std on the held-out part, and which model the held-out std prefers.
+/// the fitted part and std on the held-out part, and which model the held-out std prefers; then the
+/// nonlinear models' scale parameters per joint with their intervals.
 void print_friction_comparison(std::ostream& out, const std::vector<FrictionModelFit>& fits, double validate_last);
 
 }  // namespace dyncal::host
