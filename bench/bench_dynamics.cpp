@@ -7,6 +7,7 @@
 #include <random>
 #include <vector>
 
+#include "dyncal/friction_tracker.hpp"
 #include "dyncal/identification_model.hpp"
 #include "dyncal/kalman_filter.hpp"
 #include "dyncal/rls_forgetting.hpp"
@@ -180,6 +181,26 @@ void BM_RlsUpdate(benchmark::State& state) {
   run_filter<decltype(*rls), double>(state, *rls);
 }
 BENCHMARK(BM_RlsUpdate);
+
+// The friction tracker of a calibrated drive (Eq. 4 amplitudes, qds fixed), friction torque given.
+template <typename Scalar>
+void BM_FrictionTrackerUpdate(benchmark::State& state) {
+  using Tracker =
+      dyncal::FrictionTracker<Scalar, 6, dyncal::NonlinearFrictionAmplitudes<dyncal::NonlinearFrictionModel::eq4>>;
+  using V = typename Tracker::JointVector;
+  auto tracker = std::make_unique<Tracker>();
+  tracker->reset(Tracker::ParamVector::Constant(Scalar(0.2)), Scalar(1e3), Scalar(0.99));
+  const V zero = V::Zero(), w = V::Ones();
+  long i = 0, rejected = 0;
+  for (auto _ : state) {
+    const V qd = kStates.qd[i & 63].cast<Scalar>(), tau = kStates.qdd[i & 63].cast<Scalar>();
+    if (tracker->update(qd, zero, tau, w) != dyncal::UpdateStatus::ok) ++rejected;
+    ++i;
+  }
+  state.counters["rejected"] = static_cast<double>(rejected);
+}
+BENCHMARK_TEMPLATE(BM_FrictionTrackerUpdate, double);
+BENCHMARK_TEMPLATE(BM_FrictionTrackerUpdate, float);
 
 void BM_StreamingLeastSquaresSample(benchmark::State& state) {
   auto ls = std::make_unique<dyncal::StreamingLeastSquares<double, P>>();
