@@ -445,7 +445,8 @@ std::vector<double> fit_joint_friction(FrictionModel model, const Eigen::VectorX
   return out;
 }
 
-std::vector<double> friction_start(const SurveyData& d, FrictionModel model, const Eigen::VectorXd& phi) {
+std::vector<double> friction_start(const SurveyData& d, FrictionModel model, const Eigen::VectorXd& phi,
+                                   std::vector<std::vector<ScaleInterval>>* intervals) {
   const Eigen::Index S = d.q.rows();
   const auto Y = standard_rows(d);
   Eigen::MatrixXd residual(S, 6);
@@ -456,8 +457,10 @@ std::vector<double> friction_start(const SurveyData& d, FrictionModel model, con
   const SearchRanges ranges = search_ranges(d, model, Eigen::VectorXd::Zero(kStandard), 0.0);
   std::vector<double> out(static_cast<size_t>(6 * kf), 0.0);
   for (int j = 0; j < 6; ++j) {
+    if (intervals) intervals->resize(6);
     const std::vector<double> th =
-        fit_joint_friction(model, d.qd.col(j), d.tau_load.col(j), residual.col(j), velocity_scale_range(d, j));
+        fit_joint_friction(model, d.qd.col(j), d.tau_load.col(j), residual.col(j), velocity_scale_range(d, j),
+                           intervals ? &(*intervals)[static_cast<size_t>(j)] : nullptr);
     const int b = kStandard + kf * j;
     for (int k = 0; k < kf; ++k) {
       out[static_cast<size_t>(kf * j + k)] = std::clamp(th[static_cast<size_t>(k)], ranges.lo[b + k], ranges.hi[b + k]);

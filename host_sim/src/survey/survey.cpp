@@ -142,6 +142,22 @@ json run_survey(const RobotDescription& robot, const SurveyOptions& o) {
         json& mj = c["methods"][m->name];
         mj["online"] = m->online;
         mj[noisy ? "with_noise" : "without_noise"] = indices_json(evaluate(e, d.scenario, d.tau, tau_max), e.seconds);
+        if (m->name == std::string("physically consistent LS") && !is_linear(model)) {
+          // Which scale parameters the run determines: the joint friction scan's 95 % intervals at
+          // this method's rigid body; open on both sides = not determined.
+          std::vector<std::vector<ScaleInterval>> iv;
+          friction_start(d, model, e.standard, &iv);
+          json& u = c["undetermined_scale_parameters"][noisy ? "with_noise" : "without_noise"];
+          u = json::array();
+          for (size_t j = 0; j < iv.size(); ++j) {
+            for (const ScaleInterval& x : iv[j]) {
+              if (x.open_below && x.open_above) {
+                u.push_back("joint " + std::to_string(j + 1) + " " +
+                            friction_parameter_names(model)[static_cast<size_t>(x.parameter)]);
+              }
+            }
+          }
+        }
         if (!noisy) {
           mj["joint3"] = joint3_json(e, d.tau);
           if (m->name == std::string("physically consistent LS")) {
@@ -371,6 +387,19 @@ void print_survey(std::ostream& out, const json& r, const json& pub) {
                               " (the survey's study ran Eq. 7 and Eq. 4 only: no published numbers)";
     je_table(out, title.c_str(), r["models"][key], json::object());
     friction3_table(out, r["models"][key]);
+  }
+  out << "\nScale parameters the data do not determine (95 % profile-likelihood interval of the joint friction\n"
+      << "scan at physically consistent LS's rigid body open on both sides within the searched range):\n";
+  for (auto& [model, c] : r["models"].items()) {
+    if (!c.contains("undetermined_scale_parameters")) continue;
+    for (const char* noise : {"without_noise", "with_noise"}) {
+      std::string list;
+      for (const auto& x : c["undetermined_scale_parameters"][noise])
+        list += (list.empty() ? "" : ", ") + x.get<std::string>();
+      out << "  Eq. " << model.substr(2)
+          << (std::string(noise) == "with_noise" ? " with noise:    " : " without noise: ")
+          << (list.empty() ? "none" : list) << "\n";
+    }
   }
   if (r.contains("table10")) {
     const json& t = r["table10"];

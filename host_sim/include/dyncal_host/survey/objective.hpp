@@ -126,8 +126,10 @@ std::vector<double> fit_joint_friction(FrictionModel model, const Eigen::VectorX
 
 /// The friction of every joint fitted to its residual tau_j - Y_j phi (phi: 60 standard
 /// parameters) by fit_joint_friction, a start for the solvers that uses no set value, each parameter
-/// clamped into its search range. Joint-major, friction_parameter_names order.
-std::vector<double> friction_start(const SurveyData& data, FrictionModel model, const Eigen::VectorXd& phi);
+/// clamped into its search range. Joint-major, friction_parameter_names order. Each joint's scale
+/// parameter intervals (fit_joint_friction) into `intervals` (6 entries) if given.
+std::vector<double> friction_start(const SurveyData& data, FrictionModel model, const Eigen::VectorXd& phi,
+                                   std::vector<std::vector<ScaleInterval>>* intervals = nullptr);
 
 /// Physical feasibility (Wensing et al. 2017): each link's pseudo-inertia positive definite.
 /// Returns sum over links of max(0, -lambda_min(J_l)) / ||J_l(cad)||_F (0: feasible), and each
