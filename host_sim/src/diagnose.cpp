@@ -299,33 +299,42 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
     for (Index s = 0; s < S; ++s) fill(s, c.columns);
     return c;
   };
+  // Of one-column alternatives, the one whose column explains most of the residual (its projection),
+  // counted as a search over all of them.
+  auto best_of = [](std::vector<Candidate> alternatives, const VectorXd& residual) {
+    size_t best = 0;
+    double best_gain = -1;
+    for (size_t i = 0; i < alternatives.size(); ++i) {
+      const VectorXd col = alternatives[i].columns.col(0);
+      const double gain = std::pow(col.dot(residual), 2) / std::max(1e-300, col.squaredNorm());
+      if (gain > best_gain) {
+        best_gain = gain;
+        best = i;
+      }
+    }
+    Candidate c = std::move(alternatives[best]);
+    c.searched = static_cast<int>(alternatives.size());
+    return c;
+  };
   auto library = [&](const VectorXd& residual) {
     std::vector<Candidate> out;
     for (int j = 0; j < N; ++j) {
       const std::string J = std::to_string(j + 1);
       const double vmax = d.qd.col(j).cwiseAbs().maxCoeff();
       // Stribeck / static friction: best velocity scale of a small grid.
-      Candidate best_stribeck;
-      double best_gain = -1;
+      std::vector<Candidate> stribeck;
       for (double frac : {0.02, 0.05, 0.1, 0.2}) {
         const double qds = frac * vmax;
-        Candidate c = make(
+        stribeck.push_back(make(
             "stribeck", {j}, {"Fs" + J},
             [&](Index s, MatrixXd& m) {
               const double v = d.qd(s, j);
               m(s * N + j, 0) = sgn(v) * std::exp(-(v / qds) * (v / qds));
             },
-            "velocity scale " + std::to_string(qds).substr(0, 5) + " rad/s");
-        const VectorXd col = c.columns.col(0);
-        const double gain = std::pow(col.dot(residual), 2) / std::max(1e-300, col.squaredNorm());
-        if (gain > best_gain) {
-          best_gain = gain;
-          best_stribeck = c;
-          best_stribeck.shape = qds;
-        }
+            "velocity scale " + std::to_string(qds).substr(0, 5) + " rad/s"));
+        stribeck.back().shape = qds;
       }
-      best_stribeck.searched = 4;
-      out.push_back(best_stribeck);
+      out.push_back(best_of(std::move(stribeck), residual));
       out.push_back(make("asymmetric_friction", {j}, {"Fc+" + J, "Fv+" + J}, [&](Index s, MatrixXd& m) {
         const double v = d.qd(s, j);
         m(s * N + j, 0) = v > 0 ? 1.0 : 0.0;
@@ -333,21 +342,13 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
       }));
       out.push_back(make("velocity_power", {j}, {"Fp" + J},
                          [&](Index s, MatrixXd& m) { m(s * N + j, 0) = std::cbrt(d.qd(s, j)); }));
-      Candidate best_load;
-      double best_load_gain = -1;
+      std::vector<Candidate> load;
       for (const auto& [detail, tau_load] : load_torques) {
-        Candidate c = make(
+        load.push_back(make(
             "load_friction", {j}, {"Fl" + J},
-            [&](Index s, MatrixXd& m) { m(s * N + j, 0) = std::abs(tau_load[s * N + j]) * sgn(d.qd(s, j)); }, detail);
-        const VectorXd col = c.columns.col(0);
-        const double gain = std::pow(col.dot(residual), 2) / std::max(1e-300, col.squaredNorm());
-        if (gain > best_load_gain) {
-          best_load_gain = gain;
-          best_load = c;
-        }
+            [&](Index s, MatrixXd& m) { m(s * N + j, 0) = std::abs(tau_load[s * N + j]) * sgn(d.qd(s, j)); }, detail));
       }
-      best_load.searched = 2;
-      out.push_back(best_load);
+      out.push_back(best_of(std::move(load), residual));
       if (!has("Ia" + J))
         out.push_back(
             make("rotor_inertia", {j}, {"Ia" + J}, [&](Index s, MatrixXd& m) { m(s * N + j, 0) = d.qdd(s, j); }));
