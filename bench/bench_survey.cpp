@@ -44,7 +44,7 @@ void BM_ReducedEq25(benchmark::State& state) {
   const FrictionModel m = kModels[state.range(0)];
   const survey::SurveyData& d = data(m);
   const survey::TorqueObjective objective(d, m, settings().sigma);
-  const survey::SearchRanges r = survey::search_ranges(d, m, survey::nearest_consistent(settings().prior), 0.4);
+  const survey::SearchRanges r = survey::search_ranges(d, m, survey::nearest_consistent(settings().prior.mean), 0.4);
   const Eigen::VectorXd x = 0.5 * (r.lo + r.hi);
   for (auto _ : state) benchmark::DoNotOptimize(objective.eq25(x.data(), 1.0));
   state.SetLabel(survey::model_key(m));

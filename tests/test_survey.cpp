@@ -12,6 +12,7 @@
 #include "dyncal_host/robot_description.hpp"
 #include "dyncal_host/survey/idim_iv.hpp"
 #include "dyncal_host/survey/methods.hpp"
+#include "dyncal_host/survey/objective.hpp"
 #include "dyncal_host/survey/physically_consistent.hpp"
 #include "dyncal_host/survey/standard_parameters.hpp"
 #include "dyncal_host/survey/tracking.hpp"
@@ -50,9 +51,9 @@ TEST(SurveyParameters, BaseMapReproducesTheBaseRegressorTorque) {
 }
 
 TEST(SurveyParameters, PriorAnchoredStandardParametersHaveTheGivenBaseParameters) {
-  const Eigen::VectorXd prior = cad_prior(0.2, 5);
+  const CadPrior prior = cad_prior(0.2, 5);
   const Eigen::VectorXd phi_b = base_map() * set_standard();
-  const Eigen::VectorXd phi = standard_from_base(phi_b, prior, 0.2);
+  const Eigen::VectorXd phi = standard_from_base(phi_b, prior);
   EXPECT_LT((base_map() * phi - phi_b).norm(), 1e-9 * phi_b.norm());
   EXPECT_LT((base_map() * minimum_norm_standard(phi_b) - phi_b).norm(), 1e-9 * phi_b.norm());
   // Closer to the set values than the minimum-norm solution (the prior carries information).
@@ -70,6 +71,72 @@ TEST(SurveyParameters, PhysicalParametersOfLink3AreTheSurveysTable5SetColumn) {
   double back[10];
   standard_from_pseudo_inertia(pseudo_inertia(phi.data() + 20), back);
   for (int i = 0; i < 10; ++i) EXPECT_NEAR(back[i], phi[20 + i], 1e-12);
+}
+
+TEST(SurveyParameters, StandardFromPhysicalInvertsPhysicalParametersWithItsJacobian) {
+  const Eigen::VectorXd phi = cad_prior(0.2, 3, PriorErrors::standard).mean;
+  for (int l = 0; l < kLinks; ++l) {
+    const auto v = physical_parameters(phi.data() + 10 * l);
+    double back[10], jac[100];
+    standard_from_physical(v, back, jac);
+    for (int i = 0; i < 10; ++i) EXPECT_NEAR(back[i], phi[10 * l + i], 1e-12 * (1 + std::fabs(phi[10 * l + i])));
+    for (int k = 0; k < 10; ++k) {
+      auto a = v, b = v;
+      const double h = 1e-6 * std::max(1e-3, std::fabs(v[k]));
+      a[k] += h;
+      b[k] -= h;
+      double pa[10], pb[10];
+      standard_from_physical(a, pa);
+      standard_from_physical(b, pb);
+      for (int i = 0; i < 10; ++i) {
+        EXPECT_NEAR(jac[10 * i + k], (pa[i] - pb[i]) / (2 * h), 1e-6 * (1 + std::fabs(jac[10 * i + k])))
+            << "link " << l + 1 << " d" << i << "/d" << k;
+      }
+    }
+  }
+}
+
+TEST(SurveyParameters, CadPriorOnTable5ParametersIsWithinItsErrorOfTheSetValues) {
+  const Eigen::VectorXd set = set_standard();
+  for (PriorErrors on : {PriorErrors::table5, PriorErrors::standard}) {
+    const CadPrior p = cad_prior(0.2, 4, on);
+    // W^T W is the inverse covariance.
+    EXPECT_LT((p.whitening.transpose() * p.whitening * p.covariance - Eigen::MatrixXd::Identity(kStandard, kStandard))
+                  .cwiseAbs()
+                  .maxCoeff(),
+              1e-8);
+    for (int l = 0; l < kLinks; ++l) {
+      const auto s = on == PriorErrors::table5 ? physical_parameters(set.data() + 10 * l) : std::array<double, 10>{};
+      const auto m = on == PriorErrors::table5 ? physical_parameters(p.mean.data() + 10 * l) : std::array<double, 10>{};
+      for (int i = 0; i < 10; ++i) {
+        const double sv = on == PriorErrors::table5 ? s[i] : set[10 * l + i];
+        const double mv = on == PriorErrors::table5 ? m[i] : p.mean[10 * l + i];
+        EXPECT_LE(std::fabs(mv - sv), 0.2 * std::fabs(sv) + 1e-12) << "link " << l + 1 << " parameter " << i;
+      }
+    }
+  }
+  // Errors on what CAD reports stay 20 % on Table 5's parameters (e_d); on the standard parameters
+  // they compound (centre of mass = first moment / mass, inertia about it = a difference).
+  Estimate table5, standard;
+  table5.standard = cad_prior(0.2, 4, PriorErrors::table5).mean;
+  standard.standard = cad_prior(0.2, 4, PriorErrors::standard).mean;
+  const auto e_d = [&](const Estimate& e) {
+    double sum = 0;
+    for (int l = 0; l < kLinks; ++l) {
+      const auto s = physical_parameters(set.data() + 10 * l), v = physical_parameters(e.standard.data() + 10 * l);
+      double a = 0;
+      int k = 0;
+      for (int i = 0; i < 10; ++i) {
+        if (s[i] == 0.0) continue;
+        a += std::fabs((v[i] - s[i]) / s[i]);
+        ++k;
+      }
+      sum += a / k;
+    }
+    return sum / kLinks;
+  };
+  EXPECT_LT(e_d(table5), 0.2);
+  EXPECT_GT(e_d(standard), e_d(table5));
 }
 
 TEST(SurveyIndices, PerfectEstimateHasZeroErrorAndNoiseShowsInTheStd) {
@@ -163,18 +230,58 @@ TEST(SurveyMethods, PhysicallyConsistentLsHasPositiveDefinitePseudoInertiasAndFi
     for (int j = 0; j < 6; ++j) {
       EXPECT_LT(dyncal::test::friction_curve_error(d, m, e.friction, f, j), 0.02) << "joint " << j + 1;
     }
-    if (m != FrictionModel::eq5 && m != FrictionModel::eq6) {
+    if (m == FrictionModel::eq9) {
+      // Joint 6 holds almost no load (the wrist's RMS load torque is millinewton-metres), so its
+      // load-friction coefficient f1 moves the torque by micro-newton-metres: no data determine it.
+      // e_f over the other parameters.
+      EXPECT_LT(std::sqrt(d.tau_load.col(5).squaredNorm() / static_cast<double>(d.tau_load.rows())), 0.01);
+      Estimate without = e;
+      std::vector<double> set_without = f;
+      without.friction.pop_back();
+      set_without.pop_back();
+      double sum = 0;
+      for (size_t i = 0; i < set_without.size(); ++i) sum += std::fabs(without.friction[i] / set_without[i] - 1.0);
+      EXPECT_LT(sum / static_cast<double>(set_without.size()), 0.05);
+    } else if (m != FrictionModel::eq5 && m != FrictionModel::eq6) {
       EXPECT_LT(x.e_f, 0.05);
     }
-    EXPECT_LT(x.e_d, 0.3);
+    EXPECT_LT(x.e_d, 0.2);  // survey Table 2 level A
     EXPECT_LT(x.J_e, 1.0);  // survey Table 2 level A
-    // The prior alone (projected onto the consistent set) is worse than the estimate.
+    // The prior alone, projected onto the consistent set, is worse than the estimate.
     Estimate prior_only = e;
-    prior_only.standard = settings().prior;
+    prior_only.standard = nearest_consistent(settings().prior.mean);
     EXPECT_LT(x.e_d, evaluate(prior_only, d.scenario, d.tau, kTauMax).e_d);
   }
   // The set parameters themselves are not consistent: link 3's pseudo-inertia is indefinite.
   EXPECT_LT(pseudo_inertia_min_eigenvalues(set_standard())[2], 0.0);
+}
+
+// Under noise Levenberg-Marquardt, moving the rigid body and all friction together, could leave a
+// joint's Stribeck velocity in a wrong decade (one Eq. 4 period, seed 1: joint 5's qds 2.7 for the
+// set 0.1). The restarts from the per-joint scan keep every estimate inside the 95 % interval of the
+// scan at its own rigid body wherever that interval is bounded.
+TEST(SurveyMethods, PhysicallyConsistentLsStribeckVelocitiesLieInTheirScanIntervals) {
+  SurveyDataOptions o;
+  o.friction = FrictionModel::eq4;
+  o.periods = 1;
+  o.torque_noise = true;
+  const SurveyData d = simulate_survey_data(load_robot(default_robots_dir(), "er20"), o);
+  const Estimate e = physically_consistent_ls(d, FrictionModel::eq4, settings());
+  std::vector<std::vector<ScaleInterval>> intervals;
+  friction_start(d, FrictionModel::eq4, e.standard, &intervals);
+  int bounded = 0;
+  for (int j = 0; j < 6; ++j) {
+    const ScaleInterval& iv = intervals[static_cast<size_t>(j)][0];
+    const double qds = e.friction[static_cast<size_t>(4 * j + 2)];
+    if (!iv.open_below) {
+      EXPECT_GE(qds, iv.lo) << "joint " << j + 1;
+    }
+    if (!iv.open_above) {
+      EXPECT_LE(qds, iv.hi) << "joint " << j + 1;
+    }
+    bounded += !iv.open_below && !iv.open_above;
+  }
+  EXPECT_GE(bounded, 4);
 }
 
 // Fig. 4: forgetting follows a changing beta, the Kalman filter (no forgetting) averages over it.

@@ -36,7 +36,7 @@ MethodSettings settings() {
 Eigen::VectorXd near_set(FrictionModel m) {
   const auto f = set_friction(data(m).scenario, m);
   Eigen::VectorXd x(kStandard + static_cast<Eigen::Index>(f.size()));
-  x.head(kStandard) = cad_prior(0.2, 7);
+  x.head(kStandard) = cad_prior(0.2, 7).mean;
   for (size_t i = 0; i < f.size(); ++i) x[kStandard + static_cast<Eigen::Index>(i)] = 1.1 * f[i];
   return x;
 }
@@ -198,7 +198,7 @@ TEST(SurveyObjective, StribeckVelocityIntervalIsBoundedOnlyWhereTheDataDetermine
 
 TEST(SurveyObjective, MinEigenvalueGradientMatchesCentralDifferences) {
   // At CAD-like values (random 20 % errors): every link's smallest eigenvalue is simple there.
-  const Eigen::VectorXd phi = cad_prior(0.2, 7);
+  const Eigen::VectorXd phi = cad_prior(0.2, 7).mean;
   for (int l = 0; l < kLinks; ++l) {
     double g[10];
     pseudo_inertia_min_eigenvalue(phi.data() + 10 * l, g);
@@ -215,7 +215,7 @@ TEST(SurveyObjective, MinEigenvalueGradientMatchesCentralDifferences) {
 
 /// The result lies in its ranges and every link is physically consistent.
 void expect_feasible_in_ranges(const Estimate& e, const SurveyData& d, FrictionModel m, const MethodSettings& s) {
-  const SearchRanges r = search_ranges(d, m, nearest_consistent(s.prior), OptimiserSettings{}.range_width);
+  const SearchRanges r = search_ranges(d, m, nearest_consistent(s.prior.mean), OptimiserSettings{}.range_width);
   Eigen::VectorXd x(r.lo.size());
   x.head(kStandard) = e.standard;
   for (size_t i = 0; i < e.friction.size(); ++i) x[kStandard + static_cast<Eigen::Index>(i)] = e.friction[i];
@@ -274,7 +274,7 @@ TEST(SurveyOptimisers, GeneticAlgorithmAndParticleFilterFitNoiseFreeDataWithinTh
   // Both beat the CAD values with mid-range friction on the Eq. 25 objective by far.
   const TorqueObjective obj(d, m, settings().sigma);
   Eigen::VectorXd start(kStandard + 12), x_ga(kStandard + 12), x_pf(kStandard + 12);
-  const SearchRanges r = search_ranges(d, m, nearest_consistent(settings().prior), 0.4);
+  const SearchRanges r = search_ranges(d, m, nearest_consistent(settings().prior.mean), 0.4);
   start = 0.5 * (r.lo + r.hi);
   x_ga << ga.standard, Eigen::Map<const Eigen::VectorXd>(ga.friction.data(), 12);
   x_pf << pf.standard, Eigen::Map<const Eigen::VectorXd>(pf.friction.data(), 12);

@@ -4,6 +4,7 @@
 #include <functional>
 #include <iomanip>
 #include <iostream>
+#include <map>
 
 #include "drive_commands.hpp"
 #include "dyncal_host/diagnose.hpp"
@@ -124,6 +125,16 @@ int main(int argc, char** argv) {
   survey->add_option("--robots-dir", robots_dir, "directory holding the robot descriptions");
   survey->add_flag("--quick", sopt.quick, "one excitation period instead of two (CI)");
   survey->add_option("--seed", sopt.seed, "excitation, noise and CAD-prior seed")->capture_default_str();
+  survey
+      ->add_option("--prior-on", sopt.prior_on,
+                   "which set values the CAD prior's errors are drawn on: table5 (mass, centre of mass, inertia "
+                   "about it, as CAD reports them) or standard (inertia about the link frame, first moments)")
+      ->transform(CLI::CheckedTransformer(
+          std::map<std::string, dyncal::host::survey::PriorErrors>{
+              {"table5", dyncal::host::survey::PriorErrors::table5},
+              {"standard", dyncal::host::survey::PriorErrors::standard}},
+          CLI::ignore_case))
+      ->capture_default_str();
   survey->add_option("--prior-error", sopt.prior_error, "CAD prior: relative error of every set value (uniform)")
       ->capture_default_str();
   survey->add_option("--json", survey_json, "write the results as JSON");

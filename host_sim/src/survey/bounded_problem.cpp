@@ -14,8 +14,8 @@ BoundedProblem::BoundedProblem(const SurveyData& data, FrictionModel model, cons
       settings_(settings),
       options_(options),
       objective_(data, model, settings.sigma),
-      ranges_(search_ranges(data, model, nearest_consistent(settings.prior), options.range_width)),
-      cad_(nearest_consistent(settings.prior)) {
+      ranges_(search_ranges(data, model, nearest_consistent(settings.prior.mean), options.range_width)),
+      cad_(nearest_consistent(settings.prior.mean)) {
   const int kf = objective_.friction_per_joint();
   for (int i = 0; i < static_cast<int>(ranges_.lo.size()); ++i) {
     if (ranges_.fixed(i)) continue;

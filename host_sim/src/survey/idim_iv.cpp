@@ -95,8 +95,8 @@ Estimate idim_iv(const RobotDescription& robot, const SurveyData& d, const Metho
   while (iterations < o.max_iterations && !converged) {
     // The plant of this iterate: consistent standard parameters and non-negative friction.
     const Estimate cur = eq7_estimate(phi, "IDIM-IV");
-    const Eigen::VectorXd phi_std = nearest_consistent(
-        iterations == 0 ? settings.prior : standard_from_base(cur.base, settings.prior, settings.prior_relative_std));
+    const Eigen::VectorXd phi_std =
+        nearest_consistent(iterations == 0 ? settings.prior.mean : standard_from_base(cur.base, settings.prior));
     std::array<double, kDriveJoints> Fc{}, beta{};
     for (int j = 0; j < 6; ++j) {
       Fc[j] = std::max(0.0, cur.friction[static_cast<size_t>(2 * j)]);

@@ -93,7 +93,7 @@ Estimate eq7_estimate(const Eigen::VectorXd& phi, const char* method) {
 void complete_estimate(Estimate& e, const SurveyData& d, const MethodSettings& settings) {
   if (e.standard.size() != kStandard) {
     e.standard = minimum_norm_standard(e.base);
-    e.standard_prior = standard_from_base(e.base, settings.prior, settings.prior_relative_std);
+    e.standard_prior = standard_from_base(e.base, settings.prior);
   }
   const int k = friction_count(e.model);
   e.tau_hat.resize(d.q.rows(), 6);

@@ -1,8 +1,13 @@
 #include "dyncal_host/survey/standard_parameters.hpp"
 
 #include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <initializer_list>
 #include <random>
+#include <utility>
 
+#include "dyncal_host/input_error.hpp"
 #include "er20/robot.hpp"
 
 namespace dyncal::host::survey {
@@ -36,25 +41,63 @@ Eigen::VectorXd set_standard() {
   return phi;
 }
 
-Eigen::VectorXd cad_prior(double relative_error, std::uint64_t seed) {
+namespace {
+
+/// Standard deviations of one link's 10 drawn parameters: relative_error x max(|v_i|, 5 % of the
+/// largest |v| of the same kind); kinds are index ranges.
+void kind_scaled_std(const double* v, double relative_error, std::initializer_list<std::pair<int, int>> kinds,
+                     double* sd) {
+  for (const auto& [from, to] : kinds) {
+    double m = 0;
+    for (int i = from; i < to; ++i) m = std::max(m, std::fabs(v[i]));
+    if (m == 0.0) throw InputError("CAD prior: a link has no nonzero value of a kind, so no scale for its error");
+    for (int i = from; i < to; ++i) sd[i] = relative_error * std::max(std::fabs(v[i]), 0.05 * m);
+  }
+}
+
+}  // namespace
+
+CadPrior cad_prior(double relative_error, std::uint64_t seed, PriorErrors on) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(-relative_error, relative_error);
-  Eigen::VectorXd phi = set_standard();
-  for (int i = 0; i < kStandard; ++i) phi[i] *= 1.0 + u(rng);
-  return phi;
+  const Eigen::VectorXd set = set_standard();
+  CadPrior p;
+  p.mean.resize(kStandard);
+  p.covariance = Eigen::MatrixXd::Zero(kStandard, kStandard);
+  p.whitening = Eigen::MatrixXd::Zero(kStandard, kStandard);
+  for (int l = 0; l < kLinks; ++l) {
+    using Mat10 = Eigen::Matrix<double, 10, 10>;
+    Mat10 J = Mat10::Identity();
+    double sd[10];
+    double* mean = p.mean.data() + 10 * l;
+    if (on == PriorErrors::table5) {
+      std::array<double, 10> v = physical_parameters(set.data() + 10 * l);
+      for (double& x : v) x *= 1.0 + u(rng);
+      Eigen::Matrix<double, 10, 10, Eigen::RowMajor> jr;
+      standard_from_physical(v, mean, jr.data());
+      J = jr;
+      kind_scaled_std(v.data(), relative_error, {{0, 1}, {1, 4}, {4, 10}}, sd);
+    } else {
+      for (int i = 0; i < 10; ++i) mean[i] = set[10 * l + i] * (1.0 + u(rng));
+      kind_scaled_std(mean, relative_error, {{0, 6}, {6, 9}, {9, 10}}, sd);
+    }
+    const Mat10 P = J * Eigen::Map<const Eigen::Matrix<double, 10, 1>>(sd).cwiseAbs2().asDiagonal() * J.transpose();
+    p.covariance.block<10, 10>(10 * l, 10 * l) = P;
+    const Mat10 L = P.llt().matrixL();
+    p.whitening.block<10, 10>(10 * l, 10 * l) = L.triangularView<Eigen::Lower>().solve(Mat10::Identity());
+  }
+  return p;
 }
 
 Eigen::VectorXd minimum_norm_standard(const Eigen::VectorXd& phi_b) {
   return base_map_pinv() * phi_b;
 }
 
-Eigen::VectorXd standard_from_base(const Eigen::VectorXd& phi_b, const Eigen::VectorXd& prior, double relative_std) {
+Eigen::VectorXd standard_from_base(const Eigen::VectorXd& phi_b, const CadPrior& prior) {
   const Eigen::MatrixXd& G = base_map();
-  const Eigen::VectorXd s2 = (relative_std * prior).cwiseAbs2();
-  const Eigen::MatrixXd GS2 = G * s2.asDiagonal();
-  const Eigen::MatrixXd A = GS2 * G.transpose();
-  const Eigen::VectorXd lambda = A.completeOrthogonalDecomposition().solve(phi_b - G * prior);
-  return prior + GS2.transpose() * lambda;
+  const Eigen::MatrixXd PGt = prior.covariance * G.transpose();
+  const Eigen::VectorXd lambda = (G * PGt).completeOrthogonalDecomposition().solve(phi_b - G * prior.mean);
+  return prior.mean + PGt * lambda;
 }
 
 std::array<double, 10> physical_parameters(const double* p) {
@@ -68,6 +111,38 @@ std::array<double, 10> physical_parameters(const double* p) {
   // Parallel axis (Huygens-Steiner): I_origin = I_com + m (c^T c 1 - c c^T).
   const Eigen::Matrix3d Ic = I - m * (c.squaredNorm() * Eigen::Matrix3d::Identity() - c * c.transpose());
   return {m, c[0], c[1], c[2], Ic(0, 0), Ic(0, 1), Ic(0, 2), Ic(1, 1), Ic(1, 2), Ic(2, 2)};
+}
+
+void standard_from_physical(const std::array<double, 10>& v, double* p, double* jac) {
+  const double m = v[0];
+  const Eigen::Vector3d c(v[1], v[2], v[3]);
+  Eigen::Matrix3d Ic;
+  Ic << v[4], v[5], v[6], v[5], v[7], v[8], v[6], v[8], v[9];
+  const Eigen::Matrix3d S = c.squaredNorm() * Eigen::Matrix3d::Identity() - c * c.transpose();
+  const Eigen::Matrix3d I = Ic + m * S;
+  constexpr int kRow[6] = {0, 0, 0, 1, 1, 2}, kCol[6] = {0, 1, 2, 1, 2, 2};
+  for (int k = 0; k < 6; ++k) p[k] = I(kRow[k], kCol[k]);
+  for (int a = 0; a < 3; ++a) p[6 + a] = m * c[a];
+  p[9] = m;
+  if (!jac) return;
+  Eigen::Map<Eigen::Matrix<double, 10, 10, Eigen::RowMajor>> J(jac);
+  J.setZero();
+  for (int k = 0; k < 6; ++k) {
+    J(k, 0) = S(kRow[k], kCol[k]);
+    J(k, 4 + k) = 1.0;
+    for (int a = 0; a < 3; ++a) {
+      // d/dc_a of m (c^T c 1 - c c^T) = m (2 c_a 1 - e_a c^T - c e_a^T).
+      Eigen::Matrix3d E = 2.0 * c[a] * Eigen::Matrix3d::Identity();
+      E.row(a) -= c.transpose();
+      E.col(a) -= c;
+      J(k, 1 + a) = m * E(kRow[k], kCol[k]);
+    }
+  }
+  for (int a = 0; a < 3; ++a) {
+    J(6 + a, 0) = c[a];
+    J(6 + a, 1 + a) = m;
+  }
+  J(9, 0) = 1.0;
 }
 
 Eigen::Matrix4d pseudo_inertia(const double* p) {

@@ -80,14 +80,14 @@ json run_survey(const RobotDescription& robot, const SurveyOptions& o) {
     oo.population = 60;
     oo.generations = 500;
   }
-  ms.prior = cad_prior(o.prior_error, o.seed);
-  ms.prior_relative_std = o.prior_error;
+  ms.prior = cad_prior(o.prior_error, o.seed, o.prior_on);
   std::array<double, 6> tau_max{};
   for (int j = 0; j < 6; ++j) tau_max[j] = robot.tau_max[j];
   json result;
   result["settings"] = {{"seed", o.seed},
                         {"quick", o.quick},
                         {"prior_error", o.prior_error},
+                        {"prior_on", o.prior_on == PriorErrors::table5 ? "table5" : "standard"},
                         {"sample_rate_hz", 100},
                         {"periods", o.quick ? 1 : 2},
                         {"mu", ms.mu},
@@ -361,8 +361,9 @@ void print_survey(std::ostream& out, const json& r, const json& pub) {
   out << "dyncal survey: the survey's simulation study (Sec. 6) on the er20 through the simulated drive\n"
       << "100 Hz sampling, " << s["periods"].get<int>()
       << " period(s) of a Fourier excitation (Eq. 27, L = 5, f_f = 0.1 Hz), "
-      << "seed " << s["seed"].get<std::uint64_t>() << "; CAD prior: set values x (1 + U(-"
-      << s["prior_error"].get<double>() << ", +" << s["prior_error"].get<double>() << "))\n"
+      << "seed " << s["seed"].get<std::uint64_t>() << "; CAD prior: set "
+      << (s.value("prior_on", "standard") == "table5" ? "Table 5 parameters (m, c, I about c)" : "standard parameters")
+      << " x (1 + U(-" << s["prior_error"].get<double>() << ", +" << s["prior_error"].get<double>() << "))\n"
       << "cond(K) of the designed excitations (dyncal excite; Eq. 26, unit-scaled columns): "
       << fmt(r["models"]["eq7"]["trajectory_cond"].get<double>(), 2) << " for Eq. 7, "
       << fmt(r["models"]["eq4"]["trajectory_cond"].get<double>(), 2) << " for Eq. 4 (survey: 4.6 and 5.7)\n"

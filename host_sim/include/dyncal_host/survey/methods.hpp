@@ -10,14 +10,14 @@
 
 #include "dyncal/extended_kalman_filter.hpp"
 #include "dyncal_host/survey/estimate.hpp"
+#include "dyncal_host/survey/standard_parameters.hpp"
 #include "dyncal_host/survey/survey_data.hpp"
 #include "er20/robot.hpp"
 
 namespace dyncal::host::survey {
 
 struct MethodSettings {
-  Eigen::VectorXd prior;                                      ///< CAD standard parameters (60)
-  double prior_relative_std = 0.2;                            ///< CAD uncertainty, relative (1 sigma)
+  CadPrior prior;                                             ///< CAD prior on the standard parameters
   std::array<double, 6> sigma{10, 10, 10, 1.78, 1.78, 1.78};  ///< assumed torque noise (Table 7) [Nm]
   double mu = 0.999;                                          ///< forgetting factor (Eq. 23, 24)
   double p0 = 1e6;                                            ///< initial covariance of unknown parameters

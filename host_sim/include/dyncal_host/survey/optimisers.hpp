@@ -13,13 +13,20 @@
 
 namespace dyncal::host::survey {
 
+/// The genetic algorithm's cost over the residuals e_j / sigma_j.
+enum class Objective {
+  least_squares,  ///< sum_j mean_j^2 + var_j: the Gaussian likelihood's, which its amplitude fit minimises
+  eq25,           ///< survey Eq. 25: sum_j |mean_j| + k_e std_j
+};
+
 struct OptimiserSettings {
-  double range_width = 0.4;    ///< inertial ranges: CAD value +- range_width x |CAD value| (search_ranges)
-  double k_e = 1.0;            ///< Eq. 25 weight of the residual standard deviation
-  std::uint64_t seed = 1;      ///< GA and particle filter
-  int population = 120;        ///< GA population / particle count
-  int generations = 1500;      ///< GA generations / particle-filter iterations
-  int max_evaluations = 3000;  ///< gradient-based: objective evaluations
+  double range_width = 0.4;  ///< inertial ranges: CAD value +- range_width x |CAD value| (search_ranges)
+  double k_e = 1.0;          ///< Eq. 25 weight of the residual standard deviation
+  Objective objective = Objective::least_squares;  ///< the genetic algorithm's cost
+  std::uint64_t seed = 1;                          ///< GA and particle filter
+  int population = 120;                            ///< GA population / particle count
+  int generations = 1500;                          ///< GA generations / particle-filter iterations
+  int max_evaluations = 3000;                      ///< gradient-based: objective evaluations
 };
 
 /// Gradient-based: NLopt SLSQP from the CAD values on sum_j ||e_j / sigma_j||^2 / S (variables

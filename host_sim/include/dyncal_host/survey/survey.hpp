@@ -9,13 +9,15 @@
 #include <string>
 
 #include "dyncal_host/robot_description.hpp"
+#include "dyncal_host/survey/standard_parameters.hpp"
 
 namespace dyncal::host::survey {
 
 struct SurveyOptions {
-  bool quick = false;        ///< one excitation period (10 s, 1 000 samples) instead of two
-  std::uint64_t seed = 1;    ///< excitation, noise and CAD-prior seed
-  double prior_error = 0.2;  ///< CAD prior: set values times (1 + u), u uniform in +-prior_error
+  bool quick = false;                          ///< one excitation period (10 s, 1 000 samples) instead of two
+  std::uint64_t seed = 1;                      ///< excitation, noise and CAD-prior seed
+  double prior_error = 0.2;                    ///< CAD prior: set values times (1 + u), u uniform in +-prior_error
+  PriorErrors prior_on = PriorErrors::table5;  ///< which set values the CAD prior's errors are on
 };
 
 /// Runs the study. The result (JSON) holds, per model and method, the Sec. 5 indices without and
