@@ -92,6 +92,14 @@ TEST(CliErrors, MissingTimeColumn) {
                "missing column 't'");
 }
 
+// A command-line value outside its set: CLI11's message (which adds a --help hint line), exit 2.
+TEST(CliErrors, UnknownSurveyPriorIsRefusedBeforeAnyRun) {
+  const auto r = run_dyncal("survey --prior-on cad");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("--prior-on"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("cad"), std::string::npos) << r.err;
+}
+
 TEST(CliErrors, MissingFile) {
   expect_error("identify --robot er20 --data /nonexistent/log.csv", "cannot read");
 }
