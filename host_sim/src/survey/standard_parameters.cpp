@@ -83,7 +83,9 @@ CadPrior cad_prior(double relative_error, std::uint64_t seed, PriorErrors on) {
     }
     const Mat10 P = J * Eigen::Map<const Eigen::Matrix<double, 10, 1>>(sd).cwiseAbs2().asDiagonal() * J.transpose();
     p.covariance.block<10, 10>(10 * l, 10 * l) = P;
-    const Mat10 L = P.llt().matrixL();
+    const Eigen::LLT<Mat10> llt(P);
+    if (llt.info() != Eigen::Success) throw InputError("CAD prior: a link's covariance is not positive definite");
+    const Mat10 L = llt.matrixL();
     p.whitening.block<10, 10>(10 * l, 10 * l) = L.triangularView<Eigen::Lower>().solve(Mat10::Identity());
   }
   return p;

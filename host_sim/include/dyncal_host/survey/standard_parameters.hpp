@@ -41,7 +41,7 @@ struct CadPrior {
 /// the largest of its kind in the link) (kinds: mass; centre of mass or first moments; inertia), so
 /// that a zero value still has a finite scale; on Table 5's parameters propagated to the standard
 /// ones through the map's Jacobian at the mean (linearised). Throws InputError if a link has a
-/// kind with no nonzero value (no scale).
+/// kind with no nonzero value (no scale) or a covariance block is not positive definite (a zero mass).
 CadPrior cad_prior(double relative_error, std::uint64_t seed, PriorErrors on = PriorErrors::table5);
 
 /// The minimum-norm standard parameters with base parameters phi_b: G^+ phi_b, what a
