@@ -6,7 +6,11 @@
 // half the particle count (adaptive tempering), resamples (systematic), and rejuvenates every
 // particle by random-walk Metropolis moves whose proposal covariance is the particles' own
 // (scale 2.38 / sqrt(D), adapted towards an acceptance rate of 0.234); at b = 1 the moves go on
-// until the budget is spent. The friction amplitudes (every friction parameter but the scale
+// until the budget is spent. On the nonlinear models each step also gives every particle one
+// independence Metropolis-Hastings move of one joint's scale parameters, proposed from their
+// uniform prior on the box (acceptance exp(-b (J' - J)): prior and proposal cancel): a local
+// random walk does not cross from one decade of a Stribeck velocity to another, and the
+// joint's term of J is what decides. The friction amplitudes (every friction parameter but the scale
 // parameters, in which the torque is linear once the scales are fixed) are not sampled: each
 // particle carries their least-squares values given its other parameters, which is their
 // conditional posterior mean under a flat prior, so the particles sample the other parameters'
@@ -89,8 +93,18 @@ Estimate particle_filter(const SurveyData& data, FrictionModel model, const Meth
     X.col(i) = ui;
     if (problem.violation(x) > 0) throw InputError("particle filter: no feasible point found in the search ranges");
   }
+  // Each joint's scale-parameter coordinates (nonlinear models), for the independence moves.
+  std::array<std::vector<int>, 6> joint_scales;
+  const int kf = friction_count(model);
+  for (int k = 0; k < D; ++k) {
+    const int i = problem.free_index(k) - kStandard;
+    if (i >= 0 && !is_linear(model) && is_scale_parameter(model, i % kf)) {
+      joint_scales[static_cast<size_t>(i / kf)].push_back(k);
+    }
+  }
+  const bool independence_moves = !joint_scales[0].empty();
   double b = 0, scale = 2.38 / std::sqrt(static_cast<double>(D));
-  const int steps = options.generations / kMovesPerStep;
+  const int steps = options.generations / (kMovesPerStep + (independence_moves ? 1 : 0));
   for (int step = 0; step < steps; ++step) {
     const double b_next = std::min(1.0, b < 1.0 ? next_inverse_temperature(f, b) : 1.0);
     Eigen::VectorXd w = (-(f.array() - f.minCoeff()) * (b_next - b)).exp().matrix();
@@ -135,6 +149,21 @@ Estimate particle_filter(const SurveyData& data, FrictionModel model, const Meth
     }
     const double rate = static_cast<double>(accepted) / (kMovesPerStep * N);
     scale *= std::exp(rate - kTargetAcceptance);
+    if (independence_moves) {
+      std::uniform_int_distribution<int> joint(0, 5);
+      for (int i = 0; i < N; ++i) {
+        Eigen::VectorXd u = X.col(i);
+        for (int k : joint_scales[static_cast<size_t>(joint(rng))]) u[k] = U(rng);
+        const double logu = std::log(U(rng));
+        double fu = 0;
+        const Eigen::VectorXd x = fitted(u, fu);
+        if (problem.violation(x) > 0) continue;
+        if (logu < -b * (fu - f[i])) {
+          X.col(i) = u;
+          f[i] = fu;
+        }
+      }
+    }
   }
   // The posterior mean (feasible: the consistent set and the box are convex in these coordinates).
   const Eigen::VectorXd posterior_mean = X.rowwise().mean();
