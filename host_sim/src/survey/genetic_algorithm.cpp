@@ -129,8 +129,8 @@ Estimate genetic_algorithm(const SurveyData& data, FrictionModel model, const Me
       }
     }
     // Memetic step: the best individual's friction, joint by joint, replaced by friction_start's scan
-    // at its own inertial parameters where that lowers the joint's Eq. 25 term; one more child.
-    // Given the rigid body Eq. 25 is a sum of per-joint terms, each depending on that joint's
+    // at its own inertial parameters where that lowers the joint's term of the cost; one more child.
+    // Given the rigid body the cost is a sum of per-joint terms, each depending on that joint's
     // friction alone, and a joint whose Stribeck velocity sits in a wrong decade is not moved out of
     // it by crossover and mutation elsewhere (Eq. 4 without noise: joint 5's qds 2.65 for the set
     // 0.1, e_f 1.1, without this step).
