@@ -129,6 +129,16 @@ Estimate particle_filter(const SurveyData& data, FrictionModel model, const Meth
     Eigen::MatrixXd cov = C * C.transpose() / std::max(N - 1, 1);
     cov.diagonal().array() += 1e-14;
     const Eigen::MatrixXd L = Eigen::LLT<Eigen::MatrixXd>(cov).matrixL();
+    // Metropolis acceptance of u for particle i at the current b (u written back with its fitted
+    // amplitudes); infeasible proposals have density 0.
+    auto try_move = [&](int i, Eigen::VectorXd& u, double logu) {
+      double fu = 0;
+      const Eigen::VectorXd x = fitted(u, fu);
+      if (problem.violation(x) > 0 || !(logu < -b * (fu - f[i]))) return false;
+      X.col(i) = u;
+      f[i] = fu;
+      return true;
+    };
     int accepted = 0;
     for (int move = 0; move < kMovesPerStep; ++move) {
       for (int i = 0; i < N; ++i) {
@@ -137,14 +147,7 @@ Estimate particle_filter(const SurveyData& data, FrictionModel model, const Meth
         Eigen::VectorXd u = X.col(i) + scale * (L * z);
         const double logu = std::log(U(rng));
         if ((u.array() < 0).any() || (u.array() > 1).any()) continue;  // outside the box: density 0
-        double fu = 0;
-        const Eigen::VectorXd x = fitted(u, fu);
-        if (problem.violation(x) > 0) continue;
-        if (logu < -b * (fu - f[i])) {
-          X.col(i) = u;
-          f[i] = fu;
-          ++accepted;
-        }
+        accepted += try_move(i, u, logu);
       }
     }
     const double rate = static_cast<double>(accepted) / (kMovesPerStep * N);
@@ -154,14 +157,7 @@ Estimate particle_filter(const SurveyData& data, FrictionModel model, const Meth
       for (int i = 0; i < N; ++i) {
         Eigen::VectorXd u = X.col(i);
         for (int k : joint_scales[static_cast<size_t>(joint(rng))]) u[k] = U(rng);
-        const double logu = std::log(U(rng));
-        double fu = 0;
-        const Eigen::VectorXd x = fitted(u, fu);
-        if (problem.violation(x) > 0) continue;
-        if (logu < -b * (fu - f[i])) {
-          X.col(i) = u;
-          f[i] = fu;
-        }
+        try_move(i, u, std::log(U(rng)));
       }
     }
   }
