@@ -22,25 +22,26 @@ double mean_relative_error(const double* set, const double* est, int n, int* cou
 
 }  // namespace
 
+double inertial_parameter_error(const Eigen::VectorXd& phi_standard) {
+  const Eigen::VectorXd set = set_standard();
+  double sum = 0;
+  for (int l = 0; l < kLinks; ++l) {
+    const auto s = physical_parameters(set.data() + 10 * l);
+    const auto e = physical_parameters(phi_standard.data() + 10 * l);
+    sum += mean_relative_error(s.data(), e.data(), 10, nullptr);
+  }
+  return sum / kLinks;
+}
+
 Indices evaluate(const Estimate& est, const Scenario& scenario, const Eigen::MatrixXd& tau,
                  const std::array<double, 6>& tau_max) {
   Indices x;
-  const Eigen::VectorXd set = set_standard();
-  auto e_d = [&](const Eigen::VectorXd& phi) {
-    double sum = 0;
-    for (int l = 0; l < kLinks; ++l) {
-      const auto s = physical_parameters(set.data() + 10 * l);
-      const auto e = physical_parameters(phi.data() + 10 * l);
-      sum += mean_relative_error(s.data(), e.data(), 10, nullptr);
-    }
-    return sum / kLinks;
-  };
-  x.e_d = e_d(est.standard);
-  x.e_d_prior = e_d(est.standard_prior);
+  x.e_d = inertial_parameter_error(est.standard);
+  x.e_d_prior = inertial_parameter_error(est.standard_prior);
   const std::vector<double> f = set_friction(scenario, est.model);
   if (f.size() != est.friction.size()) throw InputError("estimate has the wrong number of friction parameters");
   x.e_f = mean_relative_error(f.data(), est.friction.data(), static_cast<int>(f.size()), nullptr);
-  const Eigen::VectorXd set_b = base_map() * set;
+  const Eigen::VectorXd set_b = base_map() * set_standard();
   x.e_b = mean_relative_error(set_b.data(), est.base.data(), kBase, nullptr);
   // Torque error normalised per joint by its maximum driving torque, pooled over joints and samples.
   const double n = static_cast<double>(tau.size());

@@ -456,8 +456,8 @@ std::vector<double> friction_start(const SurveyData& d, FrictionModel model, con
   const int kf = friction_count(model);
   const SearchRanges ranges = search_ranges(d, model, Eigen::VectorXd::Zero(kStandard), 0.0);
   std::vector<double> out(static_cast<size_t>(6 * kf), 0.0);
+  if (intervals) intervals->resize(6);
   for (int j = 0; j < 6; ++j) {
-    if (intervals) intervals->resize(6);
     const std::vector<double> th =
         fit_joint_friction(model, d.qd.col(j), d.tau_load.col(j), residual.col(j), velocity_scale_range(d, j),
                            intervals ? &(*intervals)[static_cast<size_t>(j)] : nullptr);

@@ -43,6 +43,10 @@ struct Indices {
   double e_b = 0;        ///< base parameter error: mean |(set - est) / set| over nonzero set base parameters
 };
 
+/// e_d of survey Sec. 5 for 60 standard parameters: over the links, the mean |(set - est) / set| of
+/// Table 5's parameters (m, X Y Z, I11..I33 about the centre of mass) with nonzero set values.
+double inertial_parameter_error(const Eigen::VectorXd& phi_standard);
+
 /// tau: the measured torque the method was given (S x 6); tau_max per joint [Nm].
 Indices evaluate(const Estimate& est, const Scenario& scenario, const Eigen::MatrixXd& tau,
                  const std::array<double, 6>& tau_max);
