@@ -59,6 +59,7 @@ JointLog simulated_log(const Scenario& s, const RobotDescription& robot, double 
     for (const auto& x : d.ring()) samples.push_back(x);
     if (!d.ring().empty()) d.ack(d.ring().back().seq + 1);
   }
+  EXPECT_EQ(d.fault(), dyncal::modbus_map::DriveFault::none);
   JointLog log;
   const Eigen::Index S = static_cast<Eigen::Index>(samples.size());
   log.t.resize(S);

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <limits>
 
 #include "dyncal_host/calibrate.hpp"
 #include "dyncal_host/drive/simulated_drive.hpp"
@@ -123,6 +124,85 @@ TEST(FrictionModels, MatchTheSurveyEquations) {
   f.model = FrictionModel::eq6;
   f.f1 = 50, f.f2 = 10, f.f3 = 5, f.f4 = 20;
   EXPECT_NEAR(friction_torque(f, 0.1, 0), (50 + 10 / std::cosh(0.5)) * std::tanh(2.0) + 4, 1e-12);
+}
+
+// A table off by a unit (every parameter x100): its feed-forward throws the arm off its path, and the drive
+// must stop on its own limits instead of recording a runaway.
+std::vector<std::uint8_t> scaled_table(const SimulatedDrive& d, float factor) {
+  dyncal::ParameterTable t;
+  const auto& bytes = d.active_table_bytes();
+  EXPECT_EQ(dyncal::decode_table(bytes.data(), static_cast<int>(bytes.size()), t), dyncal::TableStatus::ok);
+  for (int i = 0; i < t.count; ++i) t.values[i] *= factor;
+  std::vector<std::uint8_t> out(dyncal::kTableMaxBytes);
+  int size = 0;
+  EXPECT_EQ(dyncal::encode_table(t, out.data(), static_cast<int>(out.size()), &size), dyncal::TableStatus::ok);
+  out.resize(static_cast<size_t>(size));
+  return out;
+}
+
+TEST_F(SimulatedDriveTest, StopsOnTheRobotsLimitsWhenATableThrowsTheArmOffItsPathAndRestartsClean) {
+  const std::string path = std::filesystem::temp_directory_path() / ("dyncal_trip_" + std::to_string(getpid()));
+  std::filesystem::remove(path);
+  SimulatedDrive d(robot, base(), path);
+  const std::vector<std::uint8_t> factory = d.active_table_bytes();
+  const std::vector<std::uint8_t> runaway = scaled_table(d, 100.0f);
+  ASSERT_EQ(d.commit(runaway.data(), static_cast<int>(runaway.size())), dyncal::TableStatus::ok);
+  d.trajectory = default_excitation(robot, 0.1, 5, 1, 3, nullptr);
+  d.periods = 1;
+  d.sample_rate_hz = 1000;
+  d.start();
+  std::uint32_t last_seq = 0;
+  while (d.state() == dyncal::modbus_map::DriveState::playing) {
+    d.step();
+    if (!d.ring().empty()) {
+      last_seq = d.ring().back().seq;
+      d.ack(last_seq + 1);
+    }
+  }
+  ASSERT_EQ(d.state(), dyncal::modbus_map::DriveState::fault);
+  ASSERT_NE(d.fault(), dyncal::modbus_map::DriveFault::none);
+  ASSERT_NE(d.fault(), dyncal::modbus_map::DriveFault::non_finite_state);
+  const int j = d.fault_joint() - 1;
+  ASSERT_GE(j, 0);
+  ASSERT_LT(j, 6);
+  if (d.fault() == dyncal::modbus_map::DriveFault::velocity_limit) {
+    EXPECT_GT(std::fabs(d.fault_value()), robot.qd_max[j]);
+  } else {
+    EXPECT_TRUE(d.fault_value() < robot.q_min[j] || d.fault_value() > robot.q_max[j]) << d.fault_value();
+  }
+  // Stopped early (the trajectory is 10 s) and recorded nothing after the trip.
+  EXPECT_LT(d.time(), 5.0);
+  EXPECT_EQ(d.produced(), last_seq + 1);
+  d.step();
+  EXPECT_EQ(d.produced(), last_seq + 1);
+  // The factory table back, a start clears the fault and the trajectory plays to its end.
+  ASSERT_EQ(d.commit(factory.data(), static_cast<int>(factory.size())), dyncal::TableStatus::ok);
+  d.start();
+  EXPECT_EQ(d.fault(), dyncal::modbus_map::DriveFault::none);
+  while (d.state() == dyncal::modbus_map::DriveState::playing) {
+    d.step();
+    if (!d.ring().empty()) d.ack(d.ring().back().seq + 1);
+  }
+  EXPECT_EQ(d.state(), dyncal::modbus_map::DriveState::finished);
+  EXPECT_EQ(d.produced(), 10000u);
+  std::filesystem::remove(path);
+}
+
+TEST_F(SimulatedDriveTest, StopsOnANonFiniteState) {
+  const std::string path = std::filesystem::temp_directory_path() / ("dyncal_nan_" + std::to_string(getpid()));
+  std::filesystem::remove(path);
+  Scenario s = base();
+  s.friction[2].beta = std::numeric_limits<double>::quiet_NaN();  // the plant's integration fails
+  SimulatedDrive d(robot, s, path);
+  d.trajectory = default_excitation(robot, 0.1, 5, 1, 3, nullptr);
+  d.periods = 1;
+  d.start();
+  for (int k = 0; k < 10 && d.state() == dyncal::modbus_map::DriveState::playing; ++k) d.step();
+  ASSERT_EQ(d.state(), dyncal::modbus_map::DriveState::fault);
+  EXPECT_EQ(d.fault(), dyncal::modbus_map::DriveFault::non_finite_state);
+  EXPECT_TRUE(std::isnan(d.fault_value()));
+  EXPECT_EQ(d.produced(), 1u);  // the sample before the plant diverged
+  std::filesystem::remove(path);
 }
 
 }  // namespace

@@ -228,6 +228,11 @@ void add_drive_commands(CLI::App& app, std::function<int()>& run, const std::str
   cal->add_flag("--no-flash", s->no_flash, "identify and verify, but leave the drive's table alone");
   cal->add_flag("--diagnose", s->cal.diagnose,
                 "diagnose the residual (as dyncal diagnose) and flash the effects found with the table");
+  cal->add_option("--save-log", s->cal.save_log,
+                  "write the excitation log here (CSV, as dyncal identify --data reads)");
+  cal->add_option("--fault-dir", s->cal.fault_dir,
+                  "where a run the drive stops on a fault leaves the samples recorded before it")
+      ->capture_default_str();
   cal->add_flag("--quiet", s->quiet, "no progress output");
   cal->add_option("--report", s->report, "write the report as JSON");
   cal->callback([&run, s] { run = [s] { return run_calibrate(*s); }; });

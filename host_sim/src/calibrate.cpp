@@ -3,6 +3,8 @@
 #include <Eigen/SVD>
 #include <chrono>
 #include <cmath>
+#include <ctime>
+#include <filesystem>
 #include <functional>
 #include <iomanip>
 #include <memory>
@@ -146,7 +148,8 @@ struct Verify {
 JointLog verification_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory& t, const CalibrateOptions& o,
                           std::ostream* progress, std::uint32_t* lost, std::array<double, 6>& drive_error) {
   double secs = 0;
-  JointLog log = stream_run(drive, t, o.verify_periods, o.sample_rate_hz, progress, lost, &secs, nullptr);
+  JointLog log = stream_run(drive, t, {"verification", o.verify_periods, o.sample_rate_hz, o.fault_dir}, progress, lost,
+                            &secs, nullptr);
   linux_port::DriveInfo info;
   if (!drive.read_info(info)) throw InputError("drive: " + drive.error());
   drive_error = info.model_error_rms;
@@ -189,13 +192,44 @@ linux_port::Trajectory default_excitation(const RobotDescription& robot, double 
   return best;
 }
 
-JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory& trajectory, int periods,
-                    double sample_rate_hz, std::ostream* progress, std::uint32_t* lost, double* seconds,
+namespace {
+
+/// The streamed samples as a log: q and tau, t from seq.
+JointLog samples_to_log(const std::vector<port::DriveSample>& samples, double sample_rate_hz) {
+  const Eigen::Index S = static_cast<Eigen::Index>(samples.size());
+  JointLog log;
+  log.t.resize(S);
+  log.q.resize(S, 6);
+  log.tau.resize(S, 6);
+  for (Eigen::Index s = 0; s < S; ++s) {
+    const auto& d = samples[static_cast<size_t>(s)];
+    log.t[s] = static_cast<double>(d.seq) / sample_rate_hz;
+    for (int j = 0; j < 6; ++j) {
+      log.q(s, j) = d.q[j];
+      log.tau(s, j) = d.tau[j];
+    }
+  }
+  log.source = "drive";
+  return log;
+}
+
+/// `dir`/dyncal-fault-`run`-YYYYmmddTHHMMSS.csv (local time).
+std::string fault_log_path(const StreamRun& run) {
+  const std::time_t now = std::time(nullptr);
+  char stamp[32];
+  std::strftime(stamp, sizeof stamp, "%Y%m%dT%H%M%S", std::localtime(&now));
+  return (std::filesystem::path(run.fault_dir) / ("dyncal-fault-" + run.name + "-" + stamp + ".csv")).string();
+}
+
+}  // namespace
+
+JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory& trajectory, const StreamRun& run,
+                    std::ostream* progress, std::uint32_t* lost, double* seconds,
                     const std::function<void(const port::DriveSample&)>& on_sample) {
-  if (!drive.write_trajectory(trajectory, periods, sample_rate_hz)) throw InputError("drive: " + drive.error());
+  if (!drive.write_trajectory(trajectory, run.periods, run.sample_rate_hz)) throw InputError("drive: " + drive.error());
   const auto t0 = SteadyClock::now();
   if (!drive.start()) throw InputError("drive: " + drive.error());
-  const long expected = std::lround(periods * trajectory.period() * sample_rate_hz);
+  const long expected = std::lround(run.periods * trajectory.period() * run.sample_rate_hz);
   std::vector<port::DriveSample> samples;
   samples.reserve(static_cast<size_t>(expected));
   port::DriveSample block[mm::kSamplesPerBlock];
@@ -205,6 +239,14 @@ JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory
     const port::PortStatus st = drive.read(block, mm::kSamplesPerBlock, &n);
     if (st == port::PortStatus::end_of_stream) break;
     if (st == port::PortStatus::transport_error) throw InputError("drive: " + drive.error());
+    if (st == port::PortStatus::device_fault) {
+      if (progress) *progress << "\n";
+      if (samples.empty()) throw DriveFaultError(drive.error() + "; no sample was recorded before it");
+      const std::string path = fault_log_path(run);
+      write_csv_log(path, samples_to_log(samples, run.sample_rate_hz));
+      throw DriveFaultError(drive.error() + "; the " + std::to_string(samples.size()) +
+                            " samples recorded before it (" + run.name + " run) are in " + path);
+    }
     if (st == port::PortStatus::sequence_gap) {
       throw InputError(
           "drive overrun: " + std::to_string(drive.lost()) +
@@ -226,22 +268,40 @@ JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory
   }
   if (seconds) *seconds = seconds_since(t0);
   if (lost) *lost += drive.lost();
-  const Eigen::Index S = static_cast<Eigen::Index>(samples.size());
-  if (S < 10) throw InputError("drive delivered only " + std::to_string(S) + " samples");
-  JointLog log;
-  log.t.resize(S);
-  log.q.resize(S, 6);
-  log.tau.resize(S, 6);
-  for (Eigen::Index s = 0; s < S; ++s) {
-    const auto& d = samples[static_cast<size_t>(s)];
-    log.t[s] = static_cast<double>(d.seq) / sample_rate_hz;
-    for (int j = 0; j < 6; ++j) {
-      log.q(s, j) = d.q[j];
-      log.tau(s, j) = d.tau[j];
-    }
+  if (samples.size() < 10) throw InputError("drive delivered only " + std::to_string(samples.size()) + " samples");
+  return samples_to_log(samples, run.sample_rate_hz);
+}
+
+FlashOutcome flash_and_verify(linux_port::ModbusDrive& drive, const ParameterTable& table,
+                              const std::function<void()>& verify) {
+  ParameterTable previous;
+  TableStatus previous_status = TableStatus::ok;
+  if (drive.read(previous, &previous_status) != port::PortStatus::ok) {
+    throw InputError("drive: cannot read the active table before flashing: " +
+                     (previous_status != TableStatus::ok ? to_string(previous_status) : drive.error()));
   }
-  log.source = "drive";
-  return log;
+  FlashOutcome f;
+  const port::PortStatus st = drive.write(table, &f.status);
+  if (st == port::PortStatus::transport_error) throw InputError("flash failed: " + drive.error());
+  if (st != port::PortStatus::ok) {
+    f.message = std::string("drive rejected the table: ") + to_string(f.status);
+    return f;
+  }
+  f.flashed = true;
+  f.message = "flashed, read back and compared: identical";
+  try {
+    verify();
+  } catch (const DriveFaultError& fault) {
+    // The new table made the drive trip: the one it replaced goes back before anything else.
+    TableStatus reason = TableStatus::ok;
+    const port::PortStatus back = drive.write(previous, &reason);
+    throw DriveFaultError("with the new table, " + std::string(fault.what()) + ". " +
+                          (back == port::PortStatus::ok
+                               ? "The previous table was flashed back."
+                               : "Flashing the previous table back failed: " +
+                                     (back == port::PortStatus::rejected ? to_string(reason) : drive.error())));
+  }
+  return f;
 }
 
 CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions& o, std::ostream& progress) {
@@ -273,8 +333,12 @@ CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions&
            << " Hz, cond(K) = " << std::setprecision(3) << r.trajectory_cond << "\n";
   SampleSink sink;
   with_term_set<Online>(o.terms, Vec(robot.qd_max), o, sink);
-  const JointLog log =
-      stream_run(*drive, excitation, o.periods, o.sample_rate_hz, prog, &r.lost, &r.stream_seconds, sink.push);
+  const JointLog log = stream_run(*drive, excitation, {"excitation", o.periods, o.sample_rate_hz, o.fault_dir}, prog,
+                                  &r.lost, &r.stream_seconds, sink.push);
+  if (!o.save_log.empty()) {
+    write_csv_log(o.save_log, log);
+    progress << "excitation log written to " << o.save_log << "\n";
+  }
   sink.finish(r);
   r.samples = static_cast<long>(log.samples());
   r.samples_per_second = static_cast<double>(r.samples) / std::max(1e-9, r.stream_seconds);
@@ -314,18 +378,14 @@ CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions&
       for (const auto& e : d.effects) progress << "\n  " << e.explanation;
       progress << "\n";
     }
-    const port::PortStatus st = drive->write(table, &r.flash_status);
-    r.flashed = st == port::PortStatus::ok;
-    r.flash_message = st == port::PortStatus::rejected
-                          ? std::string("drive rejected the table: ") + to_string(r.flash_status)
-                      : st == port::PortStatus::ok ? "flashed, read back and compared: identical"
-                                                   : "flash failed: " + drive->error();
-    if (st == port::PortStatus::transport_error) throw InputError(r.flash_message);
-    progress << r.flash_message << "\n";
-    if (r.flashed) {
-      progress << "verification run with the new table\n";
+    const FlashOutcome f = flash_and_verify(*drive, table, [&] {
+      progress << "flashed, read back and compared: identical\nverification run with the new table\n";
       verification_run(*drive, fresh, o, prog, &r.lost, r.drive_error_after);
-    }
+    });
+    r.flashed = f.flashed;
+    r.flash_status = f.status;
+    r.flash_message = f.message;
+    if (!f.flashed) progress << r.flash_message << "\n";
   }
   r.total_seconds = seconds_since(t0);
   return r;

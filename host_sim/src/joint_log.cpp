@@ -2,7 +2,11 @@
 
 #include <Eigen/LU>
 #include <cmath>
+#include <cstdio>
+#include <fstream>
 #include <map>
+#include <utility>
+#include <vector>
 
 #include "dyncal_host/input_error.hpp"
 #include "dyncal_host/numeric_csv.hpp"
@@ -32,6 +36,35 @@ void check_time(const Eigen::VectorXd& t, const std::string& path) {
 }
 
 }  // namespace
+
+void write_csv_log(const std::string& path, const JointLog& log) {
+  std::ofstream out(path);
+  if (!out) throw InputError("cannot write '" + path + "'");
+  const int n = log.joints();
+  std::vector<std::pair<const Eigen::MatrixXd*, std::string>> blocks{{&log.q, "q"}};
+  if (log.has_qd) blocks.emplace_back(&log.qd, "qd");
+  if (log.has_qdd) blocks.emplace_back(&log.qdd, "qdd");
+  blocks.emplace_back(&log.tau, "tau");
+  out << "t";
+  for (const auto& b : blocks) {
+    for (int j = 1; j <= n; ++j) out << ',' << b.second << j;
+  }
+  out << '\n';
+  char number[32];
+  for (Eigen::Index s = 0; s < log.samples(); ++s) {
+    std::snprintf(number, sizeof number, "%.17g", log.t[s]);
+    out << number;
+    for (const auto& b : blocks) {
+      for (int j = 0; j < n; ++j) {
+        std::snprintf(number, sizeof number, ",%.17g", (*b.first)(s, j));
+        out << number;
+      }
+    }
+    out << '\n';
+  }
+  out.flush();
+  if (!out) throw InputError("cannot write '" + path + "'");
+}
 
 JointLog read_csv_log(const std::string& path, int expected_joints) {
   const NumericCsv csv = read_numeric_csv(path);

@@ -89,6 +89,11 @@ int main(int argc, char** argv) {
       if (!drive.ring().empty()) drive.ack(drive.ring().back().seq + 1);
     }
     std::filesystem::remove(table);
+    if (drive.state() == dyncal::modbus_map::DriveState::fault) {
+      std::fprintf(stderr, "replay_data: the simulated drive stopped: joint %d %s\n", drive.fault_joint(),
+                   dyncal::modbus_map::to_string(drive.fault()));
+      return 1;
+    }
     const double* sigma = scenario.tau_noise_std.data();
     dyncal::replay::Counts ck, cr, ce, cf;
     const auto kf = reference<Updater::kf>(samples, sigma, ck);

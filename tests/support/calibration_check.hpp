@@ -1,9 +1,11 @@
 #pragma once
 // Calibration against a fixture drive compared with the scenario's true parameters.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <optional>
 #include <sstream>
 
@@ -11,6 +13,7 @@
 #include "dyncal_host/calibrate.hpp"
 #include "dyncal_host/drive/ground_truth.hpp"
 #include "dyncal_host/drive/scenario.hpp"
+#include "dyncal_host/joint_log.hpp"
 #include "er20/robot.hpp"
 #include "support/drive_uri.hpp"
 
@@ -32,10 +35,23 @@ inline void calibrate_and_compare(const char* env, const std::string& scenario_f
   o.terms = parse_model("eq7,rotor_inertia,offset");
   o.progress = false;
   o.excitation = excitation;
+  o.save_log =
+      (std::filesystem::temp_directory_path() / ("dyncal_excitation_" + std::to_string(getpid()) + ".csv")).string();
   std::ostringstream progress;
   const CalibrateResult r = calibrate(robot, o, progress);
   ASSERT_TRUE(r.flashed) << r.flash_message;
   EXPECT_EQ(r.lost, 0u);
+  // The saved excitation log is the data the batch fit used: identify on it gives the same values.
+  {
+    const JointLog saved = read_csv_log(o.save_log, 6);
+    std::filesystem::remove(o.save_log);
+    EXPECT_EQ(saved.samples(), r.samples);
+    IdentifyOptions io = o.identify;
+    io.terms = o.terms;
+    const IdentifyResult again = identify(robot, saved, io);
+    ASSERT_EQ(again.params.size(), r.phi_batch.size());
+    for (size_t i = 0; i < r.phi_batch.size(); ++i) EXPECT_EQ(again.params[i].value, r.phi_batch[i]) << i;
+  }
   const auto truth = true_parameters(scenario, o.terms);
   ASSERT_EQ(truth.size(), r.phi_batch.size());
   // Torque share of each parameter on the excitation: share_i = max_j RMS(K_ji phi_i) / RMS(tau_j),

@@ -35,6 +35,9 @@ struct CalibrateOptions {
   bool flash = true;
   bool diagnose = false;  ///< run dyncal diagnose on the excitation and flash the effects found
   bool progress = true;   ///< progress bar on the progress stream
+  std::string save_log;   ///< if set, the excitation log is written here as CSV (dyncal identify --data)
+  /// Where a run that ends in a drive fault leaves the samples recorded before it.
+  std::string fault_dir = ".";
   IdentifyOptions identify = stiction_excluded();  ///< batch fit settings (terms copied from above)
 
   /// Batch defaults for drive data: rows of a joint below 2 % of its top speed are left out of the
@@ -73,15 +76,43 @@ struct CalibrateResult {
 };
 
 /// Runs the whole loop on the drive at options.uri. Throws InputError (bad options, wrong robot,
-/// lost samples, transport failure) with a message in words.
+/// lost samples, transport failure) with a message in words; DriveFaultError when the drive trips
+/// (samples kept, see stream_run). If the verification run with the newly flashed table trips, the
+/// table active before is flashed back first and the message says so.
 CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions& options, std::ostream& progress);
 
 void print_calibrate_report(std::ostream& out, const CalibrateResult& r);
 
+/// Outcome of flash_and_verify: flashed (and read back identical), else the drive's reason.
+struct FlashOutcome {
+  bool flashed = false;
+  TableStatus status = TableStatus::ok;
+  std::string message;
+};
+
+/// Flashes `table` (staging bank, commit, read-back comparison), then runs `verify` with it active.
+/// If `verify` throws DriveFaultError (the drive tripped with the new table), the table that was
+/// active before is flashed back and the error rethrown saying so. A table the drive rejects is
+/// returned as not flashed (`verify` not run). Throws InputError on transport failure.
+FlashOutcome flash_and_verify(linux_port::ModbusDrive& drive, const ParameterTable& table,
+                              const std::function<void()>& verify);
+
+/// One streamed run: its name in messages and fault-log names, periods, sample rate [Hz], and the
+/// directory a fault leaves its samples in.
+struct StreamRun {
+  std::string name;
+  int periods = 1;
+  double sample_rate_hz = 1000;
+  std::string fault_dir = ".";
+};
+
 /// Streams one run of `trajectory` from the drive into a log (q and tau; t from seq), handing each
-/// sample to `on_sample` (if set) as it arrives. Throws InputError on transport errors or lost samples.
-JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory& trajectory, int periods,
-                    double sample_rate_hz, std::ostream* progress, std::uint32_t* lost, double* seconds,
+/// sample to `on_sample` (if set) as it arrives. Throws InputError on transport errors or lost
+/// samples, and DriveFaultError when the drive stops on a fault: the samples recorded before it are
+/// first written (write_csv_log) to run.fault_dir/dyncal-fault-NAME-YYYYmmddTHHMMSS.csv, which the
+/// message names.
+JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory& trajectory, const StreamRun& run,
+                    std::ostream* progress, std::uint32_t* lost, double* seconds,
                     const std::function<void(const port::DriveSample&)>& on_sample);
 
 /// A Fourier excitation (Eq. 27) inside the robot's position, velocity and acceleration limits

@@ -12,4 +12,11 @@ class InputError : public std::runtime_error {
   explicit InputError(const std::string& what) : std::runtime_error(what) {}
 };
 
+/// The drive stopped a trajectory on a fault (DriveFault). The message says which joint, which
+/// limit and where the samples recorded before it were saved.
+class DriveFaultError : public InputError {
+ public:
+  explicit DriveFaultError(const std::string& what) : InputError(what) {}
+};
+
 }  // namespace dyncal::host

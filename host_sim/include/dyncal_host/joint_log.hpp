@@ -25,6 +25,11 @@ struct JointLog {
 /// (with its line and column), non-monotonic or non-uniform time, fewer than 3 samples.
 JointLog read_csv_log(const std::string& path, int expected_joints);
 
+/// Writes `log` as a CSV that read_csv_log reads back exactly: header `t, q1..qN, [qd1..qdN,]
+/// [qdd1..qddN,] tau1..tauN` (qd, qdd only when measured), 17 significant digits. Throws
+/// InputError when the file cannot be written.
+void write_csv_log(const std::string& path, const JointLog& log);
+
 /// Reads the TX40 data set (`pos_read_data.csv`: motor positions [rad]; `curr_data.csv`: motor
 /// torques [Nm]; 5 kHz, no time column) from `folder` and converts it to the joint side:
 /// q = N^-1 q_m + offsets, tau = N^T tau_m, with N the robot's transmission matrix.

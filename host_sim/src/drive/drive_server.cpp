@@ -38,6 +38,9 @@ void refresh_inputs(const SimulatedDrive& d, std::uint16_t* in, long& table_gene
   mm::set_u32(in + mm::kOverrunReg, d.overruns());
   const auto err = d.model_error_rms();
   for (int j = 0; j < kDriveJoints; ++j) mm::set_f32(in + mm::kModelErrorReg + 2 * j, static_cast<float>(err[j]));
+  in[mm::kFaultReg] = static_cast<std::uint16_t>(d.fault());
+  in[mm::kFaultJointReg] = static_cast<std::uint16_t>(d.fault_joint());
+  mm::set_f32(in + mm::kFaultValueReg, static_cast<float>(d.fault_value()));
   // The table registers change only with the table: copy them when it changed.
   if (table_generation != static_cast<long>(d.table_generation())) {
     const auto& bytes = d.active_table_bytes();
@@ -218,6 +221,11 @@ class Server {
     } else {
       const double wall = std::chrono::duration<double>(Clock::now() - wall_start_).count();
       while (drive_.state() == mm::DriveState::playing && drive_.time() < wall) drive_.step();
+    }
+    if (drive_.state() == mm::DriveState::fault) {
+      std::printf("dyncal drive: fault at t = %.3f s: joint %d, %s (%g)\n", drive_.time(), drive_.fault_joint(),
+                  mm::to_string(drive_.fault()), drive_.fault_value());
+      std::fflush(stdout);
     }
   }
 

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <optional>
 #include <stdexcept>
 #include <thread>
@@ -80,6 +81,29 @@ ParameterTable factory_table() {
   return t;
 }
 
+/// A drive trip: which limit, the 0-based joint, the measured value that broke it.
+struct Trip {
+  modbus_map::DriveFault fault = modbus_map::DriveFault::none;
+  int joint = 0;
+  double value = 0;
+};
+
+/// The first limit the measurements break: a non-finite q or qd on any joint first (the plant
+/// diverged), then positions outside [q_min, q_max], then speeds above qd_max; joint 1 first.
+Trip check_limits(const Vec& q, const Vec& qd, const Vec& q_min, const Vec& q_max, const Vec& qd_max) {
+  for (int j = 0; j < kDriveJoints; ++j) {
+    if (!std::isfinite(q[j]) || !std::isfinite(qd[j]))
+      return {modbus_map::DriveFault::non_finite_state, j, std::numeric_limits<double>::quiet_NaN()};
+  }
+  for (int j = 0; j < kDriveJoints; ++j) {
+    if (q[j] < q_min[j] || q[j] > q_max[j]) return {modbus_map::DriveFault::position_limit, j, q[j]};
+  }
+  for (int j = 0; j < kDriveJoints; ++j) {
+    if (std::fabs(qd[j]) > qd_max[j]) return {modbus_map::DriveFault::velocity_limit, j, qd[j]};
+  }
+  return {};
+}
+
 std::vector<std::uint8_t> encode(const ParameterTable& t) {
   std::vector<std::uint8_t> bytes(kTableMaxBytes);
   int size = 0;
@@ -99,6 +123,7 @@ struct SimulatedDrive::Impl {
   Vec q_meas_prev = Vec::Zero();
   Vec kp = Vec::Zero(), kd = Vec::Zero();
   Vec quantum = Vec::Zero();  // encoder resolution on the joint side [rad]
+  Vec q_min, q_max, qd_max;   // the robot's limits, the drive's trips
   ModelOps ops{};             // feed-forward and check of the active table's model
   std::normal_distribution<double> normal{0.0, 1.0};
 };
@@ -108,6 +133,9 @@ SimulatedDrive::SimulatedDrive(const RobotDescription& robot, const Scenario& sc
   if (robot.name != Robot::kName) throw InputError("the simulated drive runs the er20 model, not '" + robot.name + "'");
   sample_rate_hz = scenario.sample_rate_hz;
   for (int i = 0; i < Robot::kNumStandard; ++i) impl_->phi_true[i] = dyncal::generated::er20::kNominalStandard[i];
+  impl_->q_min = robot.q_min;
+  impl_->q_max = robot.q_max;
+  impl_->qd_max = robot.qd_max;
   for (int j = 0; j < kDriveJoints; ++j) {
     impl_->ia[j] = scenario.effects[j].rotor_inertia;
     impl_->quantum[j] =
@@ -175,6 +203,9 @@ void SimulatedDrive::start() {
   acked_ = produced_ = overruns_ = 0;
   error_sq_.fill(0.0);
   error_n_ = 0;
+  fault_ = modbus_map::DriveFault::none;
+  fault_joint_ = 0;
+  fault_value_ = 0;
   state_ = modbus_map::DriveState::playing;
 }
 
@@ -197,6 +228,14 @@ void SimulatedDrive::step() {
   }
   const Vec qd_meas = (q_meas - s.q_meas_prev) / dt;
   s.q_meas_prev = q_meas;
+  const Trip trip = check_limits(q_meas, qd_meas, s.q_min, s.q_max, s.qd_max);
+  if (trip.fault != modbus_map::DriveFault::none) {
+    state_ = modbus_map::DriveState::fault;
+    fault_ = trip.fault;
+    fault_joint_ = trip.joint + 1;
+    fault_value_ = trip.value;
+    return;
+  }
   // Control law (survey Fig. 3): feed-forward from the active table plus PD on the tracking error.
   Vec q_d, qd_d, qdd_d, tau_ff;
   trajectory.evaluate(time_, q_d, qd_d, qdd_d);

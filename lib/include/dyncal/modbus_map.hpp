@@ -27,10 +27,34 @@ struct Field {
 
 inline constexpr int kMaxJoints = 6;
 inline constexpr int kMaxHarmonics = 8;
-inline constexpr std::uint16_t kMapVersion = 2;
+inline constexpr std::uint16_t kMapVersion = 3;
 
-/// Drive states (input register `state`).
-enum class DriveState : std::uint16_t { idle = 0, playing = 1, finished = 2 };
+/// Drive states (input register `state`). `fault`: the drive stopped the trajectory on a trip
+/// (register `fault` says which); the next start command clears it.
+enum class DriveState : std::uint16_t { idle = 0, playing = 1, finished = 2, fault = 3 };
+
+/// Why the drive tripped (input register `fault`). Every trip is judged on the measurements, as a
+/// drive would, against the robot's own ratings (robot.json), not against tuned windows.
+enum class DriveFault : std::uint16_t {
+  none = 0,
+  non_finite_state = 1,  ///< a measured q or qd is NaN or infinite (the plant diverged)
+  position_limit = 2,    ///< measured q outside [q_min, q_max] of the joint (software limit)
+  velocity_limit = 3,    ///< measured |qd| above qd_max of the joint (overspeed)
+};
+
+constexpr const char* to_string(DriveFault f) noexcept {
+  switch (f) {
+    case DriveFault::none:
+      return "no fault";
+    case DriveFault::non_finite_state:
+      return "non-finite position or velocity";
+    case DriveFault::position_limit:
+      return "position limit";
+    case DriveFault::velocity_limit:
+      return "velocity limit";
+  }
+  return "unknown fault";
+}
 
 /// Commands (holding register `command`). Any other value is answered with ILLEGAL DATA VALUE.
 enum class Command : std::uint16_t {
@@ -57,6 +81,9 @@ inline constexpr std::uint16_t kModelErrorReg = 18;       // f32[6]
 inline constexpr std::uint16_t kActiveTableSizeReg = 30;  // u16 bytes
 inline constexpr std::uint16_t kActiveTableReg = 31;      // bytes, kTableMaxBytes
 inline constexpr std::uint16_t kTableWords = kTableMaxBytes / 2;
+inline constexpr std::uint16_t kFaultReg = 460;              // u16 DriveFault
+inline constexpr std::uint16_t kFaultJointReg = 461;         // u16 1-based joint that tripped, 0: none
+inline constexpr std::uint16_t kFaultValueReg = 462;         // f32 the measured q [rad] or qd [rad/s] at the trip
 inline constexpr std::uint16_t kRingReg = 500;               // u32 first seq, u16 count, samples
 inline constexpr int kSampleWords = 2 + 3 * 2 * kMaxJoints;  // seq u32, q, qd, tau f32[6]
 inline constexpr int kSamplesPerBlock = 3;                   // 3 + 3 * 38 = 117 words <= 125 per read
@@ -78,16 +105,17 @@ inline constexpr std::uint16_t kStagingTableReg = 301;  // bytes, kTableMaxBytes
 inline constexpr std::uint16_t kHoldingWords = kStagingTableReg + kTableWords;
 
 static_assert(kCoefficientsReg + kCoefficientWords <= kStagingSizeReg, "holding fields overlap");
-static_assert(kActiveTableReg + kTableWords <= kRingReg, "input fields overlap");
+static_assert(kActiveTableReg + kTableWords <= kFaultReg, "input fields overlap");
+static_assert(kFaultValueReg + 2 <= kRingReg, "input fields overlap");
 static_assert(kRingWords <= 125, "one ring block must fit one Modbus read");
 
 inline constexpr Field kRegisterMap[] = {
-    {"map_version", Bank::input, kMapVersionReg, 1, Type::u16, "-", "register map version (2)"},
+    {"map_version", Bank::input, kMapVersionReg, 1, Type::u16, "-", "register map version (3)"},
     {"num_joints", Bank::input, kNumJointsReg, 1, Type::u16, "-", "joints of the arm"},
     {"robot_id", Bank::input, kRobotIdReg, 2, Type::u32, "-", "generated kRobotId of the drive's robot"},
     {"active_model_id", Bank::input, kActiveModelIdReg, 2, Type::u32, "-", "model id of the active table"},
     {"active_count", Bank::input, kActiveCountReg, 1, Type::u16, "-", "parameters in the active table"},
-    {"state", Bank::input, kStateReg, 1, Type::u16, "-", "0 idle, 1 playing, 2 finished"},
+    {"state", Bank::input, kStateReg, 1, Type::u16, "-", "0 idle, 1 playing, 2 finished, 3 fault"},
     {"commit_result", Bank::input, kCommitResultReg, 1, Type::u16, "-", "TableStatus of the last commit (0 ok)"},
     {"commit_counter", Bank::input, kCommitCounterReg, 1, Type::u16, "-", "incremented when a commit completes"},
     {"sim_time", Bank::input, kSimTimeReg, 2, Type::f32, "s", "drive time since the trajectory started"},
@@ -99,6 +127,11 @@ inline constexpr Field kRegisterMap[] = {
     {"active_table_size", Bank::input, kActiveTableSizeReg, 1, Type::u16, "bytes", "size of the active table"},
     {"active_table", Bank::input, kActiveTableReg, kTableWords, Type::bytes, "-",
      "active parameter table, 2 bytes per register (first byte high)"},
+    {"fault", Bank::input, kFaultReg, 1, Type::u16, "-",
+     "why the drive stopped: 0 none, 1 non-finite q or qd, 2 position limit, 3 velocity limit"},
+    {"fault_joint", Bank::input, kFaultJointReg, 1, Type::u16, "-", "joint that tripped (1-based; 0 none)"},
+    {"fault_value", Bank::input, kFaultValueReg, 2, Type::f32, "rad, rad/s",
+     "the measured q (position limit) or qd (velocity limit) of that joint at the trip"},
     {"ring", Bank::input, kRingReg, kRingWords, Type::bytes, "-",
      "u32 first seq, u16 count n <= 3, then n samples: u32 seq, f32 q[6] rad, qd[6] rad/s, tau[6] Nm"},
     {"command", Bank::holding, kCommandReg, 1, Type::u16, "-", "1 start, 2 stop, 3 commit table; reads 0"},

@@ -26,6 +26,7 @@ enum class PortStatus : std::uint8_t {
   transport_error,  ///< the link failed (details from the port's own error text)
   sequence_gap,     ///< samples were lost (drive overrun): the block starts after a gap
   rejected,         ///< the other side refused the request (e.g. a table failed its checks)
+  device_fault,     ///< the source stopped on a fault after its last sample (details from the port)
 };
 
 constexpr const char* to_string(PortStatus s) noexcept {
@@ -42,6 +43,8 @@ constexpr const char* to_string(PortStatus s) noexcept {
       return "sequence gap: samples lost";
     case PortStatus::rejected:
       return "rejected";
+    case PortStatus::device_fault:
+      return "device fault";
   }
   return "unknown";
 }
@@ -51,7 +54,8 @@ class SampleSource {
  public:
   /// Copies up to `capacity` unread samples into `out`, sets *count. ok with *count > 0, no_data,
   /// end_of_stream, sequence_gap (the samples returned follow a gap; the gap size is the jump in
-  /// seq) or transport_error.
+  /// seq), device_fault (every sample recorded before the fault has been delivered; no more will
+  /// come) or transport_error.
   virtual PortStatus read(DriveSample* out, int capacity, int* count) noexcept = 0;
 
  protected:

@@ -4,6 +4,7 @@
 
 #include <cerrno>
 #include <chrono>
+#include <cstdio>
 #include <cstring>
 #include <vector>
 
@@ -88,7 +89,24 @@ bool ModbusDrive::read_info(DriveInfo& info) {
   info.produced = mm::get_u32(r + mm::kProducedReg);
   info.overruns = mm::get_u32(r + mm::kOverrunReg);
   for (int j = 0; j < mm::kMaxJoints; ++j) info.model_error_rms[j] = mm::get_f32(r + mm::kModelErrorReg + 2 * j);
+  std::uint16_t f[4];
+  if (!read_input(mm::kFaultReg, 4, f)) return false;
+  info.fault = static_cast<mm::DriveFault>(f[0]);
+  info.fault_joint = f[1];
+  info.fault_value = mm::get_f32(f + 2);
   return true;
+}
+
+std::string describe_fault(const DriveInfo& info) {
+  char text[160];
+  const char* what = info.fault == mm::DriveFault::position_limit   ? "q = %.4g rad"
+                     : info.fault == mm::DriveFault::velocity_limit ? "qd = %.4g rad/s"
+                                                                    : nullptr;
+  char value[48] = "";
+  if (what) std::snprintf(value, sizeof value, what, info.fault_value);
+  std::snprintf(text, sizeof text, "joint %d %s%s%s at t = %.3f s", info.fault_joint, mm::to_string(info.fault),
+                what ? ": " : "", value, info.sim_time);
+  return text;
 }
 
 bool ModbusDrive::write_trajectory(const Trajectory& t, int periods, double sample_rate_hz) {
@@ -136,6 +154,10 @@ port::PortStatus ModbusDrive::read(port::DriveSample* out, int capacity, int* co
       lost_ += info.produced - next_seq_;
       next_seq_ = info.produced;
       return port::PortStatus::sequence_gap;
+    }
+    if (done && info.produced == next_seq_ && info.state == mm::DriveState::fault) {
+      error_ = "drive fault: " + describe_fault(info);
+      return port::PortStatus::device_fault;
     }
     return done && info.produced == next_seq_ ? port::PortStatus::end_of_stream : port::PortStatus::no_data;
   }

@@ -40,6 +40,16 @@ class SimulatedDrive {
   void start();
   void stop();
   modbus_map::DriveState state() const { return state_; }
+  /// Why the drive stopped (state() == fault; none otherwise): each control period, before the
+  /// control law, the measured q and qd of every joint are checked — finite, q within [q_min,
+  /// q_max], |qd| <= qd_max of the robot file — and the first break stops the trajectory: no more
+  /// samples are recorded, the ring keeps those before it. start() clears the fault.
+  modbus_map::DriveFault fault() const { return fault_; }
+  /// The 1-based joint that tripped (0: none).
+  int fault_joint() const { return fault_joint_; }
+  /// Its measured q [rad] (position limit) or qd [rad/s] (velocity limit) at the trip; NaN for a
+  /// non-finite state.
+  double fault_value() const { return fault_value_; }
   /// Advances one control period (no-op unless playing).
   void step();
   double time() const { return time_; }
@@ -98,6 +108,9 @@ class SimulatedDrive {
   Scenario scenario_;
   std::string table_path_;
   modbus_map::DriveState state_ = modbus_map::DriveState::idle;
+  modbus_map::DriveFault fault_ = modbus_map::DriveFault::none;
+  int fault_joint_ = 0;
+  double fault_value_ = 0;
   double time_ = 0, clock_ = 0;
   long steps_ = 0, steps_per_sample_ = 1, total_steps_ = 0;
   std::deque<port::DriveSample> ring_;

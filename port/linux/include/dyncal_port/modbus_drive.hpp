@@ -29,7 +29,13 @@ struct DriveInfo {
   std::uint32_t produced = 0;
   std::uint32_t overruns = 0;
   std::array<double, modbus_map::kMaxJoints> model_error_rms{};
+  modbus_map::DriveFault fault = modbus_map::DriveFault::none;  ///< why it stopped (state fault)
+  int fault_joint = 0;                                          ///< 1-based; 0 none
+  double fault_value = 0;  ///< measured q [rad] or qd [rad/s] of that joint at the trip
 };
+
+/// The drive's fault in words: "joint 2 velocity limit: qd = 3.51 rad/s at t = 1.234 s".
+std::string describe_fault(const DriveInfo& info);
 
 class ModbusDrive final : public port::SampleSource, public port::ParameterStore, public port::Clock {
  public:
@@ -50,6 +56,8 @@ class ModbusDrive final : public port::SampleSource, public port::ParameterStore
   bool stop();
 
   // port::SampleSource
+  /// device_fault once every sample recorded before a drive fault has been read (error() then
+  /// describes the fault).
   port::PortStatus read(port::DriveSample* out, int capacity, int* count) noexcept override;
   /// Samples lost to drive overruns so far (gaps in seq).
   std::uint32_t lost() const { return lost_; }
