@@ -9,6 +9,7 @@
 #include <fstream>
 #include <functional>
 #include <iomanip>
+#include <optional>
 #include <sstream>
 
 #include "dyncal/friction.hpp"
@@ -22,6 +23,24 @@ namespace {
 using Eigen::Index;
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
+
+/// RSS reduction of the least-squares fit of a sin(k q_j) + b cos(k q_j) to residual(s) over the
+/// samples of `q` (S x N); nullopt when sin and cos are collinear on the data.
+template <class Residual>
+std::optional<double> harmonic_rss_reduction(const MatrixXd& q, int j, int k, Residual residual) {
+  double ss = 0, cc = 0, sc = 0, sr = 0, cr = 0;
+  for (Index s = 0; s < q.rows(); ++s) {
+    const double a = std::sin(k * q(s, j)), b = std::cos(k * q(s, j)), r = residual(s);
+    ss += a * a;
+    cc += b * b;
+    sc += a * b;
+    sr += a * r;
+    cr += b * r;
+  }
+  const double det = ss * cc - sc * sc;
+  if (det <= 1e-12 * ss * cc) return std::nullopt;
+  return (cc * sr * sr - 2 * sc * sr * cr + ss * cr * cr) / det;
+}
 
 /// A candidate effect: extra columns over the stacked rows (row s * N + j).
 struct Candidate {
@@ -358,20 +377,10 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
       int best_k = 0;
       double best_power = -1;
       for (int k = 1; k <= o.max_cycles; ++k) {
-        double ss = 0, cc = 0, sc = 0, sr = 0, cr = 0;
-        for (Index s = 0; s < S; ++s) {
-          const double a = std::sin(k * d.q(s, j)), b = std::cos(k * d.q(s, j)), r = residual[s * N + j];
-          ss += a * a;
-          cc += b * b;
-          sc += a * b;
-          sr += a * r;
-          cr += b * r;
-        }
-        const double det = ss * cc - sc * sc;
-        if (det <= 1e-12 * ss * cc) continue;
-        const double power = (cc * sr * sr - 2 * sc * sr * cr + ss * cr * cr) / det;  // RSS reduction
-        if (power > best_power) {
-          best_power = power;
+        const std::optional<double> power =
+            harmonic_rss_reduction(d.q, j, k, [&](Index s) { return residual[s * N + j]; });
+        if (power && *power > best_power) {
+          best_power = *power;
           best_k = k;
         }
       }
@@ -551,20 +560,9 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
     res.traces.spectrum = MatrixXd::Zero(o.max_cycles, N);
     for (int j = 0; j < N; ++j)
       for (int k = 1; k <= o.max_cycles; ++k) {
-        double ss = 0, cc = 0, sc = 0, sr = 0, cr = 0;
-        for (Index s = 0; s < S; ++s) {
-          const double a = std::sin(k * d.q(s, j)), b = std::cos(k * d.q(s, j));
-          const double r = d.y[s * N + j] - prediction_before[s * N + j];
-          ss += a * a;
-          cc += b * b;
-          sc += a * b;
-          sr += a * r;
-          cr += b * r;
-        }
-        const double det = ss * cc - sc * sc;
-        if (det > 1e-12 * ss * cc)
-          res.traces.spectrum(k - 1, j) =
-              (cc * sr * sr - 2 * sc * sr * cr + ss * cr * cr) / det / static_cast<double>(S);
+        const std::optional<double> power =
+            harmonic_rss_reduction(d.q, j, k, [&](Index s) { return d.y[s * N + j] - prediction_before[s * N + j]; });
+        if (power) res.traces.spectrum(k - 1, j) = *power / static_cast<double>(S);
       }
   }
   // Metrics before/after.
