@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <regex>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -105,6 +106,34 @@ TEST_F(DriveFault, RunawayTableTripsKeepsTheSamplesFlashesTheTableBeforeBackAndA
   EXPECT_EQ(info.fault, mm::DriveFault::none);
   EXPECT_EQ(info.fault_joint, 0);
   EXPECT_TRUE(std::filesystem::is_empty(dir_));
+}
+
+TEST_F(DriveFault, CalibrateStopsOnATripInTheExcitationRunWithItsSamplesKept) {
+  dyncal::ParameterTable previous, runaway;
+  dyncal::TableStatus reason;
+  ASSERT_EQ(drive_->read(previous, &reason), dyncal::port::PortStatus::ok) << drive_->error();
+  runaway = previous;
+  for (int i = 0; i < runaway.count; ++i) runaway.values[i] *= 100.0f;
+  ASSERT_EQ(drive_->write(runaway, &reason), dyncal::port::PortStatus::ok) << drive_->error();
+  CalibrateOptions o;
+  o.uri = fixture_drive_uri("DYNCAL_DRIVE_FAULT_READY");
+  o.terms = parse_model("eq7");
+  o.progress = false;
+  o.candidates = 1;
+  o.fault_dir = dir_.string();
+  std::ostringstream progress;
+  std::string message;
+  try {
+    calibrate(robot_, o, progress);
+  } catch (const DriveFaultError& e) {
+    message = e.what();
+  }
+  ASSERT_EQ(drive_->write(previous, &reason), dyncal::port::PortStatus::ok) << drive_->error();
+  ASSERT_FALSE(message.empty()) << "calibrate did not stop on the trip";
+  EXPECT_EQ(message.find("with the new table"), std::string::npos) << message;  // nothing was flashed
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(message, m, std::regex("\\(excitation run\\) are in (\\S+\\.csv)"))) << message;
+  EXPECT_GT(read_csv_log(m[1].str(), 6).samples(), 2);
 }
 
 }  // namespace
