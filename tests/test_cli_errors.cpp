@@ -100,6 +100,13 @@ TEST(CliErrors, UnknownSurveyPriorIsRefusedBeforeAnyRun) {
   EXPECT_NE(r.err.find("cad"), std::string::npos) << r.err;
 }
 
+// Where calibrate would write its logs is checked before any drive is contacted (the URI below
+// serves nothing): a run must not stream for minutes and then lose its samples.
+TEST(CliErrors, CalibrateLogDirectoriesAreCheckedBeforeTheDrive) {
+  expect_error("calibrate --drive tcp://127.0.0.1:1 --fault-dir /nonexistent", "fault directory '/nonexistent'");
+  expect_error("calibrate --drive tcp://127.0.0.1:1 --save-log /nonexistent/x.csv", "no directory '/nonexistent'");
+}
+
 TEST(CliErrors, MissingFile) {
   expect_error("identify --robot er20 --data /nonexistent/log.csv", "cannot read");
 }

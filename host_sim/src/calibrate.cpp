@@ -243,9 +243,13 @@ JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory
       if (progress) *progress << "\n";
       if (samples.empty()) throw DriveFaultError(drive.error() + "; no sample was recorded before it");
       const std::string path = fault_log_path(run);
-      write_csv_log(path, samples_to_log(samples, run.sample_rate_hz));
-      throw DriveFaultError(drive.error() + "; the " + std::to_string(samples.size()) +
-                            " samples recorded before it (" + run.name + " run) are in " + path);
+      const std::string count = std::to_string(samples.size()) + " samples recorded before it (" + run.name + " run)";
+      try {
+        write_csv_log(path, samples_to_log(samples, run.sample_rate_hz));
+      } catch (const InputError& e) {
+        throw DriveFaultError(drive.error() + "; the " + count + " are lost: " + e.what());
+      }
+      throw DriveFaultError(drive.error() + "; the " + count + " are in " + path);
     }
     if (st == port::PortStatus::sequence_gap) {
       throw InputError(
@@ -308,6 +312,13 @@ CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions&
   const auto t0 = SteadyClock::now();
   if (robot.name != Robot::kName)
     throw InputError("calibration over Modbus runs the er20 model, not '" + robot.name + "'");
+  if (!std::filesystem::is_directory(o.fault_dir))
+    throw InputError("fault directory '" + o.fault_dir + "' is not a directory");
+  if (!o.save_log.empty()) {
+    const std::filesystem::path parent = std::filesystem::path(o.save_log).parent_path();
+    if (!parent.empty() && !std::filesystem::is_directory(parent))
+      throw InputError("cannot write the log '" + o.save_log + "': no directory '" + parent.string() + "'");
+  }
   std::string error;
   auto drive = linux_port::ModbusDrive::connect(o.uri, &error);
   if (!drive) throw InputError(error);
