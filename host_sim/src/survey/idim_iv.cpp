@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <chrono>
+#include <cstdio>
 
 #include "dyncal/identification_model.hpp"
 #include "dyncal_host/butterworth.hpp"
@@ -56,6 +57,21 @@ void measured_system(const SurveyData& d, const IdimIvOptions& o, const MethodSe
   weight_rows(K, y, settings.sigma);
 }
 
+/// The length of `step` in standard errors of the instrumental-variable estimate phi (Eq. 17) of
+/// the weighted system y = K phi with instruments Z: sqrt(step^T C^-1 step / P), C = s^2 (Z^T K)^-1
+/// Z^T Z (K^T Z)^-1 its covariance, s^2 = |y - K phi|^2 / (rows - P); step^T C^-1 step = |P_Z K
+/// step|^2 / s^2 (P_Z the projection onto Z's columns). The rows' errors are taken independent:
+/// filtered, differentiated positions make them correlated, so s^2 / rows understates the variance
+/// and the step's length in standard errors is, if anything, overstated (a stricter test).
+double step_in_standard_errors(const Eigen::MatrixXd& K, const Eigen::MatrixXd& Z, const Eigen::VectorXd& y,
+                               const PV& phi, const PV& step) {
+  const double P = static_cast<double>(K.cols());
+  const double s2 = (y - K * phi).squaredNorm() / (static_cast<double>(K.rows()) - P);
+  const Eigen::VectorXd k_step = K * step;
+  const Eigen::VectorXd projected = Z * Z.colPivHouseholderQr().solve(k_step);
+  return std::sqrt(projected.squaredNorm() / s2 / P);
+}
+
 }  // namespace
 
 void measured_states(const SurveyData& d, const IdimIvOptions& o, Eigen::MatrixXd& q, Eigen::MatrixXd& qd,
@@ -91,7 +107,7 @@ Estimate idim_iv(const RobotDescription& robot, const SurveyData& d, const Metho
   PV phi = K.colPivHouseholderQr().solve(y);
   int iterations = 0;
   bool converged = false, relax = false;
-  double previous_step = INFINITY;
+  double previous_step = INFINITY, last_step_se = INFINITY;
   while (iterations < o.max_iterations && !converged) {
     // The plant of this iterate: consistent standard parameters and non-negative friction.
     const Estimate cur = eq7_estimate(phi, "IDIM-IV");
@@ -121,17 +137,21 @@ Estimate idim_iv(const RobotDescription& robot, const SurveyData& d, const Metho
     const PV next = (Z.transpose() * K).colPivHouseholderQr().solve(Z.transpose() * y);
     if (!next.allFinite()) throw InputError("IDIM-IV: the instrumental estimate is not finite");
     const double step = (next - phi).norm();
-    converged = step <= o.tolerance * phi.norm();
+    last_step_se = step_in_standard_errors(K, Z, y, next, next - phi);
+    converged = last_step_se <= o.tolerance;
     // The map from plant to estimate need not contract (on the two-period run it flipped between
-    // two plants 7e-3 apart for 20 iterations): once a step fails to halve the previous one, take
-    // half steps (Mann iteration), which damps such a cycle to its fixed point.
+    // two plants for 20 iterations): once a step fails to halve the previous one, take half steps
+    // (Mann iteration), which damps such a cycle.
     if (step > 0.5 * previous_step) relax = true;
     previous_step = step;
     phi = relax ? PV(0.5 * (phi + next)) : next;
   }
   Estimate e = eq7_estimate(phi, "IDIM-IV");
   e.iterations = iterations;
-  e.note = converged ? "converged" : "not converged in " + std::to_string(iterations) + " iterations";
+  char last[64];
+  std::snprintf(last, sizeof last, "last step %.2g standard errors", last_step_se);
+  e.note = (converged ? "converged, " : "not converged in " + std::to_string(iterations) + " iterations, ") +
+           std::string(last);
   e.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   complete_estimate(e, d, settings);
   return e;
