@@ -67,20 +67,6 @@ TableStatus check_any(const ParameterTable& t) {
   return ops ? ops->check(t) : TableStatus::wrong_model;
 }
 
-/// Factory table: the nominal (CAD) base parameters, Eq. 7 friction zero.
-ParameterTable factory_table() {
-  using Model = IdentificationModel<Robot, kFrictionEq7>;
-  StdVec phi_std;
-  for (int i = 0; i < Robot::kNumStandard; ++i) phi_std[i] = dyncal::generated::er20::kNominalStandard[i];
-  Eigen::Matrix<double, Robot::kNumBase, 1> phi_b;
-  dyncal::generated::er20::standard_to_base(phi_std, phi_b);
-  typename Model::ParamVector<double> phi = Model::ParamVector<double>::Zero();
-  phi.head<Robot::kNumBase>() = phi_b;
-  ParameterTable t;
-  make_table<Model>(phi, t);
-  return t;
-}
-
 /// A drive trip: which limit, the 0-based joint, the measured value that broke it.
 struct Trip {
   modbus_map::DriveFault fault = modbus_map::DriveFault::none;
@@ -116,6 +102,24 @@ std::vector<std::uint8_t> encode(const ParameterTable& t) {
 
 }  // namespace
 
+ParameterTable nominal_table(const std::array<double, kDriveJoints>& Fc, const std::array<double, kDriveJoints>& beta) {
+  using Model = IdentificationModel<Robot, kFrictionEq7>;
+  StdVec phi_std;
+  for (int i = 0; i < Robot::kNumStandard; ++i) phi_std[i] = dyncal::generated::er20::kNominalStandard[i];
+  Eigen::Matrix<double, Robot::kNumBase, 1> phi_b;
+  dyncal::generated::er20::standard_to_base(phi_std, phi_b);
+  typename Model::ParamVector<double> phi = Model::ParamVector<double>::Zero();
+  phi.head<Robot::kNumBase>() = phi_b;
+  for (int i = Robot::kNumBase; i < Model::kNumParams; ++i) {
+    const ParamInfo info = Model::info(i);
+    const size_t j = static_cast<size_t>(info.joint - 1);
+    phi[i] = info.term == term::coulomb ? Fc[j] : beta[j];
+  }
+  ParameterTable t;
+  make_table<Model>(phi, t);
+  return t;
+}
+
 struct SimulatedDrive::Impl {
   StdVec phi_true;
   Vec ia = Vec::Zero();
@@ -142,7 +146,7 @@ SimulatedDrive::SimulatedDrive(const RobotDescription& robot, const Scenario& sc
         scenario.encoder_counts > 0 ? 2.0 * M_PI / (scenario.encoder_counts * std::fabs(robot.gear_ratios[j])) : 0.0;
   }
   // The flash: the stored table if it is valid for this drive, else the factory table.
-  active_ = factory_table();
+  active_ = nominal_table();
   startup_note_ = "factory table (nominal base parameters, no friction)";
   std::ifstream in(table_path_, std::ios::binary);
   if (in) {

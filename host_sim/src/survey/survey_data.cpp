@@ -22,7 +22,6 @@ namespace dyncal::host::survey {
 namespace {
 
 using Robot = dyncal::generated::er20::Robot;
-using Model7 = IdentificationModel<Robot, kFrictionEq7>;
 
 /// A scratch file for the drive's simulated flash (removed again by the caller).
 std::string scratch_table_path(std::uint64_t seed) {
@@ -58,19 +57,12 @@ void set_study_friction(JointFriction& f, FrictionModel model) {
 /// The control law's feed-forward table: the set base parameters and the set Fc, beta (Eq. 7 part
 /// of the set friction), as Fig. 3 ("the inverse dynamic and friction model also takes phi_s").
 std::vector<std::uint8_t> set_parameter_table(const Scenario& s) {
-  Eigen::Matrix<double, Robot::kNumStandard, 1> phi_std;
-  for (int i = 0; i < Robot::kNumStandard; ++i) phi_std[i] = dyncal::generated::er20::kNominalStandard[i];
-  Model7::ParamVector<double> phi = Model7::ParamVector<double>::Zero();
-  Eigen::Matrix<double, Robot::kNumBase, 1> phi_b;
-  dyncal::generated::er20::standard_to_base(phi_std, phi_b);
-  phi.head<Robot::kNumBase>() = phi_b;
-  for (int i = Robot::kNumBase; i < Model7::kNumParams; ++i) {
-    const ParamInfo info = Model7::info(i);
-    const JointFriction& f = s.friction[info.joint - 1];
-    phi[i] = info.term == term::coulomb ? f.Fc : f.beta;
+  std::array<double, kDriveJoints> Fc{}, beta{};
+  for (int j = 0; j < kDriveJoints; ++j) {
+    Fc[static_cast<size_t>(j)] = s.friction[j].Fc;
+    beta[static_cast<size_t>(j)] = s.friction[j].beta;
   }
-  ParameterTable t;
-  make_table<Model7>(phi, t);
+  const ParameterTable t = nominal_table(Fc, beta);
   std::vector<std::uint8_t> bytes(kTableMaxBytes);
   int size = 0;
   if (encode_table(t, bytes.data(), static_cast<int>(bytes.size()), &size) != TableStatus::ok) {

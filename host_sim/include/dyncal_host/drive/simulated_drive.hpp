@@ -125,6 +125,12 @@ class SimulatedDrive {
   std::mt19937_64 rng_;
 };
 
+/// The er20 table of the nominal (CAD) base parameters with Eq. 7 friction Fc [Nm], beta [Nm s/rad]
+/// per joint: with zero friction, the drive's factory table; with a scenario's, the survey's
+/// set-parameter feed-forward (Fig. 3).
+ParameterTable nominal_table(const std::array<double, kDriveJoints>& Fc = {},
+                             const std::array<double, kDriveJoints>& beta = {});
+
 /// Writes `bytes` to `path` atomically (temporary file in the same directory, fsync, rename, fsync
 /// of the directory): a crash at any moment leaves the old or the new content. Throws
 /// std::runtime_error on I/O failure.
