@@ -194,6 +194,8 @@ linux_port::Trajectory default_excitation(const RobotDescription& robot, double 
 
 namespace {
 
+constexpr const char* kFlashedMessage = "flashed, read back and compared: identical";
+
 /// The streamed samples as a log: q and tau, t from seq.
 JointLog samples_to_log(const std::vector<port::DriveSample>& samples, double sample_rate_hz) {
   const Eigen::Index S = static_cast<Eigen::Index>(samples.size());
@@ -213,12 +215,16 @@ JointLog samples_to_log(const std::vector<port::DriveSample>& samples, double sa
   return log;
 }
 
-/// `dir`/dyncal-fault-`run`-YYYYmmddTHHMMSS.csv (local time).
+/// `dir`/dyncal-fault-`run`-YYYYmmddTHHMMSS.csv (local time), with -2, -3 ... before the extension
+/// if that file exists: an earlier fault log is never overwritten.
 std::string fault_log_path(const StreamRun& run) {
   const std::time_t now = std::time(nullptr);
   char stamp[32];
   std::strftime(stamp, sizeof stamp, "%Y%m%dT%H%M%S", std::localtime(&now));
-  return (std::filesystem::path(run.fault_dir) / ("dyncal-fault-" + run.name + "-" + stamp + ".csv")).string();
+  const std::string stem = (std::filesystem::path(run.fault_dir) / ("dyncal-fault-" + run.name + "-" + stamp)).string();
+  std::string path = stem + ".csv";
+  for (int k = 2; std::filesystem::exists(path); ++k) path = stem + "-" + std::to_string(k) + ".csv";
+  return path;
 }
 
 }  // namespace
@@ -292,7 +298,7 @@ FlashOutcome flash_and_verify(linux_port::ModbusDrive& drive, const ParameterTab
     return f;
   }
   f.flashed = true;
-  f.message = "flashed, read back and compared: identical";
+  f.message = kFlashedMessage;
   try {
     verify();
   } catch (const DriveFaultError& fault) {
@@ -390,7 +396,7 @@ CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions&
       progress << "\n";
     }
     const FlashOutcome f = flash_and_verify(*drive, table, [&] {
-      progress << "flashed, read back and compared: identical\nverification run with the new table\n";
+      progress << kFlashedMessage << "\nverification run with the new table\n";
       verification_run(*drive, fresh, o, prog, &r.lost, r.drive_error_after);
     });
     r.flashed = f.flashed;

@@ -109,8 +109,8 @@ struct StreamRun {
 /// Streams one run of `trajectory` from the drive into a log (q and tau; t from seq), handing each
 /// sample to `on_sample` (if set) as it arrives. Throws InputError on transport errors or lost
 /// samples, and DriveFaultError when the drive stops on a fault: the samples recorded before it are
-/// first written (write_csv_log) to run.fault_dir/dyncal-fault-NAME-YYYYmmddTHHMMSS.csv, which the
-/// message names.
+/// first written (write_csv_log) to run.fault_dir/dyncal-fault-NAME-YYYYmmddTHHMMSS.csv (-2, -3 ...
+/// appended rather than overwrite), which the message names.
 JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory& trajectory, const StreamRun& run,
                     std::ostream* progress, std::uint32_t* lost, double* seconds,
                     const std::function<void(const port::DriveSample&)>& on_sample);
