@@ -1,6 +1,6 @@
 #pragma once
 // Shared by the survey tests: one noise-free survey run per friction model (one excitation
-// period, cached), the er20's maximum torques, and method settings with the seed-1 CAD prior.
+// period, cached), the er20's maximum torques (robot.json), and method settings with the seed-1 CAD prior.
 #include <array>
 #include <cmath>
 #include <map>
@@ -12,7 +12,13 @@
 
 namespace dyncal::test {
 
-inline const std::array<double, 6> kEr20TauMax{1200, 1300, 600, 110, 110, 60};
+/// The er20's maximum joint driving torques tau_max [Nm] from its robot.json (survey Sec. 5.1).
+inline const std::array<double, 6> kEr20TauMax = [] {
+  const host::RobotDescription robot = host::load_robot(host::default_robots_dir(), "er20");
+  std::array<double, 6> t{};
+  for (int j = 0; j < 6; ++j) t[static_cast<size_t>(j)] = robot.tau_max[j];
+  return t;
+}();
 
 inline const host::survey::SurveyData& survey_data(host::FrictionModel model) {
   static std::map<host::FrictionModel, host::survey::SurveyData> cache;
