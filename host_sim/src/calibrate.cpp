@@ -147,9 +147,8 @@ struct Verify {
 /// Verification run: stream a fresh trajectory and read the drive's model error.
 JointLog verification_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory& t, const CalibrateOptions& o,
                           std::ostream* progress, std::uint32_t* lost, std::array<double, 6>& drive_error) {
-  double secs = 0;
   JointLog log = stream_run(drive, t, {"verification", o.verify_periods, o.sample_rate_hz, o.fault_dir}, progress, lost,
-                            &secs, nullptr);
+                            nullptr, nullptr);
   linux_port::DriveInfo info;
   if (!drive.read_info(info)) throw InputError("drive: " + drive.error());
   drive_error = info.model_error_rms;

@@ -89,6 +89,13 @@ bool ModbusDrive::read_info(DriveInfo& info) {
   info.produced = mm::get_u32(r + mm::kProducedReg);
   info.overruns = mm::get_u32(r + mm::kOverrunReg);
   for (int j = 0; j < mm::kMaxJoints; ++j) info.model_error_rms[j] = mm::get_f32(r + mm::kModelErrorReg + 2 * j);
+  // The fault registers only when there is a fault: read() polls this while it waits for samples.
+  if (info.state != mm::DriveState::fault) {
+    info.fault = mm::DriveFault::none;
+    info.fault_joint = 0;
+    info.fault_value = 0;
+    return true;
+  }
   std::uint16_t f[4];
   if (!read_input(mm::kFaultReg, 4, f)) return false;
   info.fault = static_cast<mm::DriveFault>(f[0]);

@@ -29,7 +29,7 @@ struct DriveInfo {
   std::uint32_t produced = 0;
   std::uint32_t overruns = 0;
   std::array<double, modbus_map::kMaxJoints> model_error_rms{};
-  modbus_map::DriveFault fault = modbus_map::DriveFault::none;  ///< why it stopped (state fault)
+  modbus_map::DriveFault fault = modbus_map::DriveFault::none;  ///< why it stopped (read only in state fault)
   int fault_joint = 0;                                          ///< 1-based; 0 none
   double fault_value = 0;  ///< measured q [rad] or qd [rad/s] of that joint at the trip
 };
