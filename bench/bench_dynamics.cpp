@@ -8,11 +8,11 @@
 #include <vector>
 
 #include "dyncal/friction_tracker.hpp"
+#include "dyncal/generated/er20/robot.hpp"
 #include "dyncal/identification_model.hpp"
 #include "dyncal/kalman_filter.hpp"
 #include "dyncal/rls_forgetting.hpp"
 #include "dyncal/streaming_least_squares.hpp"
-#include "er20/robot.hpp"
 
 namespace {
 

@@ -5,15 +5,17 @@
 
 #include <map>
 
-#include "dyncal_host/robot_description.hpp"
-#include "dyncal_host/survey/objective.hpp"
-#include "dyncal_host/survey/physically_consistent.hpp"
-#include "dyncal_host/survey/standard_parameters.hpp"
+#include "dyncal_host/common/robot_description.hpp"
+#include "dyncal_host/identification/objective.hpp"
+#include "dyncal_host/identification/physically_consistent.hpp"
+#include "dyncal_host/identification/standard_parameters.hpp"
+#include "dyncal_host/survey/survey_data.hpp"
 
 namespace {
 
 using dyncal::host::FrictionModel;
 namespace survey = dyncal::host::survey;
+using namespace dyncal::host;
 
 const survey::SurveyData& data(FrictionModel model) {
   static std::map<FrictionModel, survey::SurveyData> cache;
@@ -31,9 +33,9 @@ const survey::SurveyData& data(FrictionModel model) {
   return it->second;
 }
 
-survey::MethodSettings settings() {
-  survey::MethodSettings s;
-  s.prior = survey::cad_prior(0.2, 1);
+MethodSettings settings() {
+  MethodSettings s;
+  s.prior = cad_prior(0.2, 1);
   return s;
 }
 
@@ -43,19 +45,19 @@ constexpr FrictionModel kModels[] = {FrictionModel::eq7, FrictionModel::eq8, Fri
 void BM_ReducedEq25(benchmark::State& state) {
   const FrictionModel m = kModels[state.range(0)];
   const survey::SurveyData& d = data(m);
-  const survey::TorqueObjective objective(d, m, settings().sigma);
-  const survey::SearchRanges r = survey::search_ranges(d, m, survey::nearest_consistent(settings().prior.mean), 0.4);
+  const TorqueObjective objective(d, m, settings().sigma);
+  const SearchRanges r = search_ranges(d, m, nearest_consistent(settings().prior.mean), 0.4);
   const Eigen::VectorXd x = 0.5 * (r.lo + r.hi);
   for (auto _ : state) benchmark::DoNotOptimize(objective.eq25(x.data(), 1.0));
-  state.SetLabel(survey::model_key(m));
+  state.SetLabel(model_key(m));
 }
 BENCHMARK(BM_ReducedEq25)->DenseRange(0, 5)->Unit(benchmark::kMicrosecond);
 
 void BM_PhysicallyConsistentLs(benchmark::State& state) {
   const FrictionModel m = kModels[state.range(0)];
   const survey::SurveyData& d = data(m);
-  for (auto _ : state) benchmark::DoNotOptimize(survey::physically_consistent_ls(d, m, settings()));
-  state.SetLabel(survey::model_key(m));
+  for (auto _ : state) benchmark::DoNotOptimize(physically_consistent_ls(d, m, settings()));
+  state.SetLabel(model_key(m));
 }
 BENCHMARK(BM_PhysicallyConsistentLs)->DenseRange(0, 5)->Unit(benchmark::kMillisecond);
 

@@ -20,7 +20,7 @@ from dyncal_codegen.description import STANDARD_NAMES  # noqa: E402
 from dyncal_codegen.emit_cpp import CppPrinter  # noqa: E402
 from dyncal_codegen.tracer import live_program  # noqa: E402
 
-GENERATOR_VERSION = "3"
+GENERATOR_VERSION = "4"
 
 
 def input_digest(robot_dir, desc):
@@ -45,7 +45,8 @@ def banner(name, inputs, what, counts):
     ]
     for fn, (m, a) in counts.items():
         lines.append(f"// Operation count {fn}: {m} multiplications, {a} additions (plus dyncal::sin_cos of q)")
-    lines.append("// Regenerate: cmake --build <build> --target regenerate (or scripts/codegen).")
+    lines.append(f"// Include as \"dyncal/generated/{name}/<file>.hpp\". "
+                 "Regenerate: cmake --build <build> --target regenerate (or scripts/codegen).")
     return "\n".join(lines) + "\n"
 
 
@@ -350,12 +351,13 @@ inline void standard_to_base(const Eigen::Matrix<Scalar, {n_std}, 1>& phi, Eigen
     robot_hpp += f"""#pragma once
 
 #include "dynamics.hpp"
+#include "dyncal/robot_model.hpp"
 #include "parameters.hpp"
 #include "regressor.hpp"
 
 namespace {ns} {{
 
-/// The generated {name} model as one type, for templates in lib/ (see dyncal/robot_model.hpp).
+/// The generated {name} model as one type, for templates in lib/: meets dyncal/robot_model.hpp.
 struct Robot {{
   static constexpr const char* kName = kRobotName;
   static constexpr std::uint32_t kRobotId = {ns}::kRobotId;
@@ -408,6 +410,8 @@ struct Robot {{
     {ns}::standard_to_base(phi, phi_b);
   }}
 }};
+
+static_assert(dyncal::is_robot_model_v<Robot>, "the generated {name} model does not meet dyncal/robot_model.hpp");
 
 }}  // namespace {ns}
 """

@@ -5,7 +5,7 @@
 
 #include <sstream>
 
-#include "dyncal_host/calibrate.hpp"
+#include "dyncal_host/calibration/calibrate.hpp"
 #include "support/drive_uri.hpp"
 
 namespace {

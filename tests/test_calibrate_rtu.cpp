@@ -4,7 +4,7 @@
 #include <cstdlib>
 #include <sstream>
 
-#include "dyncal_host/calibrate.hpp"
+#include "dyncal_host/calibration/calibrate.hpp"
 
 namespace {
 

@@ -9,10 +9,10 @@
 #include <filesystem>
 #include <functional>
 
-#include "dyncal_host/calibrate.hpp"
-#include "dyncal_host/diagnose.hpp"
+#include "dyncal_host/calibration/calibrate.hpp"
+#include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/diagnosis/diagnose.hpp"
 #include "dyncal_host/drive/simulated_drive.hpp"
-#include "dyncal_host/input_error.hpp"
 
 namespace {
 
@@ -28,7 +28,7 @@ TEST(Diagnose, Tx40FindsTheWristCouplingAndLiftsJoint5) {
   print_diagnose_report(std::cout, r);
   ASSERT_FALSE(r.effects.empty());
   // The first effect: a motor turning with q5 + q6 (motor 6 drives both), shared by joints 5 and 6.
-  EXPECT_EQ(r.effects[0].kind, "coupling");
+  EXPECT_EQ(r.effects[0].kind, Effect::coupling);
   EXPECT_EQ(r.effects[0].joints, (std::vector<int>{5, 6}));
   EXPECT_LT(r.joints[4].r2_validation_before, 0.7);
   EXPECT_GE(r.joints[4].r2_validation_after, 0.9);
@@ -91,7 +91,7 @@ TEST(Diagnose, NamesUndeclaredCoggingOnTheRightJoint) {
   const auto r = diagnose(robot, simulated_log(s, robot, 20), sim_options());
   print_diagnose_report(std::cout, r);
   ASSERT_FALSE(r.effects.empty());
-  EXPECT_EQ(r.effects[0].kind, "position_periodic");
+  EXPECT_EQ(r.effects[0].kind, Effect::position_periodic);
   EXPECT_EQ(r.effects[0].joints, (std::vector<int>{2}));
   EXPECT_NE(r.effects[0].explanation.find("12 cycles per revolution"), std::string::npos) << r.effects[0].explanation;
   EXPECT_LE(r.joints[1].rms_validation_after, 0.5 * r.joints[1].rms_validation_before);
@@ -154,9 +154,10 @@ TEST_P(DiagnoseEffect, NamesTheEffectOnTheRightJoint) {
   const auto r = diagnose(robot, simulated_log(s, robot, 20), o);
   print_diagnose_report(std::cout, r);
   ASSERT_FALSE(r.effects.empty()) << c.name;
-  EXPECT_EQ(r.effects[0].kind, c.kind) << c.name << ": " << r.effects[0].explanation;
-  const bool named = std::any_of(r.effects.begin(), r.effects.end(),
-                                 [&](const DiagnosedEffect& e) { return e.kind == c.kind && e.joints == c.joints; });
+  EXPECT_EQ(std::string(effect_name(r.effects[0].kind)), c.kind) << c.name << ": " << r.effects[0].explanation;
+  const bool named = std::any_of(r.effects.begin(), r.effects.end(), [&](const DiagnosedEffect& e) {
+    return effect_name(e.kind) == std::string(c.kind) && e.joints == c.joints;
+  });
   EXPECT_TRUE(named) << c.name << ": not named on joint(s) " << c.joints.front();
   if (!ia_case) {
     EXPECT_EQ(r.effects[0].joints, c.joints) << c.name << ": " << r.effects[0].explanation;

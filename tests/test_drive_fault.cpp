@@ -12,10 +12,10 @@
 #include <vector>
 
 #include "dyncal/modbus_map.hpp"
-#include "dyncal_host/calibrate.hpp"
-#include "dyncal_host/input_error.hpp"
-#include "dyncal_host/joint_log.hpp"
-#include "dyncal_host/robot_description.hpp"
+#include "dyncal_host/calibration/calibrate.hpp"
+#include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/common/robot_description.hpp"
+#include "dyncal_host/identification/joint_log.hpp"
 #include "dyncal_port/modbus_drive.hpp"
 #include "support/drive_uri.hpp"
 
@@ -41,7 +41,8 @@ class DriveFault : public ::testing::Test {
   std::vector<std::uint8_t> active_bytes() {
     std::vector<std::uint8_t> b(dyncal::kTableMaxBytes);
     int size = 0;
-    EXPECT_TRUE(drive_->read_active_bytes(b.data(), static_cast<int>(b.size()), &size)) << drive_->error();
+    EXPECT_EQ(drive_->read_active_bytes(b.data(), static_cast<int>(b.size()), &size), dyncal::port::PortStatus::ok)
+        << drive_->error();
     b.resize(static_cast<size_t>(size));
     return b;
   }
@@ -68,7 +69,7 @@ TEST_F(DriveFault, RunawayTableTripsKeepsTheSamplesFlashesTheTableBeforeBackAndA
   ASSERT_FALSE(message.empty()) << "the runaway table did not trip the drive";
   // The drive says which joint and which limit; the host passes it on.
   dyncal::linux_port::DriveInfo info;
-  ASSERT_TRUE(drive_->read_info(info)) << drive_->error();
+  ASSERT_EQ(drive_->read_info(info), dyncal::port::PortStatus::ok) << drive_->error();
   EXPECT_EQ(info.state, mm::DriveState::fault);
   ASSERT_TRUE(info.fault == mm::DriveFault::position_limit || info.fault == mm::DriveFault::velocity_limit);
   ASSERT_GE(info.fault_joint, 1);
@@ -101,7 +102,7 @@ TEST_F(DriveFault, RunawayTableTripsKeepsTheSamplesFlashesTheTableBeforeBackAndA
   const JointLog full =
       stream_run(*drive_, trajectory, {"excitation", 1, 100, dir_.string()}, nullptr, nullptr, nullptr, nullptr);
   EXPECT_EQ(full.samples(), 1000);
-  ASSERT_TRUE(drive_->read_info(info)) << drive_->error();
+  ASSERT_EQ(drive_->read_info(info), dyncal::port::PortStatus::ok) << drive_->error();
   EXPECT_EQ(info.state, mm::DriveState::finished);
   EXPECT_EQ(info.fault, mm::DriveFault::none);
   EXPECT_EQ(info.fault_joint, 0);

@@ -7,12 +7,12 @@
 #include <cstring>
 #include <vector>
 
+#include "dyncal/generated/er20/robot.hpp"
+#include "dyncal/generated/tx40/robot.hpp"
 #include "dyncal/modbus_map.hpp"
 #include "dyncal/table_check.hpp"
 #include "dyncal_port/modbus_drive.hpp"
-#include "er20/robot.hpp"
 #include "support/drive_uri.hpp"
-#include "tx40/robot.hpp"
 
 namespace {
 
@@ -42,7 +42,7 @@ class DriveModbus : public ::testing::Test {
 
 TEST_F(DriveModbus, IdentifiesItself) {
   dyncal::linux_port::DriveInfo info;
-  ASSERT_TRUE(drive_->read_info(info)) << drive_->error();
+  ASSERT_EQ(drive_->read_info(info), dyncal::port::PortStatus::ok) << drive_->error();
   EXPECT_EQ(info.map_version, mm::kMapVersion);
   EXPECT_EQ(info.num_joints, 6);
   EXPECT_EQ(info.robot_id, Er20::kRobotId);
@@ -51,36 +51,38 @@ TEST_F(DriveModbus, IdentifiesItself) {
 TEST_F(DriveModbus, EveryRegisterTypeRoundTrips) {
   // u16
   const std::uint16_t harmonics = 3;
-  ASSERT_TRUE(drive_->write_holding(mm::kHarmonicsReg, 1, &harmonics)) << drive_->error();
+  ASSERT_EQ(drive_->write_holding(mm::kHarmonicsReg, 1, &harmonics), dyncal::port::PortStatus::ok) << drive_->error();
   std::uint16_t back = 0;
-  ASSERT_TRUE(drive_->read_holding(mm::kHarmonicsReg, 1, &back));
+  ASSERT_EQ(drive_->read_holding(mm::kHarmonicsReg, 1, &back), dyncal::port::PortStatus::ok);
   EXPECT_EQ(back, 3);
   // f32 (two registers, high word first)
   std::uint16_t f[2], fb[2];
   mm::set_f32(f, 0.125f);
-  ASSERT_TRUE(drive_->write_holding(mm::kOmegaFReg, 2, f)) << drive_->error();
-  ASSERT_TRUE(drive_->read_holding(mm::kOmegaFReg, 2, fb));
+  ASSERT_EQ(drive_->write_holding(mm::kOmegaFReg, 2, f), dyncal::port::PortStatus::ok) << drive_->error();
+  ASSERT_EQ(drive_->read_holding(mm::kOmegaFReg, 2, fb), dyncal::port::PortStatus::ok);
   EXPECT_EQ(mm::get_f32(fb), 0.125f);
   // f32 array across more than one Modbus frame
   std::vector<std::uint16_t> c(mm::kCoefficientWords), cb(mm::kCoefficientWords);
   for (int k = 0; k < mm::kCoefficientWords / 2; ++k) mm::set_f32(&c[2 * k], 0.001f * static_cast<float>(k));
-  ASSERT_TRUE(drive_->write_holding(mm::kCoefficientsReg, mm::kCoefficientWords, c.data())) << drive_->error();
-  ASSERT_TRUE(drive_->read_holding(mm::kCoefficientsReg, 120, cb.data()));
-  ASSERT_TRUE(drive_->read_holding(mm::kCoefficientsReg + 120, mm::kCoefficientWords - 120, cb.data() + 120));
+  ASSERT_EQ(drive_->write_holding(mm::kCoefficientsReg, mm::kCoefficientWords, c.data()), dyncal::port::PortStatus::ok)
+      << drive_->error();
+  ASSERT_EQ(drive_->read_holding(mm::kCoefficientsReg, 120, cb.data()), dyncal::port::PortStatus::ok);
+  ASSERT_EQ(drive_->read_holding(mm::kCoefficientsReg + 120, mm::kCoefficientWords - 120, cb.data() + 120),
+            dyncal::port::PortStatus::ok);
   EXPECT_EQ(c, cb);
   // u32 (ack: the only legal value while nothing was produced is the produced count)
   dyncal::linux_port::DriveInfo info;
-  ASSERT_TRUE(drive_->read_info(info));
+  ASSERT_EQ(drive_->read_info(info), dyncal::port::PortStatus::ok);
   std::uint16_t a[2], ab[2];
   mm::set_u32(a, info.produced);
-  ASSERT_TRUE(drive_->write_holding(mm::kAckReg, 2, a)) << drive_->error();
-  ASSERT_TRUE(drive_->read_holding(mm::kAckReg, 2, ab));
+  ASSERT_EQ(drive_->write_holding(mm::kAckReg, 2, a), dyncal::port::PortStatus::ok) << drive_->error();
+  ASSERT_EQ(drive_->read_holding(mm::kAckReg, 2, ab), dyncal::port::PortStatus::ok);
   EXPECT_EQ(mm::get_u32(ab), info.produced);
   // bytes (staging bank)
   std::vector<std::uint16_t> bytes(100), bb(100);
   for (int k = 0; k < 100; ++k) bytes[k] = static_cast<std::uint16_t>(0xA500 + k);
-  ASSERT_TRUE(drive_->write_holding(mm::kStagingTableReg, 100, bytes.data()));
-  ASSERT_TRUE(drive_->read_holding(mm::kStagingTableReg, 100, bb.data()));
+  ASSERT_EQ(drive_->write_holding(mm::kStagingTableReg, 100, bytes.data()), dyncal::port::PortStatus::ok);
+  ASSERT_EQ(drive_->read_holding(mm::kStagingTableReg, 100, bb.data()), dyncal::port::PortStatus::ok);
   EXPECT_EQ(bytes, bb);
   // every input field is readable
   for (const auto& field : mm::kRegisterMap) {
@@ -88,7 +90,7 @@ TEST_F(DriveModbus, EveryRegisterTypeRoundTrips) {
     std::vector<std::uint16_t> r(field.words);
     for (int done = 0; done < field.words; done += 120) {
       const int n = std::min(120, field.words - done);
-      EXPECT_TRUE(drive_->read_input(field.address + done, n, r.data() + done))
+      EXPECT_EQ(drive_->read_input(field.address + done, n, r.data() + done), dyncal::port::PortStatus::ok)
           << field.name << ": " << drive_->error();
     }
   }
@@ -111,6 +113,10 @@ TEST_F(DriveModbus, IllegalAddressesAndValuesGetModbusExceptions) {
   EXPECT_EQ(errno, EMBXILVAL);
   EXPECT_EQ(modbus_write_register(ctx, mm::kHarmonicsReg, 9), -1);
   EXPECT_EQ(errno, EMBXILVAL);
+  // Through the port: an exception response is `rejected` (the drive answered and refused), named.
+  const std::uint16_t nine = 9;
+  EXPECT_EQ(drive_->write_holding(mm::kHarmonicsReg, 1, &nine), dyncal::port::PortStatus::rejected);
+  EXPECT_NE(drive_->error().find("Illegal data value"), std::string::npos) << drive_->error();
   std::uint16_t f[2];
   mm::set_f32(f, 5000.0f);  // sample rate above 1 kHz
   EXPECT_EQ(modbus_write_registers(ctx, mm::kSampleRateReg, 2, f), -1);
@@ -148,12 +154,14 @@ dyncal::TableStatus commit_raw(ModbusDrive& d, const std::uint8_t* bytes, int si
   regs[0] = static_cast<std::uint16_t>(size);
   mm::bytes_to_regs(bytes, size, regs.data() + 1);
   std::uint16_t before = 0;
-  EXPECT_TRUE(d.read_input(mm::kCommitCounterReg, 1, &before));
-  EXPECT_TRUE(d.write_holding(mm::kStagingSizeReg, static_cast<int>(regs.size()), regs.data())) << d.error();
+  EXPECT_EQ(d.read_input(mm::kCommitCounterReg, 1, &before), dyncal::port::PortStatus::ok);
+  EXPECT_EQ(d.write_holding(mm::kStagingSizeReg, static_cast<int>(regs.size()), regs.data()),
+            dyncal::port::PortStatus::ok)
+      << d.error();
   const std::uint16_t cmd = static_cast<std::uint16_t>(mm::Command::commit_table);
-  EXPECT_TRUE(d.write_holding(mm::kCommandReg, 1, &cmd)) << d.error();
+  EXPECT_EQ(d.write_holding(mm::kCommandReg, 1, &cmd), dyncal::port::PortStatus::ok) << d.error();
   std::uint16_t r[2] = {0, before};
-  while (r[1] == before) EXPECT_TRUE(d.read_input(mm::kCommitResultReg, 2, r));
+  while (r[1] == before) EXPECT_EQ(d.read_input(mm::kCommitResultReg, 2, r), dyncal::port::PortStatus::ok);
   return static_cast<dyncal::TableStatus>(r[0]);
 }
 
@@ -161,7 +169,8 @@ TEST_F(DriveModbus, FlashRejectsBadTablesAndKeepsTheActiveOne) {
   using Model = dyncal::IdentificationModel<Er20, dyncal::kFrictionEq7 | dyncal::term::rotor_inertia>;
   std::uint8_t before[dyncal::kTableMaxBytes], after[dyncal::kTableMaxBytes];
   int before_size = 0, after_size = 0;
-  ASSERT_TRUE(drive_->read_active_bytes(before, sizeof before, &before_size)) << drive_->error();
+  ASSERT_EQ(drive_->read_active_bytes(before, sizeof before, &before_size), dyncal::port::PortStatus::ok)
+      << drive_->error();
 
   Model::ParamVector<double> phi = Model::ParamVector<double>::Constant(0.5);
   dyncal::ParameterTable good;
@@ -195,7 +204,7 @@ TEST_F(DriveModbus, FlashRejectsBadTablesAndKeepsTheActiveOne) {
   EXPECT_EQ(drive_->write(model, &reason), dyncal::port::PortStatus::rejected);
   EXPECT_EQ(reason, dyncal::TableStatus::wrong_model);
 
-  ASSERT_TRUE(drive_->read_active_bytes(after, sizeof after, &after_size));
+  ASSERT_EQ(drive_->read_active_bytes(after, sizeof after, &after_size), dyncal::port::PortStatus::ok);
   ASSERT_EQ(after_size, before_size);
   EXPECT_EQ(std::memcmp(before, after, before_size), 0) << "a rejected table changed the active one";
 

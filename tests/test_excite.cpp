@@ -5,10 +5,10 @@
 
 #include <Eigen/SVD>
 
+#include "dyncal/generated/er20/robot.hpp"
 #include "dyncal/identification_model.hpp"
-#include "dyncal_host/excite.hpp"
-#include "dyncal_host/input_error.hpp"
-#include "er20/robot.hpp"
+#include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/identification/excitation.hpp"
 
 namespace {
 

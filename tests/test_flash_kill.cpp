@@ -16,9 +16,9 @@
 #include <thread>
 #include <vector>
 
+#include "dyncal/generated/er20/robot.hpp"
 #include "dyncal/table_check.hpp"
 #include "dyncal_port/modbus_drive.hpp"
-#include "er20/robot.hpp"
 
 extern char** environ;
 
@@ -75,7 +75,7 @@ std::vector<std::uint8_t> active_bytes(const std::string& uri) {
   if (!d) return {};
   std::uint8_t b[dyncal::kTableMaxBytes];
   int size = 0;
-  EXPECT_TRUE(d->read_active_bytes(b, sizeof b, &size)) << d->error();
+  EXPECT_EQ(d->read_active_bytes(b, sizeof b, &size), dyncal::port::PortStatus::ok) << d->error();
   return std::vector<std::uint8_t>(b, b + size);
 }
 

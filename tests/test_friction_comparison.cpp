@@ -6,12 +6,12 @@
 #include <cmath>
 #include <map>
 
-#include "dyncal_host/friction_comparison.hpp"
-#include "dyncal_host/identify.hpp"
-#include "dyncal_host/input_error.hpp"
-#include "dyncal_host/joint_log.hpp"
-#include "dyncal_host/robot_description.hpp"
-#include "dyncal_host/stacked_data.hpp"
+#include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/common/robot_description.hpp"
+#include "dyncal_host/identification/friction_comparison.hpp"
+#include "dyncal_host/identification/identify.hpp"
+#include "dyncal_host/identification/joint_log.hpp"
+#include "dyncal_host/identification/stacked_data.hpp"
 
 namespace {
 
@@ -61,15 +61,15 @@ TEST(FrictionComparison, RealTx40FrictionIsNonlinear) {
 // chosen value and the same parameter as the fit used; linear models have none.
 TEST(FrictionComparison, NonlinearModelsReportTheirScaleParametersWithIntervals) {
   for (const auto& f : fits()) {
-    if (survey::is_linear(f.model)) {
+    if (is_linear(f.model)) {
       EXPECT_TRUE(f.scale_intervals.empty());
       continue;
     }
     ASSERT_EQ(f.scale_intervals.size(), 6u);
-    const int kf = survey::friction_count(f.model);
+    const int kf = friction_count(f.model);
     for (size_t j = 0; j < 6; ++j) {
-      for (const survey::ScaleInterval& iv : f.scale_intervals[j]) {
-        EXPECT_TRUE(survey::is_scale_parameter(f.model, iv.parameter));
+      for (const ScaleInterval& iv : f.scale_intervals[j]) {
+        EXPECT_TRUE(is_scale_parameter(f.model, iv.parameter));
         EXPECT_LE(iv.lo, iv.best);
         EXPECT_LE(iv.best, iv.hi);
         EXPECT_DOUBLE_EQ(f.friction[j * kf + static_cast<size_t>(iv.parameter)], iv.best);

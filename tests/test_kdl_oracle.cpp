@@ -10,9 +10,9 @@
 #include <nlohmann/json.hpp>
 #include <random>
 
-#include "er20/robot.hpp"
+#include "dyncal/generated/er20/robot.hpp"
+#include "dyncal/generated/tx40/robot.hpp"
 #include "support/random_physical.hpp"
-#include "tx40/robot.hpp"
 
 namespace {
 

@@ -6,10 +6,10 @@
 #include <limits>
 
 #include "dyncal/crc32.hpp"
+#include "dyncal/generated/er20/robot.hpp"
 #include "dyncal/modbus_map.hpp"
 #include "dyncal/parameter_table.hpp"
 #include "dyncal/table_check.hpp"
-#include "er20/robot.hpp"
 
 namespace {
 

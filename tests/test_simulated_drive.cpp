@@ -7,7 +7,7 @@
 #include <filesystem>
 #include <limits>
 
-#include "dyncal_host/calibrate.hpp"
+#include "dyncal_host/calibration/calibrate.hpp"
 #include "dyncal_host/drive/simulated_drive.hpp"
 
 namespace {

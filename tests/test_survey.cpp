@@ -8,15 +8,17 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "dyncal_host/input_error.hpp"
-#include "dyncal_host/robot_description.hpp"
-#include "dyncal_host/survey/idim_iv.hpp"
-#include "dyncal_host/survey/methods.hpp"
-#include "dyncal_host/survey/objective.hpp"
-#include "dyncal_host/survey/physically_consistent.hpp"
-#include "dyncal_host/survey/standard_parameters.hpp"
+#include "dyncal/generated/er20/robot.hpp"
+#include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/common/robot_description.hpp"
+#include "dyncal_host/identification/idim_iv.hpp"
+#include "dyncal_host/identification/methods.hpp"
+#include "dyncal_host/identification/objective.hpp"
+#include "dyncal_host/identification/physically_consistent.hpp"
+#include "dyncal_host/identification/standard_parameters.hpp"
+#include "dyncal_host/survey/indices.hpp"
+#include "dyncal_host/survey/survey_data.hpp"
 #include "dyncal_host/survey/tracking.hpp"
-#include "er20/robot.hpp"
 #include "support/survey_fixture.hpp"
 
 namespace {
@@ -352,7 +354,8 @@ TEST(SurveyIdimIv, BeatsLeastSquaresOnNoisyPositions) {
   const SurveyData d = simulate_survey_data(robot, o);
   IdimIvOptions raw;
   raw.filter = false;
-  const Estimate ols = pseudo_inverse_measured(d, settings(), raw), iv = idim_iv(robot, d, settings(), raw);
+  const Estimate ols = pseudo_inverse_measured(d, settings(), raw),
+                 iv = idim_iv(d, settings(), raw, survey::closed_loop_of(robot, d));
   // Converged in the estimate's own standard errors (IdimIvOptions::tolerance).
   ASSERT_EQ(iv.note.rfind("converged, last step ", 0), 0u) << iv.note;
   EXPECT_LE(std::stod(iv.note.substr(std::string("converged, last step ").size())), raw.tolerance) << iv.note;
@@ -361,7 +364,8 @@ TEST(SurveyIdimIv, BeatsLeastSquaresOnNoisyPositions) {
   EXPECT_LT(x_iv.J_e_prior, 0.6 * x_ols.J_e_prior);
   IdimIvOptions filtered;
   const Indices f_ols = evaluate(pseudo_inverse_measured(d, settings(), filtered), d.scenario, d.tau, kTauMax);
-  const Indices f_iv = evaluate(idim_iv(robot, d, settings(), filtered), d.scenario, d.tau, kTauMax);
+  const Indices f_iv =
+      evaluate(idim_iv(d, settings(), filtered, survey::closed_loop_of(robot, d)), d.scenario, d.tau, kTauMax);
   // Delta J_e (without filter against with): IDIM-IV's is the smaller by far (survey: 0.08 vs 3.6).
   const double d_ols = (x_ols.J_e_prior - f_ols.J_e_prior) / f_ols.J_e_prior;
   const double d_iv = (x_iv.J_e_prior - f_iv.J_e_prior) / f_iv.J_e_prior;

@@ -7,11 +7,13 @@
 #include <algorithm>
 #include <map>
 
-#include "dyncal_host/input_error.hpp"
-#include "dyncal_host/robot_description.hpp"
-#include "dyncal_host/survey/optimisers.hpp"
-#include "dyncal_host/survey/standard_parameters.hpp"
-#include "er20/robot.hpp"
+#include "dyncal/generated/er20/robot.hpp"
+#include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/common/robot_description.hpp"
+#include "dyncal_host/identification/optimisers.hpp"
+#include "dyncal_host/identification/standard_parameters.hpp"
+#include "dyncal_host/survey/indices.hpp"
+#include "dyncal_host/survey/survey_data.hpp"
 #include "support/survey_fixture.hpp"
 
 namespace {

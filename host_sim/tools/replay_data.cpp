@@ -12,10 +12,10 @@
 #include <sstream>
 #include <vector>
 
-#include "dyncal_host/calibrate.hpp"
+#include "dyncal_host/common/robot_description.hpp"
 #include "dyncal_host/drive/scenario.hpp"
 #include "dyncal_host/drive/simulated_drive.hpp"
-#include "dyncal_host/robot_description.hpp"
+#include "dyncal_host/identification/excitation.hpp"
 #include "replay.hpp"
 
 namespace {

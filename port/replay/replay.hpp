@@ -11,10 +11,10 @@
 #include "dyncal/causal_differentiator.hpp"
 #include "dyncal/extended_kalman_filter.hpp"
 #include "dyncal/friction_tracker.hpp"
+#include "dyncal/generated/er20/robot.hpp"
 #include "dyncal/identification_model.hpp"
 #include "dyncal/kalman_filter.hpp"
 #include "dyncal/rls_forgetting.hpp"
-#include "er20/robot.hpp"
 
 namespace dyncal::replay {
 

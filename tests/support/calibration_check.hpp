@@ -9,12 +9,12 @@
 #include <optional>
 #include <sstream>
 
+#include "dyncal/generated/er20/robot.hpp"
 #include "dyncal/identification_model.hpp"
-#include "dyncal_host/calibrate.hpp"
+#include "dyncal_host/calibration/calibrate.hpp"
 #include "dyncal_host/drive/ground_truth.hpp"
 #include "dyncal_host/drive/scenario.hpp"
-#include "dyncal_host/joint_log.hpp"
-#include "er20/robot.hpp"
+#include "dyncal_host/identification/joint_log.hpp"
 #include "support/drive_uri.hpp"
 
 namespace dyncal::host {

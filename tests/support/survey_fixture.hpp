@@ -6,9 +6,10 @@
 #include <map>
 #include <vector>
 
-#include "dyncal_host/robot_description.hpp"
-#include "dyncal_host/survey/methods.hpp"
-#include "dyncal_host/survey/standard_parameters.hpp"
+#include "dyncal_host/common/robot_description.hpp"
+#include "dyncal_host/identification/methods.hpp"
+#include "dyncal_host/identification/standard_parameters.hpp"
+#include "dyncal_host/survey/survey_data.hpp"
 
 namespace dyncal::test {
 
@@ -32,9 +33,9 @@ inline const host::survey::SurveyData& survey_data(host::FrictionModel model) {
   return it->second;
 }
 
-inline host::survey::MethodSettings survey_settings() {
-  host::survey::MethodSettings s;
-  s.prior = host::survey::cad_prior(0.2, 1);
+inline host::MethodSettings survey_settings() {
+  host::MethodSettings s;
+  s.prior = host::cad_prior(0.2, 1);
   return s;
 }
 
@@ -43,11 +44,11 @@ inline host::survey::MethodSettings survey_settings() {
 /// what a fit recovers of the friction even where its parameters trade off.
 inline double friction_curve_error(const host::survey::SurveyData& d, host::FrictionModel model,
                                    const std::vector<double>& est, const std::vector<double>& set, int j) {
-  const int kf = host::survey::friction_count(model);
+  const int kf = host::friction_count(model);
   double diff = 0, ref = 0;
   for (Eigen::Index s = 0; s < d.q.rows(); ++s) {
-    const double a = host::survey::friction_torque(model, set.data() + kf * j, d.qd(s, j), d.tau_load(s, j));
-    const double b = host::survey::friction_torque(model, est.data() + kf * j, d.qd(s, j), d.tau_load(s, j));
+    const double a = host::friction_torque(model, set.data() + kf * j, d.qd(s, j), d.tau_load(s, j));
+    const double b = host::friction_torque(model, est.data() + kf * j, d.qd(s, j), d.tau_load(s, j));
     diff += (b - a) * (b - a);
     ref += a * a;
   }

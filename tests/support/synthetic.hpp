@@ -5,8 +5,8 @@
 #include <Eigen/Core>
 #include <cmath>
 
+#include "dyncal/generated/er20/robot.hpp"
 #include "dyncal/identification_model.hpp"
-#include "er20/robot.hpp"
 
 namespace dyncal::test {
 

@@ -1,10 +1,10 @@
 // GENERATED FILE - DO NOT EDIT.
-// Generator: codegen/generate.py (dyncal codegen 3, SymPy 1.11.1)
+// Generator: codegen/generate.py (dyncal codegen 4, SymPy 1.11.1)
 // Robot: er20; inputs: robots/er20/robot.json (sha256 2ed936baf54754ce)
 // Contents: inverse dynamics tau(q, qd, qdd, phi) and mass matrix M(q, phi)
 // Operation count inverse_dynamics: 372 multiplications, 309 additions (plus dyncal::sin_cos of q)
 // Operation count mass_matrix: 401 multiplications, 312 additions (plus dyncal::sin_cos of q)
-// Regenerate: cmake --build <build> --target regenerate (or scripts/codegen).
+// Include as "dyncal/generated/er20/<file>.hpp". Regenerate: cmake --build <build> --target regenerate (or scripts/codegen).
 #pragma once
 
 #include <Eigen/Core>

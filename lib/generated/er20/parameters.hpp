@@ -1,8 +1,8 @@
 // GENERATED FILE - DO NOT EDIT.
-// Generator: codegen/generate.py (dyncal codegen 3, SymPy 1.11.1)
+// Generator: codegen/generate.py (dyncal codegen 4, SymPy 1.11.1)
 // Robot: er20; inputs: robots/er20/robot.json (sha256 2ed936baf54754ce)
 // Contents: parameter index names, standard->base map, kinematic data
-// Regenerate: cmake --build <build> --target regenerate (or scripts/codegen).
+// Include as "dyncal/generated/er20/<file>.hpp". Regenerate: cmake --build <build> --target regenerate (or scripts/codegen).
 #pragma once
 
 #include <Eigen/Core>

@@ -1,17 +1,18 @@
 // GENERATED FILE - DO NOT EDIT.
-// Generator: codegen/generate.py (dyncal codegen 3, SymPy 1.11.1)
+// Generator: codegen/generate.py (dyncal codegen 4, SymPy 1.11.1)
 // Robot: er20; inputs: robots/er20/robot.json (sha256 2ed936baf54754ce)
 // Contents: the Robot traits type gathering the generated model
-// Regenerate: cmake --build <build> --target regenerate (or scripts/codegen).
+// Include as "dyncal/generated/er20/<file>.hpp". Regenerate: cmake --build <build> --target regenerate (or scripts/codegen).
 #pragma once
 
 #include "dynamics.hpp"
+#include "dyncal/robot_model.hpp"
 #include "parameters.hpp"
 #include "regressor.hpp"
 
 namespace dyncal::generated::er20 {
 
-/// The generated er20 model as one type, for templates in lib/ (see dyncal/robot_model.hpp).
+/// The generated er20 model as one type, for templates in lib/: meets dyncal/robot_model.hpp.
 struct Robot {
   static constexpr const char* kName = kRobotName;
   static constexpr std::uint32_t kRobotId = dyncal::generated::er20::kRobotId;
@@ -64,5 +65,7 @@ struct Robot {
     dyncal::generated::er20::standard_to_base(phi, phi_b);
   }
 };
+
+static_assert(dyncal::is_robot_model_v<Robot>, "the generated er20 model does not meet dyncal/robot_model.hpp");
 
 }  // namespace dyncal::generated::er20

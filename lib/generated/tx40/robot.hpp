@@ -1,17 +1,18 @@
 // GENERATED FILE - DO NOT EDIT.
-// Generator: codegen/generate.py (dyncal codegen 3, SymPy 1.11.1)
+// Generator: codegen/generate.py (dyncal codegen 4, SymPy 1.11.1)
 // Robot: tx40; inputs: robots/tx40/robot.json (sha256 14380c70690bae49), robots/tx40/tx40.urdf (sha256 3d00cbd46279c915)
 // Contents: the Robot traits type gathering the generated model
-// Regenerate: cmake --build <build> --target regenerate (or scripts/codegen).
+// Include as "dyncal/generated/tx40/<file>.hpp". Regenerate: cmake --build <build> --target regenerate (or scripts/codegen).
 #pragma once
 
 #include "dynamics.hpp"
+#include "dyncal/robot_model.hpp"
 #include "parameters.hpp"
 #include "regressor.hpp"
 
 namespace dyncal::generated::tx40 {
 
-/// The generated tx40 model as one type, for templates in lib/ (see dyncal/robot_model.hpp).
+/// The generated tx40 model as one type, for templates in lib/: meets dyncal/robot_model.hpp.
 struct Robot {
   static constexpr const char* kName = kRobotName;
   static constexpr std::uint32_t kRobotId = dyncal::generated::tx40::kRobotId;
@@ -64,5 +65,7 @@ struct Robot {
     dyncal::generated::tx40::standard_to_base(phi, phi_b);
   }
 };
+
+static_assert(dyncal::is_robot_model_v<Robot>, "the generated tx40 model does not meet dyncal/robot_model.hpp");
 
 }  // namespace dyncal::generated::tx40

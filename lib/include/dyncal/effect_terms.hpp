@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 
+#include "dyncal/assert.hpp"
 #include "dyncal/friction.hpp"
 
 namespace dyncal {
@@ -49,51 +50,74 @@ inline bool effect_term_valid(const EffectTerm& e, int num_joints) noexcept {
   return true;
 }
 
-/// Adds the torques [Nm] of `count` effect terms to tau (N joints). q [rad], qd [rad/s],
-/// qdd [rad/s^2], tau_rb [Nm] the rigid-body torque (for load friction). Allocation-free.
+/// The regressor columns of an effect at one sample: the torque it adds is sum_k c_k column[k] on
+/// its joint and, for a coupling, `sign` times the same on its second joint (the motor's torque
+/// reflected by the transmission). One joint's q [rad], qd [rad/s], qdd [rad/s^2] and tau_rb [Nm]
+/// (the rigid-body torque, read by load friction); a coupling's motor turns with v = qd + sign qd2,
+/// a = qdd + sign qdd2. shape: velocity scale [rad/s] (stribeck) or cycles per revolution
+/// (position_periodic). Writes the kind's columns (1 to 3) and returns their count; 0 for an
+/// unknown kind. The coefficients' meaning is EffectKind's.
+template <typename Scalar>
+int effect_columns(EffectKind kind, Scalar shape, Scalar sign, Scalar q, Scalar qd, Scalar qdd, Scalar qd2, Scalar qdd2,
+                   Scalar tau_rb, Scalar columns[3]) noexcept {
+  using std::abs;
+  switch (kind) {
+    case EffectKind::stribeck: {
+      const Scalar x = qd / shape;
+      columns[0] = sgn(qd) * std::exp(-x * x);
+      return 1;
+    }
+    case EffectKind::asymmetric_friction:
+      columns[0] = qd > Scalar(0) ? Scalar(1) : Scalar(0);
+      columns[1] = qd > Scalar(0) ? qd : Scalar(0);
+      return 2;
+    case EffectKind::velocity_power:
+      columns[0] = std::cbrt(qd);
+      return 1;
+    case EffectKind::load_friction:
+      columns[0] = abs(tau_rb) * sgn(qd);
+      return 1;
+    case EffectKind::rotor_inertia:
+      columns[0] = qdd;
+      return 1;
+    case EffectKind::offset:
+      columns[0] = Scalar(1);
+      return 1;
+    case EffectKind::position_periodic:
+      columns[0] = std::sin(shape * q);
+      columns[1] = std::cos(shape * q);
+      return 2;
+    case EffectKind::coupling: {
+      const Scalar v = qd + sign * qd2, a = qdd + sign * qdd2;
+      columns[0] = sgn(v);
+      columns[1] = v;
+      columns[2] = a;
+      return 3;
+    }
+  }
+  return 0;
+}
+
+/// Adds the torques [Nm] of `count` effect terms to tau (N joints): sum_k c_k effect_columns(...)[k].
+/// q [rad], qd [rad/s], qdd [rad/s^2], tau_rb [Nm] the rigid-body torque (for load friction).
+/// Allocation-free. Precondition: every term is effect_term_valid for N joints (a table passes
+/// table_check before its terms are used).
 template <typename Scalar, int N>
 void add_effect_torques(const EffectTerm* effects, int count, const Eigen::Matrix<Scalar, N, 1>& q,
                         const Eigen::Matrix<Scalar, N, 1>& qd, const Eigen::Matrix<Scalar, N, 1>& qdd,
                         const Eigen::Matrix<Scalar, N, 1>& tau_rb, Eigen::Matrix<Scalar, N, 1>& tau) noexcept {
-  using std::abs;
   for (int i = 0; i < count; ++i) {
     const EffectTerm& e = effects[i];
-    const int j = e.joint;
-    const Scalar c0 = Scalar(e.c[0]), c1 = Scalar(e.c[1]), c2 = Scalar(e.c[2]);
-    switch (e.kind) {
-      case EffectKind::stribeck: {
-        const Scalar x = qd[j] / Scalar(e.shape);
-        tau[j] += c0 * sgn(qd[j]) * std::exp(-x * x);
-        break;
-      }
-      case EffectKind::asymmetric_friction:
-        if (qd[j] > Scalar(0)) tau[j] += c0 + c1 * qd[j];
-        break;
-      case EffectKind::velocity_power:
-        tau[j] += c0 * std::cbrt(qd[j]);
-        break;
-      case EffectKind::load_friction:
-        tau[j] += c0 * abs(tau_rb[j]) * sgn(qd[j]);
-        break;
-      case EffectKind::rotor_inertia:
-        tau[j] += c0 * qdd[j];
-        break;
-      case EffectKind::offset:
-        tau[j] += c0;
-        break;
-      case EffectKind::position_periodic:
-        tau[j] += c0 * std::sin(Scalar(e.shape) * q[j]) + c1 * std::cos(Scalar(e.shape) * q[j]);
-        break;
-      case EffectKind::coupling: {
-        const int k = e.joint2;
-        const Scalar s = Scalar(e.sign);
-        const Scalar v = qd[j] + s * qd[k], a = qdd[j] + s * qdd[k];
-        const Scalar f = c0 * sgn(v) + c1 * v + c2 * a;
-        tau[j] += f;
-        tau[k] += s * f;
-        break;
-      }
-    }
+    DYNCAL_ASSERT(effect_term_valid(e, N));
+    const int j = e.joint, k = e.kind == EffectKind::coupling ? e.joint2 : e.joint;
+    const Scalar s = Scalar(e.sign);
+    Scalar columns[3];
+    const int m = effect_columns(e.kind, Scalar(e.shape), s, q[j], qd[j], qdd[j], qd[k], qdd[k], tau_rb[j], columns);
+    if (m == 0) continue;
+    Scalar f = Scalar(e.c[0]) * columns[0];
+    for (int c = 1; c < m; ++c) f += Scalar(e.c[c]) * columns[c];
+    tau[j] += f;
+    if (e.kind == EffectKind::coupling) tau[k] += s * f;
   }
 }
 

@@ -3,6 +3,7 @@
 
 #include <Eigen/Core>
 
+#include "dyncal/assert.hpp"
 #include "dyncal/sin_cos.hpp"
 
 namespace dyncal {
@@ -21,9 +22,10 @@ struct FourierTrajectory {
 
   Scalar period() const noexcept { return Scalar(1) / f_f; }
 
-  /// Position, velocity and acceleration at time t.
+  /// Position, velocity and acceleration at time t. Precondition: 0 <= harmonics <= H.
   void evaluate(Scalar t, Eigen::Matrix<Scalar, N, 1>& q, Eigen::Matrix<Scalar, N, 1>& qd,
                 Eigen::Matrix<Scalar, N, 1>& qdd) const noexcept {
+    DYNCAL_ASSERT(harmonics >= 0 && harmonics <= H);
     const Scalar w = Scalar(6.283185307179586476925) * f_f;
     // Reduce w t to one period first so that sin_cos stays accurate for long runs.
     const Scalar phase = w * (t - period() * std::floor(t / period()));

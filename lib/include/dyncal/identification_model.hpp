@@ -4,6 +4,7 @@
 
 #include "friction.hpp"
 #include "regressor_structure.hpp"
+#include "robot_model.hpp"
 
 namespace dyncal {
 
@@ -30,6 +31,8 @@ struct ParamInfo {
 /// example Ia_1 into link1_ZZ_R) and has no column.
 template <class Robot, unsigned Terms>
 class IdentificationModel {
+  static_assert(is_robot_model_v<Robot>, "IdentificationModel needs a robot model (dyncal/robot_model.hpp)");
+
  public:
   using RobotType = Robot;
   static constexpr unsigned kTerms = Terms;

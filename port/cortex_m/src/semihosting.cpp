@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "dyncal/assert.hpp"
+
 namespace dyncal::cortex_m {
 namespace {
 
@@ -76,3 +78,16 @@ void exit(int status) {
 }
 
 }  // namespace dyncal::cortex_m
+
+// lib/'s assert hook (dyncal/assert.hpp, DYNCAL_ASSERT_MODE 2): the broken precondition on the console,
+// then exit status 3.
+extern "C" void dyncal_assert_failed(const char* file, int line, const char* expression) noexcept {
+  dyncal::cortex_m::write("dyncal assert failed: ");
+  dyncal::cortex_m::write(file);
+  dyncal::cortex_m::write(":");
+  dyncal::cortex_m::write_int(line);
+  dyncal::cortex_m::write(": ");
+  dyncal::cortex_m::write(expression);
+  dyncal::cortex_m::write("\n");
+  dyncal::cortex_m::exit(3);
+}

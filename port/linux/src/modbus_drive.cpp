@@ -56,29 +56,35 @@ ModbusDrive::~ModbusDrive() {
   modbus_free(ctx_);
 }
 
-bool ModbusDrive::fail(const char* what) {
-  error_ = std::string(what) + ": " + modbus_strerror(errno);
-  return false;
+port::PortStatus ModbusDrive::fail(const char* what) {
+  const int code = errno;
+  error_ = std::string(what) + ": " + modbus_strerror(code);
+  // A Modbus exception response (illegal function, address or value, device failure, busy, ...):
+  // the drive answered and refused. Anything else (time-out, broken link, bad frame) is transport.
+  const bool exception = code > MODBUS_ENOBASE && code <= MODBUS_ENOBASE + MODBUS_EXCEPTION_GATEWAY_TARGET;
+  return exception ? port::PortStatus::rejected : port::PortStatus::transport_error;
 }
 
-bool ModbusDrive::read_input(int address, int count, std::uint16_t* regs) {
-  return modbus_read_input_registers(ctx_, address, count, regs) == count || fail("reading input registers");
+port::PortStatus ModbusDrive::read_input(int address, int count, std::uint16_t* regs) {
+  if (modbus_read_input_registers(ctx_, address, count, regs) != count) return fail("reading input registers");
+  return port::PortStatus::ok;
 }
-bool ModbusDrive::read_holding(int address, int count, std::uint16_t* regs) {
-  return modbus_read_registers(ctx_, address, count, regs) == count || fail("reading holding registers");
+port::PortStatus ModbusDrive::read_holding(int address, int count, std::uint16_t* regs) {
+  if (modbus_read_registers(ctx_, address, count, regs) != count) return fail("reading holding registers");
+  return port::PortStatus::ok;
 }
-bool ModbusDrive::write_holding(int address, int count, const std::uint16_t* regs) {
+port::PortStatus ModbusDrive::write_holding(int address, int count, const std::uint16_t* regs) {
   for (int done = 0; done < count;) {
     const int n = std::min(count - done, MODBUS_MAX_WRITE_REGISTERS / 2 * 2);  // never split a 32-bit value
     if (modbus_write_registers(ctx_, address + done, n, regs + done) != n) return fail("writing holding registers");
     done += n;
   }
-  return true;
+  return port::PortStatus::ok;
 }
 
-bool ModbusDrive::read_info(DriveInfo& info) {
+port::PortStatus ModbusDrive::read_info(DriveInfo& info) {
   std::uint16_t r[mm::kModelErrorReg + 12];
-  if (!read_input(0, mm::kModelErrorReg + 12, r)) return false;
+  if (const auto st = read_input(0, mm::kModelErrorReg + 12, r); st != port::PortStatus::ok) return st;
   info.map_version = r[mm::kMapVersionReg];
   info.num_joints = r[mm::kNumJointsReg];
   info.robot_id = mm::get_u32(r + mm::kRobotIdReg);
@@ -94,14 +100,14 @@ bool ModbusDrive::read_info(DriveInfo& info) {
     info.fault = mm::DriveFault::none;
     info.fault_joint = 0;
     info.fault_value = 0;
-    return true;
+    return port::PortStatus::ok;
   }
   std::uint16_t f[4];
-  if (!read_input(mm::kFaultReg, 4, f)) return false;
+  if (const auto st = read_input(mm::kFaultReg, 4, f); st != port::PortStatus::ok) return st;
   info.fault = static_cast<mm::DriveFault>(f[0]);
   info.fault_joint = f[1];
   info.fault_value = mm::get_f32(f + 2);
-  return true;
+  return port::PortStatus::ok;
 }
 
 std::string describe_fault(const DriveInfo& info) {
@@ -116,7 +122,7 @@ std::string describe_fault(const DriveInfo& info) {
   return text;
 }
 
-bool ModbusDrive::write_trajectory(const Trajectory& t, int periods, double sample_rate_hz) {
+port::PortStatus ModbusDrive::write_trajectory(const Trajectory& t, int periods, double sample_rate_hz) {
   std::uint16_t settings[6];
   mm::set_f32(settings, static_cast<float>(sample_rate_hz));
   mm::set_f32(settings + 2, static_cast<float>(t.f_f));
@@ -131,18 +137,18 @@ bool ModbusDrive::write_trajectory(const Trajectory& t, int periods, double samp
       mm::set_f32(p + 2 + 2 * mm::kMaxHarmonics + 2 * l, static_cast<float>(t.b(j, l)));
     }
   }
-  return write_holding(mm::kSampleRateReg, 6, settings) &&
-         write_holding(mm::kCoefficientsReg, mm::kCoefficientWords, c.data());
+  if (const auto st = write_holding(mm::kSampleRateReg, 6, settings); st != port::PortStatus::ok) return st;
+  return write_holding(mm::kCoefficientsReg, mm::kCoefficientWords, c.data());
 }
 
-bool ModbusDrive::start() {
+port::PortStatus ModbusDrive::start() {
   const std::uint16_t cmd = static_cast<std::uint16_t>(mm::Command::start);
   next_seq_ = 0;
   lost_ = 0;
   return write_holding(mm::kCommandReg, 1, &cmd);
 }
 
-bool ModbusDrive::stop() {
+port::PortStatus ModbusDrive::stop() {
   const std::uint16_t cmd = static_cast<std::uint16_t>(mm::Command::stop);
   return write_holding(mm::kCommandReg, 1, &cmd);
 }
@@ -150,12 +156,12 @@ bool ModbusDrive::stop() {
 port::PortStatus ModbusDrive::read(port::DriveSample* out, int capacity, int* count) noexcept {
   *count = 0;
   std::uint16_t w[mm::kRingWords];
-  if (!read_input(mm::kRingReg, mm::kRingWords, w)) return port::PortStatus::transport_error;
+  if (read_input(mm::kRingReg, mm::kRingWords, w) != port::PortStatus::ok) return port::PortStatus::transport_error;
   const std::uint32_t first = mm::get_u32(w);
   const int n = std::min<int>(w[2], capacity);
   if (n == 0) {
     DriveInfo info;
-    if (!read_info(info)) return port::PortStatus::transport_error;
+    if (read_info(info) != port::PortStatus::ok) return port::PortStatus::transport_error;
     const bool done = info.state != mm::DriveState::playing;
     if (done && info.produced > next_seq_) {  // dropped at the end of the run
       lost_ += info.produced - next_seq_;
@@ -196,7 +202,7 @@ port::PortStatus ModbusDrive::read(port::DriveSample* out, int capacity, int* co
   next_seq_ = out[n - 1].seq + 1;
   std::uint16_t ack[2];
   mm::set_u32(ack, next_seq_);
-  if (!write_holding(mm::kAckReg, 2, ack)) return port::PortStatus::transport_error;
+  if (write_holding(mm::kAckReg, 2, ack) != port::PortStatus::ok) return port::PortStatus::transport_error;
   *count = n;
   return status;
 }
@@ -210,14 +216,16 @@ port::PortStatus ModbusDrive::write(const ParameterTable& table, TableStatus* re
   regs[0] = static_cast<std::uint16_t>(size);
   mm::bytes_to_regs(bytes, size, regs + 1);
   std::uint16_t counter_before = 0;
-  if (!read_input(mm::kCommitCounterReg, 1, &counter_before)) return port::PortStatus::transport_error;
-  if (!write_holding(mm::kStagingSizeReg, 1 + (size + 1) / 2, regs)) return port::PortStatus::transport_error;
+  if (read_input(mm::kCommitCounterReg, 1, &counter_before) != port::PortStatus::ok)
+    return port::PortStatus::transport_error;
+  if (write_holding(mm::kStagingSizeReg, 1 + (size + 1) / 2, regs) != port::PortStatus::ok)
+    return port::PortStatus::transport_error;
   const std::uint16_t cmd = static_cast<std::uint16_t>(mm::Command::commit_table);
-  if (!write_holding(mm::kCommandReg, 1, &cmd)) return port::PortStatus::transport_error;
+  if (write_holding(mm::kCommandReg, 1, &cmd) != port::PortStatus::ok) return port::PortStatus::transport_error;
   // The drive answers the command at once and flashes afterwards; requests wait until it is done.
   for (;;) {
     std::uint16_t r[2];
-    if (!read_input(mm::kCommitResultReg, 2, r)) return port::PortStatus::transport_error;
+    if (read_input(mm::kCommitResultReg, 2, r) != port::PortStatus::ok) return port::PortStatus::transport_error;
     if (r[1] != counter_before) {
       *reason = static_cast<TableStatus>(r[0]);
       break;
@@ -227,7 +235,8 @@ port::PortStatus ModbusDrive::write(const ParameterTable& table, TableStatus* re
   // Read back and compare byte for byte.
   std::uint8_t back[kTableMaxBytes];
   int back_size = 0;
-  if (!read_active_bytes(back, kTableMaxBytes, &back_size)) return port::PortStatus::transport_error;
+  if (read_active_bytes(back, kTableMaxBytes, &back_size) != port::PortStatus::ok)
+    return port::PortStatus::transport_error;
   if (back_size != size || std::memcmp(back, bytes, static_cast<size_t>(size)) != 0) {
     error_ = "the drive's active table differs from the table sent";
     return port::PortStatus::transport_error;
@@ -235,26 +244,27 @@ port::PortStatus ModbusDrive::write(const ParameterTable& table, TableStatus* re
   return port::PortStatus::ok;
 }
 
-bool ModbusDrive::read_active_bytes(std::uint8_t* bytes, int capacity, int* size) {
+port::PortStatus ModbusDrive::read_active_bytes(std::uint8_t* bytes, int capacity, int* size) {
   std::uint16_t regs[mm::kTableWords + 1];
   for (int done = 0; done < mm::kTableWords + 1;) {
     const int n = std::min(mm::kTableWords + 1 - done, MODBUS_MAX_READ_REGISTERS);
-    if (!read_input(mm::kActiveTableSizeReg + done, n, regs + done)) return false;
+    if (const auto st = read_input(mm::kActiveTableSizeReg + done, n, regs + done); st != port::PortStatus::ok)
+      return st;
     done += n;
   }
   *size = regs[0];
   if (*size > capacity) {
     error_ = "active table larger than the buffer";
-    return false;
+    return port::PortStatus::transport_error;
   }
   mm::regs_to_bytes(regs + 1, *size, bytes);
-  return true;
+  return port::PortStatus::ok;
 }
 
 port::PortStatus ModbusDrive::read(ParameterTable& table, TableStatus* reason) noexcept {
   std::uint8_t bytes[kTableMaxBytes];
   int size = 0;
-  if (!read_active_bytes(bytes, kTableMaxBytes, &size)) return port::PortStatus::transport_error;
+  if (read_active_bytes(bytes, kTableMaxBytes, &size) != port::PortStatus::ok) return port::PortStatus::transport_error;
   *reason = decode_table(bytes, size, table);
   return *reason == TableStatus::ok ? port::PortStatus::ok : port::PortStatus::rejected;
 }

@@ -37,10 +37,15 @@ struct DriveInfo {
 /// The drive's fault in words: "joint 2 velocity limit: qd = 3.51 rad/s at t = 1.234 s".
 std::string describe_fault(const DriveInfo& info);
 
+/// Every call returns a port::PortStatus and, unless ok, leaves the reason in error(). As libmodbus
+/// documents each call, the "Errors" line says which statuses a call returns: transport_error when
+/// the request or its answer failed (time-out, broken link, bad frame; libmodbus's text in error()),
+/// rejected when the drive answered with a Modbus exception (illegal address or value, device
+/// failure; error() names it) or refused a table (the TableStatus in *reason).
 class ModbusDrive final : public port::SampleSource, public port::ParameterStore, public port::Clock {
  public:
-  /// Connects to `uri`: tcp://HOST:PORT or rtu:DEVICE (115200 8N1, slave 1). nullptr on failure,
-  /// with the reason in *error.
+  /// Connects to `uri`: tcp://HOST:PORT or rtu:DEVICE (115200 8N1, slave 1), response time-out 2 s.
+  /// Errors: nullptr, with the reason in *error (malformed URI, no context, connection refused).
   static std::unique_ptr<ModbusDrive> connect(const std::string& uri, std::string* error);
   ~ModbusDrive();
   ModbusDrive(const ModbusDrive&) = delete;
@@ -49,36 +54,48 @@ class ModbusDrive final : public port::SampleSource, public port::ParameterStore
   /// Last failure in words (libmodbus's text, or the drive's exception).
   const std::string& error() const { return error_; }
 
-  bool read_info(DriveInfo& info);
-  /// Writes the trajectory (Eq. 27 coefficients), periods and sample rate. The drive must be idle.
-  bool write_trajectory(const Trajectory& trajectory, int periods, double sample_rate_hz);
-  bool start();
-  bool stop();
+  /// Reads the drive's identity, state and counters (input registers 0..29; the fault registers too
+  /// when the state is fault). Errors: transport_error, rejected.
+  port::PortStatus read_info(DriveInfo& info);
+  /// Writes the trajectory (Eq. 27 coefficients), periods and sample rate; the drive must be idle.
+  /// Errors: transport_error, rejected (a value outside the register's range, docs/modbus.md).
+  port::PortStatus write_trajectory(const Trajectory& trajectory, int periods, double sample_rate_hz);
+  /// Starts the written trajectory from its beginning (clears the ring and the statistics).
+  /// Errors: transport_error, rejected.
+  port::PortStatus start();
+  /// Stops playing; the drive holds its position. Errors: transport_error, rejected.
+  port::PortStatus stop();
 
   // port::SampleSource
-  /// device_fault once every sample recorded before a drive fault has been read (error() then
-  /// describes the fault).
+  /// Errors: transport_error; sequence_gap when samples were lost (lost() counts them); device_fault
+  /// once every sample recorded before a drive fault has been read (error() then describes the fault).
   port::PortStatus read(port::DriveSample* out, int capacity, int* count) noexcept override;
   /// Samples lost to drive overruns so far (gaps in seq).
   std::uint32_t lost() const { return lost_; }
 
   // port::ParameterStore
+  /// Stages, commits and reads the table back byte for byte. Errors: rejected with *reason (the
+  /// table cannot be encoded, or the drive refused it: its active table is unchanged);
+  /// transport_error (link failure, or the read-back differs from what was sent).
   port::PortStatus write(const ParameterTable& table, TableStatus* reason) noexcept override;
+  /// The active table, decoded and CRC-checked. Errors: transport_error; rejected with *reason.
   port::PortStatus read(ParameterTable& table, TableStatus* reason) noexcept override;
-  /// Raw bytes of the active table (for comparison with what was sent).
-  bool read_active_bytes(std::uint8_t* bytes, int capacity, int* size);
+  /// Raw bytes of the active table (for comparison with what was sent). Errors: transport_error
+  /// (also when the table is larger than `capacity`), rejected.
+  port::PortStatus read_active_bytes(std::uint8_t* bytes, int capacity, int* size);
 
   // port::Clock
   std::uint64_t now_us() noexcept override;
 
-  /// Low-level register access (tests): false with error() on failure or a Modbus exception.
-  bool read_input(int address, int count, std::uint16_t* regs);
-  bool read_holding(int address, int count, std::uint16_t* regs);
-  bool write_holding(int address, int count, const std::uint16_t* regs);
+  /// Low-level register access (tests). Errors: transport_error, rejected (Modbus exception).
+  port::PortStatus read_input(int address, int count, std::uint16_t* regs);
+  port::PortStatus read_holding(int address, int count, std::uint16_t* regs);
+  port::PortStatus write_holding(int address, int count, const std::uint16_t* regs);
 
  private:
   explicit ModbusDrive(modbus_t* ctx) : ctx_(ctx) {}
-  bool fail(const char* what);
+  /// error() from errno; rejected for a Modbus exception, transport_error otherwise.
+  port::PortStatus fail(const char* what);
   modbus_t* ctx_;
   std::string error_;
   std::uint32_t next_seq_ = 0;

@@ -1,0 +1,60 @@
+#pragma once
+// The dyncal subcommands, one file each. Each add_*_command adds its subcommand to the app; when the
+// user chooses it, its parse callback sets `run` to the action, which main() then calls. Actions
+// throw InputError on bad input (main prints it on one line, exit 2) and return the exit code.
+
+#include <CLI/CLI.hpp>
+#include <functional>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "dyncal_host/common/robot_description.hpp"
+#include "dyncal_host/identification/joint_log.hpp"
+#include "dyncal_port/modbus_drive.hpp"
+
+namespace dyncal::app {
+
+using Action = std::function<int()>;
+
+void add_identify_command(CLI::App& app, Action& run);
+void add_diagnose_command(CLI::App& app, Action& run);
+void add_excite_command(CLI::App& app, Action& run);
+void add_survey_command(CLI::App& app, Action& run);
+void add_drive_command(CLI::App& app, Action& run);
+void add_calibrate_command(CLI::App& app, Action& run);
+void add_table_command(CLI::App& app, Action& run);
+void add_flash_command(CLI::App& app, Action& run);
+void add_registers_command(CLI::App& app, Action& run);
+
+/// Reads a JSON file. Throws InputError (unreadable, invalid JSON) naming the file.
+nlohmann::json read_json_file(const std::string& path);
+/// Writes `j` (indented) to `path`. Throws InputError when the file cannot be written.
+void write_json_file(const std::string& path, const nlohmann::json& j);
+
+/// The drive at `uri` (tcp://HOST:PORT or rtu:DEVICE). Throws InputError when it cannot be reached.
+std::unique_ptr<linux_port::ModbusDrive> connect_drive(const std::string& uri);
+
+/// The robot a command works on: --robot NAME under --robots-dir.
+struct RobotOption {
+  std::string name;
+  std::string robots_dir;
+  /// Adds --robot (with `help`) and --robots-dir to `cmd`.
+  void add_to(CLI::App* cmd, const std::string& help);
+  /// The robot's description. Throws InputError (unknown robot, malformed robot.json).
+  host::RobotDescription load() const;
+};
+
+/// A measured log: --format csv|tx40, --data, and the robot (tx40 by default with --format tx40).
+struct LogOption {
+  RobotOption robot;
+  std::string format = "csv";
+  std::string data;
+  void add_to(CLI::App* cmd);
+  /// The robot (--robot, or tx40 for --format tx40). Throws InputError (no --robot for csv, ...).
+  host::RobotDescription load_robot() const;
+  /// The log on the joint side (TX40 files through the robot's transmission). Throws InputError.
+  host::JointLog load_log(const host::RobotDescription& robot) const;
+};
+
+}  // namespace dyncal::app

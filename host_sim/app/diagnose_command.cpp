@@ -1,0 +1,48 @@
+// dyncal diagnose: what the declared model lacks in a measured log, added and reported.
+#include <iostream>
+#include <memory>
+
+#include "commands.hpp"
+#include "dyncal_host/diagnosis/diagnose.hpp"
+
+namespace dyncal::app {
+namespace {
+
+struct DiagnoseSettings {
+  LogOption log;
+  host::DiagnoseOptions options;
+  std::string model = "eq7", report, plots;
+};
+
+int run_diagnose(DiagnoseSettings& s) {
+  const auto robot = s.log.load_robot();
+  s.options.identify.terms = host::parse_model(s.model);
+  const auto log = s.log.load_log(robot);
+  const auto result = host::diagnose(robot, log, s.options);
+  host::print_diagnose_report(std::cout, result);
+  if (!s.report.empty()) write_json_file(s.report, host::diagnose_report_json(result));
+  if (!s.plots.empty()) {
+    const auto files = host::write_diagnose_plots(result, s.plots);
+    std::cout << "\nplots: " << files.size() << " SVG files in " << s.plots << "\n";
+  }
+  return 0;
+}
+
+}  // namespace
+
+void add_diagnose_command(CLI::App& app, Action& run) {
+  auto s = std::make_shared<DiagnoseSettings>();
+  auto* cmd = app.add_subcommand("diagnose", "find what the declared model lacks in a measured log, add it, report");
+  s->log.add_to(cmd);
+  cmd->add_option("--model", s->model, "declared model: eq7 or eq8, optionally with rotor_inertia and offset")
+      ->capture_default_str();
+  cmd->add_option("--cutoff", s->options.identify.cutoff_hz, "zero-phase Butterworth cut-off [Hz]")
+      ->capture_default_str();
+  cmd->add_option("--max-effects", s->options.max_effects, "greedy steps at most")->capture_default_str();
+  cmd->add_option("--bic", s->options.bic_threshold, "BIC drop an effect needs")->capture_default_str();
+  cmd->add_option("--report", s->report, "write the report as JSON");
+  cmd->add_option("--plots", s->plots, "write SVG plots (gnuplot) into this directory");
+  cmd->callback([&run, s] { run = [s] { return run_diagnose(*s); }; });
+}
+
+}  // namespace dyncal::app

@@ -1,0 +1,71 @@
+// dyncal drive: the simulated drive behind a Modbus server (TCP or RTU).
+#include <atomic>
+#include <csignal>
+#include <iostream>
+#include <memory>
+
+#include "commands.hpp"
+#include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/drive/drive_server.hpp"
+
+namespace dyncal::app {
+namespace {
+
+std::atomic<bool> g_stop{false};
+void on_signal(int) {
+  g_stop.store(true);
+}
+
+struct DriveSettings {
+  RobotOption robot;
+  std::string scenario, table_file, ready_file, rtu;
+  std::string listen = "127.0.0.1:1502";
+  bool lockstep = false;
+  int flash_delay_ms = 0;
+};
+
+int run_drive(DriveSettings& s) {
+  const auto robot = s.robot.load();
+  const auto scenario = s.scenario.empty() ? host::default_scenario(robot) : host::load_scenario(s.scenario, robot);
+  if (s.table_file.empty()) s.table_file = "dyncal-drive-" + robot.name + ".table";
+  host::SimulatedDrive drive(robot, scenario, s.table_file);
+  drive.lockstep = s.lockstep;
+  drive.flash_chunk_delay_ms = s.flash_delay_ms;
+  std::cout << "dyncal drive: " << robot.name << ", " << (s.lockstep ? "lockstep" : "real-time") << ", "
+            << drive.startup_note() << std::endl;
+  host::DriveServerOptions o;
+  o.ready_file = s.ready_file;
+  if (!s.rtu.empty()) {
+    o.rtu_device = s.rtu;
+  } else {
+    const size_t colon = s.listen.rfind(':');
+    if (colon == std::string::npos) throw host::InputError("--tcp wants HOST:PORT");
+    o.tcp_host = s.listen.substr(0, colon);
+    o.tcp_port = std::stoi(s.listen.substr(colon + 1));
+  }
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  host::serve_drive(drive, o, g_stop);
+  std::cout << "dyncal drive: stopped" << std::endl;
+  return 0;
+}
+
+}  // namespace
+
+void add_drive_command(CLI::App& app, Action& run) {
+  auto s = std::make_shared<DriveSettings>();
+  s->robot.name = "er20";
+  auto* cmd = app.add_subcommand("drive", "run the simulated er20 drive (Modbus server)");
+  s->robot.add_to(cmd, "robot (the simulated drive runs er20)");
+  cmd->get_option("--robot")->capture_default_str();
+  cmd->add_option("--scenario", s->scenario, "scenario JSON: friction models, effects, noise (docs/modbus.md)");
+  cmd->add_option("--tcp", s->listen, "serve Modbus TCP on HOST:PORT (port 0: any free port)")->capture_default_str();
+  cmd->add_option("--rtu", s->rtu, "serve Modbus RTU on this serial device instead (e.g. a socat pty)");
+  cmd->add_option("--table", s->table_file, "the simulated flash file (default dyncal-drive-<robot>.table)");
+  cmd->add_option("--ready-file", s->ready_file, "write the drive's URI here once it serves requests");
+  cmd->add_flag("--lockstep", s->lockstep, "virtual time: advance only as fast as the host reads samples");
+  cmd->add_option("--flash-delay-ms", s->flash_delay_ms, "sleep per 64 bytes written to flash (tests)");
+  cmd->callback([&run, s] { run = [s] { return run_drive(*s); }; });
+}
+
+}  // namespace dyncal::app

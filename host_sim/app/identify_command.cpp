@@ -1,0 +1,72 @@
+// dyncal identify: base parameters and friction from a measured log, cross-validated.
+#include <iostream>
+#include <memory>
+
+#include "commands.hpp"
+#include "dyncal_host/identification/friction_comparison.hpp"
+#include "dyncal_host/identification/identify.hpp"
+#include "dyncal_host/identification/identify_report.hpp"
+#include "dyncal_host/identification/stacked_data.hpp"
+
+namespace dyncal::app {
+namespace {
+
+struct IdentifySettings {
+  LogOption log;
+  host::IdentifyOptions options;
+  std::string model = "eq7,rotor_inertia,offset", report, params;
+  bool compare_friction = false;
+};
+
+int run_identify(IdentifySettings& s) {
+  const auto robot = s.log.load_robot();
+  s.options.terms = host::parse_model(s.model);
+  const auto log = s.log.load_log(robot);
+  if (s.compare_friction) {
+    const double last = s.options.validate_last > 0 ? s.options.validate_last : 0.3;
+    const auto stacked = host::prepare_stacked(robot, log, s.options);
+    host::print_friction_comparison(std::cout, host::compare_friction_models(stacked, last), last);
+    return 0;
+  }
+  const auto result = host::identify(robot, log, s.options);
+  host::print_identify_report(std::cout, result);
+  if (!s.report.empty()) write_json_file(s.report, host::identify_report_json(result));
+  if (!s.params.empty()) write_json_file(s.params, host::parameter_table_json(result));
+  return 0;
+}
+
+}  // namespace
+
+void add_identify_command(CLI::App& app, Action& run) {
+  auto s = std::make_shared<IdentifySettings>();
+  host::IdentifyOptions& opt = s->options;
+  auto* cmd = app.add_subcommand("identify", "identify base parameters and friction from a measured log");
+  s->log.add_to(cmd);
+  cmd->add_option("--model", s->model,
+                  "terms besides the rigid body: eq7|eq8|coulomb|viscous|power|rotor_inertia|offset, comma-separated")
+      ->capture_default_str();
+  cmd->add_option("--method", opt.method, "ols | wls | kf | rls")
+      ->check(CLI::IsMember({"ols", "wls", "kf", "rls"}))
+      ->capture_default_str();
+  cmd->add_option("--cutoff", opt.cutoff_hz, "zero-phase Butterworth cut-off [Hz]")->capture_default_str();
+  cmd->add_option("--filter-order", opt.filter_order, "Butterworth order (even)")->capture_default_str();
+  cmd->add_option("--decimate", opt.decimate, "decimation factor (0: automatic, about 25 x cut-off)")
+      ->capture_default_str();
+  cmd->add_option("--folds", opt.folds, "folds of the blocked cross-validation")->capture_default_str();
+  cmd->add_option("--block", opt.block_seconds, "cross-validation block length [s]")->capture_default_str();
+  cmd->add_option("--validate-last", opt.validate_last, "validate on this final fraction instead (time split)");
+  cmd->add_option("--mu", opt.rls_mu, "RLS forgetting factor mu (survey Eq. 23)")->capture_default_str();
+  cmd->add_option("--p0", opt.p0, "KF/RLS initial covariance diagonal")->capture_default_str();
+  cmd->add_option("--min-speed", opt.min_speed_fraction,
+                  "fit only rows where |qd_j| >= this fraction of joint j's top speed (stiction)")
+      ->capture_default_str();
+  cmd->add_option("--report", s->report, "write the report as JSON");
+  cmd->add_option("--params", s->params, "write the identified parameter table as JSON");
+  cmd->add_flag("--compare-friction", s->compare_friction,
+                "fit each friction model (survey Eq. 4-9) with the --model's other terms and compare their "
+                "torque error on the fitted part and on the last --validate-last (default 0.3) of the log "
+                "(survey Table 12)");
+  cmd->callback([&run, s] { run = [s] { return run_identify(*s); }; });
+}
+
+}  // namespace dyncal::app

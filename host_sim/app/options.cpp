@@ -1,0 +1,66 @@
+// Options and files several subcommands share.
+#include <fstream>
+
+#include "commands.hpp"
+#include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/common/robot_description.hpp"
+
+namespace dyncal::app {
+
+using host::InputError;
+
+nlohmann::json read_json_file(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError("cannot read '" + path + "'");
+  try {
+    return nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(path + ": invalid JSON: " + e.what());
+  }
+}
+
+void write_json_file(const std::string& path, const nlohmann::json& j) {
+  std::ofstream out(path);
+  if (!out) throw InputError("cannot write '" + path + "'");
+  out << j.dump(2) << "\n";
+}
+
+std::unique_ptr<linux_port::ModbusDrive> connect_drive(const std::string& uri) {
+  std::string error;
+  auto d = linux_port::ModbusDrive::connect(uri, &error);
+  if (!d) throw InputError(error);
+  return d;
+}
+
+void RobotOption::add_to(CLI::App* cmd, const std::string& help) {
+  robots_dir = host::default_robots_dir();
+  cmd->add_option("--robot", name, help);
+  cmd->add_option("--robots-dir", robots_dir, "directory holding the robot descriptions");
+}
+
+host::RobotDescription RobotOption::load() const {
+  return host::load_robot(robots_dir, name);
+}
+
+void LogOption::add_to(CLI::App* cmd) {
+  robot.add_to(cmd, "robot name (robots/<name>/); tx40 by default with --format tx40");
+  cmd->add_option("--format", format, "log format: csv (t,q1..qN,[qd..],[qdd..],tau1..tauN) or tx40")
+      ->check(CLI::IsMember({"csv", "tx40"}));
+  cmd->add_option("--data", data, "CSV log file, or the folder of the TX40 files")->required();
+}
+
+host::RobotDescription LogOption::load_robot() const {
+  RobotOption r = robot;
+  if (r.name.empty()) {
+    if (format != "tx40") throw InputError("--robot is required for --format csv");
+    r.name = "tx40";
+  }
+  return r.load();
+}
+
+host::JointLog LogOption::load_log(const host::RobotDescription& r) const {
+  return format == "tx40" ? host::read_tx40_log(data, r.transmission, r.joint_offsets)
+                          : host::read_csv_log(data, r.num_joints);
+}
+
+}  // namespace dyncal::app

@@ -1,0 +1,62 @@
+// dyncal survey: the survey's simulation study on the er20, beside its published numbers.
+#include <iostream>
+#include <map>
+#include <memory>
+
+#include "commands.hpp"
+#include "dyncal_host/survey/survey.hpp"
+
+namespace dyncal::app {
+namespace {
+
+namespace survey = host::survey;
+
+struct SurveySettings {
+  std::string robots_dir, json, check;
+  survey::SurveyOptions options;
+  double tolerance = 1e-3;
+};
+
+int run_survey(const SurveySettings& s) {
+  const auto robot = host::load_robot(s.robots_dir, "er20");
+  const nlohmann::json published = read_json_file(s.robots_dir + "/er20/survey_published.json");
+  const nlohmann::json result = survey::run_survey(robot, s.options);
+  if (!s.json.empty()) write_json_file(s.json, result);
+  survey::print_survey(std::cout, result, published);
+  if (s.check.empty()) return 0;
+  const std::string diff = survey::compare_survey(result, read_json_file(s.check), s.tolerance);
+  if (!diff.empty()) {
+    std::cerr << "dyncal survey: differs from " << s.check << ":\n" << diff;
+    return 1;
+  }
+  std::cout << "\nmatches " << s.check << " (relative tolerance " << s.tolerance << ")\n";
+  return 0;
+}
+
+}  // namespace
+
+void add_survey_command(CLI::App& app, Action& run) {
+  auto s = std::make_shared<SurveySettings>();
+  s->robots_dir = host::default_robots_dir();
+  auto* cmd = app.add_subcommand(
+      "survey", "reproduce the survey's simulation study on the er20 (Tables 5, 6, 8-12, Fig. 4) next to its numbers");
+  cmd->add_option("--robots-dir", s->robots_dir, "directory holding the robot descriptions");
+  cmd->add_flag("--quick", s->options.quick, "one excitation period instead of two (CI)");
+  cmd->add_option("--seed", s->options.seed, "excitation, noise and CAD-prior seed")->capture_default_str();
+  cmd->add_option("--prior-on", s->options.prior_on,
+                  "which set values the CAD prior's errors are drawn on: table5 (mass, centre of mass, inertia "
+                  "about it, as CAD reports them) or standard (inertia about the link frame, first moments)")
+      ->transform(
+          CLI::CheckedTransformer(std::map<std::string, host::PriorErrors>{{"table5", host::PriorErrors::table5},
+                                                                           {"standard", host::PriorErrors::standard}},
+                                  CLI::ignore_case))
+      ->capture_default_str();
+  cmd->add_option("--prior-error", s->options.prior_error, "CAD prior: relative error of every set value (uniform)")
+      ->capture_default_str();
+  cmd->add_option("--json", s->json, "write the results as JSON");
+  cmd->add_option("--check", s->check, "compare with a committed result JSON; exit 1 on any difference");
+  cmd->add_option("--tolerance", s->tolerance, "relative tolerance of --check")->capture_default_str();
+  cmd->callback([&run, s] { run = [s] { return run_survey(*s); }; });
+}
+
+}  // namespace dyncal::app

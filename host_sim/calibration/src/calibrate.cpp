@@ -1,0 +1,438 @@
+#include "dyncal_host/calibration/calibrate.hpp"
+
+#include <Eigen/SVD>
+#include <chrono>
+#include <cmath>
+#include <ctime>
+#include <filesystem>
+#include <functional>
+#include <iomanip>
+#include <memory>
+#include <ostream>
+#include <random>
+
+#include "dyncal/causal_differentiator.hpp"
+#include "dyncal/generated/er20/robot.hpp"
+#include "dyncal/identification_model.hpp"
+#include "dyncal/kalman_filter.hpp"
+#include "dyncal/rls_forgetting.hpp"
+#include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/common/model_terms.hpp"
+#include "dyncal_host/identification/excitation.hpp"
+#include "dyncal_host/identification/identify_report.hpp"
+
+namespace dyncal::host {
+namespace {
+
+using Robot = dyncal::generated::er20::Robot;
+using Vec = Eigen::Matrix<double, 6, 1>;
+using SteadyClock = std::chrono::steady_clock;
+namespace mm = dyncal::modbus_map;
+
+double seconds_since(SteadyClock::time_point t0) {
+  return std::chrono::duration<double>(SteadyClock::now() - t0).count();
+}
+
+void progress_bar(std::ostream& out, double fraction, long samples, const char* what) {
+  const int width = 30;
+  const int filled = static_cast<int>(std::lround(std::min(1.0, fraction) * width));
+  out << "\r" << what << " [" << std::string(static_cast<size_t>(filled), '#')
+      << std::string(static_cast<size_t>(width - filled), '.') << "] " << std::setw(3)
+      << static_cast<int>(std::lround(100 * std::min(1.0, fraction))) << "% " << samples << " samples" << std::flush;
+}
+
+/// Per-sample consumer of a stream (the online estimators) and its wrap-up.
+struct SampleSink {
+  std::function<void(const port::DriveSample&)> push;
+  std::function<void(CalibrateResult&)> finish;
+};
+
+/// Online path and verification for one compiled model.
+template <unsigned Terms>
+struct ModelRun {
+  using Model = IdentificationModel<Robot, Terms>;
+  static constexpr int P = Model::kNumParams;
+  using ParamVec = Eigen::Matrix<double, P, 1>;
+
+  /// The online path: lib/ KF and RLS updated with each sample as it arrives from the drive.
+  struct Online {
+    std::unique_ptr<KalmanFilter<double, P, 6>> kf = std::make_unique<KalmanFilter<double, P, 6>>();
+    std::unique_ptr<RlsForgetting<double, P, 6>> rls = std::make_unique<RlsForgetting<double, P, 6>>();
+    CausalDifferentiator<double, 6> diff;
+    typename Model::template Regressor<double> K;
+    Vec qd_max;
+    double min_speed = 0;
+    long updates = 0, rejected = 0;
+
+    void push(const port::DriveSample& sample) {
+      Vec q_in, tau_in, q, qd, qdd, tau;
+      for (int j = 0; j < 6; ++j) {
+        q_in[j] = sample.q[j];
+        tau_in[j] = sample.tau[j];
+      }
+      if (diff.update(q_in, tau_in, q, qd, qdd, tau) != UpdateStatus::ok) return;
+      Model::regressor(q, qd, qdd, Vec::Zero().eval(), K);
+      for (int j = 0; j < 6; ++j) {  // stiction band: as the batch fit, relative to the joint's speed limit
+        if (std::abs(qd[j]) >= min_speed * qd_max[j]) continue;
+        K.row(j).setZero();
+        tau[j] = 0.0;
+      }
+      const UpdateStatus a = kf->update(K, tau, Vec::Ones());
+      const UpdateStatus b = rls->update(K, tau);
+      ++updates;
+      if (a != UpdateStatus::ok || b != UpdateStatus::ok) ++rejected;
+    }
+    void finish(CalibrateResult& r) const {
+      r.phi_kf.assign(kf->estimate().data(), kf->estimate().data() + P);
+      r.phi_rls.assign(rls->estimate().data(), rls->estimate().data() + P);
+      r.online_updates = updates;
+      r.online_rejected = rejected;
+    }
+  };
+
+  static void online(const Vec& qd_max, const CalibrateOptions& o, SampleSink& sink) {
+    auto st = std::make_shared<Online>();
+    const ParamVec p0 = ParamVec::Constant(o.identify.p0);
+    st->kf->reset(ParamVec::Zero(), p0);
+    st->rls->reset(ParamVec::Zero(), p0, o.rls_mu);
+    if (st->diff.reset(1.0 / o.sample_rate_hz, o.online_cutoff_hz) != UpdateStatus::ok) {
+      throw InputError("online cut-off must be below half the sample rate");
+    }
+    st->qd_max = qd_max;
+    st->min_speed = o.identify.min_speed_fraction;
+    sink.push = [st](const port::DriveSample& s) { st->push(s); };
+    sink.finish = [st](CalibrateResult& r) { st->finish(r); };
+  }
+
+  static VerificationErrors verify(const JointLog& log, const std::vector<double>& phi_v, double cutoff) {
+    ParamVec phi;
+    for (int i = 0; i < P; ++i) phi[i] = phi_v[static_cast<size_t>(i)];
+    CausalDifferentiator<double, 6> diff;
+    diff.reset(log.sample_period(), cutoff);
+    typename Model::template Regressor<double> K;
+    Vec se = Vec::Zero(), st = Vec::Zero();
+    long n = 0;
+    for (Eigen::Index s = 0; s < log.samples(); ++s) {
+      Vec q, qd, qdd, tau;
+      if (diff.update(log.q.row(s).transpose(), log.tau.row(s).transpose(), q, qd, qdd, tau) != UpdateStatus::ok)
+        continue;
+      Model::regressor(q, qd, qdd, Vec::Zero().eval(), K);
+      se += (tau - K * phi).cwiseAbs2();
+      st += tau.cwiseAbs2();
+      ++n;
+    }
+    VerificationErrors e;
+    for (int j = 0; j < 6; ++j) {
+      e.rms[j] = std::sqrt(se[j] / static_cast<double>(std::max(1L, n)));
+      e.rms_tau[j] = std::sqrt(st[j] / static_cast<double>(std::max(1L, n)));
+    }
+    return e;
+  }
+};
+
+template <unsigned Terms>
+struct Online {
+  static void run(const Vec& qd_max, const CalibrateOptions& o, SampleSink& sink) {
+    ModelRun<Terms>::online(qd_max, o, sink);
+  }
+};
+template <unsigned Terms>
+struct Verify {
+  static void run(const JointLog& log, const CalibrateOptions& o, CalibrateResult& r) {
+    r.verify_batch = ModelRun<Terms>::verify(log, r.phi_batch, o.online_cutoff_hz);
+    r.verify_kf = ModelRun<Terms>::verify(log, r.phi_kf, o.online_cutoff_hz);
+    r.verify_rls = ModelRun<Terms>::verify(log, r.phi_rls, o.online_cutoff_hz);
+  }
+};
+
+/// Verification run: stream a fresh trajectory and read the drive's model error.
+JointLog verification_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory& t, const CalibrateOptions& o,
+                          std::ostream* progress, std::uint32_t* lost, std::array<double, 6>& drive_error) {
+  JointLog log = stream_run(drive, t, {"verification", o.verify_periods, o.sample_rate_hz, o.fault_dir}, progress, lost,
+                            nullptr, nullptr);
+  linux_port::DriveInfo info;
+  if (drive.read_info(info) != port::PortStatus::ok) throw InputError("drive: " + drive.error());
+  drive_error = info.model_error_rms;
+  return log;
+}
+
+constexpr const char* kFlashedMessage = "flashed, read back and compared: identical";
+
+/// The streamed samples as a log: q and tau, t from seq.
+JointLog samples_to_log(const std::vector<port::DriveSample>& samples, double sample_rate_hz) {
+  const Eigen::Index S = static_cast<Eigen::Index>(samples.size());
+  JointLog log;
+  log.t.resize(S);
+  log.q.resize(S, 6);
+  log.tau.resize(S, 6);
+  for (Eigen::Index s = 0; s < S; ++s) {
+    const auto& d = samples[static_cast<size_t>(s)];
+    log.t[s] = static_cast<double>(d.seq) / sample_rate_hz;
+    for (int j = 0; j < 6; ++j) {
+      log.q(s, j) = d.q[j];
+      log.tau(s, j) = d.tau[j];
+    }
+  }
+  log.source = "drive";
+  return log;
+}
+
+/// `dir`/dyncal-fault-`run`-YYYYmmddTHHMMSS.csv (local time), with -2, -3 ... before the extension
+/// if that file exists: an earlier fault log is never overwritten.
+std::string fault_log_path(const StreamRun& run) {
+  const std::time_t now = std::time(nullptr);
+  char stamp[32];
+  std::strftime(stamp, sizeof stamp, "%Y%m%dT%H%M%S", std::localtime(&now));
+  const std::string stem = (std::filesystem::path(run.fault_dir) / ("dyncal-fault-" + run.name + "-" + stamp)).string();
+  std::string path = stem + ".csv";
+  for (int k = 2; std::filesystem::exists(path); ++k) path = stem + "-" + std::to_string(k) + ".csv";
+  return path;
+}
+
+}  // namespace
+
+JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory& trajectory, const StreamRun& run,
+                    std::ostream* progress, std::uint32_t* lost, double* seconds,
+                    const std::function<void(const port::DriveSample&)>& on_sample) {
+  if (drive.write_trajectory(trajectory, run.periods, run.sample_rate_hz) != port::PortStatus::ok)
+    throw InputError("drive: " + drive.error());
+  const auto t0 = SteadyClock::now();
+  if (drive.start() != port::PortStatus::ok) throw InputError("drive: " + drive.error());
+  const long expected = std::lround(run.periods * trajectory.period() * run.sample_rate_hz);
+  std::vector<port::DriveSample> samples;
+  samples.reserve(static_cast<size_t>(expected));
+  port::DriveSample block[mm::kSamplesPerBlock];
+  long last_shown = -1;
+  for (;;) {
+    int n = 0;
+    const port::PortStatus st = drive.read(block, mm::kSamplesPerBlock, &n);
+    if (st == port::PortStatus::end_of_stream) break;
+    if (st == port::PortStatus::transport_error) throw InputError("drive: " + drive.error());
+    if (st == port::PortStatus::device_fault) {
+      if (progress) *progress << "\n";
+      if (samples.empty()) throw DriveFaultError(drive.error() + "; no sample was recorded before it");
+      const std::string path = fault_log_path(run);
+      const std::string count = std::to_string(samples.size()) + " samples recorded before it (" + run.name + " run)";
+      try {
+        write_csv_log(path, samples_to_log(samples, run.sample_rate_hz));
+      } catch (const InputError& e) {
+        throw DriveFaultError(drive.error() + "; the " + count + " are lost: " + e.what());
+      }
+      throw DriveFaultError(drive.error() + "; the " + count + " are in " + path);
+    }
+    if (st == port::PortStatus::sequence_gap) {
+      throw InputError(
+          "drive overrun: " + std::to_string(drive.lost()) +
+          " samples lost (the host read too slowly; use --lockstep on the simulated drive or a lower --rate)");
+    }
+    samples.insert(samples.end(), block, block + n);
+    if (on_sample) {
+      for (int k = 0; k < n; ++k) on_sample(block[k]);
+    }
+    if (progress && static_cast<long>(samples.size()) / 500 != last_shown) {
+      last_shown = static_cast<long>(samples.size()) / 500;
+      progress_bar(*progress, static_cast<double>(samples.size()) / static_cast<double>(expected),
+                   static_cast<long>(samples.size()), "streaming");
+    }
+  }
+  if (progress) {
+    progress_bar(*progress, 1.0, static_cast<long>(samples.size()), "streaming");
+    *progress << "\n";
+  }
+  if (seconds) *seconds = seconds_since(t0);
+  if (lost) *lost += drive.lost();
+  if (samples.size() < 10) throw InputError("drive delivered only " + std::to_string(samples.size()) + " samples");
+  return samples_to_log(samples, run.sample_rate_hz);
+}
+
+FlashOutcome flash_and_verify(linux_port::ModbusDrive& drive, const ParameterTable& table,
+                              const std::function<void()>& verify) {
+  ParameterTable previous;
+  TableStatus previous_status = TableStatus::ok;
+  if (drive.read(previous, &previous_status) != port::PortStatus::ok) {
+    throw InputError("drive: cannot read the active table before flashing: " +
+                     (previous_status != TableStatus::ok ? to_string(previous_status) : drive.error()));
+  }
+  FlashOutcome f;
+  const port::PortStatus st = drive.write(table, &f.status);
+  if (st == port::PortStatus::transport_error) throw InputError("flash failed: " + drive.error());
+  if (st != port::PortStatus::ok) {
+    f.message = std::string("drive rejected the table: ") + to_string(f.status);
+    return f;
+  }
+  f.flashed = true;
+  f.message = kFlashedMessage;
+  try {
+    verify();
+  } catch (const DriveFaultError& fault) {
+    // The new table made the drive trip: the one it replaced goes back before anything else.
+    TableStatus reason = TableStatus::ok;
+    const port::PortStatus back = drive.write(previous, &reason);
+    throw DriveFaultError("with the new table, " + std::string(fault.what()) + ". " +
+                          (back == port::PortStatus::ok
+                               ? "The previous table was flashed back."
+                               : "Flashing the previous table back failed: " +
+                                     (back == port::PortStatus::rejected ? to_string(reason) : drive.error())));
+  }
+  return f;
+}
+
+CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions& o, std::ostream& progress) {
+  const auto t0 = SteadyClock::now();
+  if (robot.name != Robot::kName)
+    throw InputError("calibration over Modbus runs the er20 model, not '" + robot.name + "'");
+  if (!std::filesystem::is_directory(o.fault_dir))
+    throw InputError("fault directory '" + o.fault_dir + "' is not a directory");
+  if (!o.save_log.empty()) {
+    const std::filesystem::path parent = std::filesystem::path(o.save_log).parent_path();
+    if (!parent.empty() && !std::filesystem::is_directory(parent))
+      throw InputError("cannot write the log '" + o.save_log + "': no directory '" + parent.string() + "'");
+  }
+  std::string error;
+  auto drive = linux_port::ModbusDrive::connect(o.uri, &error);
+  if (!drive) throw InputError(error);
+  linux_port::DriveInfo info;
+  if (drive->read_info(info) != port::PortStatus::ok) throw InputError("drive: " + drive->error());
+  if (info.map_version != mm::kMapVersion || info.num_joints != 6)
+    throw InputError("drive speaks another register map");
+  if (info.robot_id != Robot::kRobotId)
+    throw InputError("the drive's robot id does not match robot '" + robot.name + "'");
+
+  CalibrateResult r;
+  std::ostream* prog = o.progress ? &progress : nullptr;
+  // 1. Excitation: stream, then online estimators sample by sample and the batch fit.
+  linux_port::Trajectory excitation;
+  if (o.excitation) {
+    excitation = *o.excitation;
+    excitation_quality(robot, excitation, FrictionModel::eq7, 400, &r.trajectory_cond, nullptr);
+  } else {
+    excitation = default_excitation(robot, o.f_f, o.harmonics, o.candidates, o.seed, &r.trajectory_cond);
+  }
+  progress << "excitation: Fourier series (Eq. 27), L = " << excitation.harmonics << ", f_f = " << excitation.f_f
+           << " Hz" << (o.excitation ? " (designed)" : "") << ", " << o.periods << " periods at " << o.sample_rate_hz
+           << " Hz, cond(K) = " << std::setprecision(3) << r.trajectory_cond << "\n";
+  SampleSink sink;
+  with_term_set<Online>(o.terms, Vec(robot.qd_max), o, sink);
+  const JointLog log = stream_run(*drive, excitation, {"excitation", o.periods, o.sample_rate_hz, o.fault_dir}, prog,
+                                  &r.lost, &r.stream_seconds, sink.push);
+  if (!o.save_log.empty()) {
+    write_csv_log(o.save_log, log);
+    progress << "excitation log written to " << o.save_log << "\n";
+  }
+  sink.finish(r);
+  r.samples = static_cast<long>(log.samples());
+  r.samples_per_second = static_cast<double>(r.samples) / std::max(1e-9, r.stream_seconds);
+  IdentifyOptions io = o.identify;
+  io.terms = o.terms;
+  r.batch = identify(robot, log, io);
+  for (const auto& p : r.batch.params) {
+    r.names.push_back(p.name);
+    r.phi_batch.push_back(p.value);
+  }
+  // 2. Fresh trajectory with the drive's current table, flash, same trajectory again.
+  const auto fresh = default_excitation(robot, o.f_f, o.harmonics, 1, o.seed + 1000, nullptr);
+  progress << "verification run with the drive's current table\n";
+  const JointLog vlog = verification_run(*drive, fresh, o, prog, &r.lost, r.drive_error_before);
+  with_term_set<Verify>(o.terms, vlog, o, r);
+  if (o.flash) {
+    ParameterTable table;
+    table.robot_id = Robot::kRobotId;
+    table.model_id = o.terms;
+    table.count = static_cast<std::uint16_t>(r.phi_batch.size());
+    for (size_t i = 0; i < r.phi_batch.size(); ++i) table.values[i] = static_cast<float>(r.phi_batch[i]);
+    if (o.diagnose) {
+      // The same analysis as `dyncal diagnose` on the excitation; the table then carries the effects
+      // found and the declared parameters re-estimated with them.
+      DiagnoseOptions dopt;
+      dopt.identify = io;
+      const DiagnoseResult d = diagnose(robot, log, dopt);
+      std::vector<std::string> skipped;
+      const std::vector<EffectTerm> terms = effect_terms(d, &skipped);
+      if (static_cast<int>(terms.size()) > kTableMaxEffects) throw InputError("more effects than a table holds");
+      for (size_t i = 0; i < d.declared_params.size(); ++i) table.values[i] = static_cast<float>(d.declared_params[i]);
+      table.effect_count = static_cast<std::uint16_t>(terms.size());
+      for (size_t i = 0; i < terms.size(); ++i) table.effects[i] = terms[i];
+      for (const auto& e : d.effects) r.effects.push_back(e.explanation);
+      r.effects_not_flashed = skipped;
+      progress << "diagnosis: " << d.effects.size() << " effect(s) found";
+      for (const auto& e : d.effects) progress << "\n  " << e.explanation;
+      progress << "\n";
+    }
+    const FlashOutcome f = flash_and_verify(*drive, table, [&] {
+      progress << kFlashedMessage << "\nverification run with the new table\n";
+      verification_run(*drive, fresh, o, prog, &r.lost, r.drive_error_after);
+    });
+    r.flashed = f.flashed;
+    r.flash_status = f.status;
+    r.flash_message = f.message;
+    if (!f.flashed) progress << r.flash_message << "\n";
+  }
+  r.total_seconds = seconds_since(t0);
+  return r;
+}
+
+void print_calibrate_report(std::ostream& out, const CalibrateResult& r) {
+  out << std::fixed;
+  out << "\ncalibration: " << r.samples << " samples streamed in " << std::setprecision(1) << r.stream_seconds << " s ("
+      << std::setprecision(0) << r.samples_per_second << " samples/s), " << r.lost << " lost; online updates "
+      << r.online_updates << " (" << r.online_rejected << " rejected)\n";
+  out << "batch fit (" << r.batch.method << ", " << r.batch.model << "), cross-validated on the excitation run:\n";
+  out << "  joint    RMS [Nm]   rel. RMS      R2     e_T\n";
+  for (const auto& j : r.batch.joints) {
+    out << "  " << std::setw(5) << j.joint << std::setprecision(3) << std::setw(11) << j.rms << std::setw(11)
+        << j.relative_rms << std::setprecision(4) << std::setw(8) << j.r2 << std::setw(8) << j.e_T << "\n";
+  }
+  out << "fresh trajectory, prediction RMS [Nm] of each estimate (online path, causal filter):\n";
+  out << "  joint     RMS tau       batch          KF         RLS\n";
+  for (int j = 0; j < 6; ++j) {
+    out << "  " << std::setw(5) << j + 1 << std::setprecision(3) << std::setw(12) << r.verify_batch.rms_tau[j]
+        << std::setw(12) << r.verify_batch.rms[j] << std::setw(12) << r.verify_kf.rms[j] << std::setw(12)
+        << r.verify_rls.rms[j] << "\n";
+  }
+  if (!r.effects.empty()) {
+    out << "effects diagnosed and flashed with the table:\n";
+    for (const auto& e : r.effects) out << "  " << e << "\n";
+    for (const auto& e : r.effects_not_flashed) out << "  (not flashed: " << e << " - drift has no table term)\n";
+  }
+  out << "flash: " << r.flash_message << "\n";
+  if (r.flashed) {
+    out << "drive model error RMS(tau - tau_ff) [Nm] on the fresh trajectory, before -> after the flash:\n";
+    out << "  joint      before       after   reduction\n";
+    for (int j = 0; j < 6; ++j) {
+      const double b = r.drive_error_before[j], a = r.drive_error_after[j];
+      out << "  " << std::setw(5) << j + 1 << std::setprecision(3) << std::setw(12) << b << std::setw(12) << a
+          << std::setprecision(1) << std::setw(11) << (b > 0 ? 100.0 * (1.0 - a / b) : 0.0) << "%\n";
+    }
+  }
+  out << "total wall time " << std::setprecision(1) << r.total_seconds << " s\n";
+  out << std::defaultfloat;
+}
+
+nlohmann::json calibrate_report_json(const CalibrateResult& r) {
+  nlohmann::json j;
+  j["batch"] = identify_report_json(r.batch);
+  j["samples"] = r.samples;
+  j["lost"] = r.lost;
+  j["samples_per_second"] = r.samples_per_second;
+  j["trajectory_cond"] = r.trajectory_cond;
+  j["params"] = nlohmann::json::array();
+  for (size_t i = 0; i < r.names.size(); ++i) {
+    j["params"].push_back(
+        {{"name", r.names[i]}, {"batch", r.phi_batch[i]}, {"kf", r.phi_kf[i]}, {"rls", r.phi_rls[i]}});
+  }
+  j["joints"] = nlohmann::json::array();
+  for (size_t k = 0; k < 6; ++k) {
+    j["joints"].push_back({{"joint", k + 1},
+                           {"verify_rms_batch", r.verify_batch.rms[k]},
+                           {"verify_rms_kf", r.verify_kf.rms[k]},
+                           {"verify_rms_rls", r.verify_rls.rms[k]},
+                           {"drive_error_before", r.drive_error_before[k]},
+                           {"drive_error_after", r.drive_error_after[k]}});
+  }
+  j["flashed"] = r.flashed;
+  j["flash_message"] = r.flash_message;
+  j["total_seconds"] = r.total_seconds;
+  return j;
+}
+
+}  // namespace dyncal::host

@@ -1,0 +1,106 @@
+#pragma once
+// `dyncal diagnose`: fit the declared model, then test a library of candidate effects against the
+// residual, add the significant ones greedily (validation error and BIC), and report before/after.
+
+#include <nlohmann/json.hpp>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "dyncal/effect_terms.hpp"
+#include "dyncal_host/identification/identify.hpp"
+
+namespace dyncal::host {
+
+struct DiagnoseOptions {
+  IdentifyOptions identify;   ///< filtering, declared model (terms), folds, block length
+  int max_effects = 16;       ///< greedy steps at most
+  int max_cycles = 64;        ///< position-periodic search: 1..max_cycles cycles per revolution
+  double bic_threshold = 10;  ///< accept when BIC falls by more than this (Kass-Raftery "very strong")
+  double min_gain = 0.05;     ///< and the affected joints' validation RSS falls by at least this fraction
+};
+
+/// The effects the diagnosis tests. All but drift have a parameter-table term (lib/ EffectKind, whose
+/// columns they use), so a drive's feed-forward includes them; drift is a change over the log (a
+/// temperature rise), not a model term.
+enum class Effect {
+  stribeck,             ///< extra torque at low speed: (Fs - Fc) sgn(qd) exp(-(qd / qds)^2)
+  asymmetric_friction,  ///< friction that differs with the direction of motion
+  velocity_power,       ///< f1 qd^(1/3) (Eq. 8)
+  load_friction,        ///< f1 |tau_load| sgn(qd) (Eq. 9)
+  rotor_inertia,        ///< Ia qdd
+  offset,               ///< constant torque
+  position_periodic,    ///< sin / cos of k q: cogging, gear ripple
+  coupling,             ///< a motor turning with qd_i + sign qd_j (coupled transmission)
+  drift,                ///< viscous friction and offset changing linearly over the log
+};
+
+/// Stable lower-case name: "stribeck", "asymmetric_friction", ... (reports and JSON).
+const char* effect_name(Effect e);
+
+/// One effect added to the model.
+struct DiagnosedEffect {
+  Effect kind = Effect::offset;
+  std::vector<int> joints;  ///< 1-based
+  std::vector<std::string> param_names;
+  std::vector<double> params;
+  double shape = 0;            ///< velocity scale [rad/s] (stribeck), cycles per revolution (periodic)
+  double sign = 1;             ///< coupling: the motor turns with q_i + sign q_j
+  double delta_bic = 0;        ///< BIC change on the affected joints (negative: evidence for)
+  double validation_gain = 0;  ///< relative drop of the affected joints' validation RSS
+  std::string explanation;
+};
+
+struct RejectedCandidate {
+  Effect kind = Effect::offset;
+  std::vector<int> joints;
+  double delta_bic = 0, validation_gain = 0;
+  std::string reason;
+};
+
+struct DiagnoseJoint {
+  int joint = 0;
+  double rms_train_before = 0, rms_train_after = 0;
+  double rms_validation_before = 0, rms_validation_after = 0;
+  double rms_tau = 0;
+  double r2_validation_before = 0, r2_validation_after = 0;
+  double e_T_before = 0, e_T_after = 0, e_T_std_before = 0, e_T_std_after = 0;
+};
+
+/// What the plots show, per joint (kept samples, decimated rate).
+struct DiagnoseTraces {
+  Eigen::VectorXd t;
+  Eigen::MatrixXd q, qd, tau, tau_before, tau_after;  ///< S x N; predictions of the final fits
+  Eigen::MatrixXd spectrum;  ///< max_cycles x N: residual power removed by k cycles/rev (declared model)
+};
+
+struct DiagnoseResult {
+  std::string robot, declared_model, validation;
+  long samples = 0;
+  double effective_samples_per_joint = 0;  ///< n_eff used by BIC: duration x 2 f_c
+  std::vector<DiagnoseJoint> joints;
+  std::vector<DiagnosedEffect> effects;
+  std::vector<RejectedCandidate> rejected;  ///< best candidate per kind and joint of the last round
+  std::vector<std::string> notes;
+  std::vector<std::string> declared_names;  ///< the declared model's parameters...
+  std::vector<double> declared_params;      ///< ...re-estimated jointly with the effects found
+  DiagnoseTraces traces;
+};
+
+/// Runs the diagnosis. Throws InputError on bad input (too few samples, a joint that does not
+/// move, constant velocity on every joint).
+DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, const DiagnoseOptions& options);
+
+void print_diagnose_report(std::ostream& out, const DiagnoseResult& r);
+
+/// Writes SVG plots with gnuplot into `dir` (created): per joint, residual vs velocity, residual vs
+/// position, residual spectrum over the joint angle, measured and predicted torque before/after.
+/// Returns the files written. Throws InputError when gnuplot is missing or fails.
+std::vector<std::string> write_diagnose_plots(const DiagnoseResult& r, const std::string& dir);
+
+/// The effects as parameter-table terms (dyncal/effect_terms.hpp). Drift has no table term (it is a
+/// change over time, not a model term): it is skipped and named in *skipped.
+std::vector<EffectTerm> effect_terms(const DiagnoseResult& r, std::vector<std::string>* skipped);
+nlohmann::json diagnose_report_json(const DiagnoseResult& r);
+
+}  // namespace dyncal::host

@@ -1,0 +1,66 @@
+#pragma once
+// The diagnosis's library of candidate effects (private to host_sim/diagnosis): one table entry per
+// effect kind — how it builds its columns (lib/ effect_columns where the effect is a table term),
+// which signs of its fitted parameters are physical, and how a found effect is explained.
+
+#include <Eigen/Core>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "dyncal/effect_terms.hpp"
+#include "dyncal_host/diagnosis/diagnose.hpp"
+#include "dyncal_host/identification/stacked_data.hpp"
+
+namespace dyncal::host::detail {
+
+/// A candidate effect: extra columns over the stacked rows (row s * N + j).
+struct Candidate {
+  Effect effect = Effect::offset;
+  std::vector<int> joints;  ///< 0-based
+  std::vector<std::string> names;
+  Eigen::MatrixXd columns;  ///< (S N) x m
+  std::string detail;       ///< e.g. "36 cycles per revolution"
+  int searched = 1;         ///< alternatives the search chose among (frequencies, velocity scales, signs)
+  double shape = 0;         ///< velocity scale (stribeck) or cycles per revolution (position_periodic)
+  double sign = 1;          ///< coupling: the motor turns with q_i + sign q_j
+};
+
+/// What the library reads at one greedy step.
+struct CandidateContext {
+  const StackedData& data;
+  int max_cycles = 64;  ///< position-periodic search: 1..max_cycles cycles per revolution
+  /// Load torques for load friction (what it is, S N stacked torque [Nm]); the better one is taken.
+  std::vector<std::pair<std::string, Eigen::VectorXd>> load_torques;
+  std::vector<std::string> model_names;  ///< parameters of the model so far (no second Ia or offset)
+  Eigen::VectorXd residual;              ///< of the model so far (S N)
+};
+
+/// One effect kind.
+struct EffectSpec {
+  Effect effect;
+  const char* name;
+  std::optional<EffectKind> table_kind;  ///< its parameter-table term (lib/), if it has one
+  bool per_pair;                         ///< candidates per joint pair i < j (else per joint i)
+  /// Appends this kind's candidates for joint i (per_pair: joints i < j) to `out`.
+  void (*generate)(const CandidateContext& c, int i, int j, std::vector<Candidate>& out);
+  /// Whether the fitted parameters (the candidate's columns, in order) have physical signs.
+  bool (*physical)(const Eigen::VectorXd& added);
+  /// What a found effect means, with its fitted parameters.
+  std::string (*explain)(const Candidate& c, const std::vector<double>& params);
+};
+
+/// The table, in report order (stribeck, asymmetric_friction, velocity_power, load_friction,
+/// rotor_inertia, offset, position_periodic, coupling, drift).
+const std::vector<EffectSpec>& effect_specs();
+const EffectSpec& effect_spec(Effect e);
+
+/// Every candidate of the current step: per joint the per-joint kinds in table order, then every
+/// joint pair's per-pair kinds.
+std::vector<Candidate> candidate_library(const CandidateContext& c);
+
+/// "joint 3: " or "joints 5 and 6: " followed by the kind's explanation.
+std::string explain(const Candidate& c, const std::vector<double>& params);
+
+}  // namespace dyncal::host::detail

@@ -1,0 +1,185 @@
+#pragma once
+// Blocked cross-validation of a growing linear design (private to host_sim/diagnosis).
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+#include <algorithm>
+#include <vector>
+
+#include "dyncal_host/identification/stacked_data.hpp"
+
+namespace dyncal::host::detail {
+
+using Eigen::Index;
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+
+/// Blocked cross-validation from per-fold, per-joint Gram matrices of the design [X C] and y. The
+/// base design X is fixed for a greedy step (set_base), so each candidate C only costs its cross
+/// products with X over the rows where C is not zero.
+class CrossValidator {
+ public:
+  CrossValidator(const StackedData& d, int N, const std::vector<int>& fold, int folds)
+      : d_(d), N_(N), fold_(fold), folds_(folds) {}
+
+  void set_base(const MatrixXd& X) {
+    X_ = &X;
+    const Index p = X.cols(), S = d_.t.size();
+    sx_ = X.colwise().norm().transpose();
+    for (Index i = 0; i < p; ++i) sx_[i] = sx_[i] > 0 ? 1.0 / sx_[i] : 1.0;
+    Gxx_fit_.assign(folds_, MatrixXd::Zero(p, p));
+    gx_fit_.assign(folds_, VectorXd::Zero(p));
+    Gxx_all_.assign(folds_, std::vector<MatrixXd>(N_, MatrixXd::Zero(p, p)));
+    gx_all_.assign(folds_, std::vector<VectorXd>(N_, VectorXd::Zero(p)));
+    yy_.assign(folds_, VectorXd::Zero(N_));
+    for (Index s = 0; s < S; ++s) {
+      const int f = fold_[s];
+      for (int j = 0; j < N_; ++j) {
+        const Index r = s * N_ + j;
+        const VectorXd x = X.row(r).transpose().cwiseProduct(sx_);
+        const double y = d_.y[r];
+        if (!d_.fit_row[r]) continue;  // rows left out of the fit (stiction band) are not judged either
+        Gxx_all_[f][j].selfadjointView<Eigen::Lower>().rankUpdate(x);
+        gx_all_[f][j] += x * y;
+        yy_[f][j] += y * y;
+        Gxx_fit_[f].selfadjointView<Eigen::Lower>().rankUpdate(x);
+        gx_fit_[f] += x * y;
+      }
+    }
+    for (auto& G : Gxx_fit_) G = MatrixXd(G.selfadjointView<Eigen::Lower>());
+    for (auto& v : Gxx_all_)
+      for (auto& G : v) G = MatrixXd(G.selfadjointView<Eigen::Lower>());
+  }
+
+  /// Out-of-fold predictions of the base design alone (each block predicted by the fit without its
+  /// fold), for the per-sample indices e_T and e_T_Std.
+  VectorXd predict_out_of_fold() const {
+    const MatrixXd& X = *X_;
+    const Index S = d_.t.size();
+    std::vector<VectorXd> beta;
+    fold_fits(Gxx_fit_, gx_fit_, beta);
+    for (auto& b : beta) b = b.cwiseProduct(sx_);
+    VectorXd pred(S * N_);
+    for (Index s = 0; s < S; ++s)
+      for (int j = 0; j < N_; ++j) pred[s * N_ + j] = X.row(s * N_ + j).dot(beta[fold_[s]]);
+    return pred;
+  }
+
+  /// Validation and training RSS per joint of [X C] (C may have no columns); phi_out: the
+  /// coefficients of the fit on all rows, X's first.
+  /// *novelty: the smallest fraction of a (unit-scaled) candidate column not explained by X (1 if C
+  /// is empty); near 0 means the candidate is collinear with the model and not identifiable.
+  void evaluate(const MatrixXd& C, VectorXd& val_rss, VectorXd& train_rss, VectorXd* phi_out = nullptr,
+                double* novelty = nullptr) const {
+    const MatrixXd& X = *X_;
+    const Index p = X.cols(), m = C.cols(), q = p + m, S = d_.t.size();
+    VectorXd sc = C.colwise().norm().transpose();
+    for (Index i = 0; i < m; ++i) sc[i] = sc[i] > 0 ? 1.0 / sc[i] : 1.0;
+    std::vector<MatrixXd> G_fit(folds_);
+    std::vector<VectorXd> g_fit(folds_);
+    std::vector<std::vector<MatrixXd>> G_all(folds_, std::vector<MatrixXd>(N_));
+    std::vector<std::vector<VectorXd>> g_all(folds_, std::vector<VectorXd>(N_));
+    for (int f = 0; f < folds_; ++f) {
+      G_fit[f] = MatrixXd::Zero(q, q);
+      G_fit[f].topLeftCorner(p, p) = Gxx_fit_[f];
+      g_fit[f] = VectorXd::Zero(q);
+      g_fit[f].head(p) = gx_fit_[f];
+      for (int j = 0; j < N_; ++j) {
+        G_all[f][j] = MatrixXd::Zero(q, q);
+        G_all[f][j].topLeftCorner(p, p) = Gxx_all_[f][j];
+        g_all[f][j] = VectorXd::Zero(q);
+        g_all[f][j].head(p) = gx_all_[f][j];
+      }
+    }
+    if (m > 0) {
+      for (Index s = 0; s < S; ++s) {
+        const int f = fold_[s];
+        for (int j = 0; j < N_; ++j) {
+          const Index r = s * N_ + j;
+          if (!d_.fit_row[r]) continue;
+          const VectorXd c = C.row(r).transpose().cwiseProduct(sc);
+          if (c.isZero(0.0)) continue;
+          const VectorXd x = X.row(r).transpose().cwiseProduct(sx_);
+          const double y = d_.y[r];
+          const MatrixXd xc = x * c.transpose();
+          const MatrixXd cc = c * c.transpose();
+          auto add = [&](MatrixXd& G, VectorXd& g) {
+            G.topRightCorner(p, m) += xc;
+            G.bottomLeftCorner(m, p) += xc.transpose();
+            G.bottomRightCorner(m, m) += cc;
+            g.tail(m) += c * y;
+          };
+          add(G_all[f][j], g_all[f][j]);
+          add(G_fit[f], g_fit[f]);
+        }
+      }
+    }
+    std::vector<VectorXd> fold_beta;
+    const VectorXd beta = fold_fits(G_fit, g_fit, fold_beta);
+    if (novelty) {
+      MatrixXd G_total = MatrixXd::Zero(q, q);
+      for (const auto& G : G_fit) G_total += G;
+      const double ridge = ridge_for(G_total);
+      *novelty = 1.0;
+      if (m > 0) {
+        MatrixXd Gxx = G_total.topLeftCorner(p, p);
+        Gxx.diagonal().array() += ridge;
+        const MatrixXd Gxc = G_total.topRightCorner(p, m);
+        const MatrixXd schur = G_total.bottomRightCorner(m, m) - Gxc.transpose() * Gxx.ldlt().solve(Gxc);
+        for (Index i = 0; i < m; ++i)
+          *novelty = std::min(*novelty, schur(i, i) / std::max(1e-300, G_total(p + i, p + i)));
+      }
+    }
+    auto rss = [&](const VectorXd& b, int f, int j) {
+      return std::max(0.0, yy_[f][j] - 2.0 * b.dot(g_all[f][j]) + b.dot(G_all[f][j] * b));
+    };
+    val_rss = VectorXd::Zero(N_);
+    for (int f = 0; f < folds_; ++f)
+      for (int j = 0; j < N_; ++j) val_rss[j] += rss(fold_beta[f], f, j);
+    train_rss = VectorXd::Zero(N_);
+    for (int f = 0; f < folds_; ++f)
+      for (int j = 0; j < N_; ++j) train_rss[j] += rss(beta, f, j);
+    if (phi_out) {
+      phi_out->resize(q);
+      phi_out->head(p) = beta.head(p).cwiseProduct(sx_);
+      phi_out->tail(m) = beta.tail(m).cwiseProduct(sc);
+    }
+  }
+
+ private:
+  static double ridge_for(const MatrixXd& G) { return 1e-12 * std::max(1.0, G.diagonal().maxCoeff()); }
+
+  /// Least-squares coefficients from per-fold Gram matrices: fold_beta[f] from every fold but f,
+  /// and the return value from all folds (a tiny ridge keeps LDLT defined for collinear columns).
+  VectorXd fold_fits(const std::vector<MatrixXd>& G_fit, const std::vector<VectorXd>& g_fit,
+                     std::vector<VectorXd>& fold_beta) const {
+    MatrixXd G_total = MatrixXd::Zero(G_fit[0].rows(), G_fit[0].cols());
+    VectorXd g_total = VectorXd::Zero(g_fit[0].size());
+    for (int f = 0; f < folds_; ++f) {
+      G_total += G_fit[f];
+      g_total += g_fit[f];
+    }
+    const double ridge = ridge_for(G_total);
+    auto solve = [&](MatrixXd G, const VectorXd& g) {
+      G.diagonal().array() += ridge;
+      return VectorXd(G.ldlt().solve(g));
+    };
+    fold_beta.resize(folds_);
+    for (int f = 0; f < folds_; ++f) fold_beta[f] = solve(G_total - G_fit[f], g_total - g_fit[f]);
+    return solve(G_total, g_total);
+  }
+
+  const StackedData& d_;
+  int N_;
+  const std::vector<int>& fold_;
+  int folds_;
+  const MatrixXd* X_ = nullptr;
+  VectorXd sx_;
+  std::vector<MatrixXd> Gxx_fit_;
+  std::vector<VectorXd> gx_fit_;
+  std::vector<std::vector<MatrixXd>> Gxx_all_;
+  std::vector<std::vector<VectorXd>> gx_all_;
+  std::vector<VectorXd> yy_;
+};
+
+}  // namespace dyncal::host::detail

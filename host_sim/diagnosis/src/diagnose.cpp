@@ -1,0 +1,286 @@
+// dyncal diagnose: the greedy search. Each step evaluates every candidate of the library
+// (candidates.hpp) against the model so far by blocked cross-validation (cross_validator.hpp) and
+// BIC, adds the one with the largest validation gain among those with very strong evidence and
+// physical parameters, and stops when none qualifies.
+#include "dyncal_host/diagnosis/diagnose.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <sstream>
+
+#include "candidates.hpp"
+#include "cross_validator.hpp"
+#include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/identification/signal.hpp"
+#include "dyncal_host/identification/stacked_data.hpp"
+#include "harmonic_fit.hpp"
+
+namespace dyncal::host {
+namespace {
+
+using detail::Candidate;
+using detail::CrossValidator;
+using Eigen::Index;
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+
+/// A joint that does not move, or moves at constant velocity, carries no information.
+void check_every_joint_moves(const StackedData& d) {
+  for (int j = 0; j < d.q.cols(); ++j) {
+    const double range = d.q.col(j).maxCoeff() - d.q.col(j).minCoeff();
+    const double qd_var = (d.qd.col(j).array() - d.qd.col(j).mean()).square().mean();
+    if (range < 1e-3)
+      throw InputError("joint " + std::to_string(j + 1) + " does not move (range < 1 mrad): nothing to diagnose");
+    if (std::sqrt(qd_var) < 1e-3 * std::max(1e-9, d.qd.col(j).cwiseAbs().maxCoeff()) || std::sqrt(qd_var) < 1e-4) {
+      throw InputError("joint " + std::to_string(j + 1) +
+                       " moves at constant velocity: inertia and friction cannot be told apart");
+    }
+  }
+}
+
+/// Effective independent samples of each joint's residual (effective_samples): the residual is
+/// low-passed and carries smooth model error, so counting every sample would make BIC overconfident.
+VectorXd effective_samples_per_joint(const VectorXd& residual, int N) {
+  const Index S = residual.size() / N;
+  VectorXd n(N);
+  for (int j = 0; j < N; ++j) {
+    VectorXd r(S);
+    for (Index s = 0; s < S; ++s) r[s] = residual[s * N + j];
+    n[j] = effective_samples(r);
+  }
+  return n;
+}
+
+/// What the cross-validation says of one candidate against the model so far.
+struct Evidence {
+  double delta_bic = 0;  ///< BIC change on the candidate's joints (negative: evidence for)
+  double gain = 0;       ///< relative drop of those joints' validation RSS
+  bool physical = true;  ///< its fitted parameters have physical signs
+  bool collinear = false;
+};
+
+/// The model so far: its design, names, fit and validation / training RSS per joint.
+struct Model {
+  MatrixXd X;
+  std::vector<std::string> names;
+  VectorXd phi, val, train;
+};
+
+Evidence weigh(const CrossValidator& cv, const Candidate& c, const Model& m, const VectorXd& n_eff,
+               const VectorXd& val_before) {
+  VectorXd val, train, phi_c;
+  double novelty = 1;
+  cv.evaluate(c.columns, val, train, &phi_c, &novelty);
+  Evidence e;
+  e.collinear = novelty < 1e-6;
+  double v0 = 0, v1 = 0, n_joints = 0;
+  for (int j : c.joints) {
+    n_joints += n_eff[j];
+    e.delta_bic += n_eff[j] * std::log(std::max(1e-300, train[j]) / std::max(1e-300, m.train[j]));
+    v0 += m.val[j] / std::max(1e-300, val_before[j]);  // joints weighted by their own scale
+    v1 += val[j] / std::max(1e-300, val_before[j]);
+  }
+  e.delta_bic += static_cast<double>(c.columns.cols()) * std::log(n_joints);
+  // A candidate picked among several alternatives (the best frequency of a spectral search, ...)
+  // pays for the look-elsewhere effect: 2 ln(alternatives), a Bonferroni factor in BIC units.
+  e.delta_bic += 2.0 * std::log(static_cast<double>(c.searched));
+  e.gain = v0 > 0 ? (v0 - v1) / v0 : 0;
+  e.physical = detail::effect_spec(c.effect).physical(phi_c.tail(c.columns.cols()));
+  return e;
+}
+
+/// The strongest rejected candidate of each kind (smallest BIC change) and why it was rejected.
+std::vector<RejectedCandidate> strongest_rejected(const std::vector<Candidate>& cands, const std::vector<Evidence>& ev,
+                                                  double bic_threshold) {
+  std::vector<RejectedCandidate> out;
+  for (const detail::EffectSpec& spec : detail::effect_specs()) {
+    int top = -1;
+    for (size_t c = 0; c < cands.size(); ++c)
+      if (cands[c].effect == spec.effect && (top < 0 || ev[c].delta_bic < ev[static_cast<size_t>(top)].delta_bic))
+        top = static_cast<int>(c);
+    if (top < 0) continue;
+    const Candidate& c = cands[static_cast<size_t>(top)];
+    const Evidence& e = ev[static_cast<size_t>(top)];
+    RejectedCandidate rc{c.effect, {}, e.delta_bic, e.gain, ""};
+    for (int j : c.joints) rc.joints.push_back(j + 1);
+    std::ostringstream why;
+    why << std::setprecision(3);
+    if (!e.physical)
+      why << "unphysical sign of its parameter (BIC change " << rc.delta_bic << ")";
+    else if (rc.delta_bic >= -bic_threshold)
+      why << "BIC change " << rc.delta_bic << " (needs < " << -bic_threshold << ")";
+    else
+      why << "validation RSS does not drop (gain " << 100 * rc.validation_gain << " %)";
+    rc.reason = why.str();
+    out.push_back(rc);
+  }
+  return out;
+}
+
+/// Two load torques for load-dependent friction, from the rigid-body parameters of the declared
+/// model's fit: the torque the gear transmits, Y(q, qd, qdd) phi (a real gearbox's friction grows
+/// with it, inertial part included), and the load the joint holds, h(q, qd) = Y(q, qd, 0) phi
+/// (gravity and velocity products: what a model without an algebraic loop, such as the simulated
+/// drive, applies). The candidate takes whichever explains the residual better.
+std::vector<std::pair<std::string, VectorXd>> load_torques(const StackedData& d, const VectorXd& phi) {
+  VectorXd phi_rb = phi;
+  phi_rb.tail(phi.size() - d.num_base).setZero();
+  return {{"load: transmitted rigid-body torque", d.W * phi_rb},
+          {"load: gravity and velocity-product torque", d.W_load * phi_rb}};
+}
+
+/// The traces the plots show: kept samples, predictions before and after, the residual spectrum.
+DiagnoseTraces traces(const StackedData& d, const VectorXd& before, const VectorXd& after, int max_cycles) {
+  const int N = static_cast<int>(d.q.cols());
+  const Index S = d.t.size();
+  DiagnoseTraces tr;
+  tr.t = d.t;
+  tr.q = d.q;
+  tr.qd = d.qd;
+  tr.tau.resize(S, N);
+  tr.tau_before.resize(S, N);
+  tr.tau_after.resize(S, N);
+  for (Index s = 0; s < S; ++s)
+    for (int j = 0; j < N; ++j) {
+      tr.tau(s, j) = d.y[s * N + j];
+      tr.tau_before(s, j) = before[s * N + j];
+      tr.tau_after(s, j) = after[s * N + j];
+    }
+  tr.spectrum = MatrixXd::Zero(max_cycles, N);
+  for (int j = 0; j < N; ++j)
+    for (int k = 1; k <= max_cycles; ++k) {
+      const std::optional<double> power =
+          detail::harmonic_rss_reduction(d.q, j, k, [&](Index s) { return d.y[s * N + j] - before[s * N + j]; });
+      if (power) tr.spectrum(k - 1, j) = *power / static_cast<double>(S);
+    }
+  return tr;
+}
+
+/// e_T and e_T_Std (survey Sec. 5.1) of joint j: mean and standard deviation of |tau - tau_hat| /
+/// tau_max over the out-of-fold predictions (rows in the fit only, as the validation RSS).
+void torque_indices(const StackedData& d, int j, double tau_max, const VectorXd& pred, double& mean, double& stdev) {
+  const int N = static_cast<int>(d.q.cols());
+  double sa = 0, sa2 = 0, n_rows = 0;
+  for (Index s = 0; s < d.t.size(); ++s) {
+    const Index r = s * N + j;
+    if (!d.fit_row[r]) continue;
+    const double a = std::abs(d.y[r] - pred[r]) / tau_max;
+    sa += a;
+    sa2 += a * a;
+    n_rows += 1;
+  }
+  mean = sa / std::max(1.0, n_rows);
+  stdev = std::sqrt(std::max(0.0, sa2 / std::max(1.0, n_rows) - mean * mean));
+}
+
+/// Per joint: validation and training RMS, R², e_T and e_T_Std before and after the effects.
+std::vector<DiagnoseJoint> joint_metrics(const StackedData& d, const RobotDescription& robot, const Model& before,
+                                         const Model& after, const VectorXd& oof_before, const VectorXd& oof_after) {
+  const int N = static_cast<int>(d.q.cols());
+  const Index S = d.t.size();
+  std::vector<DiagnoseJoint> out;
+  for (int j = 0; j < N; ++j) {
+    DiagnoseJoint m;
+    m.joint = j + 1;
+    double sy = 0, syy = 0;
+    for (Index s = 0; s < S; ++s) {
+      sy += d.y[s * N + j];
+      syy += d.y[s * N + j] * d.y[s * N + j];
+    }
+    const double n = static_cast<double>(S), ss_tot = syy - sy * sy / n;
+    m.rms_tau = std::sqrt(syy / n);
+    m.rms_train_before = std::sqrt(before.train[j] / n);
+    m.rms_train_after = std::sqrt(after.train[j] / n);
+    m.rms_validation_before = std::sqrt(before.val[j] / n);
+    m.rms_validation_after = std::sqrt(after.val[j] / n);
+    m.r2_validation_before = 1 - before.val[j] / ss_tot;
+    m.r2_validation_after = 1 - after.val[j] / ss_tot;
+    torque_indices(d, j, robot.tau_max[j], oof_before, m.e_T_before, m.e_T_std_before);
+    torque_indices(d, j, robot.tau_max[j], oof_after, m.e_T_after, m.e_T_std_after);
+    out.push_back(m);
+  }
+  return out;
+}
+
+}  // namespace
+
+DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, const DiagnoseOptions& o) {
+  IdentifyOptions io = o.identify;
+  if (io.terms == 0) io.terms = kFrictionEq7;
+  io.load_regressor = true;  // the load-friction candidate's load torque h(q, qd)
+  const StackedData d = prepare_stacked(robot, log, io);
+  const int N = robot.num_joints;
+  const Index S = d.t.size();
+  DiagnoseResult res;
+  res.robot = robot.name;
+  res.declared_model = model_name(io.terms);
+  res.samples = static_cast<long>(S);
+  check_every_joint_moves(d);
+  // Folds as in identify (blocked).
+  const Index block = std::max<Index>(1, std::lround(io.block_seconds * d.rate_hz));
+  if (S < block * io.folds * 2) throw InputError("too few samples for a diagnosis (" + std::to_string(S) + ")");
+  std::vector<int> fold(static_cast<size_t>(S));
+  for (Index s = 0; s < S; ++s) fold[s] = static_cast<int>((s / block) % io.folds);
+  res.validation = "blocked " + std::to_string(io.folds) + "-fold cross-validation";
+
+  CrossValidator cv(d, N, fold, io.folds);
+  const MatrixXd none(S * N, 0);
+  Model m{d.W, d.names, {}, {}, {}};
+  cv.set_base(m.X);
+  cv.evaluate(none, m.val, m.train, &m.phi);
+  const Model declared = m;
+  const VectorXd oof_before = cv.predict_out_of_fold();
+  detail::CandidateContext library{d, o.max_cycles, load_torques(d, m.phi), {}, {}};
+
+  for (int step = 0; step < o.max_effects; ++step) {
+    library.model_names = m.names;
+    library.residual = d.y - m.X * m.phi;
+    const std::vector<Candidate> cands = detail::candidate_library(library);
+    const VectorXd n_eff = effective_samples_per_joint(library.residual, N);
+    if (step == 0) res.effective_samples_per_joint = n_eff.mean();
+    // Selection on validation error only: the largest relative validation gain among candidates
+    // whose BIC evidence is very strong and whose parameters are physical.
+    int best = -1;
+    double best_score = 0;
+    std::vector<Evidence> ev(cands.size());
+    for (size_t c = 0; c < cands.size(); ++c) {
+      ev[c] = weigh(cv, cands[c], m, n_eff, declared.val);
+      const Evidence& e = ev[c];
+      if (e.physical && !e.collinear && e.delta_bic < -o.bic_threshold && e.gain >= o.min_gain && e.gain > best_score) {
+        best_score = e.gain;
+        best = static_cast<int>(c);
+      }
+    }
+    if (best < 0) {
+      res.rejected = strongest_rejected(cands, ev, o.bic_threshold);
+      break;
+    }
+    const Candidate& c = cands[static_cast<size_t>(best)];
+    MatrixXd A(S * N, m.X.cols() + c.columns.cols());
+    A << m.X, c.columns;
+    m.X = A;
+    for (const auto& n : c.names) m.names.push_back(n);
+    cv.set_base(m.X);
+    cv.evaluate(none, m.val, m.train, &m.phi);
+    DiagnosedEffect e;
+    e.kind = c.effect;
+    for (int j : c.joints) e.joints.push_back(j + 1);
+    e.param_names = c.names;
+    for (Index k = 0; k < c.columns.cols(); ++k) e.params.push_back(m.phi[m.X.cols() - c.columns.cols() + k]);
+    e.delta_bic = ev[static_cast<size_t>(best)].delta_bic;
+    e.shape = c.shape;
+    e.sign = c.sign;
+    e.validation_gain = ev[static_cast<size_t>(best)].gain;
+    e.explanation = detail::explain(c, e.params);
+    res.effects.push_back(e);
+  }
+
+  res.declared_names = d.names;
+  res.declared_params.assign(m.phi.data(), m.phi.data() + d.W.cols());
+  res.traces = traces(d, declared.X * declared.phi, m.X * m.phi, o.max_cycles);
+  res.joints = joint_metrics(d, robot, declared, m, oof_before, cv.predict_out_of_fold());
+  return res;
+}
+
+}  // namespace dyncal::host

@@ -1,0 +1,109 @@
+// dyncal diagnose's report: text, JSON, and the effects as parameter-table terms.
+#include <iomanip>
+#include <optional>
+
+#include "candidates.hpp"
+#include "dyncal_host/diagnosis/diagnose.hpp"
+
+namespace dyncal::host {
+
+void print_diagnose_report(std::ostream& out, const DiagnoseResult& r) {
+  out << "dyncal diagnose: robot " << r.robot << ", declared model " << r.declared_model << ", " << r.samples
+      << " samples, " << r.validation << ", BIC with n_eff = " << std::lround(r.effective_samples_per_joint)
+      << " per joint (mean, from the residual's autocorrelation)\n\n";
+  out << "effects added (greedy, by validation gain, each with BIC evidence):\n";
+  if (r.effects.empty()) out << "  none: nothing significant is left in the residual\n";
+  for (const auto& e : r.effects) {
+    out << "  " << std::left << std::setw(20) << effect_name(e.kind) << std::right << " dBIC " << std::setw(8)
+        << std::setprecision(4) << e.delta_bic << ", validation RSS -" << std::setprecision(3)
+        << 100 * e.validation_gain << " %\n    " << e.explanation << "\n";
+  }
+  out << "\nstrongest rejected candidates:\n";
+  for (const auto& c : r.rejected) {
+    out << "  " << std::left << std::setw(20) << effect_name(c.kind) << std::right << " joint";
+    for (int j : c.joints) out << " " << j;
+    out << ": " << c.reason << "\n";
+  }
+  out << "\njoint   RMS val before   after [Nm]   R2 before   after   rel. RMS after     e_T before  after   e_T_Std "
+         "before  after\n"
+      << std::fixed;
+  for (const auto& j : r.joints) {
+    out << std::setw(5) << j.joint << std::setprecision(4) << std::setw(17) << j.rms_validation_before << std::setw(12)
+        << j.rms_validation_after << std::setw(12) << j.r2_validation_before << std::setw(8) << j.r2_validation_after
+        << std::setw(17) << j.rms_validation_after / j.rms_tau << std::setw(15) << j.e_T_before << std::setw(7)
+        << j.e_T_after << std::setw(15) << j.e_T_std_before << std::setw(7) << j.e_T_std_after << "\n";
+  }
+  out << "\njoint   RMS train before   after [Nm]   rel. RMS train before   after\n";
+  for (const auto& j : r.joints) {
+    out << std::setw(5) << j.joint << std::setprecision(4) << std::setw(19) << j.rms_train_before << std::setw(12)
+        << j.rms_train_after << std::setw(24) << j.rms_train_before / j.rms_tau << std::setw(8)
+        << j.rms_train_after / j.rms_tau << "\n";
+  }
+  out << std::defaultfloat;
+}
+
+std::vector<EffectTerm> effect_terms(const DiagnoseResult& r, std::vector<std::string>* skipped) {
+  std::vector<EffectTerm> out;
+  for (const auto& e : r.effects) {
+    const std::optional<EffectKind> kind = detail::effect_spec(e.kind).table_kind;
+    if (!kind) {
+      if (skipped)
+        skipped->push_back(std::string(effect_name(e.kind)) + " on joint " + std::to_string(e.joints.front()));
+      continue;
+    }
+    EffectTerm t;
+    t.kind = *kind;
+    t.joint = static_cast<std::uint8_t>(e.joints.front() - 1);
+    for (size_t k = 0; k < e.params.size() && k < 3; ++k) t.c[k] = static_cast<float>(e.params[k]);
+    t.shape = static_cast<float>(e.shape);
+    if (t.kind == EffectKind::coupling) {
+      t.joint2 = static_cast<std::uint8_t>(e.joints.back() - 1);
+      t.sign = static_cast<std::int8_t>(e.sign > 0 ? 1 : -1);
+    }
+    out.push_back(t);
+  }
+  return out;
+}
+
+nlohmann::json diagnose_report_json(const DiagnoseResult& r) {
+  nlohmann::json j;
+  j["robot"] = r.robot;
+  j["declared_model"] = r.declared_model;
+  j["samples"] = r.samples;
+  j["validation"] = r.validation;
+  j["effective_samples_per_joint"] = r.effective_samples_per_joint;
+  j["effects"] = nlohmann::json::array();
+  for (const auto& e : r.effects) {
+    nlohmann::json p = nlohmann::json::object();
+    for (size_t i = 0; i < e.params.size(); ++i) p[e.param_names[i]] = e.params[i];
+    j["effects"].push_back({{"kind", effect_name(e.kind)},
+                            {"joint", e.joints.front()},
+                            {"joints", e.joints},
+                            {"parameters", p},
+                            {"evidence", {{"delta_bic", e.delta_bic}, {"validation_gain", e.validation_gain}}},
+                            {"explanation", e.explanation}});
+  }
+  j["rejected"] = nlohmann::json::array();
+  for (const auto& c : r.rejected)
+    j["rejected"].push_back(
+        {{"kind", effect_name(c.kind)}, {"joints", c.joints}, {"delta_bic", c.delta_bic}, {"reason", c.reason}});
+  j["joints"] = nlohmann::json::array();
+  for (const auto& m : r.joints) {
+    j["joints"].push_back({{"joint", m.joint},
+                           {"rms_train_before", m.rms_train_before},
+                           {"rms_train_after", m.rms_train_after},
+                           {"rms_validation_before", m.rms_validation_before},
+                           {"rms_validation_after", m.rms_validation_after},
+                           {"relative_rms_validation_before", m.rms_validation_before / m.rms_tau},
+                           {"relative_rms_validation_after", m.rms_validation_after / m.rms_tau},
+                           {"r2_validation_before", m.r2_validation_before},
+                           {"r2_validation_after", m.r2_validation_after},
+                           {"e_T_before", m.e_T_before},
+                           {"e_T_after", m.e_T_after},
+                           {"e_T_std_before", m.e_T_std_before},
+                           {"e_T_std_after", m.e_T_std_after}});
+  }
+  return j;
+}
+
+}  // namespace dyncal::host

@@ -1,0 +1,75 @@
+#pragma once
+// What the simulated drive simulates: friction per joint (survey Eq. 4-9), effects the
+// identification model may not declare, noise, control and timing. Loaded from a JSON scenario
+// file (schema in docs/modbus.md); every field has a default.
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "dyncal_host/common/friction_model.hpp"
+#include "dyncal_host/common/robot_description.hpp"
+
+namespace dyncal::host {
+
+inline constexpr int kDriveJoints = 6;
+
+/// Friction of one joint. Eq. 7: Fc sgn(qd) + beta qd. Eq. 4: [Fc + (Fs - Fc) exp(-|qd/qds|^delta_s)]
+/// sgn(qd) + beta qd. Eq. 5: f1 sgn - f2 sgn exp(-|qd|/f3) - f4 sgn exp(-1/(f5 |qd|)) + beta qd.
+/// Eq. 6: (f1 + f2 sech(f3 qd)) tanh(f4 qd) + beta qd. Eq. 8: Eq. 7 + fp qd^(1/3). Eq. 9: Eq. 7 +
+/// fl |tau_load| sgn(qd) (as dyncal's Eq. 9 column). Units: Nm, Nm s/rad, rad/s.
+struct JointFriction {
+  FrictionModel model = FrictionModel::eq7;
+  double Fc = 0, beta = 0, Fs = 0, qds = 0.1, delta_s = 2.0;
+  double f1 = 0, f2 = 0, f3 = 1, f4 = 0, f5 = 1;
+  double fp = 0, fl = 0;
+};
+
+/// Effects on one joint beyond its friction model.
+struct JointEffects {
+  double cogging_amplitude = 0;      ///< [Nm] A sin(n q + phase)
+  double cogging_cycles = 0;         ///< n, cycles per joint revolution
+  double cogging_phase = 0;          ///< [rad]
+  double load_friction = 0;          ///< extra fl |tau_load| sgn(qd) [-] (load-dependent friction)
+  double viscous_drift = 0;          ///< relative rise of beta when warm: beta (1 + d (1 - exp(-t/T)))
+  double drift_time_constant = 600;  ///< T [s] (temperature time constant)
+  double offset = 0;                 ///< constant torque offset in the measured torque [Nm]
+  double rotor_inertia = 0;          ///< Ia, reflected to the joint side [kg m^2]
+};
+
+/// A motor that turns with q_i + sign q_j (a coupled wrist transmission): its friction
+/// Fc sgn(v) + beta v, v = qd_i + sign qd_j, acts on joint i and, with the sign, on joint j.
+struct CoupledFriction {
+  int joint_i = 0, joint_j = 0;  ///< 0-based
+  double sign = 1.0;
+  double Fc = 0, beta = 0;
+};
+
+struct Scenario {
+  std::string robot = "er20";
+  std::uint64_t seed = 1;
+  double control_rate_hz = 1000;  ///< control and integration step (RK4, `substeps` per step)
+  int substeps = 2;
+  double sample_rate_hz = 1000;  ///< recording rate (a divisor of the control rate)
+  double bandwidth_hz = 8;       ///< PD loop natural frequency per joint (gains from M(q0))
+  double damping = 1.0;
+  std::array<double, kDriveJoints> tau_noise_std{10, 10, 10, 1.78, 1.78, 1.78};  ///< Table 7 [Nm]
+  double encoder_counts = 131072;  ///< per motor revolution (quantisation: 2 pi / (counts N_j))
+  std::array<JointFriction, kDriveJoints> friction{};
+  std::array<JointEffects, kDriveJoints> effects{};
+  std::vector<CoupledFriction> couplings;
+};
+
+/// The default scenario for `robot`: Eq. 7 friction with the robot file's Fc and beta, the
+/// rotor inertia a 20 kg-class arm's motors reflect (Ia = J_m N^2, J_m = 2e-4 kg m^2 / N^2 scaled,
+/// see docs/modbus.md), Table 7 noise, no undeclared effects.
+Scenario default_scenario(const RobotDescription& robot);
+
+/// Reads a scenario JSON file over the defaults of `robot`. Throws InputError naming the field.
+Scenario load_scenario(const std::string& path, const RobotDescription& robot);
+
+/// Friction torque [Nm] of one joint at velocity qd [rad/s], load torque tau_load [Nm].
+double friction_torque(const JointFriction& f, double qd, double tau_load);
+
+}  // namespace dyncal::host

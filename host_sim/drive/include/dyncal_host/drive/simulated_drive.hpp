@@ -1,0 +1,139 @@
+#pragma once
+// The simulated six-axis drive without its transport: plant (forward dynamics of the generated
+// model, RK4), control law (PD + inverse-dynamics feed-forward from the active parameter table,
+// survey Fig. 3), friction and effects from the scenario, measurement (encoder quantisation, torque
+// noise), recording into a ring buffer, and the parameter table (checked, persisted atomically).
+
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "dyncal/fourier_trajectory.hpp"
+#include "dyncal/modbus_map.hpp"
+#include "dyncal/parameter_table.hpp"
+#include "dyncal/port.hpp"
+#include "dyncal_host/common/robot_description.hpp"
+#include "dyncal_host/drive/scenario.hpp"
+
+namespace dyncal::host {
+
+using DriveTrajectory = FourierTrajectory<double, kDriveJoints, modbus_map::kMaxHarmonics>;
+
+class SimulatedDrive {
+ public:
+  static constexpr int kRingCapacity = 16384;
+
+  /// `table_path`: the simulated flash. Its table becomes active if valid; otherwise (missing or
+  /// invalid, reason in startup_note()) the factory table: nominal base parameters, no friction.
+  SimulatedDrive(const RobotDescription& robot, const Scenario& scenario, std::string table_path);
+  ~SimulatedDrive();
+
+  std::uint32_t robot_id() const;
+  /// Trajectory and recording settings; only while not playing.
+  DriveTrajectory trajectory;
+  int periods = 2;
+  double sample_rate_hz = 1000;
+
+  void start();
+  void stop();
+  modbus_map::DriveState state() const { return state_; }
+  /// Why the drive stopped (state() == fault; none otherwise): each control period, before the
+  /// control law, the measured q and qd of every joint are checked — finite, q within [q_min,
+  /// q_max], |qd| <= qd_max of the robot file — and the first break stops the trajectory: no more
+  /// samples are recorded, the ring keeps those before it. start() clears the fault.
+  modbus_map::DriveFault fault() const { return fault_; }
+  /// The 1-based joint that tripped (0: none).
+  int fault_joint() const { return fault_joint_; }
+  /// Its measured q [rad] (position limit) or qd [rad/s] (velocity limit) at the trip; NaN for a
+  /// non-finite state.
+  double fault_value() const { return fault_value_; }
+  /// Advances one control period (no-op unless playing).
+  void step();
+  double time() const { return time_; }
+  double control_period() const { return 1.0 / scenario_.control_rate_hz; }
+  /// Seconds of simulated time until the trajectory ends.
+  double remaining() const;
+
+  /// Ring buffer: samples with seq >= acked() not yet freed, oldest first.
+  const std::deque<port::DriveSample>& ring() const { return ring_; }
+  std::uint32_t acked() const { return acked_; }
+  /// Frees samples with seq < seq_end (ignored if it would skip unrecorded samples).
+  void ack(std::uint32_t seq_end);
+  bool ring_full() const { return static_cast<int>(ring_.size()) >= kRingCapacity; }
+  /// Lockstep mode: the drive waits for the host instead of dropping samples when the ring is full.
+  bool lockstep = true;
+  std::uint32_t produced() const { return produced_; }
+  std::uint32_t overruns() const { return overruns_; }
+
+  /// Checks the encoded table (format, CRC, robot, model, value ranges), then persists it (write a
+  /// temporary file, fsync, rename over the flash file, fsync the directory) and makes it active.
+  /// On any failure the active table and the file stay as they were.
+  TableStatus commit(const std::uint8_t* bytes, int size);
+  const std::vector<std::uint8_t>& active_table_bytes() const { return active_bytes_; }
+  /// Incremented each time the active table changes (a commit that took effect).
+  std::uint32_t table_generation() const { return table_generation_; }
+  const ParameterTable& active_table() const { return active_; }
+  const std::string& startup_note() const { return startup_note_; }
+  /// Milliseconds to sleep after each 64-byte chunk written to the flash file (0: none); lets tests
+  /// kill the drive in the middle of a flash.
+  int flash_chunk_delay_ms = 0;
+
+  /// Per joint RMS of tau_cmd - tau_ff [Nm] since start(): the drive's own model error.
+  std::array<double, kDriveJoints> model_error_rms() const;
+
+  /// The exact plant state at one recorded sample (simulation studies, survey Fig. 3): q [rad],
+  /// qd [rad/s], qdd [rad/s^2] of the plant at the sample instant, the commanded torque [Nm] and the
+  /// measured (noisy) torque [Nm] recorded with it.
+  struct PlantSample {
+    double t = 0;
+    std::array<double, kDriveJoints> q{}, qd{}, qdd{}, tau_cmd{}, tau_measured{};
+  };
+  /// If set, every recorded sample also appends its PlantSample here (not through the ring).
+  std::vector<PlantSample>* plant_log = nullptr;
+  /// Standard parameters of the plant (60, generated StandardParam order); nominal by default.
+  /// Only while not playing. Throws InputError on a size mismatch.
+  void set_plant_parameters(const std::vector<double>& phi_standard);
+  /// PD gains of the control law (computed by start() from M(q0) unless fixed here; the known
+  /// control law IDIM-IV simulates). Only while not playing.
+  void fix_gains(const std::array<double, kDriveJoints>& kp, const std::array<double, kDriveJoints>& kd);
+  std::array<double, kDriveJoints> kp() const;
+  std::array<double, kDriveJoints> kd() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  Scenario scenario_;
+  std::string table_path_;
+  modbus_map::DriveState state_ = modbus_map::DriveState::idle;
+  modbus_map::DriveFault fault_ = modbus_map::DriveFault::none;
+  int fault_joint_ = 0;
+  double fault_value_ = 0;
+  double time_ = 0, clock_ = 0;
+  long steps_ = 0, steps_per_sample_ = 1, total_steps_ = 0;
+  std::deque<port::DriveSample> ring_;
+  std::uint32_t acked_ = 0, produced_ = 0, overruns_ = 0;
+  ParameterTable active_;
+  std::vector<std::uint8_t> active_bytes_;
+  std::uint32_t table_generation_ = 0;
+  std::string startup_note_;
+  std::array<double, kDriveJoints> error_sq_{};
+  bool gains_fixed_ = false;
+  long error_n_ = 0;
+  std::mt19937_64 rng_;
+};
+
+/// The er20 table of the nominal (CAD) base parameters with Eq. 7 friction Fc [Nm], beta [Nm s/rad]
+/// per joint: with zero friction, the drive's factory table; with a scenario's, the survey's
+/// set-parameter feed-forward (Fig. 3).
+ParameterTable nominal_table(const std::array<double, kDriveJoints>& Fc = {},
+                             const std::array<double, kDriveJoints>& beta = {});
+
+/// Writes `bytes` to `path` atomically (temporary file in the same directory, fsync, rename, fsync
+/// of the directory): a crash at any moment leaves the old or the new content. Throws
+/// std::runtime_error on I/O failure.
+void write_file_atomically(const std::string& path, const std::vector<std::uint8_t>& bytes, int chunk_delay_ms = 0);
+
+}  // namespace dyncal::host

@@ -1,0 +1,171 @@
+#include "dyncal_host/drive/scenario.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "dyncal_host/common/input_error.hpp"
+
+namespace dyncal::host {
+namespace {
+
+using nlohmann::json;
+
+// Motor rotor inertias [kg m^2] of a 20 kg-class arm's servo motors (large axes 1-2, medium 3,
+// small wrist motors 4-6); reflected to the joint as J_m N^2.
+constexpr std::array<double, kDriveJoints> kMotorInertia{3e-4, 3e-4, 1.5e-4, 3e-5, 3e-5, 3e-5};
+
+json read_json(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError("cannot read scenario file " + path);
+  try {
+    json j;
+    in >> j;
+    return j;
+  } catch (const json::exception& e) {
+    throw InputError(path + ": invalid JSON: " + e.what());
+  }
+}
+
+double number(const json& j, const char* key, double fallback, const std::string& where) {
+  if (!j.contains(key)) return fallback;
+  if (!j[key].is_number()) throw InputError(where + ": '" + key + "' must be a number");
+  const double v = j[key].get<double>();
+  if (!std::isfinite(v)) throw InputError(where + ": '" + key + "' is not finite");
+  return v;
+}
+
+void read_joint(const json& j, JointFriction& f, JointEffects& e, const std::string& where) {
+  if (!j.is_object()) throw InputError(where + " must be an object");
+  if (j.contains("friction")) {
+    const json& fj = j["friction"];
+    const std::string w = where + ".friction";
+    if (fj.contains("model")) f.model = parse_friction_model(fj["model"].get<std::string>());
+    f.Fc = number(fj, "Fc", f.Fc, w);
+    f.beta = number(fj, "beta", f.beta, w);
+    f.Fs = number(fj, "Fs", f.Fs, w);
+    f.qds = number(fj, "qds", f.qds, w);
+    f.delta_s = number(fj, "delta_s", f.delta_s, w);
+    f.f1 = number(fj, "f1", f.f1, w);
+    f.f2 = number(fj, "f2", f.f2, w);
+    f.f3 = number(fj, "f3", f.f3, w);
+    f.f4 = number(fj, "f4", f.f4, w);
+    f.f5 = number(fj, "f5", f.f5, w);
+    f.fp = number(fj, "fp", f.fp, w);
+    f.fl = number(fj, "fl", f.fl, w);
+    if (f.qds <= 0 || f.f3 <= 0 || f.f5 <= 0) throw InputError(w + ": qds, f3 and f5 must be > 0");
+  }
+  if (j.contains("cogging")) {
+    const json& c = j["cogging"];
+    e.cogging_amplitude = number(c, "amplitude", 0, where + ".cogging");
+    e.cogging_cycles = number(c, "cycles_per_rev", 0, where + ".cogging");
+    e.cogging_phase = number(c, "phase", 0, where + ".cogging");
+  }
+  e.load_friction = number(j, "load_friction", e.load_friction, where);
+  if (j.contains("viscous_drift")) {
+    e.viscous_drift = number(j["viscous_drift"], "relative_rise", 0, where + ".viscous_drift");
+    e.drift_time_constant = number(j["viscous_drift"], "time_constant", 600, where + ".viscous_drift");
+    if (e.drift_time_constant <= 0) throw InputError(where + ".viscous_drift.time_constant must be > 0");
+  }
+  e.offset = number(j, "offset", e.offset, where);
+  e.rotor_inertia = number(j, "rotor_inertia", e.rotor_inertia, where);
+  if (e.rotor_inertia < 0) throw InputError(where + ".rotor_inertia must be >= 0");
+}
+
+}  // namespace
+
+Scenario default_scenario(const RobotDescription& robot) {
+  if (robot.num_joints != kDriveJoints) throw InputError("the simulated drive needs a six-axis robot");
+  Scenario s;
+  s.robot = robot.name;
+  for (int j = 0; j < kDriveJoints; ++j) {
+    const NominalFriction f =
+        static_cast<size_t>(j) < robot.friction.size() ? robot.friction[static_cast<size_t>(j)] : NominalFriction{};
+    s.friction[j].Fc = f.Fc;
+    s.friction[j].beta = f.beta;
+    s.friction[j].Fs = f.Fs;
+    s.friction[j].qds = f.qds;
+    const double n = robot.gear_ratios[j];
+    s.effects[j].rotor_inertia = kMotorInertia[j] * n * n;
+  }
+  return s;
+}
+
+Scenario load_scenario(const std::string& path, const RobotDescription& robot) {
+  Scenario s = default_scenario(robot);
+  const json j = read_json(path);
+  const std::string w = path;
+  if (j.contains("robot") && j["robot"].get<std::string>() != robot.name) {
+    throw InputError(w + ": scenario is for robot '" + j["robot"].get<std::string>() + "', drive runs '" + robot.name +
+                     "'");
+  }
+  s.seed = static_cast<std::uint64_t>(number(j, "seed", static_cast<double>(s.seed), w));
+  s.control_rate_hz = number(j, "control_rate_hz", s.control_rate_hz, w);
+  s.substeps = static_cast<int>(number(j, "substeps", s.substeps, w));
+  s.sample_rate_hz = number(j, "sample_rate_hz", s.sample_rate_hz, w);
+  s.bandwidth_hz = number(j, "bandwidth_hz", s.bandwidth_hz, w);
+  s.damping = number(j, "damping", s.damping, w);
+  s.encoder_counts = number(j, "encoder_counts", s.encoder_counts, w);
+  if (s.control_rate_hz < 1000 || s.substeps < 1 || s.encoder_counts < 0) {
+    throw InputError(w + ": control_rate_hz must be >= 1000, substeps >= 1, encoder_counts >= 0 (0: no quantisation)");
+  }
+  if (j.contains("tau_noise_std")) {
+    const json& a = j["tau_noise_std"];
+    if (a.is_number()) {
+      s.tau_noise_std.fill(a.get<double>());
+    } else if (a.is_array() && a.size() == kDriveJoints) {
+      for (int k = 0; k < kDriveJoints; ++k) s.tau_noise_std[k] = a[static_cast<size_t>(k)].get<double>();
+    } else {
+      throw InputError(w + ": tau_noise_std must be a number or an array of 6");
+    }
+  }
+  if (j.contains("couplings")) {
+    for (const json& c : j["couplings"]) {
+      CoupledFriction cf;
+      if (!c.contains("joints") || c["joints"].size() != 2)
+        throw InputError(w + ": a coupling needs \"joints\": [i, j]");
+      cf.joint_i = c["joints"][0].get<int>() - 1;
+      cf.joint_j = c["joints"][1].get<int>() - 1;
+      if (cf.joint_i < 0 || cf.joint_j < 0 || cf.joint_i >= kDriveJoints || cf.joint_j >= kDriveJoints ||
+          cf.joint_i == cf.joint_j) {
+        throw InputError(w + ": coupling joints must be two different joints 1..6");
+      }
+      cf.sign = number(c, "sign", 1.0, w + ".couplings");
+      cf.Fc = number(c, "Fc", 0, w + ".couplings");
+      cf.beta = number(c, "beta", 0, w + ".couplings");
+      s.couplings.push_back(cf);
+    }
+  }
+  if (j.contains("joints")) {
+    const json& js = j["joints"];
+    if (!js.is_array() || js.size() != kDriveJoints) throw InputError(w + ": 'joints' must be an array of 6 objects");
+    for (int k = 0; k < kDriveJoints; ++k) {
+      read_joint(js[static_cast<size_t>(k)], s.friction[k], s.effects[k],
+                 w + ": joints[" + std::to_string(k + 1) + "]");
+    }
+  }
+  return s;
+}
+
+double friction_torque(const JointFriction& f, double qd, double tau_load) {
+  const double sg = qd > 0 ? 1.0 : (qd < 0 ? -1.0 : 0.0);
+  const double aq = std::fabs(qd);
+  switch (f.model) {
+    case FrictionModel::eq4:
+      return (f.Fc + (f.Fs - f.Fc) * std::exp(-std::pow(aq / f.qds, f.delta_s))) * sg + f.beta * qd;
+    case FrictionModel::eq5:
+      return f.f1 * sg - f.f2 * sg * std::exp(-aq / f.f3) - (aq > 0 ? f.f4 * sg * std::exp(-1.0 / (f.f5 * aq)) : 0.0) +
+             f.beta * qd;
+    case FrictionModel::eq6:
+      return (f.f1 + f.f2 / std::cosh(f.f3 * qd)) * std::tanh(f.f4 * qd) + f.beta * qd;
+    case FrictionModel::eq7:
+      return f.Fc * sg + f.beta * qd;
+    case FrictionModel::eq8:
+      return f.Fc * sg + f.beta * qd + f.fp * std::cbrt(qd);
+    case FrictionModel::eq9:
+      return f.Fc * sg + f.beta * qd + f.fl * std::fabs(tau_load) * sg;
+  }
+  return 0.0;
+}
+
+}  // namespace dyncal::host

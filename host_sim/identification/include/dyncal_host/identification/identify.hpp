@@ -1,0 +1,63 @@
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "dyncal_host/common/model_terms.hpp"
+#include "dyncal_host/common/robot_description.hpp"
+#include "dyncal_host/identification/joint_log.hpp"
+
+namespace dyncal::host {
+
+/// Options of `dyncal identify` (defaults follow the survey and Gautier's practice).
+struct IdentifyOptions {
+  std::string method = "ols";       ///< ols | wls | kf | rls
+  unsigned terms = 0;               ///< dyncal::term bits (rigid body always included)
+  int filter_order = 4;             ///< Butterworth order (zero-phase: twice the attenuation)
+  double cutoff_hz = 20.0;          ///< low-pass cut-off for q, tau and the regressor columns
+  int decimate = 0;                 ///< decimation factor; 0: floor(fs / (25 * cutoff)), at least 1
+  int folds = 5;                    ///< blocked k-fold cross-validation
+  double block_seconds = 0.5;       ///< length of the contiguous blocks dealt to the folds in turn
+  double validate_last = 0.0;       ///< > 0: plain time split, this fraction at the end validates
+  double rls_mu = 0.9999;           ///< forgetting factor of RLS (survey Eq. 23)
+  double p0 = 1e6;                  ///< initial covariance diag of KF and RLS (prior ignorance)
+  double min_speed_fraction = 0.0;  ///< fit only rows with |qd_j| >= this fraction of joint j's top speed
+  bool load_regressor = false;      ///< also stack Y(q, qd, 0) (StackedData::W_load): the load torque's regressor
+};
+
+struct JointMetrics {
+  int joint = 0;            ///< 1-based
+  double rms = 0;           ///< RMS of the validation residual [Nm]
+  double rms_tau = 0;       ///< RMS of the measured torque [Nm]
+  double relative_rms = 0;  ///< rms / rms_tau
+  double r2 = 0;            ///< 1 - SS_res / SS_tot
+  double e_T = 0;           ///< mean(|tau - tau_hat| / tau_max), survey Sec. 5.1
+  double e_T_std = 0;       ///< std(|tau - tau_hat| / tau_max)
+};
+
+struct ParamEstimate {
+  std::string name;
+  double value = 0;
+  double std = 0;  ///< standard deviation (OLS/WLS: sigma^2 (W^T W)^-1; KF/RLS: sqrt(diag P))
+};
+
+struct IdentifyResult {
+  std::string robot, method, model, validation, data_source;
+  double sample_rate_hz = 0, decimated_rate_hz = 0, cutoff_hz = 0;
+  long samples_used = 0;
+  std::vector<JointMetrics> joints;
+  std::vector<ParamEstimate> params;
+  double condition_number = 0;  ///< cond(W) of the full stacked (weighted) regressor
+  double fit_seconds = 0;       ///< wall time of the estimator over the full data
+  std::vector<std::string> notes;
+};
+
+/// Identifies the model from `log` and validates it on data each fit never saw.
+/// Throws InputError on bad options, too little data or an unsupported robot/model.
+IdentifyResult identify(const RobotDescription& robot, const JointLog& log, const IdentifyOptions& options);
+
+/// Per-robot entry points (one translation unit each), called by identify().
+IdentifyResult identify_er20(const RobotDescription& robot, const JointLog& log, const IdentifyOptions& options);
+IdentifyResult identify_tx40(const RobotDescription& robot, const JointLog& log, const IdentifyOptions& options);
+
+}  // namespace dyncal::host

@@ -1,0 +1,51 @@
+#pragma once
+// The survey's optimisation methods (Sec. 3.4) on the standard parameters and the friction
+// parameters within search ranges, with each link's pseudo-inertia kept positive definite
+// (physical feasibility, Wensing et al. 2017): gradient-based (NLopt SLSQP, least-squares
+// objective), a genetic algorithm (Eq. 25 objective) and a particle filter (the posterior under the
+// assumed noise); the last two need no initial values, only the ranges. Deterministic for a seed;
+// budgets are evaluation counts, not times.
+
+#include <cstdint>
+
+#include "dyncal_host/identification/methods.hpp"
+#include "dyncal_host/identification/objective.hpp"
+
+namespace dyncal::host {
+
+/// The genetic algorithm's cost over the residuals e_j / sigma_j.
+enum class Objective {
+  least_squares,  ///< sum_j mean_j^2 + var_j: the Gaussian likelihood's, which its amplitude fit minimises
+  eq25,           ///< survey Eq. 25: sum_j |mean_j| + k_e std_j
+};
+
+struct OptimiserSettings {
+  double range_width = 0.4;  ///< inertial ranges: CAD value +- range_width x |CAD value| (search_ranges)
+  double k_e = 1.0;          ///< Eq. 25 weight of the residual standard deviation
+  Objective objective = Objective::least_squares;  ///< the genetic algorithm's cost
+  std::uint64_t seed = 1;                          ///< GA and particle filter
+  int population = 120;                            ///< GA population / particle count
+  int generations = 1500;                          ///< GA generations / particle-filter iterations
+  int max_evaluations = 3000;                      ///< gradient-based: objective evaluations
+};
+
+/// Gradient-based: NLopt SLSQP from the CAD values on sum_j ||e_j / sigma_j||^2 / S (variables
+/// scaled to their ranges), one inequality lambda_min(J_l) >= 0 per link with its analytic gradient.
+Estimate gradient_descent(const RunData& data, FrictionModel model, const MethodSettings& settings,
+                          const OptimiserSettings& options = {});
+
+/// Real-coded genetic algorithm (Deb 2000 constraint handling: feasible beats infeasible, less
+/// violation beats more): binary tournaments, simulated binary crossover (eta 15, p 0.9), polynomial
+/// mutation (eta 20, p 1/D), (mu + lambda) survival; population uniform in the ranges.
+Estimate genetic_algorithm(const RunData& data, FrictionModel model, const MethodSettings& settings,
+                           const OptimiserSettings& options = {});
+
+/// Particle filter for static parameters: a sequential Monte Carlo sampler (Del Moral, Doucet and
+/// Jasra 2006) from the uniform distribution on the feasible ranges to the posterior of the torques
+/// under the assumed noise (MethodSettings::sigma), with adaptive tempering, systematic resampling
+/// and random-walk Metropolis moves (particles' covariance). `generations` counts evaluations per
+/// particle (5 moves a step). Returns the posterior mean.
+Estimate particle_filter(const RunData& data, FrictionModel model, const MethodSettings& settings,
+                         const OptimiserSettings& options = {});
+
+}  // namespace dyncal::host

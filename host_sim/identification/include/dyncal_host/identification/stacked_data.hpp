@@ -1,0 +1,35 @@
+#pragma once
+// The identification data of a log after filtering, differentiation, regressor evaluation,
+// parallel filtering and decimation: what every batch method and the diagnosis work on.
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "dyncal_host/identification/identify.hpp"
+
+namespace dyncal::host {
+
+/// Stacked, filtered and decimated identification data: row s * N + j is joint j at sample s.
+struct StackedData {
+  Eigen::MatrixXd W;               ///< (S N) x P regressor
+  Eigen::MatrixXd W_load;          ///< (S N) x P regressor at qdd = 0, filtered and stacked as W (only with
+                                   ///< IdentifyOptions::load_regressor, else empty): its rigid-body columns times
+                                   ///< phi give the load torque h(q, qd), gravity and velocity products [Nm]
+  Eigen::VectorXd y;               ///< (S N) torques [Nm]
+  Eigen::VectorXd t;               ///< S sample times [s]
+  double rate_hz = 0;              ///< after decimation
+  std::vector<char> fit_row;       ///< (S N): 1 where row s * N + j enters the fit (see min_speed_fraction)
+  Eigen::MatrixXd q, qd, qdd;      ///< S x N filtered joint signals at the kept samples (for extra columns)
+  std::vector<std::string> names;  ///< P parameter names
+  int num_base = 0;                ///< the first num_base columns are the base parameters (rigid body)
+  double cutoff_hz = 0;
+};
+
+/// Prepares `log` for the declared model options.terms (a built term set, model_terms.hpp) of
+/// `robot` (er20 or tx40). Throws InputError.
+StackedData prepare_stacked(const RobotDescription& robot, const JointLog& log, const IdentifyOptions& options);
+StackedData prepare_er20(const RobotDescription& robot, const JointLog& log, const IdentifyOptions& options);
+StackedData prepare_tx40(const RobotDescription& robot, const JointLog& log, const IdentifyOptions& options);
+
+}  // namespace dyncal::host

@@ -1,0 +1,84 @@
+#include "dyncal_host/identification/identify_report.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+namespace dyncal::host {
+namespace {
+
+std::string format(const char* fmt, double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, fmt, v);
+  return buf;
+}
+
+}  // namespace
+
+void print_identify_report(std::ostream& out, const IdentifyResult& r) {
+  out << "dyncal identify: robot " << r.robot << ", method " << r.method << ", model " << r.model << "\n";
+  out << "data: " << r.data_source << ", " << r.samples_used << " samples used at "
+      << format("%.0f", r.decimated_rate_hz) << " Hz (from " << format("%.0f", r.sample_rate_hz)
+      << " Hz; zero-phase Butterworth " << format("%g", r.cutoff_hz) << " Hz, parallel decimation)\n";
+  out << "validation: " << r.validation << " (every sample predicted by a fit that did not see it)\n\n";
+  out << "joint   RMS [Nm]   rel. RMS      R^2       e_T    e_T_Std   RMS tau [Nm]\n";
+  for (const auto& j : r.joints) {
+    char line[160];
+    std::snprintf(line, sizeof line, "%5d %10.4f %10.4f %8.4f %9.5f %10.5f %14.4f\n", j.joint, j.rms, j.relative_rms,
+                  j.r2, j.e_T, j.e_T_std, j.rms_tau);
+    out << line;
+  }
+  out << "\nregressor condition number cond(W): " << format("%.4g", r.condition_number) << "; full-data fit in "
+      << format("%.3f", r.fit_seconds) << " s\n";
+  out << "\nparameter                   value        std    std %\n";
+  for (const auto& p : r.params) {
+    char line[160];
+    const double rel = p.value != 0.0 ? 100.0 * p.std / std::abs(p.value) : INFINITY;
+    std::snprintf(line, sizeof line, "%-20s %12.5g %10.3g %8.1f\n", p.name.c_str(), p.value, p.std, rel);
+    out << line;
+  }
+  for (const auto& n : r.notes) out << "note: " << n << "\n";
+}
+
+nlohmann::json identify_report_json(const IdentifyResult& r) {
+  nlohmann::json j;
+  j["robot"] = r.robot;
+  j["method"] = r.method;
+  j["model"] = r.model;
+  j["validation"] = r.validation;
+  j["data"] = r.data_source;
+  j["sample_rate_hz"] = r.sample_rate_hz;
+  j["decimated_rate_hz"] = r.decimated_rate_hz;
+  j["cutoff_hz"] = r.cutoff_hz;
+  j["samples"] = r.samples_used;
+  j["condition_number"] = r.condition_number;
+  j["fit_seconds"] = r.fit_seconds;
+  j["joints"] = nlohmann::json::array();
+  for (const auto& m : r.joints) {
+    j["joints"].push_back({{"joint", m.joint},
+                           {"rms_validation", m.rms},
+                           {"relative_rms_validation", m.relative_rms},
+                           {"r2_validation", m.r2},
+                           {"e_T", m.e_T},
+                           {"e_T_Std", m.e_T_std},
+                           {"rms_tau", m.rms_tau}});
+  }
+  j["params"] = nlohmann::json::array();
+  for (const auto& p : r.params) j["params"].push_back({{"name", p.name}, {"value", p.value}, {"std", p.std}});
+  j["notes"] = r.notes;
+  return j;
+}
+
+nlohmann::json parameter_table_json(const IdentifyResult& r) {
+  nlohmann::json j;
+  j["format"] = "dyncal-parameters";
+  j["version"] = 1;
+  j["robot"] = r.robot;
+  j["model"] = r.model;
+  j["method"] = r.method;
+  j["params"] = nlohmann::json::array();
+  for (const auto& p : r.params) j["params"].push_back({{"name", p.name}, {"value", p.value}});
+  return j;
+}
+
+}  // namespace dyncal::host

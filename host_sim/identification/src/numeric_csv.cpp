@@ -1,0 +1,74 @@
+#include "dyncal_host/identification/numeric_csv.hpp"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+
+#include "dyncal_host/common/input_error.hpp"
+
+namespace dyncal::host {
+namespace {
+
+std::string trim(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t\r");
+  if (b == std::string::npos) return "";
+  const auto e = s.find_last_not_of(" \t\r");
+  return s.substr(b, e - b + 1);
+}
+
+std::vector<std::string> split(const std::string& line) {
+  std::vector<std::string> out;
+  std::string::size_type start = 0;
+  while (true) {
+    const auto comma = line.find(',', start);
+    out.push_back(trim(line.substr(start, comma == std::string::npos ? std::string::npos : comma - start)));
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return out;
+}
+
+}  // namespace
+
+NumericCsv read_numeric_csv(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError("cannot read '" + path + "'");
+  NumericCsv csv;
+  std::string line;
+  if (!std::getline(in, line) || trim(line).empty()) throw InputError(path + ": empty file (no header line)");
+  csv.header = split(line);
+  const size_t cols = csv.header.size();
+  std::vector<double> data;
+  long line_no = 1;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (trim(line).empty()) continue;
+    const auto fields = split(line);
+    if (fields.size() != cols) {
+      throw InputError(path + ":" + std::to_string(line_no) + ": " + std::to_string(fields.size()) +
+                       " fields, header has " + std::to_string(cols));
+    }
+    for (size_t c = 0; c < cols; ++c) {
+      const std::string& f = fields[c];
+      char* end = nullptr;
+      errno = 0;
+      const double v = std::strtod(f.c_str(), &end);
+      if (f.empty() || end != f.c_str() + f.size() || errno == ERANGE) {
+        throw InputError(path + ":" + std::to_string(line_no) + ": column '" + csv.header[c] + "': '" + f +
+                         "' is not a number");
+      }
+      if (!std::isfinite(v)) {
+        throw InputError(path + ":" + std::to_string(line_no) + ": column '" + csv.header[c] + "': non-finite value '" +
+                         f + "'");
+      }
+      data.push_back(v);
+    }
+  }
+  const Eigen::Index rows = static_cast<Eigen::Index>(data.size() / cols);
+  csv.values = Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+      data.data(), rows, static_cast<Eigen::Index>(cols));
+  return csv;
+}
+
+}  // namespace dyncal::host

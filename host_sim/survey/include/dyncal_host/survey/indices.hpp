@@ -1,0 +1,38 @@
+#pragma once
+// The survey's evaluation indices (Sec. 5: e_T, e_T_Std, e_d, e_f, J_e; plus e_b) of an estimate
+// against the set parameters of the study's run, and the levels of Tables 1-4.
+
+#include <Eigen/Core>
+#include <array>
+
+#include "dyncal_host/drive/scenario.hpp"
+#include "dyncal_host/identification/estimate.hpp"
+
+namespace dyncal::host::survey {
+
+/// Survey Sec. 5 indices; e_d and e_f are means of |(set - est) / set| over the parameters whose
+/// set value is nonzero (m, X Y Z, I11..I33 of every link, Table 5's parametrisation).
+struct Indices {
+  double e_d = 0;        ///< inertial parameter error, standard parameters as the method gives them
+  double e_d_prior = 0;  ///< the same with the CAD prior (Estimate::standard_prior)
+  double e_f = 0;        ///< friction parameter error
+  double e_T = 0;        ///< |Mean((tau - tau_hat) / tau_max)| (signed mean, as the published numbers)
+  double e_T_std = 0;    ///< Std((tau - tau_hat) / tau_max)
+  double e_T_abs = 0;    ///< Mean(|tau - tau_hat| / tau_max), Sec. 5.1 read literally
+  double J_e = 0;        ///< e_d + e_f + e_T + e_T_std
+  double J_e_prior = 0;  ///< e_d_prior + e_f + e_T + e_T_std
+  double e_b = 0;        ///< base parameter error: mean |(set - est) / set| over nonzero set base parameters
+};
+
+/// e_d of survey Sec. 5 for 60 standard parameters: over the links, the mean |(set - est) / set| of
+/// Table 5's parameters (m, X Y Z, I11..I33 about the centre of mass) with nonzero set values.
+double inertial_parameter_error(const Eigen::VectorXd& phi_standard);
+
+/// tau: the measured torque the method was given (S x 6); tau_max per joint [Nm].
+Indices evaluate(const Estimate& est, const Scenario& scenario, const Eigen::MatrixXd& tau,
+                 const std::array<double, 6>& tau_max);
+
+/// Level letter of survey Tables 1-4: 'A' below a, 'B' below b, else 'C'.
+char level(double value, double a, double b);
+
+}  // namespace dyncal::host::survey

@@ -1,0 +1,35 @@
+#pragma once
+// `dyncal survey`: the survey's simulation study (Sec. 6) on the er20 through the simulated drive,
+// every implemented method on the linear (Eq. 7) and nonlinear (Eq. 4) model, without and with
+// Table 7 noise, printed side by side with the published numbers.
+
+#include <cstdint>
+#include <iosfwd>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "dyncal_host/common/robot_description.hpp"
+#include "dyncal_host/identification/standard_parameters.hpp"
+
+namespace dyncal::host::survey {
+
+struct SurveyOptions {
+  bool quick = false;                          ///< one excitation period (10 s, 1 000 samples) instead of two
+  std::uint64_t seed = 1;                      ///< excitation, noise and CAD-prior seed
+  double prior_error = 0.2;                    ///< CAD prior: set values times (1 + u), u uniform in +-prior_error
+  PriorErrors prior_on = PriorErrors::table5;  ///< which set values the CAD prior's errors are on
+};
+
+/// Runs the study. The result (JSON) holds, per model and method, the Sec. 5 indices without and
+/// with noise, the solution times, and joint 3's parameters (Tables 5, 6). Throws InputError.
+nlohmann::json run_survey(const RobotDescription& robot, const SurveyOptions& options);
+
+/// Prints our Tables 5, 6, 8, 9 and 11 next to the published ones (`published`: the data file
+/// robots/er20/survey_published.json).
+void print_survey(std::ostream& out, const nlohmann::json& result, const nlohmann::json& published);
+
+/// Compares every index and parameter of `ours` with `reference` (solution times excepted):
+/// |a - b| <= relative_tolerance * max(|a|, |b|) + 1e-9. Returns the differences found (empty: equal).
+std::string compare_survey(const nlohmann::json& ours, const nlohmann::json& reference, double relative_tolerance);
+
+}  // namespace dyncal::host::survey

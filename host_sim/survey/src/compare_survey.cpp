@@ -1,0 +1,52 @@
+// compare_survey: a study's result against a committed reference, within a relative tolerance.
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <iomanip>
+#include <sstream>
+
+#include "dyncal_host/survey/survey.hpp"
+
+namespace dyncal::host::survey {
+
+using nlohmann::json;
+
+std::string compare_survey(const json& ours, const json& ref, double tol) {
+  std::ostringstream diff;
+  std::function<void(const json&, const json&, const std::string&)> walk = [&](const json& a, const json& b,
+                                                                               const std::string& path) {
+    if (path.size() >= 8 && path.compare(path.size() - 8, 8, "/seconds") == 0) return;
+    if (a.type() != b.type() && !(a.is_number() && b.is_number())) {
+      diff << path << ": different kinds\n";
+      return;
+    }
+    if (a.is_object()) {
+      for (auto& [k, v] : b.items()) {
+        if (!a.contains(k)) {
+          diff << path << "/" << k << ": missing\n";
+        } else {
+          walk(a[k], v, path + "/" + k);
+        }
+      }
+      for (auto& [k, v] : a.items())
+        if (!b.contains(k)) diff << path << "/" << k << ": not in the reference\n";
+    } else if (a.is_array()) {
+      if (a.size() != b.size()) {
+        diff << path << ": " << a.size() << " entries, reference " << b.size() << "\n";
+        return;
+      }
+      for (size_t i = 0; i < a.size(); ++i) walk(a[i], b[i], path + "/" + std::to_string(i));
+    } else if (a.is_number()) {
+      const double x = a.get<double>(), y = b.get<double>();
+      if (!(std::fabs(x - y) <= tol * std::max(std::fabs(x), std::fabs(y)) + 1e-9)) {
+        diff << path << ": " << std::setprecision(10) << x << " vs reference " << y << "\n";
+      }
+    } else if (a != b) {
+      diff << path << ": " << a.dump() << " vs reference " << b.dump() << "\n";
+    }
+  };
+  walk(ours, ref, "");
+  return diff.str();
+}
+
+}  // namespace dyncal::host::survey
