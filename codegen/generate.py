@@ -123,7 +123,11 @@ def main():
         return 2
     robot_dir, out_dir = sys.argv[1], sys.argv[2]
     t0 = time.time()
-    desc, joints = description.load(robot_dir)
+    try:
+        desc, joints = description.load(robot_dir)
+    except description.DescriptionError as e:
+        print(f"generate.py: {e}", file=sys.stderr)
+        return 2
     name = desc["name"]
     n = len(joints)
     n_std = 10 * n

@@ -3,8 +3,14 @@
 #include <gtest/gtest.h>
 #include <modbus/modbus.h>
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
 #include <cerrno>
 #include <cstring>
+#include <thread>
 #include <vector>
 
 #include "dyncal/generated/er20/robot.hpp"
@@ -217,3 +223,39 @@ TEST_F(DriveModbus, FlashRejectsBadTablesAndKeepsTheActiveOne) {
 }
 
 }  // namespace
+
+// A drive of another register map version (a real libmodbus server on loopback whose map_version
+// is 3, the six-axis map) is refused by the host with a message naming both versions.
+TEST(DriveModbusVersion, AnOlderMapIsRefusedWithBothVersions) {
+  modbus_t* server = modbus_new_tcp("127.0.0.1", 0);
+  ASSERT_NE(server, nullptr);
+  const int listener = modbus_tcp_listen(server, 1);
+  ASSERT_GE(listener, 0) << modbus_strerror(errno);
+  sockaddr_in addr{};
+  socklen_t len = sizeof addr;
+  ASSERT_EQ(getsockname(listener, reinterpret_cast<sockaddr*>(&addr), &len), 0);
+  const int port = ntohs(addr.sin_port);
+  modbus_mapping_t* map = modbus_mapping_new(0, 0, 0, mm::kInputWords);
+  map->tab_input_registers[mm::kMapVersionReg] = 3;
+  map->tab_input_registers[mm::kNumJointsReg] = 6;
+  std::thread serve([&] {
+    modbus_tcp_accept(server, const_cast<int*>(&listener));
+    std::uint8_t query[MODBUS_TCP_MAX_ADU_LENGTH];
+    for (;;) {
+      const int n = modbus_receive(server, query);
+      if (n < 0) break;
+      if (n > 0) modbus_reply(server, query, n, map);
+    }
+  });
+  std::string error;
+  auto drive = ModbusDrive::connect("tcp://127.0.0.1:" + std::to_string(port), &error);
+  ASSERT_NE(drive, nullptr) << error;
+  dyncal::linux_port::DriveInfo info;
+  EXPECT_EQ(drive->read_info(info), dyncal::port::PortStatus::rejected);
+  EXPECT_NE(drive->error().find("register map version 3, this host version 4"), std::string::npos) << drive->error();
+  drive.reset();  // the server's receive fails when the client closes
+  serve.join();
+  close(listener);
+  modbus_mapping_free(map);
+  modbus_free(server);
+}

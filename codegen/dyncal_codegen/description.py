@@ -173,11 +173,28 @@ def load_urdf(path):
 
 
 def load(robot_dir):
-    """Load robots/<name>/robot.json and its kinematics. Returns (description dict, joints)."""
+    """Load robots/<name>/robot.json, validate it (schema.py, docs/robots.md) and load its
+    kinematics. Returns (description dict, joints); "gravity" defaults to [0, 0, -9.81].
+    Raises DescriptionError with a one-line message naming the file and the field."""
+    from dyncal_codegen import schema
+
     path = os.path.join(robot_dir, "robot.json")
-    with open(path) as f:
-        desc = json.load(f)
-    return desc, load_description(robot_dir, desc)
+    try:
+        with open(path) as f:
+            desc = json.load(f)
+    except OSError as e:
+        raise DescriptionError(f"{path}: cannot be read ({e.strerror})") from None
+    except json.JSONDecodeError as e:
+        raise DescriptionError(f"{path}: invalid JSON: {e}") from None
+    try:
+        n = schema.validate(desc, robot_dir)
+        joints = load_description(robot_dir, desc)
+    except (schema.SchemaError, DescriptionError) as e:
+        raise DescriptionError(f"{path}: {e}") from None
+    if len(joints) != n:
+        raise DescriptionError(f"{path}: limits list {n} joints, the kinematics {len(joints)}")
+    desc.setdefault("gravity", [0.0, 0.0, -9.81])
+    return desc, joints
 
 
 def load_description(robot_dir, desc):

@@ -26,6 +26,7 @@ void add_calibrate_command(CLI::App& app, Action& run);
 void add_table_command(CLI::App& app, Action& run);
 void add_flash_command(CLI::App& app, Action& run);
 void add_registers_command(CLI::App& app, Action& run);
+void add_robot_command(CLI::App& app, Action& run);
 
 /// Reads a JSON file. Throws InputError (unreadable, invalid JSON) naming the file.
 nlohmann::json read_json_file(const std::string& path);

@@ -22,7 +22,7 @@ void print_design(const host::RobotDescription& robot, const ExciteSettings& s, 
             << "cond(K): best of " << x.candidates << " random starts " << r.start_cond << " -> optimised " << r.cond
             << " (" << s.criterion << ", " << r.evaluations << " evaluations); log det " << r.logdet << "\n"
             << "joint   position   velocity   acceleration   (fraction of the limit)\n";
-  for (int i = 0; i < 6; ++i) {
+  for (int i = 0; i < robot.num_joints; ++i) {
     const auto k = static_cast<size_t>(i);
     std::cout << std::setw(5) << i + 1 << std::setw(11) << r.position_use[k] << std::setw(11) << r.velocity_use[k]
               << std::setw(15) << r.acceleration_use[k] << "\n";

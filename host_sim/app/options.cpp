@@ -2,6 +2,7 @@
 #include <fstream>
 
 #include "commands.hpp"
+#include "dyncal_host/identification/compiled_robot.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/robot_description.hpp"
 
@@ -39,7 +40,10 @@ void RobotOption::add_to(CLI::App* cmd, const std::string& help) {
 }
 
 host::RobotDescription RobotOption::load() const {
-  return host::load_robot(robots_dir, name);
+  if (name.empty()) throw InputError("--robot is required (robots/<name>/; docs/robots.md)");
+  host::RobotDescription r = host::load_robot(robots_dir, name);
+  host::derive_tau_max(r);
+  return r;
 }
 
 void LogOption::add_to(CLI::App* cmd) {

@@ -147,7 +147,7 @@ struct Verify {
 
 /// Verification run: stream a fresh trajectory and read the drive's model error.
 JointLog verification_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory& t, const CalibrateOptions& o,
-                          std::ostream* progress, std::uint32_t* lost, std::array<double, 6>& drive_error) {
+                          std::ostream* progress, std::uint32_t* lost, std::array<double, modbus_map::kMaxJoints>& drive_error) {
   JointLog log = stream_run(drive, t, {"verification", o.verify_periods, o.sample_rate_hz, o.fault_dir}, progress, lost,
                             nullptr, nullptr);
   linux_port::DriveInfo info;
@@ -201,11 +201,11 @@ JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory
   const long expected = std::lround(run.periods * trajectory.period() * run.sample_rate_hz);
   std::vector<port::DriveSample> samples;
   samples.reserve(static_cast<size_t>(expected));
-  port::DriveSample block[mm::kSamplesPerBlock];
+  port::DriveSample block[mm::samples_per_block(1)];  // the most a block can carry
   long last_shown = -1;
   for (;;) {
     int n = 0;
-    const port::PortStatus st = drive.read(block, mm::kSamplesPerBlock, &n);
+    const port::PortStatus st = drive.read(block, mm::samples_per_block(1), &n);
     if (st == port::PortStatus::end_of_stream) break;
     if (st == port::PortStatus::transport_error) throw InputError("drive: " + drive.error());
     if (st == port::PortStatus::device_fault) {
@@ -293,8 +293,9 @@ CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions&
   if (!drive) throw InputError(error);
   linux_port::DriveInfo info;
   if (drive->read_info(info) != port::PortStatus::ok) throw InputError("drive: " + drive->error());
-  if (info.map_version != mm::kMapVersion || info.num_joints != 6)
-    throw InputError("drive speaks another register map");
+  if (info.num_joints != Robot::kNumJoints)
+    throw InputError("the drive has " + std::to_string(info.num_joints) + " joints, robot '" + robot.name + "' " +
+                     std::to_string(Robot::kNumJoints));
   if (info.robot_id != Robot::kRobotId)
     throw InputError("the drive's robot id does not match robot '" + robot.name + "'");
 

@@ -42,4 +42,11 @@ std::string model_name(unsigned terms) {
   return out;
 }
 
+int built_term_set_index(unsigned terms) {
+  for (int i = 0; i < kBuiltTermSets; ++i)
+    if (built_term_set(i) == terms) return i;
+  throw InputError("model '" + model_name(terms) +
+                   "' is not built: use Coulomb + viscous (eq7) or eq8, optionally with rotor_inertia and offset");
+}
+
 }  // namespace dyncal::host

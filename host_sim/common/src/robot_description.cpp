@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
@@ -10,24 +11,136 @@
 namespace dyncal::host {
 namespace {
 
-double number_field(const nlohmann::json& j, const char* key, double fallback, const std::string& where) {
-  if (!j.contains(key)) return fallback;
-  if (!j[key].is_number()) throw InputError(where + ": '" + key + "' must be a number");
-  const double v = j[key].get<double>();
-  if (!std::isfinite(v)) throw InputError(where + ": '" + key + "' is not finite");
-  return v;
+using nlohmann::json;
+
+/// Field errors name the file and the field as docs/robots.md does ("limits.q_max[2]"), on one line.
+struct Reader {
+  std::string path;
+
+  [[noreturn]] void fail(const std::string& field, const std::string& what) const {
+    throw InputError(path + ": " + field + ": " + what);
+  }
+
+  double number(const json& v, const std::string& field, bool positive = false) const {
+    if (!v.is_number()) fail(field, "expected a number, got " + v.dump());
+    const double x = v.get<double>();
+    if (!std::isfinite(x)) fail(field, "is not finite");
+    if (positive && x <= 0) fail(field, "must be > 0, got " + v.dump());
+    return x;
+  }
+
+  const json* object(const json& parent, const char* key, const std::string& field, bool required) const {
+    if (!parent.contains(key)) {
+      if (required) fail(field, "missing");
+      return nullptr;
+    }
+    if (!parent[key].is_object()) fail(field, "expected an object");
+    return &parent[key];
+  }
+
+  /// An array of n finite numbers (n < 0: any length >= 1), or an empty vector when optional and absent.
+  Eigen::VectorXd vector(const json& parent, const char* key, int n, const std::string& field, bool required,
+                         bool positive = false) const {
+    if (!parent.contains(key)) {
+      if (required) fail(field, "missing");
+      return {};
+    }
+    const json& a = parent[key];
+    if (!a.is_array() || a.empty()) fail(field, "expected a list of numbers, one per joint");
+    if (n >= 0 && static_cast<int>(a.size()) != n)
+      fail(field, std::to_string(a.size()) + " entries, expected " + std::to_string(n) + " (one per joint)");
+    Eigen::VectorXd v(static_cast<Eigen::Index>(a.size()));
+    for (size_t i = 0; i < a.size(); ++i)
+      v[static_cast<Eigen::Index>(i)] = number(a[i], field + "[" + std::to_string(i + 1) + "]", positive);
+    return v;
+  }
+
+  int joint_index(const json& c, const char* key, int n, const std::string& field) const {
+    if (!c.contains(key) || !c[key].is_number_integer()) fail(field + "." + key, "expected a joint number 1.." + std::to_string(n));
+    const int k = c[key].get<int>();
+    if (k < 1 || k > n) fail(field + "." + key, std::to_string(k) + " is not a joint 1.." + std::to_string(n));
+    return k - 1;
+  }
+};
+
+json read_json(const std::string& name, const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) throw InputError("unknown robot '" + name + "' (no " + path + ")");
+  if (!std::filesystem::is_regular_file(path, ec)) throw InputError(path + ": not a regular file");
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot be read");
+  try {
+    json j;
+    in >> j;
+    return j;
+  } catch (const json::exception& e) {
+    throw InputError(path + ": invalid JSON: " + e.what());
+  }
 }
 
-Eigen::VectorXd vector_field(const nlohmann::json& j, const char* key, int n, const std::string& where) {
-  if (!j.contains(key) || !j[key].is_array()) throw InputError(where + ": missing array '" + key + "'");
-  const auto& a = j[key];
-  if (static_cast<int>(a.size()) != n) {
-    throw InputError(where + ": '" + key + "' has " + std::to_string(a.size()) + " entries, expected " +
-                     std::to_string(n));
+void read_limits(const Reader& rd, const json& j, RobotDescription& r) {
+  const json& lim = *rd.object(j, "limits", "limits", true);
+  r.q_min = rd.vector(lim, "q_min", -1, "limits.q_min", true);
+  r.num_joints = static_cast<int>(r.q_min.size());
+  const int n = r.num_joints;
+  if (n > kMaxRobotDescriptionJoints)
+    rd.fail("limits.q_min", std::to_string(n) + " joints; dyncal takes 1 to " + std::to_string(kMaxRobotDescriptionJoints));
+  r.q_max = rd.vector(lim, "q_max", n, "limits.q_max", true);
+  for (int i = 0; i < n; ++i) {
+    if (!(r.q_max[i] > r.q_min[i]))
+      rd.fail("limits.q_max[" + std::to_string(i + 1) + "]",
+              std::to_string(r.q_max[i]) + " is not above q_min " + std::to_string(r.q_min[i]));
   }
-  Eigen::VectorXd v(n);
-  for (int i = 0; i < n; ++i) v[i] = a[static_cast<size_t>(i)].get<double>();
-  return v;
+  r.qd_max = rd.vector(lim, "qd_max", n, "limits.qd_max", true, true);
+  r.qdd_max = rd.vector(lim, "qdd_max", n, "limits.qdd_max", false, true);
+  if (r.qdd_max.size() == 0) r.qdd_max = kDefaultQddPerQd * r.qd_max;
+  r.tau_max = rd.vector(lim, "tau_max", n, "limits.tau_max", false, true);
+}
+
+void read_transmission(const Reader& rd, const json& j, RobotDescription& r) {
+  const int n = r.num_joints;
+  r.gear_ratios = Eigen::VectorXd::Ones(n);
+  r.joint_offsets = Eigen::VectorXd::Zero(n);
+  const json* tr = rd.object(j, "transmission", "transmission", false);
+  if (tr) {
+    r.gear_ratios = rd.vector(*tr, "gear_ratios", n, "transmission.gear_ratios", true);
+    for (int i = 0; i < n; ++i)
+      if (r.gear_ratios[i] == 0) rd.fail("transmission.gear_ratios[" + std::to_string(i + 1) + "]", "is 0");
+    const Eigen::VectorXd off = rd.vector(*tr, "joint_offsets", n, "transmission.joint_offsets", false);
+    if (off.size() > 0) r.joint_offsets = off;
+  }
+  r.transmission = r.gear_ratios.asDiagonal();
+  if (!tr || !tr->contains("coupling")) return;
+  const json& cs = (*tr)["coupling"];
+  if (!cs.is_array()) rd.fail("transmission.coupling", "expected a list of {motor, joint, ratio}");
+  for (size_t k = 0; k < cs.size(); ++k) {
+    const std::string field = "transmission.coupling[" + std::to_string(k + 1) + "]";
+    const json& c = cs[k];
+    if (!c.is_object()) rd.fail(field, "expected an object {motor, joint, ratio}");
+    const int motor = rd.joint_index(c, "motor", n, field), joint = rd.joint_index(c, "joint", n, field);
+    if (motor == joint) rd.fail(field, "motor and joint are the same (its ratio is gear_ratios)");
+    if (!c.contains("ratio")) rd.fail(field + ".ratio", "missing");
+    r.transmission(motor, joint) = rd.number(c["ratio"], field + ".ratio");
+  }
+}
+
+void read_friction(const Reader& rd, const json& j, RobotDescription& r) {
+  const int n = r.num_joints;
+  r.friction.assign(static_cast<size_t>(n), NominalFriction{});
+  if (!j.contains("friction")) return;
+  const json& fr = j["friction"];
+  if (!fr.is_array() || static_cast<int>(fr.size()) != n)
+    rd.fail("friction", "expected one entry per joint (" + std::to_string(n) + ")");
+  for (int k = 0; k < n; ++k) {
+    const json& fj = fr[static_cast<size_t>(k)];
+    const std::string field = "friction[" + std::to_string(k + 1) + "]";
+    if (!fj.is_object()) rd.fail(field, "expected an object {Fc, beta, Fs, qds}");
+    NominalFriction& f = r.friction[static_cast<size_t>(k)];
+    if (fj.contains("Fc")) f.Fc = rd.number(fj["Fc"], field + ".Fc");
+    if (fj.contains("beta")) f.beta = rd.number(fj["beta"], field + ".beta");
+    f.Fs = fj.contains("Fs") ? rd.number(fj["Fs"], field + ".Fs") : f.Fc;
+    if (fj.contains("qds")) f.qds = rd.number(fj["qds"], field + ".qds", true);
+  }
 }
 
 }  // namespace
@@ -39,54 +152,18 @@ std::string default_robots_dir() {
 
 RobotDescription load_robot(const std::string& robots_dir, const std::string& name) {
   const std::string path = robots_dir + "/" + name + "/robot.json";
-  std::ifstream in(path);
-  if (!in) throw InputError("unknown robot '" + name + "' (no " + path + ")");
-  nlohmann::json j;
-  try {
-    in >> j;
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(path + ": invalid JSON: " + e.what());
-  }
+  const json j = read_json(name, path);
+  const Reader rd{path};
+  if (!j.is_object()) throw InputError(path + ": the file is not a JSON object");
   RobotDescription r;
   r.name = name;
   r.directory = robots_dir + "/" + name;
-  try {
-    const auto& tr = j.at("transmission");
-    r.gear_ratios = vector_field(tr, "gear_ratios", static_cast<int>(tr.at("gear_ratios").size()), path);
-    r.num_joints = static_cast<int>(r.gear_ratios.size());
-    const int n = r.num_joints;
-    r.transmission = r.gear_ratios.asDiagonal();
-    for (const auto& c : tr.at("coupling")) {
-      const int motor = c.at("motor").get<int>();
-      const int joint = c.at("joint").get<int>();
-      if (motor < 1 || motor > n || joint < 1 || joint > n) throw InputError(path + ": coupling joint out of range");
-      r.transmission(motor - 1, joint - 1) = c.at("ratio").get<double>();
-    }
-    r.joint_offsets = vector_field(tr, "joint_offsets", n, path);
-    const auto& lim = j.at("limits");
-    r.q_min = vector_field(lim, "q_min", n, path);
-    r.q_max = vector_field(lim, "q_max", n, path);
-    r.qd_max = vector_field(lim, "qd_max", n, path);
-    r.qdd_max = vector_field(lim, "qdd_max", n, path);
-    r.tau_max = vector_field(lim, "tau_max", n, path);
-    r.friction.assign(static_cast<size_t>(n), NominalFriction{});
-    if (j.contains("friction")) {
-      const auto& fr = j["friction"];
-      if (!fr.is_array() || static_cast<int>(fr.size()) != n)
-        throw InputError(path + ": 'friction' must list one entry per joint (" + std::to_string(n) + ")");
-      for (int k = 0; k < n; ++k) {
-        const auto& fj = fr[static_cast<size_t>(k)];
-        const std::string where = path + ": friction of joint " + std::to_string(k + 1);
-        NominalFriction& f = r.friction[static_cast<size_t>(k)];
-        f.Fc = number_field(fj, "Fc", 0, where);
-        f.beta = number_field(fj, "beta", 0, where);
-        f.Fs = number_field(fj, "Fs", f.Fc, where);
-        f.qds = number_field(fj, "qds", 0.1, where);
-      }
-    }
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(path + ": " + e.what());
-  }
+  if (!j.contains("name") || !j["name"].is_string()) rd.fail("name", "missing (the robot's name, as its folder)");
+  if (j["name"].get<std::string>() != name)
+    rd.fail("name", "'" + j["name"].get<std::string>() + "' differs from the folder name '" + name + "'");
+  read_limits(rd, j, r);
+  read_transmission(rd, j, r);
+  read_friction(rd, j, r);
   return r;
 }
 

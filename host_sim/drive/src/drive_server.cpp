@@ -53,7 +53,7 @@ void refresh_inputs(const SimulatedDrive& d, std::uint16_t* in, long& table_gene
   // Ring window: the oldest unacknowledged samples.
   std::uint16_t* w = in + mm::kRingReg;
   const auto& ring = d.ring();
-  const int n = std::min<int>(mm::kSamplesPerBlock, static_cast<int>(ring.size()));
+  const int n = std::min<int>(mm::samples_per_block(kDriveJoints), static_cast<int>(ring.size()));
   mm::set_u32(w, ring.empty() ? d.produced() : ring.front().seq);
   w[2] = static_cast<std::uint16_t>(n);
   std::uint16_t* p = w + 3;
@@ -62,10 +62,10 @@ void refresh_inputs(const SimulatedDrive& d, std::uint16_t* in, long& table_gene
     mm::set_u32(p, s.seq);
     for (int j = 0; j < kDriveJoints; ++j) {
       mm::set_f32(p + 2 + 2 * j, s.q[j]);
-      mm::set_f32(p + 2 + 12 + 2 * j, s.qd[j]);
-      mm::set_f32(p + 2 + 24 + 2 * j, s.tau[j]);
+      mm::set_f32(p + 2 + 2 * (kDriveJoints + j), s.qd[j]);
+      mm::set_f32(p + 2 + 2 * (2 * kDriveJoints + j), s.tau[j]);
     }
-    p += mm::kSampleWords;
+    p += mm::sample_words(kDriveJoints);
   }
 }
 

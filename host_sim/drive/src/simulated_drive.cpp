@@ -182,8 +182,9 @@ void SimulatedDrive::start() {
   const double steps_per_sample = scenario_.control_rate_hz / sample_rate_hz;
   steps_per_sample_ = std::max(1L, std::lround(steps_per_sample));
   total_steps_ = std::lround(periods * trajectory.period() * scenario_.control_rate_hz);
-  Vec qd_d, qdd_d;
-  trajectory.evaluate(0.0, impl_->q, qd_d, qdd_d);  // the simulation starts on the trajectory
+  Vec q_d, qd_d, qdd_d;
+  trajectory.evaluate(0.0, q_d, qd_d, qdd_d);  // the simulation starts on the trajectory
+  impl_->q = q_d;
   impl_->qd = qd_d;
   Vec q_meas = impl_->q;
   for (int j = 0; j < kDriveJoints; ++j) {

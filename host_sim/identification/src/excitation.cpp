@@ -7,53 +7,14 @@
 #include <nlopt.hpp>
 #include <random>
 
-#include "dyncal/generated/er20/robot.hpp"
-#include "dyncal/generated/tx40/robot.hpp"
-#include "dyncal/identification_model.hpp"
-#include "dyncal/nonlinear_friction.hpp"
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/identification/compiled_robot.hpp"
 
 namespace dyncal::host {
 namespace {
 
-using Vec = Eigen::Matrix<double, 6, 1>;
+using Vec = Eigen::Matrix<double, modbus_map::kMaxJoints, 1>;  // rows past the robot's joints unused
 namespace mm = dyncal::modbus_map;
-
-/// Stacked, column-normalised regressor of one period: rows 6 x grid.
-template <class Robot>
-Eigen::MatrixXd stacked_regressor(const ExcitationTrajectory& t, FrictionModel model,
-                                  const std::vector<NominalFriction>& friction, int grid) {
-  using Model7 = IdentificationModel<Robot, kFrictionEq7>;
-  const bool eq4 = model == FrictionModel::eq4;
-  const int cols = eq4 ? Robot::kNumBase + 24 : Model7::kNumParams;
-  Eigen::MatrixXd W(6 * grid, cols);
-  typename Model7::template Regressor<double> K;
-  Eigen::Matrix<double, 6, Robot::kNumBase> Yb;
-  for (int k = 0; k < grid; ++k) {
-    Vec q, qd, qdd;
-    t.evaluate(t.period() * k / grid, q, qd, qdd);
-    if (!eq4) {
-      Model7::regressor(q, qd, qdd, Vec::Zero().eval(), K);
-      W.middleRows(6 * k, 6) = K;
-      continue;
-    }
-    Robot::base_regressor(q, qd, qdd, Yb);
-    W.block(6 * k, 0, 6, Robot::kNumBase) = Yb;
-    W.block(6 * k, Robot::kNumBase, 6, 24).setZero();
-    for (int j = 0; j < 6; ++j) {
-      const NominalFriction& f = friction[static_cast<size_t>(j)];
-      const double theta[4] = {f.Fc, f.Fs, f.qds, f.beta};
-      double jac[4];
-      NonlinearFriction<NonlinearFrictionModel::eq4>::torque(theta, qd[j], jac);
-      for (int i = 0; i < 4; ++i) W(6 * k + j, Robot::kNumBase + 4 * j + i) = jac[i];
-    }
-  }
-  for (Eigen::Index i = 0; i < W.cols(); ++i) {
-    const double n = W.col(i).norm();
-    if (n > 0) W.col(i) /= n;
-  }
-  return W;
-}
 
 /// Extremes of q, qd, qdd over one period on `grid` points.
 void extremes(const ExcitationTrajectory& t, int grid, Vec& qmin, Vec& qmax, Vec& vmax, Vec& amax) {
@@ -77,14 +38,7 @@ void quality(const RobotDescription& robot, const ExcitationTrajectory& t, Frict
   const std::vector<NominalFriction> friction =
       robot.friction.empty() ? std::vector<NominalFriction>(static_cast<size_t>(robot.num_joints)) : robot.friction;
   if (model != FrictionModel::eq7 && model != FrictionModel::eq4) throw InputError("excitation: model eq7 or eq4");
-  Eigen::MatrixXd W;
-  if (robot.name == dyncal::generated::er20::Robot::kName) {
-    W = stacked_regressor<dyncal::generated::er20::Robot>(t, model, friction, grid);
-  } else if (robot.name == dyncal::generated::tx40::Robot::kName) {
-    W = stacked_regressor<dyncal::generated::tx40::Robot>(t, model, friction, grid);
-  } else {
-    throw InputError("excitation: no generated model for robot '" + robot.name + "'");
-  }
+  const Eigen::MatrixXd W = compiled_robot_for(robot).excitation_regressor(t, model, friction, grid);
   // Eigenvalues of the (column-normalised) information matrix: cond(K) = sqrt(lambda_max / lambda_min).
   const Eigen::MatrixXd G = W.transpose() * W / static_cast<double>(W.rows());
   const Eigen::VectorXd ev = Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(G, Eigen::EigenvaluesOnly).eigenvalues();
@@ -105,7 +59,7 @@ struct Design {
     t.f_f = options->f_f;
     t.harmonics = options->harmonics;
     const int L = options->harmonics;
-    for (int j = 0; j < 6; ++j) {
+    for (int j = 0; j < robot->num_joints; ++j) {
       for (int l = 0; l < L; ++l) {
         t.a(j, l) = x[2 * L * j + l];
         t.b(j, l) = x[2 * L * j + L + l];
@@ -118,7 +72,7 @@ struct Design {
   double value(const double* x) {
     ++evaluations;
     ExcitationTrajectory t = trajectory(x);
-    for (int j = 0; j < 6; ++j) {
+    for (int j = 0; j < robot->num_joints; ++j) {
       if (t.a.row(j).head(options->harmonics).squaredNorm() + t.b.row(j).head(options->harmonics).squaredNorm() == 0) {
         return 1e300;  // a joint that does not move: the regressor is singular
       }
@@ -147,7 +101,7 @@ void fit_to_limits(const RobotDescription& robot, ExcitationTrajectory& t, doubl
   t.q0.setZero();
   Vec qmin, qmax, vmax, amax;
   extremes(t, grid, qmin, qmax, vmax, amax);
-  for (int j = 0; j < 6; ++j) {
+  for (int j = 0; j < robot.num_joints; ++j) {
     const double half_range = 0.5 * (robot.q_max[j] - robot.q_min[j]);
     const double s =
         margin * std::min({half_range / std::max(0.5 * (qmax[j] - qmin[j]), 1e-300),
@@ -165,11 +119,14 @@ void excitation_quality(const RobotDescription& robot, const ExcitationTrajector
   quality(robot, t, model, grid, cond, logdet);
 }
 
-void limit_use(const RobotDescription& robot, const ExcitationTrajectory& t, std::array<double, 6>& position,
-               std::array<double, 6>& velocity, std::array<double, 6>& acceleration) {
+void limit_use(const RobotDescription& robot, const ExcitationTrajectory& t, JointFractions& position,
+               JointFractions& velocity, JointFractions& acceleration) {
   Vec qmin, qmax, vmax, amax;
   extremes(t, 2000, qmin, qmax, vmax, amax);
-  for (int j = 0; j < 6; ++j) {
+  position.fill(0);
+  velocity.fill(0);
+  acceleration.fill(0);
+  for (int j = 0; j < robot.num_joints; ++j) {
     const double centre = 0.5 * (robot.q_max[j] + robot.q_min[j]), half = 0.5 * (robot.q_max[j] - robot.q_min[j]);
     position[j] = std::max(std::fabs(qmax[j] - centre), std::fabs(qmin[j] - centre)) / half;
     velocity[j] = vmax[j] / robot.qd_max[j];
@@ -178,14 +135,14 @@ void limit_use(const RobotDescription& robot, const ExcitationTrajectory& t, std
 }
 
 ExciteResult design_excitation(const RobotDescription& robot, const ExciteOptions& o) {
-  if (robot.num_joints != 6) throw InputError("excitation: a six-axis robot");
+  compiled_robot_for(robot);  // throws when the robot is not compiled in
   if (!(o.f_f > 0) || o.harmonics < 1 || o.harmonics > mm::kMaxHarmonics || o.candidates < 1 || o.max_evaluations < 1) {
     throw InputError("excitation: f_f > 0, harmonics 1..8, candidates >= 1, evaluations >= 1");
   }
   Design d;
   d.robot = &robot;
   d.options = &o;
-  const int L = o.harmonics, D = 12 * L;
+  const int L = o.harmonics, N = robot.num_joints, D = 2 * L * N;
   // Random starts: coefficients uniform in +-1 / l (the spectrum of a smooth motion), seeded.
   std::mt19937_64 rng(o.seed);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
@@ -193,7 +150,7 @@ ExciteResult design_excitation(const RobotDescription& robot, const ExciteOption
   double start = std::numeric_limits<double>::infinity();
   for (int c = 0; c < o.candidates; ++c) {
     std::vector<double> x(static_cast<size_t>(D));
-    for (int j = 0; j < 6; ++j)
+    for (int j = 0; j < N; ++j)
       for (int k = 0; k < 2 * L; ++k) x[static_cast<size_t>(2 * L * j + k)] = u(rng) / (k % L + 1);
     const double v = d.value(x.data());
     if (v < start) {
@@ -231,7 +188,7 @@ nlohmann::json trajectory_to_json(const RobotDescription& robot, const Excitatio
   j["robot"] = robot.name;
   j["f_f"] = t.f_f;
   j["harmonics"] = t.harmonics;
-  for (int i = 0; i < 6; ++i) {
+  for (int i = 0; i < robot.num_joints; ++i) {
     j["q0"].push_back(t.q0[i]);
     nlohmann::json a = nlohmann::json::array(), b = nlohmann::json::array();
     for (int l = 0; l < t.harmonics; ++l) {
@@ -267,10 +224,11 @@ ExcitationTrajectory trajectory_from_json(const RobotDescription& robot, const n
   const auto& q0 = need("q0");
   const auto& a = need("a");
   const auto& b = need("b");
-  if (!q0.is_array() || q0.size() != 6 || !a.is_array() || a.size() != 6 || !b.is_array() || b.size() != 6) {
-    throw InputError("trajectory file: q0, a and b need one entry per joint (6)");
+  const size_t n = static_cast<size_t>(robot.num_joints);
+  if (!q0.is_array() || q0.size() != n || !a.is_array() || a.size() != n || !b.is_array() || b.size() != n) {
+    throw InputError("trajectory file: q0, a and b need one entry per joint (" + std::to_string(n) + ")");
   }
-  for (size_t i = 0; i < 6; ++i) {
+  for (size_t i = 0; i < n; ++i) {
     const std::string joint = " of joint " + std::to_string(i + 1);
     t.q0[static_cast<Eigen::Index>(i)] = number(q0[i], "q0" + joint);
     if (!a[i].is_array() || a[i].size() != static_cast<size_t>(t.harmonics) || !b[i].is_array() ||
@@ -282,9 +240,9 @@ ExcitationTrajectory trajectory_from_json(const RobotDescription& robot, const n
       t.b(static_cast<Eigen::Index>(i), l) = number(b[i][static_cast<size_t>(l)], "b" + joint);
     }
   }
-  std::array<double, 6> pos{}, vel{}, acc{};
+  JointFractions pos{}, vel{}, acc{};
   limit_use(robot, t, pos, vel, acc);
-  for (int i = 0; i < 6; ++i) {
+  for (int i = 0; i < robot.num_joints; ++i) {
     for (const auto& [use, what] : {std::pair{pos[i], "position range"}, std::pair{vel[i], "velocity limit"},
                                     std::pair{acc[i], "acceleration limit"}}) {
       if (use > 1.0) {
@@ -298,7 +256,7 @@ ExcitationTrajectory trajectory_from_json(const RobotDescription& robot, const n
 
 ExcitationTrajectory default_excitation(const RobotDescription& robot, double f_f, int harmonics, int candidates,
                                         std::uint64_t seed, double* cond) {
-  if (robot.num_joints != 6) throw InputError("calibration needs a six-axis robot");
+  compiled_robot_for(robot);
   if (!(f_f > 0) || harmonics < 1 || harmonics > mm::kMaxHarmonics || candidates < 1) {
     throw InputError("excitation: f_f must be > 0, harmonics 1..8, candidates >= 1");
   }
@@ -311,7 +269,7 @@ ExcitationTrajectory default_excitation(const RobotDescription& robot, double f_
     ExcitationTrajectory t;
     t.f_f = f_f;
     t.harmonics = harmonics;
-    for (int j = 0; j < 6; ++j) {
+    for (int j = 0; j < robot.num_joints; ++j) {
       for (int l = 0; l < harmonics; ++l) {
         t.a(j, l) = u(rng) / (l + 1);
         t.b(j, l) = u(rng) / (l + 1);

@@ -22,20 +22,24 @@ struct FourierTrajectory {
 
   Scalar period() const noexcept { return Scalar(1) / f_f; }
 
-  /// Position, velocity and acceleration at time t. Precondition: 0 <= harmonics <= H.
-  void evaluate(Scalar t, Eigen::Matrix<Scalar, N, 1>& q, Eigen::Matrix<Scalar, N, 1>& qd,
-                Eigen::Matrix<Scalar, N, 1>& qdd) const noexcept {
+  /// Position, velocity and acceleration of the first M joints (M <= N; a robot with fewer joints
+  /// than a register-map-sized trajectory plays its first slots) at time t.
+  /// Precondition: 0 <= harmonics <= H.
+  template <int M>
+  void evaluate(Scalar t, Eigen::Matrix<Scalar, M, 1>& q, Eigen::Matrix<Scalar, M, 1>& qd,
+                Eigen::Matrix<Scalar, M, 1>& qdd) const noexcept {
+    static_assert(M >= 1 && M <= N, "a trajectory of N joints evaluates at most N");
     DYNCAL_ASSERT(harmonics >= 0 && harmonics <= H);
     const Scalar w = Scalar(6.283185307179586476925) * f_f;
     // Reduce w t to one period first so that sin_cos stays accurate for long runs.
     const Scalar phase = w * (t - period() * std::floor(t / period()));
-    q = q0;
+    q = q0.template head<M>();
     qd.setZero();
     qdd.setZero();
     for (int l = 1; l <= harmonics; ++l) {
       const Scalar wl = w * Scalar(l);
       const SinCos<Scalar> sc = sin_cos(phase * Scalar(l));
-      for (int i = 0; i < N; ++i) {
+      for (int i = 0; i < M; ++i) {
         const Scalar ai = a(i, l - 1), bi = b(i, l - 1);
         q[i] += (ai * sc.sin - bi * sc.cos) / wl;
         qd[i] += ai * sc.cos + bi * sc.sin;

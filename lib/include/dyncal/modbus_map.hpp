@@ -25,9 +25,11 @@ struct Field {
   const char* description;
 };
 
-inline constexpr int kMaxJoints = 6;
+inline constexpr int kMaxJoints = 7;  ///< dyncal::kMaxRobotJoints (dyncal/robot_model.hpp)
 inline constexpr int kMaxHarmonics = 8;
-inline constexpr std::uint16_t kMapVersion = 3;
+/// 4: up to 7 joints (model error and coefficients sized for 7; ring samples packed for the
+/// drive's num_joints, as many per block as fit).
+inline constexpr std::uint16_t kMapVersion = 4;
 
 /// Drive states (input register `state`). `fault`: the drive stopped the trajectory on a trip
 /// (register `fault` says which); the next start command clears it.
@@ -77,17 +79,19 @@ inline constexpr std::uint16_t kSimTimeReg = 10;          // f32
 inline constexpr std::uint16_t kProducedReg = 12;         // u32 samples recorded so far (next seq)
 inline constexpr std::uint16_t kOverrunReg = 14;          // u32 samples dropped (ring full)
 inline constexpr std::uint16_t kActiveCrcReg = 16;        // u32 CRC-32 field of the active table
-inline constexpr std::uint16_t kModelErrorReg = 18;       // f32[6]
-inline constexpr std::uint16_t kActiveTableSizeReg = 30;  // u16 bytes
-inline constexpr std::uint16_t kActiveTableReg = 31;      // bytes, kTableMaxBytes
+inline constexpr std::uint16_t kModelErrorReg = 18;       // f32[kMaxJoints]
+inline constexpr std::uint16_t kActiveTableSizeReg = 32;  // u16 bytes
+inline constexpr std::uint16_t kActiveTableReg = 33;      // bytes, kTableMaxBytes
 inline constexpr std::uint16_t kTableWords = kTableMaxBytes / 2;
 inline constexpr std::uint16_t kFaultReg = 460;              // u16 DriveFault
 inline constexpr std::uint16_t kFaultJointReg = 461;         // u16 1-based joint that tripped, 0: none
 inline constexpr std::uint16_t kFaultValueReg = 462;         // f32 the measured q [rad] or qd [rad/s] at the trip
 inline constexpr std::uint16_t kRingReg = 500;               // u32 first seq, u16 count, samples
-inline constexpr int kSampleWords = 2 + 3 * 2 * kMaxJoints;  // seq u32, q, qd, tau f32[6]
-inline constexpr int kSamplesPerBlock = 3;                   // 3 + 3 * 38 = 117 words <= 125 per read
-inline constexpr std::uint16_t kRingWords = 3 + kSamplesPerBlock * kSampleWords;
+inline constexpr std::uint16_t kRingWords = 123;             // one read of at most 125 registers
+/// Registers of one ring sample of a drive with `joints` joints: u32 seq, f32 q, qd, tau [joints].
+constexpr int sample_words(int joints) noexcept { return 2 + 3 * 2 * joints; }
+/// Samples per ring block for `joints` joints (1 joint: 15, 3: 6, 6: 3, 7: 2).
+constexpr int samples_per_block(int joints) noexcept { return (kRingWords - 3) / sample_words(joints); }
 inline constexpr std::uint16_t kInputWords = kRingReg + kRingWords;
 
 // --- holding registers (function codes 03, 06, 16, 23)
@@ -97,7 +101,7 @@ inline constexpr std::uint16_t kSampleRateReg = 4;     // f32 [Hz], 100..1000, d
 inline constexpr std::uint16_t kOmegaFReg = 6;         // f32 [Hz] fundamental frequency, (0, 10]
 inline constexpr std::uint16_t kHarmonicsReg = 8;      // u16 L, 1..kMaxHarmonics
 inline constexpr std::uint16_t kPeriodsReg = 9;        // u16 periods to play, 1..100
-inline constexpr std::uint16_t kCoefficientsReg = 10;  // f32[6][1 + 2 * 8]: q0, a_1..a_8, b_1..b_8
+inline constexpr std::uint16_t kCoefficientsReg = 10;  // f32[kMaxJoints][1 + 2 * 8]: q0, a_1..a_8, b_1..b_8
 inline constexpr int kCoefficientsPerJoint = 1 + 2 * kMaxHarmonics;
 inline constexpr std::uint16_t kCoefficientWords = 2 * kMaxJoints * kCoefficientsPerJoint;
 inline constexpr std::uint16_t kStagingSizeReg = 300;   // u16 bytes of the staged table
@@ -105,12 +109,14 @@ inline constexpr std::uint16_t kStagingTableReg = 301;  // bytes, kTableMaxBytes
 inline constexpr std::uint16_t kHoldingWords = kStagingTableReg + kTableWords;
 
 static_assert(kCoefficientsReg + kCoefficientWords <= kStagingSizeReg, "holding fields overlap");
+static_assert(kModelErrorReg + 2 * kMaxJoints <= kActiveTableSizeReg, "input fields overlap");
 static_assert(kActiveTableReg + kTableWords <= kFaultReg, "input fields overlap");
 static_assert(kFaultValueReg + 2 <= kRingReg, "input fields overlap");
 static_assert(kRingWords <= 125, "one ring block must fit one Modbus read");
+static_assert(samples_per_block(kMaxJoints) >= 2, "a block carries at least two samples");
 
 inline constexpr Field kRegisterMap[] = {
-    {"map_version", Bank::input, kMapVersionReg, 1, Type::u16, "-", "register map version (3)"},
+    {"map_version", Bank::input, kMapVersionReg, 1, Type::u16, "-", "register map version (4)"},
     {"num_joints", Bank::input, kNumJointsReg, 1, Type::u16, "-", "joints of the arm"},
     {"robot_id", Bank::input, kRobotIdReg, 2, Type::u32, "-", "generated kRobotId of the drive's robot"},
     {"active_model_id", Bank::input, kActiveModelIdReg, 2, Type::u32, "-", "model id of the active table"},
@@ -122,7 +128,7 @@ inline constexpr Field kRegisterMap[] = {
     {"produced", Bank::input, kProducedReg, 2, Type::u32, "-", "samples recorded since start (next seq)"},
     {"overruns", Bank::input, kOverrunReg, 2, Type::u32, "-", "samples dropped because the ring was full"},
     {"active_crc", Bank::input, kActiveCrcReg, 2, Type::u32, "-", "CRC-32 field of the active table"},
-    {"model_error_rms", Bank::input, kModelErrorReg, 12, Type::f32, "Nm",
+    {"model_error_rms", Bank::input, kModelErrorReg, 2 * kMaxJoints, Type::f32, "Nm",
      "per joint: RMS of tau - tau_ff (drive's model error) since start"},
     {"active_table_size", Bank::input, kActiveTableSizeReg, 1, Type::u16, "bytes", "size of the active table"},
     {"active_table", Bank::input, kActiveTableReg, kTableWords, Type::bytes, "-",
@@ -133,7 +139,8 @@ inline constexpr Field kRegisterMap[] = {
     {"fault_value", Bank::input, kFaultValueReg, 2, Type::f32, "rad, rad/s",
      "the measured q (position limit) or qd (velocity limit) of that joint at the trip"},
     {"ring", Bank::input, kRingReg, kRingWords, Type::bytes, "-",
-     "u32 first seq, u16 count n <= 3, then n samples: u32 seq, f32 q[6] rad, qd[6] rad/s, tau[6] Nm"},
+     "u32 first seq, u16 count n <= 120 / (2 + 6 N), then n samples of N = num_joints: u32 seq, "
+     "f32 q[N] rad, qd[N] rad/s, tau[N] Nm"},
     {"command", Bank::holding, kCommandReg, 1, Type::u16, "-", "1 start, 2 stop, 3 commit table; reads 0"},
     {"ack", Bank::holding, kAckReg, 2, Type::u32, "-", "samples with seq < ack are consumed and freed"},
     {"sample_rate", Bank::holding, kSampleRateReg, 2, Type::f32, "Hz", "recording rate, 100..1000, divides 1000"},

@@ -8,7 +8,7 @@
 
 namespace dyncal::port {
 
-inline constexpr int kMaxJoints = 6;
+inline constexpr int kMaxJoints = 7;  ///< dyncal::kMaxRobotJoints (dyncal/robot_model.hpp)
 
 /// One sample as a drive records it, joint side: q [rad], qd [rad/s], tau [Nm] (motor torque
 /// reflected to the joint), float32 as on the wire. `seq` counts samples from the trajectory start.

@@ -83,10 +83,21 @@ port::PortStatus ModbusDrive::write_holding(int address, int count, const std::u
 }
 
 port::PortStatus ModbusDrive::read_info(DriveInfo& info) {
-  std::uint16_t r[mm::kModelErrorReg + 12];
-  if (const auto st = read_input(0, mm::kModelErrorReg + 12, r); st != port::PortStatus::ok) return st;
+  std::uint16_t r[mm::kModelErrorReg + 2 * mm::kMaxJoints];
+  if (const auto st = read_input(0, mm::kModelErrorReg + 2 * mm::kMaxJoints, r); st != port::PortStatus::ok) return st;
   info.map_version = r[mm::kMapVersionReg];
+  if (info.map_version != mm::kMapVersion) {  // another layout: nothing else in it can be read
+    error_ = "the drive speaks Modbus register map version " + std::to_string(info.map_version) +
+             ", this host version " + std::to_string(mm::kMapVersion) + " (docs/modbus.md): update one of them";
+    return port::PortStatus::rejected;
+  }
   info.num_joints = r[mm::kNumJointsReg];
+  if (info.num_joints < 1 || info.num_joints > mm::kMaxJoints) {
+    error_ = "the drive reports " + std::to_string(info.num_joints) + " joints (1.." +
+             std::to_string(mm::kMaxJoints) + " supported)";
+    return port::PortStatus::rejected;
+  }
+  joints_ = info.num_joints;
   info.robot_id = mm::get_u32(r + mm::kRobotIdReg);
   info.active_model_id = mm::get_u32(r + mm::kActiveModelIdReg);
   info.active_count = r[mm::kActiveCountReg];
@@ -155,10 +166,19 @@ port::PortStatus ModbusDrive::stop() {
 
 port::PortStatus ModbusDrive::read(port::DriveSample* out, int capacity, int* count) noexcept {
   *count = 0;
+  if (joints_ == 0) {  // the sample layout depends on the drive's joint count
+    DriveInfo info;
+    if (const auto st = read_info(info); st != port::PortStatus::ok) return st;
+  }
   std::uint16_t w[mm::kRingWords];
   if (read_input(mm::kRingReg, mm::kRingWords, w) != port::PortStatus::ok) return port::PortStatus::transport_error;
   const std::uint32_t first = mm::get_u32(w);
   const int n = std::min<int>(w[2], capacity);
+  if (w[2] > mm::samples_per_block(joints_)) {
+    error_ = "ring block of " + std::to_string(w[2]) + " samples, at most " +
+             std::to_string(mm::samples_per_block(joints_)) + " fit for " + std::to_string(joints_) + " joints";
+    return port::PortStatus::transport_error;
+  }
   if (n == 0) {
     DriveInfo info;
     if (read_info(info) != port::PortStatus::ok) return port::PortStatus::transport_error;
@@ -175,13 +195,14 @@ port::PortStatus ModbusDrive::read(port::DriveSample* out, int capacity, int* co
     return done && info.produced == next_seq_ ? port::PortStatus::end_of_stream : port::PortStatus::no_data;
   }
   const std::uint16_t* p = w + 3;
-  for (int k = 0; k < n; ++k, p += mm::kSampleWords) {
+  for (int k = 0; k < n; ++k, p += mm::sample_words(joints_)) {
     port::DriveSample& s = out[k];
+    s = port::DriveSample{};
     s.seq = mm::get_u32(p);
-    for (int j = 0; j < mm::kMaxJoints; ++j) {
+    for (int j = 0; j < joints_; ++j) {
       s.q[j] = mm::get_f32(p + 2 + 2 * j);
-      s.qd[j] = mm::get_f32(p + 2 + 12 + 2 * j);
-      s.tau[j] = mm::get_f32(p + 2 + 24 + 2 * j);
+      s.qd[j] = mm::get_f32(p + 2 + 2 * (joints_ + j));
+      s.tau[j] = mm::get_f32(p + 2 + 2 * (2 * joints_ + j));
     }
   }
   port::PortStatus status = port::PortStatus::ok;

@@ -54,8 +54,10 @@ class ModbusDrive final : public port::SampleSource, public port::ParameterStore
   /// Last failure in words (libmodbus's text, or the drive's exception).
   const std::string& error() const { return error_; }
 
-  /// Reads the drive's identity, state and counters (input registers 0..29; the fault registers too
-  /// when the state is fault). Errors: transport_error, rejected.
+  /// Reads the drive's identity, state and counters (input registers 0..31; the fault registers too
+  /// when the state is fault). Errors: transport_error, rejected (also when the drive's register map
+  /// version is not modbus_map::kMapVersion: error() names both versions, or the joint count is not
+  /// 1..kMaxJoints).
   port::PortStatus read_info(DriveInfo& info);
   /// Writes the trajectory (Eq. 27 coefficients), periods and sample rate; the drive must be idle.
   /// Errors: transport_error, rejected (a value outside the register's range, docs/modbus.md).
@@ -67,7 +69,9 @@ class ModbusDrive final : public port::SampleSource, public port::ParameterStore
   port::PortStatus stop();
 
   // port::SampleSource
-  /// Errors: transport_error; sequence_gap when samples were lost (lost() counts them); device_fault
+  /// Samples carry the drive's num_joints joints (the rest of each DriveSample is zero); the first
+  /// call reads it with read_info.
+  /// Errors: transport_error, rejected (read_info's); sequence_gap when samples were lost (lost() counts them); device_fault
   /// once every sample recorded before a drive fault has been read (error() then describes the fault).
   port::PortStatus read(port::DriveSample* out, int capacity, int* count) noexcept override;
   /// Samples lost to drive overruns so far (gaps in seq).
@@ -100,6 +104,7 @@ class ModbusDrive final : public port::SampleSource, public port::ParameterStore
   std::string error_;
   std::uint32_t next_seq_ = 0;
   std::uint32_t lost_ = 0;
+  int joints_ = 0;  ///< the drive's num_joints (read_info), 0 until known
 };
 
 }  // namespace dyncal::linux_port

@@ -23,6 +23,16 @@ constexpr bool is_built_term_set(unsigned terms) {
   return friction == kFrictionEq7 || friction == kFrictionEq8;
 }
 
+/// Number of built term sets, and the i-th of them (0-based; Eq. 7 ones first).
+inline constexpr int kBuiltTermSets = 8;
+constexpr unsigned built_term_set(int i) {
+  const unsigned friction = i < 4 ? kFrictionEq7 : kFrictionEq8;
+  return friction | ((i & 1) ? term::rotor_inertia : 0u) | ((i & 2) ? term::offset : 0u);
+}
+/// Index of a built term set (built_term_set(index) == terms). Throws InputError naming the model
+/// when it is not built.
+int built_term_set_index(unsigned terms);
+
 /// Calls F<Terms>::run(args...) for the compiled term set equal to `terms`. Throws InputError naming
 /// the model when it is not built.
 template <template <unsigned> class F, typename... Args>

@@ -13,22 +13,34 @@ struct NominalFriction {
   double Fc = 0, beta = 0, Fs = 0, qds = 0.1;
 };
 
+/// Joints a robot may have (the register map's and the firmware's kMaxJoints).
+inline constexpr int kMaxRobotDescriptionJoints = 7;
+/// qdd_max when robot.json gives none: kDefaultQddPerQd * qd_max [rad/s^2], top speed in 0.25 s.
+inline constexpr double kDefaultQddPerQd = 4.0;
+
 /// Drive and limit data of a robot, from robots/<name>/robot.json (kinematics and inertials go to
-/// the code generator instead). Vectors are per joint, joint 1 first; SI units.
+/// the code generator instead; docs/robots.md is the schema). Vectors are per joint, joint 1 first;
+/// SI units, joint side.
 struct RobotDescription {
   std::string name;
   std::string directory;
-  int num_joints = 0;
-  Eigen::VectorXd gear_ratios;    ///< motor turns per joint turn (signed)
+  int num_joints = 0;             ///< the length of limits.q_min, 1..kMaxRobotDescriptionJoints
+  Eigen::VectorXd gear_ratios;    ///< motor turns per joint turn (signed); 1 without "transmission"
   Eigen::MatrixXd transmission;   ///< N: q_motor = N q_joint, tau_joint = N^T tau_motor
-  Eigen::VectorXd joint_offsets;  ///< added to N^-1 q_motor to give the model's q [rad]
-  Eigen::VectorXd q_min, q_max, qd_max, qdd_max;
-  Eigen::VectorXd tau_max;                ///< maximum joint driving torque [Nm] (survey Sec. 5.1)
+  Eigen::VectorXd joint_offsets;  ///< added to N^-1 q_motor to give the model's q [rad]; default 0
+  Eigen::VectorXd q_min, q_max, qd_max;
+  Eigen::VectorXd qdd_max;  ///< [rad/s^2]; kDefaultQddPerQd * qd_max when the file gives none
+  /// Maximum joint driving torque [Nm] (survey Sec. 5.1). Empty when the file gives none: then
+  /// derive_tau_max (compiled_robot.hpp) fills it from the nominal model and sets tau_max_derived.
+  Eigen::VectorXd tau_max;
+  bool tau_max_derived = false;
   std::vector<NominalFriction> friction;  ///< per joint (num_joints entries); Fs defaults to Fc
 };
 
-/// Loads robots/<name>/robot.json below `robots_dir`. Throws InputError naming the problem
-/// (unknown robot, missing field, wrong vector length).
+/// Loads robots/<name>/robot.json below `robots_dir`. Throws InputError on one line naming the file
+/// and the field as docs/robots.md does (unknown robot, not a file, invalid JSON, a field missing,
+/// of the wrong type or length, non-finite, q_max <= q_min, a zero gear ratio, a coupling out of range,
+/// more than 7 joints).
 RobotDescription load_robot(const std::string& robots_dir, const std::string& name);
 
 /// The robots directory: $DYNCAL_ROBOTS if set, else the source tree's robots/ (compiled in).

@@ -15,12 +15,15 @@
 #include "dyncal/modbus_map.hpp"
 #include "dyncal/parameter_table.hpp"
 #include "dyncal/port.hpp"
+#include "dyncal_host/common/excitation_trajectory.hpp"
 #include "dyncal_host/common/robot_description.hpp"
 #include "dyncal_host/drive/scenario.hpp"
 
 namespace dyncal::host {
 
-using DriveTrajectory = FourierTrajectory<double, kDriveJoints, modbus_map::kMaxHarmonics>;
+/// The trajectory as the register map carries it (modbus_map::kMaxJoints slots; the drive plays
+/// its robot's joints, the first slots).
+using DriveTrajectory = ExcitationTrajectory;
 
 class SimulatedDrive {
  public:

@@ -18,6 +18,9 @@ namespace dyncal::host {
 
 enum class ExcitationCriterion { cond, logdet };
 
+/// Per joint (joint 1 first; entries past the robot's joints are 0): a fraction of a limit.
+using JointFractions = std::array<double, modbus_map::kMaxJoints>;
+
 struct ExciteOptions {
   double f_f = 0.1;   ///< fundamental frequency [Hz] (survey: 0.1 Hz)
   int harmonics = 5;  ///< L (survey: 5)
@@ -38,7 +41,7 @@ struct ExciteResult {
   double logdet = 0;      ///< log det(K^T K / rows), same scaling
   double start_cond = 0;  ///< cond of the best random candidate (the optimiser's start)
   int evaluations = 0;
-  std::array<double, 6> position_use{}, velocity_use{}, acceleration_use{};  ///< fraction of each limit
+  JointFractions position_use{}, velocity_use{}, acceleration_use{};  ///< fraction of each limit
 };
 
 /// Scales each joint's coefficients so that the joint uses at most `margin` of its position
@@ -47,7 +50,7 @@ struct ExciteResult {
 void fit_to_limits(const RobotDescription& robot, ExcitationTrajectory& t, double margin, int grid);
 
 /// cond(K) and log det(K^T K / rows) of `t` over one period (columns scaled to unit norm) for the
-/// robot's generated model (er20 or tx40). Throws InputError for other robots.
+/// robot's compiled model (compiled_robot.hpp). Throws InputError for a robot not compiled in.
 void excitation_quality(const RobotDescription& robot, const ExcitationTrajectory& t, FrictionModel model, int grid,
                         double* cond, double* logdet);
 
@@ -55,10 +58,10 @@ void excitation_quality(const RobotDescription& robot, const ExcitationTrajector
 ExciteResult design_excitation(const RobotDescription& robot, const ExciteOptions& options);
 
 /// Fraction of each joint's limits `t` uses, checked on a grid 10 times finer than the design's.
-void limit_use(const RobotDescription& robot, const ExcitationTrajectory& t, std::array<double, 6>& position,
-               std::array<double, 6>& velocity, std::array<double, 6>& acceleration);
+void limit_use(const RobotDescription& robot, const ExcitationTrajectory& t, JointFractions& position,
+               JointFractions& velocity, JointFractions& acceleration);
 
-/// {"f_f", "harmonics", "q0" [6], "a" [6][L], "b" [6][L], "robot"} plus `extra` fields.
+/// {"f_f", "harmonics", "q0" [N], "a" [N][L], "b" [N][L], "robot"} plus `extra` fields.
 nlohmann::json trajectory_to_json(const RobotDescription& robot, const ExcitationTrajectory& t);
 /// Reads a trajectory file; throws InputError naming the problem (missing field, wrong size, other
 /// robot, or a limit exceeded: the joint, the quantity and by how much).

@@ -53,11 +53,8 @@ struct IdentifyResult {
 };
 
 /// Identifies the model from `log` and validates it on data each fit never saw.
-/// Throws InputError on bad options, too little data or an unsupported robot/model.
+/// Throws InputError on bad options, too little data, a robot not compiled into this build
+/// (compiled_robot.hpp) or a model not built (model_terms.hpp).
 IdentifyResult identify(const RobotDescription& robot, const JointLog& log, const IdentifyOptions& options);
-
-/// Per-robot entry points (one translation unit each), called by identify().
-IdentifyResult identify_er20(const RobotDescription& robot, const JointLog& log, const IdentifyOptions& options);
-IdentifyResult identify_tx40(const RobotDescription& robot, const JointLog& log, const IdentifyOptions& options);
 
 }  // namespace dyncal::host

@@ -27,9 +27,7 @@ struct StackedData {
 };
 
 /// Prepares `log` for the declared model options.terms (a built term set, model_terms.hpp) of
-/// `robot` (er20 or tx40). Throws InputError.
+/// `robot` (a compiled robot, compiled_robot.hpp). Throws InputError.
 StackedData prepare_stacked(const RobotDescription& robot, const JointLog& log, const IdentifyOptions& options);
-StackedData prepare_er20(const RobotDescription& robot, const JointLog& log, const IdentifyOptions& options);
-StackedData prepare_tx40(const RobotDescription& robot, const JointLog& log, const IdentifyOptions& options);
 
 }  // namespace dyncal::host

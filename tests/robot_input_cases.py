@@ -1,0 +1,165 @@
+#!/usr/bin/python3
+"""Bad input for `dyncal robot import`, `dyncal robot check` and the C++ robot.json loader: every
+malformed URDF and robot.json of the tables below must give exactly one line on stderr naming the
+problem, no traceback, and exit 2; nothing may be written for a refused import. Also: re-importing
+the test URDFs reproduces the committed tests/robots/ folders byte for byte.
+
+Usage: robot_input_cases.py DYNCAL SOURCE_DIR"""
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+
+DYNCAL, SRC = sys.argv[1], sys.argv[2]
+ARM3 = open(os.path.join(SRC, "tests/urdf/arm3.urdf")).read()
+failures = []
+
+
+def run(args):
+    p = subprocess.run([DYNCAL] + args, capture_output=True, text=True)
+    return p.returncode, p.stdout, p.stderr
+
+
+def expect_one_line(case, args, needle):
+    rc, out, err = run(args)
+    lines = [line for line in err.splitlines() if line.strip()]
+    ok = rc == 2 and len(lines) == 1 and "Traceback" not in err and needle in err
+    print(f"{'ok  ' if ok else 'FAIL'} {case}: exit {rc}: {err.strip()}")
+    if not ok:
+        failures.append(f"{case}: expected exit 2 and one line containing {needle!r}; got exit {rc}, stderr {err!r}")
+
+
+def urdf_case(tmp, case, text, needle, extra=()):
+    path = os.path.join(tmp, case + ".urdf")
+    with open(path, "w") as f:
+        f.write(text)
+    robots = os.path.join(tmp, "robots_" + case)
+    expect_one_line("urdf " + case, ["robot", "import", path, "--name", "arm", "--robots-dir", robots, *extra], needle)
+    if os.path.exists(os.path.join(robots, "arm")):
+        failures.append(f"urdf {case}: the refused import wrote {robots}/arm")
+
+
+def replace(old, new, count=1):
+    assert old in ARM3, old
+    return ARM3.replace(old, new, count)
+
+
+ELBOW_LIMIT = '<limit lower="-2.5" upper="2.5" velocity="2.5" effort="60"/>'
+URDF_CASES = [
+    ("not_xml", "this is not a URDF <robot", "not a readable URDF"),
+    ("not_robot", '<?xml version="1.0"?><model name="x"/>', "not <robot>"),
+    ("prismatic", replace('name="elbow" type="revolute"', 'name="elbow" type="prismatic"'), "joint 'elbow' is prismatic"),
+    ("mimic", replace(ELBOW_LIMIT, ELBOW_LIMIT + '<mimic joint="pitch"/>'), "joint 'elbow' is a mimic joint"),
+    ("branching", replace("</robot>", '<joint name="wrist2" type="revolute"><parent link="upper_arm"/>'
+                          '<child link="side"/><axis xyz="0 0 1"/>'
+                          '<limit lower="-1" upper="1" velocity="1" effort="1"/></joint>'
+                          '<link name="side"><inertial><mass value="1"/><inertia ixx="0.01" ixy="0" ixz="0" '
+                          'iyy="0.01" iyz="0" izz="0.01"/></inertial></link></robot>'), "branches at link 'upper_arm'"),
+    ("no_limit", replace(ELBOW_LIMIT, ""), "joint 'elbow'"),
+    ("no_velocity", replace(ELBOW_LIMIT, '<limit lower="-2.5" upper="2.5" effort="60"/>'), "velocity"),
+    ("upper_below_lower", replace(ELBOW_LIMIT, '<limit lower="2.5" upper="-2.5" velocity="2.5" effort="60"/>'),
+     "is not above lower"),
+    ("zero_axis", replace('<axis xyz="-1 0 0"/>', '<axis xyz="0 0 0"/>'), "zero axis"),
+    ("bad_axis", replace('<axis xyz="-1 0 0"/>', '<axis xyz="-1 zero 0"/>'), "is not 3 numbers"),
+    ("negative_mass", replace('<mass value="3.0"/>', '<mass value="-3.0"/>'), "negative mass"),
+    ("undefined_link", replace('<child link="forearm"/>', '<child link="forarm"/>'), "is not defined"),
+    ("two_parents", replace("</robot>", '<joint name="again" type="fixed"><parent link="shoulder"/>'
+                            '<child link="forearm"/></joint></robot>'), "has two parent joints"),
+]
+
+
+def robot_json_cases(good):
+    """(case, mutate(desc) -> desc or a raw string, needle) for a valid description `good`."""
+    def edit(fn):
+        def go(d):
+            d = json.loads(json.dumps(d))
+            fn(d)
+            return d
+        return go
+
+    return [
+        ("invalid_json", lambda d: "{ \"name\": ", "invalid JSON"),
+        ("not_object", lambda d: "[1, 2]", "not a JSON object"),
+        ("no_limits", edit(lambda d: d.pop("limits")), "limits"),
+        ("no_qd_max", edit(lambda d: d["limits"].pop("qd_max")), "limits.qd_max"),
+        ("short_q_max", edit(lambda d: d["limits"]["q_max"].pop()), "limits.q_max"),
+        ("q_max_below_q_min", edit(lambda d: d["limits"]["q_max"].__setitem__(1, -5.0)), "limits.q_max[2]"),
+        ("negative_qd_max", edit(lambda d: d["limits"]["qd_max"].__setitem__(0, -1.0)), "limits.qd_max[1]"),
+        ("string_tau_max", edit(lambda d: d["limits"].__setitem__("tau_max", ["a", 1, 1])), "limits.tau_max[1]"),
+        ("zero_gear", edit(lambda d: d.__setitem__("transmission", {"gear_ratios": [1, 0, 1]})),
+         "transmission.gear_ratios[2]"),
+        ("coupling_out_of_range", edit(lambda d: d.__setitem__(
+            "transmission", {"gear_ratios": [1, 1, 1], "coupling": [{"motor": 4, "joint": 1, "ratio": 1}]})),
+         "transmission.coupling[1].motor"),
+        ("name_differs", edit(lambda d: d.__setitem__("name", "other")), "name"),
+        ("friction_not_object", edit(lambda d: d.__setitem__("friction", [1, 2, 3])), "friction[1]"),
+        ("too_many_joints", edit(lambda d: [d["limits"][k].extend([1.0] * 5) for k in d["limits"]]),
+         "limits"),
+    ]
+
+
+def main():
+    with tempfile.TemporaryDirectory() as tmp:
+        for case, text, needle in URDF_CASES:
+            urdf_case(tmp, case, text, needle)
+        expect_one_line("urdf missing file", ["robot", "import", os.path.join(tmp, "none.urdf"), "--name", "arm",
+                                              "--robots-dir", tmp], "none.urdf")
+        good = os.path.join(SRC, "tests/urdf/arm3.urdf")
+        expect_one_line("bad --name", ["robot", "import", good, "--name", "3arm", "--robots-dir", tmp], "--name")
+        expect_one_line("unknown --tip", ["robot", "import", good, "--name", "arm", "--tip", "hand",
+                                          "--robots-dir", tmp], "'hand'")
+        eight = ARM3
+        for k in range(6):  # 3 + 6 moving joints
+            eight = eight.replace("</robot>", f'<joint name="x{k}" type="revolute"><parent link="'
+                                  f'{"forearm" if k == 0 else f"l{k - 1}"}"/><child link="l{k}"/><axis xyz="0 0 1"/>'
+                                  '<limit lower="-1" upper="1" velocity="1" effort="1"/></joint>'
+                                  f'<link name="l{k}"><inertial><mass value="1"/><inertia ixx="0.01" ixy="0" '
+                                  'ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link></robot>')
+        urdf_case(tmp, "nine_joints", eight, "1 to 7")
+
+        # An existing robot is not replaced without --force.
+        robots = os.path.join(tmp, "robots")
+        rc, _, err = run(["robot", "import", good, "--name", "arm3", "--robots-dir", robots])
+        if rc != 0:
+            failures.append(f"importing arm3 failed: {err}")
+        expect_one_line("existing robot", ["robot", "import", good, "--name", "arm3", "--robots-dir", robots], "--force")
+
+        # Re-importing reproduces the committed test robots.
+        for name in ("arm3", "cobot7"):
+            out = os.path.join(tmp, "reimport")
+            rc, _, err = run(["robot", "import", os.path.join(SRC, f"tests/urdf/{name}.urdf"), "--name", name,
+                              "--robots-dir", out])
+            committed = os.path.join(SRC, "tests/robots", name)
+            for f in sorted(os.listdir(committed)):
+                a, b = open(os.path.join(committed, f), "rb").read(), open(os.path.join(out, name, f), "rb").read()
+                if a != b:
+                    failures.append(f"re-import of {name}: {f} differs from tests/robots/{name}/{f}")
+            print(f"ok   re-import of {name} equals tests/robots/{name}" if rc == 0 else f"FAIL {err}")
+
+        # robot.json: the Python check and the C++ loader (excite reads it) refuse the same files.
+        base = json.load(open(os.path.join(robots, "arm3", "robot.json")))
+        for case, mutate, needle in robot_json_cases(base):
+            d = os.path.join(tmp, "json_" + case)
+            shutil.copytree(os.path.join(robots, "arm3"), os.path.join(d, "arm3"))
+            desc = mutate(base)
+            with open(os.path.join(d, "arm3", "robot.json"), "w") as f:
+                f.write(desc if isinstance(desc, str) else json.dumps(desc))
+            expect_one_line("robot.json " + case + " (check)", ["robot", "check", "arm3", "--robots-dir", d], needle)
+            expect_one_line("robot.json " + case + " (C++ loader)",
+                            ["excite", "--robot", "arm3", "--robots-dir", d, "--out", os.path.join(d, "t.json")],
+                            needle)
+        d = os.path.join(tmp, "json_directory")
+        os.makedirs(os.path.join(d, "arm3", "robot.json"))
+        expect_one_line("robot.json is a directory (C++ loader)", ["excite", "--robot", "arm3", "--robots-dir", d,
+                                                                   "--out", os.path.join(d, "t.json")], "not a regular file")
+        expect_one_line("unknown robot", ["robot", "check", "nobody", "--robots-dir", d], "unknown robot 'nobody'")
+    if failures:
+        print("\n".join(failures), file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
