@@ -33,6 +33,8 @@ bool register_robot(const CompiledRobot& robot) {
   }
   if (robot.excitation_regressor) entry.excitation_regressor = robot.excitation_regressor;
   if (robot.inverse_dynamics) entry.inverse_dynamics = robot.inverse_dynamics;
+  if (robot.standard_to_base) entry.standard_to_base = robot.standard_to_base;
+  if (robot.base_regressor) entry.base_regressor = robot.base_regressor;
   return true;
 }
 

@@ -38,10 +38,19 @@ struct CompiledRobot {
   using InverseDynamicsFn = Eigen::VectorXd (*)(const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
                                                 const Eigen::VectorXd& qdd, const Eigen::VectorXd& phi);
 
+  /// phi_b = the base parameters (BaseParam order, num_base) of the standard parameters phi (Gautier).
+  using StandardToBaseFn = Eigen::VectorXd (*)(const Eigen::VectorXd& phi);
+
+  /// Y_b(q, qd, qdd) (N x num_base): tau = Y_b phi_b [Nm].
+  using BaseRegressorFn = Eigen::MatrixXd (*)(const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
+                                              const Eigen::VectorXd& qdd);
+
   std::array<IdentifyFn, kBuiltTermSets> identify{};  ///< by built_term_set_index
   std::array<PrepareFn, kBuiltTermSets> prepare{};
   ExcitationRegressorFn excitation_regressor = nullptr;
   InverseDynamicsFn inverse_dynamics = nullptr;
+  StandardToBaseFn standard_to_base = nullptr;
+  BaseRegressorFn base_regressor = nullptr;
 };
 
 /// Adds (or completes) the entry of `robot.name`: fields that are set in `robot` overwrite the

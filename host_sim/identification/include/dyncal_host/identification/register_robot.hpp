@@ -61,6 +61,24 @@ Eigen::VectorXd inverse_dynamics(const Eigen::VectorXd& q, const Eigen::VectorXd
   return tau;
 }
 
+/// CompiledRobot::StandardToBaseFn for `Robot`.
+template <class Robot>
+Eigen::VectorXd standard_to_base(const Eigen::VectorXd& phi) {
+  const Eigen::Matrix<double, Robot::kNumStandard, 1> p = phi;
+  Eigen::Matrix<double, Robot::kNumBase, 1> b;
+  Robot::standard_to_base(p, b);
+  return b;
+}
+
+/// CompiledRobot::BaseRegressorFn for `Robot`.
+template <class Robot>
+Eigen::MatrixXd base_regressor(const Eigen::VectorXd& q, const Eigen::VectorXd& qd, const Eigen::VectorXd& qdd) {
+  using Vec = typename Robot::template JointVector<double>;
+  Eigen::Matrix<double, Robot::kNumJoints, Robot::kNumBase> Yb;
+  Robot::base_regressor(Vec(q), Vec(qd), Vec(qdd), Yb);
+  return Yb;
+}
+
 template <class Robot, unsigned Terms>
 StackedData prepare_stacked_with(const RobotDescription& robot, const JointLog& log, const IdentifyOptions& o) {
   return IdentifyPipeline<Robot, Terms>(robot, o).prepare(log);
@@ -79,6 +97,8 @@ bool register_robot_model(const double (&nominal_standard)[Robot::kNumStandard])
   c.nominal_standard.assign(nominal_standard, nominal_standard + Robot::kNumStandard);
   c.excitation_regressor = &excitation_regressor<Robot>;
   c.inverse_dynamics = &inverse_dynamics<Robot>;
+  c.standard_to_base = &standard_to_base<Robot>;
+  c.base_regressor = &base_regressor<Robot>;
   return register_robot(c);
 }
 
