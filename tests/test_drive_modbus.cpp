@@ -1,9 +1,8 @@
 // The simulated drive over Modbus TCP on loopback (a real libmodbus server started by a CTest
 // fixture): register round trips, Modbus exceptions, table flash checks.
+#include <arpa/inet.h>
 #include <gtest/gtest.h>
 #include <modbus/modbus.h>
-
-#include <arpa/inet.h>
 #include <netinet/in.h>
 #include <sys/socket.h>
 #include <unistd.h>

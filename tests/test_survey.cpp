@@ -378,7 +378,7 @@ TEST(SurveyIdimIv, BeatsLeastSquaresOnNoisyPositions) {
 // a plant with the set parameters must retrace the recorded states exactly.
 TEST(SurveyClosedLoop, SimulationWithTheSetParametersRetracesTheRecordedStates) {
   const SurveyData& d = data(FrictionModel::eq7);
-  std::array<double, 6> Fc{}, beta{};
+  JointArray Fc{}, beta{};
   for (int j = 0; j < 6; ++j) {
     Fc[j] = d.scenario.friction[j].Fc;
     beta[j] = d.scenario.friction[j].beta;

@@ -5,31 +5,39 @@
 #include "commands.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/model_terms.hpp"
+#include "dyncal_host/identification/compiled_robot.hpp"
 
 namespace dyncal::app {
 namespace {
 
 struct FlashSettings {
-  std::string uri = "tcp://127.0.0.1:1502", robot = "er20", params;
+  std::string uri = "tcp://127.0.0.1:1502", robot, params;
 };
 
 int run_flash(const FlashSettings& s) {
   using host::InputError;
   const nlohmann::json j = read_json_file(s.params);
   if (j.value("format", "") != "dyncal-parameters") throw InputError(s.params + ": not a dyncal parameter file");
-  auto d = connect_drive(s.uri);
-  linux_port::DriveInfo info;
-  if (d->read_info(info) != port::PortStatus::ok) throw InputError("drive: " + d->error());
+  if (!j.contains("robot") || !j["robot"].is_string()) throw InputError(s.params + ": 'robot' missing");
+  const std::string robot = j["robot"].get<std::string>();
+  if (!s.robot.empty() && robot != s.robot)
+    throw InputError(s.params + ": parameters are for robot '" + robot + "', not '" + s.robot + "'");
+  // The table carries the id of the robot the parameters were identified for: the drive refuses it
+  // (wrong robot) unless it runs that robot.
+  const host::CompiledRobot& compiled = host::compiled_robot(robot);
   ParameterTable t;
-  t.robot_id = info.robot_id;
-  if (j.value("robot", "") != s.robot) {
-    throw InputError(s.params + ": parameters are for robot '" + j.value("robot", "") + "', not '" + s.robot + "'");
-  }
+  t.robot_id = compiled.robot_id;
   t.model_id = host::parse_model(j.value("model", ""));
   const auto& p = j["params"];
   if (!p.is_array() || p.empty() || p.size() > kTableMaxParams) throw InputError(s.params + ": bad 'params'");
   t.count = static_cast<std::uint16_t>(p.size());
-  for (size_t i = 0; i < p.size(); ++i) t.values[i] = p[i]["value"].get<float>();
+  for (size_t i = 0; i < p.size(); ++i) {
+    const auto& v = p[i];
+    if (!v.is_object() || !v.contains("value") || !v["value"].is_number())
+      throw InputError(s.params + ": params[" + std::to_string(i + 1) + "]: expected an object with a number 'value'");
+    t.values[i] = v["value"].get<float>();
+  }
+  auto d = connect_drive(s.uri);
   TableStatus reason = TableStatus::ok;
   const auto st = d->write(t, &reason);
   if (st == port::PortStatus::rejected) {
@@ -47,7 +55,7 @@ void add_flash_command(CLI::App& app, Action& run) {
   auto s = std::make_shared<FlashSettings>();
   auto* cmd = app.add_subcommand("flash", "flash a parameter file (dyncal identify --params) to the drive");
   cmd->add_option("--drive", s->uri)->capture_default_str();
-  cmd->add_option("--robot", s->robot)->capture_default_str();
+  cmd->add_option("--robot", s->robot, "robot the drive runs (default: the parameter file's)");
   cmd->add_option("--params", s->params, "parameter JSON from dyncal identify --params")->required();
   cmd->callback([&run, s] { run = [s] { return run_flash(*s); }; });
 }

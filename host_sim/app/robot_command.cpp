@@ -4,7 +4,6 @@
 // the same robot.json through the tools' loader, and whether this build has compiled the robot.
 #include <spawn.h>
 #include <sys/wait.h>
-
 #include <unistd.h>
 
 #include <Eigen/Core>
@@ -64,8 +63,9 @@ int run_import(const RobotSettings& s) {
 /// 1e-9 max(1, |tau_kdl|) on every joint. Prints the result; false (with one line on stderr) on a
 /// mismatch.
 bool compare_with_kdl(const RobotSettings& s, const host::CompiledRobot& c) {
-  const std::string file = (std::filesystem::temp_directory_path() /
-                            ("dyncal-kdl-" + s.name + "-" + std::to_string(getpid()) + ".json")).string();
+  const std::string file =
+      (std::filesystem::temp_directory_path() / ("dyncal-kdl-" + s.name + "-" + std::to_string(getpid()) + ".json"))
+          .string();
   const int rc = run_importer({"samples", s.name, "--robots-dir", s.robots_dir, "--out", file});
   if (rc != 0) throw InputError("the KDL reference of " + s.name + " could not be computed");
   nlohmann::json j;

@@ -1,11 +1,13 @@
 # host_sim/robots: every robot folder (DYNCAL_ROBOT_DIRS, top-level CMakeLists.txt) compiled into the
 # host tools. Per robot: its generated model (committed lib/generated/<name>/ for the shipped robots,
 # else generated here into the build tree by codegen/generate.py whenever robot.json, a URDF of the
-# folder or the generator changes) and three translation units made from the templates in this
-# folder, which register the robot's operations by name at start-up (compiled_robot.hpp): the model
-# (robot_model.cpp.in) and `identify` for the Eq. 7 and the Eq. 8 term sets (robot_identify.cpp.in,
-# two units so that a robot's heaviest code compiles on two cores). Adding a robot compiles only its
-# own units. Part `robots` of the dependency rule: it depends on identification.
+# folder or the generator changes) and translation units made from the templates in this
+# folder, which register the robot's operations by name at start-up: the model (robot_model.cpp.in,
+# compiled_robot.hpp), `identify` for the Eq. 7 and the Eq. 8 term sets (robot_identify.cpp.in, two
+# units so that a robot's heaviest code compiles on two cores) and the simulated drive's plant
+# (robot_drive.cpp.in, drive_plant.hpp) and calibrate's online estimators (robot_calibration.cpp.in,
+# online_model.hpp, two units). Adding a robot compiles only its own units. Part `robots` of the
+# dependency rule: it depends on calibration, identification and drive.
 set(DYNCAL_ROBOTS_GENERATED ${CMAKE_BINARY_DIR}/robots_generated)
 file(GLOB codegen_sources ${PROJECT_SOURCE_DIR}/codegen/*.py ${PROJECT_SOURCE_DIR}/codegen/dyncal_codegen/*.py)
 set(robot_sources "")
@@ -24,15 +26,17 @@ foreach(dir ${DYNCAL_ROBOT_DIRS})
   endif()
   set(unit ${CMAKE_CURRENT_BINARY_DIR}/robots/${DYNCAL_ROBOT})
   configure_file(${CMAKE_CURRENT_LIST_DIR}/robot_model.cpp.in ${unit}_model.cpp @ONLY)
+  configure_file(${CMAKE_CURRENT_LIST_DIR}/robot_drive.cpp.in ${unit}_drive.cpp @ONLY)
   foreach(DYNCAL_FIRST 0 4)
     configure_file(${CMAKE_CURRENT_LIST_DIR}/robot_identify.cpp.in ${unit}_identify_${DYNCAL_FIRST}.cpp @ONLY)
-    list(APPEND robot_sources ${unit}_identify_${DYNCAL_FIRST}.cpp)
+    configure_file(${CMAKE_CURRENT_LIST_DIR}/robot_calibration.cpp.in ${unit}_calibration_${DYNCAL_FIRST}.cpp @ONLY)
+    list(APPEND robot_sources ${unit}_identify_${DYNCAL_FIRST}.cpp ${unit}_calibration_${DYNCAL_FIRST}.cpp)
   endforeach()
-  list(APPEND robot_sources ${unit}_model.cpp)
+  list(APPEND robot_sources ${unit}_model.cpp ${unit}_drive.cpp)
 endforeach()
 add_library(dyncal_host_robots OBJECT ${robot_sources})
 target_include_directories(dyncal_host_robots PRIVATE ${DYNCAL_ROBOTS_GENERATED})
-target_link_libraries(dyncal_host_robots PUBLIC dyncal_host_identification)
+target_link_libraries(dyncal_host_robots PUBLIC dyncal_host_identification dyncal_host_drive dyncal_host_calibration)
 target_compile_options(dyncal_host_robots PRIVATE ${DYNCAL_WARNINGS})
-set_property(GLOBAL PROPERTY DYNCAL_HOST_CLOSURE_robots "identification;common")
+set_property(GLOBAL PROPERTY DYNCAL_HOST_CLOSURE_robots "calibration;diagnosis;identification;drive;common")
 set_property(GLOBAL APPEND PROPERTY DYNCAL_HOST_PARTS robots)

@@ -11,21 +11,16 @@
 #include <ostream>
 #include <random>
 
-#include "dyncal/causal_differentiator.hpp"
-#include "dyncal/generated/er20/robot.hpp"
-#include "dyncal/identification_model.hpp"
-#include "dyncal/kalman_filter.hpp"
-#include "dyncal/rls_forgetting.hpp"
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/calibration/online_model.hpp"
 #include "dyncal_host/common/model_terms.hpp"
+#include "dyncal_host/identification/compiled_robot.hpp"
 #include "dyncal_host/identification/excitation.hpp"
 #include "dyncal_host/identification/identify_report.hpp"
 
 namespace dyncal::host {
 namespace {
 
-using Robot = dyncal::generated::er20::Robot;
-using Vec = Eigen::Matrix<double, 6, 1>;
 using SteadyClock = std::chrono::steady_clock;
 namespace mm = dyncal::modbus_map;
 
@@ -41,110 +36,6 @@ void progress_bar(std::ostream& out, double fraction, long samples, const char* 
       << static_cast<int>(std::lround(100 * std::min(1.0, fraction))) << "% " << samples << " samples" << std::flush;
 }
 
-/// Per-sample consumer of a stream (the online estimators) and its wrap-up.
-struct SampleSink {
-  std::function<void(const port::DriveSample&)> push;
-  std::function<void(CalibrateResult&)> finish;
-};
-
-/// Online path and verification for one compiled model.
-template <unsigned Terms>
-struct ModelRun {
-  using Model = IdentificationModel<Robot, Terms>;
-  static constexpr int P = Model::kNumParams;
-  using ParamVec = Eigen::Matrix<double, P, 1>;
-
-  /// The online path: lib/ KF and RLS updated with each sample as it arrives from the drive.
-  struct Online {
-    std::unique_ptr<KalmanFilter<double, P, 6>> kf = std::make_unique<KalmanFilter<double, P, 6>>();
-    std::unique_ptr<RlsForgetting<double, P, 6>> rls = std::make_unique<RlsForgetting<double, P, 6>>();
-    CausalDifferentiator<double, 6> diff;
-    typename Model::template Regressor<double> K;
-    Vec qd_max;
-    double min_speed = 0;
-    long updates = 0, rejected = 0;
-
-    void push(const port::DriveSample& sample) {
-      Vec q_in, tau_in, q, qd, qdd, tau;
-      for (int j = 0; j < 6; ++j) {
-        q_in[j] = sample.q[j];
-        tau_in[j] = sample.tau[j];
-      }
-      if (diff.update(q_in, tau_in, q, qd, qdd, tau) != UpdateStatus::ok) return;
-      Model::regressor(q, qd, qdd, Vec::Zero().eval(), K);
-      for (int j = 0; j < 6; ++j) {  // stiction band: as the batch fit, relative to the joint's speed limit
-        if (std::abs(qd[j]) >= min_speed * qd_max[j]) continue;
-        K.row(j).setZero();
-        tau[j] = 0.0;
-      }
-      const UpdateStatus a = kf->update(K, tau, Vec::Ones());
-      const UpdateStatus b = rls->update(K, tau);
-      ++updates;
-      if (a != UpdateStatus::ok || b != UpdateStatus::ok) ++rejected;
-    }
-    void finish(CalibrateResult& r) const {
-      r.phi_kf.assign(kf->estimate().data(), kf->estimate().data() + P);
-      r.phi_rls.assign(rls->estimate().data(), rls->estimate().data() + P);
-      r.online_updates = updates;
-      r.online_rejected = rejected;
-    }
-  };
-
-  static void online(const Vec& qd_max, const CalibrateOptions& o, SampleSink& sink) {
-    auto st = std::make_shared<Online>();
-    const ParamVec p0 = ParamVec::Constant(o.identify.p0);
-    st->kf->reset(ParamVec::Zero(), p0);
-    st->rls->reset(ParamVec::Zero(), p0, o.rls_mu);
-    if (st->diff.reset(1.0 / o.sample_rate_hz, o.online_cutoff_hz) != UpdateStatus::ok) {
-      throw InputError("online cut-off must be below half the sample rate");
-    }
-    st->qd_max = qd_max;
-    st->min_speed = o.identify.min_speed_fraction;
-    sink.push = [st](const port::DriveSample& s) { st->push(s); };
-    sink.finish = [st](CalibrateResult& r) { st->finish(r); };
-  }
-
-  static VerificationErrors verify(const JointLog& log, const std::vector<double>& phi_v, double cutoff) {
-    ParamVec phi;
-    for (int i = 0; i < P; ++i) phi[i] = phi_v[static_cast<size_t>(i)];
-    CausalDifferentiator<double, 6> diff;
-    diff.reset(log.sample_period(), cutoff);
-    typename Model::template Regressor<double> K;
-    Vec se = Vec::Zero(), st = Vec::Zero();
-    long n = 0;
-    for (Eigen::Index s = 0; s < log.samples(); ++s) {
-      Vec q, qd, qdd, tau;
-      if (diff.update(log.q.row(s).transpose(), log.tau.row(s).transpose(), q, qd, qdd, tau) != UpdateStatus::ok)
-        continue;
-      Model::regressor(q, qd, qdd, Vec::Zero().eval(), K);
-      se += (tau - K * phi).cwiseAbs2();
-      st += tau.cwiseAbs2();
-      ++n;
-    }
-    VerificationErrors e;
-    for (int j = 0; j < 6; ++j) {
-      e.rms[j] = std::sqrt(se[j] / static_cast<double>(std::max(1L, n)));
-      e.rms_tau[j] = std::sqrt(st[j] / static_cast<double>(std::max(1L, n)));
-    }
-    return e;
-  }
-};
-
-template <unsigned Terms>
-struct Online {
-  static void run(const Vec& qd_max, const CalibrateOptions& o, SampleSink& sink) {
-    ModelRun<Terms>::online(qd_max, o, sink);
-  }
-};
-template <unsigned Terms>
-struct Verify {
-  static void run(const JointLog& log, const CalibrateOptions& o, CalibrateResult& r) {
-    r.verify_batch = ModelRun<Terms>::verify(log, r.phi_batch, o.online_cutoff_hz);
-    r.verify_kf = ModelRun<Terms>::verify(log, r.phi_kf, o.online_cutoff_hz);
-    r.verify_rls = ModelRun<Terms>::verify(log, r.phi_rls, o.online_cutoff_hz);
-  }
-};
-
 /// Verification run: stream a fresh trajectory and read the drive's model error.
 JointLog verification_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory& t, const CalibrateOptions& o,
                           std::ostream* progress, std::uint32_t* lost, std::array<double, modbus_map::kMaxJoints>& drive_error) {
@@ -159,16 +50,16 @@ JointLog verification_run(linux_port::ModbusDrive& drive, const linux_port::Traj
 constexpr const char* kFlashedMessage = "flashed, read back and compared: identical";
 
 /// The streamed samples as a log: q and tau, t from seq.
-JointLog samples_to_log(const std::vector<port::DriveSample>& samples, double sample_rate_hz) {
+JointLog samples_to_log(const std::vector<port::DriveSample>& samples, double sample_rate_hz, int joints) {
   const Eigen::Index S = static_cast<Eigen::Index>(samples.size());
   JointLog log;
   log.t.resize(S);
-  log.q.resize(S, 6);
-  log.tau.resize(S, 6);
+  log.q.resize(S, joints);
+  log.tau.resize(S, joints);
   for (Eigen::Index s = 0; s < S; ++s) {
     const auto& d = samples[static_cast<size_t>(s)];
     log.t[s] = static_cast<double>(d.seq) / sample_rate_hz;
-    for (int j = 0; j < 6; ++j) {
+    for (int j = 0; j < joints; ++j) {
       log.q(s, j) = d.q[j];
       log.tau(s, j) = d.tau[j];
     }
@@ -194,6 +85,9 @@ std::string fault_log_path(const StreamRun& run) {
 JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory& trajectory, const StreamRun& run,
                     std::ostream* progress, std::uint32_t* lost, double* seconds,
                     const std::function<void(const port::DriveSample&)>& on_sample) {
+  linux_port::DriveInfo info;
+  if (drive.read_info(info) != port::PortStatus::ok) throw InputError("drive: " + drive.error());
+  const int joints = info.num_joints;
   if (drive.write_trajectory(trajectory, run.periods, run.sample_rate_hz) != port::PortStatus::ok)
     throw InputError("drive: " + drive.error());
   const auto t0 = SteadyClock::now();
@@ -214,7 +108,7 @@ JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory
       const std::string path = fault_log_path(run);
       const std::string count = std::to_string(samples.size()) + " samples recorded before it (" + run.name + " run)";
       try {
-        write_csv_log(path, samples_to_log(samples, run.sample_rate_hz));
+        write_csv_log(path, samples_to_log(samples, run.sample_rate_hz, joints));
       } catch (const InputError& e) {
         throw DriveFaultError(drive.error() + "; the " + count + " are lost: " + e.what());
       }
@@ -242,7 +136,7 @@ JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory
   if (seconds) *seconds = seconds_since(t0);
   if (lost) *lost += drive.lost();
   if (samples.size() < 10) throw InputError("drive delivered only " + std::to_string(samples.size()) + " samples");
-  return samples_to_log(samples, run.sample_rate_hz);
+  return samples_to_log(samples, run.sample_rate_hz, joints);
 }
 
 FlashOutcome flash_and_verify(linux_port::ModbusDrive& drive, const ParameterTable& table,
@@ -279,8 +173,9 @@ FlashOutcome flash_and_verify(linux_port::ModbusDrive& drive, const ParameterTab
 
 CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions& o, std::ostream& progress) {
   const auto t0 = SteadyClock::now();
-  if (robot.name != Robot::kName)
-    throw InputError("calibration over Modbus runs the er20 model, not '" + robot.name + "'");
+  const CompiledRobot& compiled = compiled_robot_for(robot);
+  const OnlineModel& online = online_model(robot.name);
+  const int term_set = built_term_set_index(o.terms);
   if (!std::filesystem::is_directory(o.fault_dir))
     throw InputError("fault directory '" + o.fault_dir + "' is not a directory");
   if (!o.save_log.empty()) {
@@ -293,13 +188,14 @@ CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions&
   if (!drive) throw InputError(error);
   linux_port::DriveInfo info;
   if (drive->read_info(info) != port::PortStatus::ok) throw InputError("drive: " + drive->error());
-  if (info.num_joints != Robot::kNumJoints)
+  if (info.num_joints != compiled.num_joints)
     throw InputError("the drive has " + std::to_string(info.num_joints) + " joints, robot '" + robot.name + "' " +
-                     std::to_string(Robot::kNumJoints));
-  if (info.robot_id != Robot::kRobotId)
+                     std::to_string(compiled.num_joints));
+  if (info.robot_id != compiled.robot_id)
     throw InputError("the drive's robot id does not match robot '" + robot.name + "'");
 
   CalibrateResult r;
+  r.num_joints = robot.num_joints;
   std::ostream* prog = o.progress ? &progress : nullptr;
   // 1. Excitation: stream, then online estimators sample by sample and the batch fit.
   linux_port::Trajectory excitation;
@@ -313,7 +209,7 @@ CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions&
            << " Hz" << (o.excitation ? " (designed)" : "") << ", " << o.periods << " periods at " << o.sample_rate_hz
            << " Hz, cond(K) = " << std::setprecision(3) << r.trajectory_cond << "\n";
   SampleSink sink;
-  with_term_set<Online>(o.terms, Vec(robot.qd_max), o, sink);
+  online.online[static_cast<size_t>(term_set)](robot.qd_max, o, sink);
   const JointLog log = stream_run(*drive, excitation, {"excitation", o.periods, o.sample_rate_hz, o.fault_dir}, prog,
                                   &r.lost, &r.stream_seconds, sink.push);
   if (!o.save_log.empty()) {
@@ -334,10 +230,13 @@ CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions&
   const auto fresh = default_excitation(robot, o.f_f, o.harmonics, 1, o.seed + 1000, nullptr);
   progress << "verification run with the drive's current table\n";
   const JointLog vlog = verification_run(*drive, fresh, o, prog, &r.lost, r.drive_error_before);
-  with_term_set<Verify>(o.terms, vlog, o, r);
+  const OnlineModel::VerifyFn verify = online.verify[static_cast<size_t>(term_set)];
+  r.verify_batch = verify(vlog, r.phi_batch, o.online_cutoff_hz);
+  r.verify_kf = verify(vlog, r.phi_kf, o.online_cutoff_hz);
+  r.verify_rls = verify(vlog, r.phi_rls, o.online_cutoff_hz);
   if (o.flash) {
     ParameterTable table;
-    table.robot_id = Robot::kRobotId;
+    table.robot_id = compiled.robot_id;
     table.model_id = o.terms;
     table.count = static_cast<std::uint16_t>(r.phi_batch.size());
     for (size_t i = 0; i < r.phi_batch.size(); ++i) table.values[i] = static_cast<float>(r.phi_batch[i]);
@@ -385,7 +284,7 @@ void print_calibrate_report(std::ostream& out, const CalibrateResult& r) {
   }
   out << "fresh trajectory, prediction RMS [Nm] of each estimate (online path, causal filter):\n";
   out << "  joint     RMS tau       batch          KF         RLS\n";
-  for (int j = 0; j < 6; ++j) {
+  for (int j = 0; j < r.num_joints; ++j) {
     out << "  " << std::setw(5) << j + 1 << std::setprecision(3) << std::setw(12) << r.verify_batch.rms_tau[j]
         << std::setw(12) << r.verify_batch.rms[j] << std::setw(12) << r.verify_kf.rms[j] << std::setw(12)
         << r.verify_rls.rms[j] << "\n";
@@ -399,7 +298,7 @@ void print_calibrate_report(std::ostream& out, const CalibrateResult& r) {
   if (r.flashed) {
     out << "drive model error RMS(tau - tau_ff) [Nm] on the fresh trajectory, before -> after the flash:\n";
     out << "  joint      before       after   reduction\n";
-    for (int j = 0; j < 6; ++j) {
+    for (int j = 0; j < r.num_joints; ++j) {
       const double b = r.drive_error_before[j], a = r.drive_error_after[j];
       out << "  " << std::setw(5) << j + 1 << std::setprecision(3) << std::setw(12) << b << std::setw(12) << a
           << std::setprecision(1) << std::setw(11) << (b > 0 ? 100.0 * (1.0 - a / b) : 0.0) << "%\n";
@@ -422,7 +321,7 @@ nlohmann::json calibrate_report_json(const CalibrateResult& r) {
         {{"name", r.names[i]}, {"batch", r.phi_batch[i]}, {"kf", r.phi_kf[i]}, {"rls", r.phi_rls[i]}});
   }
   j["joints"] = nlohmann::json::array();
-  for (size_t k = 0; k < 6; ++k) {
+  for (size_t k = 0; k < static_cast<size_t>(r.num_joints); ++k) {
     j["joints"].push_back({{"joint", k + 1},
                            {"verify_rms_batch", r.verify_batch.rms[k]},
                            {"verify_rms_kf", r.verify_kf.rms[k]},

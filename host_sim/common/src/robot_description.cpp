@@ -56,7 +56,8 @@ struct Reader {
   }
 
   int joint_index(const json& c, const char* key, int n, const std::string& field) const {
-    if (!c.contains(key) || !c[key].is_number_integer()) fail(field + "." + key, "expected a joint number 1.." + std::to_string(n));
+    if (!c.contains(key) || !c[key].is_number_integer())
+      fail(field + "." + key, "expected a joint number 1.." + std::to_string(n));
     const int k = c[key].get<int>();
     if (k < 1 || k > n) fail(field + "." + key, std::to_string(k) + " is not a joint 1.." + std::to_string(n));
     return k - 1;
@@ -84,7 +85,8 @@ void read_limits(const Reader& rd, const json& j, RobotDescription& r) {
   r.num_joints = static_cast<int>(r.q_min.size());
   const int n = r.num_joints;
   if (n > kMaxRobotDescriptionJoints)
-    rd.fail("limits.q_min", std::to_string(n) + " joints; dyncal takes 1 to " + std::to_string(kMaxRobotDescriptionJoints));
+    rd.fail("limits.q_min",
+            std::to_string(n) + " joints; dyncal takes 1 to " + std::to_string(kMaxRobotDescriptionJoints));
   r.q_max = rd.vector(lim, "q_max", n, "limits.q_max", true);
   for (int i = 0; i < n; ++i) {
     if (!(r.q_max[i] > r.q_min[i]))

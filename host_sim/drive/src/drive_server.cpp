@@ -28,7 +28,8 @@ std::uint16_t be16(const std::uint8_t* p) {
 /// `table_generation`: the drive's table generation last copied into the registers (-1: none yet).
 void refresh_inputs(const SimulatedDrive& d, std::uint16_t* in, long& table_generation) {
   in[mm::kMapVersionReg] = mm::kMapVersion;
-  in[mm::kNumJointsReg] = kDriveJoints;
+  const int n_joints = d.num_joints();
+  in[mm::kNumJointsReg] = static_cast<std::uint16_t>(n_joints);
   mm::set_u32(in + mm::kRobotIdReg, d.robot_id());
   mm::set_u32(in + mm::kActiveModelIdReg, d.active_table().model_id);
   in[mm::kActiveCountReg] = d.active_table().count;
@@ -37,7 +38,7 @@ void refresh_inputs(const SimulatedDrive& d, std::uint16_t* in, long& table_gene
   mm::set_u32(in + mm::kProducedReg, d.produced());
   mm::set_u32(in + mm::kOverrunReg, d.overruns());
   const auto err = d.model_error_rms();
-  for (int j = 0; j < kDriveJoints; ++j) mm::set_f32(in + mm::kModelErrorReg + 2 * j, static_cast<float>(err[j]));
+  for (int j = 0; j < n_joints; ++j) mm::set_f32(in + mm::kModelErrorReg + 2 * j, static_cast<float>(err[j]));
   in[mm::kFaultReg] = static_cast<std::uint16_t>(d.fault());
   in[mm::kFaultJointReg] = static_cast<std::uint16_t>(d.fault_joint());
   mm::set_f32(in + mm::kFaultValueReg, static_cast<float>(d.fault_value()));
@@ -53,19 +54,19 @@ void refresh_inputs(const SimulatedDrive& d, std::uint16_t* in, long& table_gene
   // Ring window: the oldest unacknowledged samples.
   std::uint16_t* w = in + mm::kRingReg;
   const auto& ring = d.ring();
-  const int n = std::min<int>(mm::samples_per_block(kDriveJoints), static_cast<int>(ring.size()));
+  const int n = std::min<int>(mm::samples_per_block(n_joints), static_cast<int>(ring.size()));
   mm::set_u32(w, ring.empty() ? d.produced() : ring.front().seq);
   w[2] = static_cast<std::uint16_t>(n);
   std::uint16_t* p = w + 3;
   for (int k = 0; k < n; ++k) {
     const port::DriveSample& s = ring[static_cast<size_t>(k)];
     mm::set_u32(p, s.seq);
-    for (int j = 0; j < kDriveJoints; ++j) {
+    for (int j = 0; j < n_joints; ++j) {
       mm::set_f32(p + 2 + 2 * j, s.q[j]);
-      mm::set_f32(p + 2 + 2 * (kDriveJoints + j), s.qd[j]);
-      mm::set_f32(p + 2 + 2 * (2 * kDriveJoints + j), s.tau[j]);
+      mm::set_f32(p + 2 + 2 * (n_joints + j), s.qd[j]);
+      mm::set_f32(p + 2 + 2 * (2 * n_joints + j), s.tau[j]);
     }
-    p += mm::sample_words(kDriveJoints);
+    p += mm::sample_words(n_joints);
   }
 }
 
@@ -144,7 +145,7 @@ void load_trajectory(SimulatedDrive& d, const std::uint16_t* h) {
   d.trajectory.f_f = mm::get_f32(h + mm::kOmegaFReg);
   d.trajectory.harmonics = h[mm::kHarmonicsReg];
   d.periods = h[mm::kPeriodsReg];
-  for (int j = 0; j < kDriveJoints; ++j) {
+  for (int j = 0; j < mm::kMaxJoints; ++j) {  // every slot; the drive plays its robot's joints
     const std::uint16_t* c = h + mm::kCoefficientsReg + 2 * mm::kCoefficientsPerJoint * j;
     d.trajectory.q0[j] = mm::get_f32(c);
     for (int l = 0; l < mm::kMaxHarmonics; ++l) {

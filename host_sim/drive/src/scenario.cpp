@@ -11,13 +11,9 @@ namespace {
 
 using nlohmann::json;
 
-// Motor rotor inertias [kg m^2] of a 20 kg-class arm's servo motors (large axes 1-2, medium 3,
-// small wrist motors 4-6); reflected to the joint as J_m N^2.
-constexpr std::array<double, kDriveJoints> kMotorInertia{3e-4, 3e-4, 1.5e-4, 3e-5, 3e-5, 3e-5};
-
 json read_json(const std::string& path) {
   std::ifstream in(path);
-  if (!in) throw InputError("cannot read scenario file " + path);
+  if (!in) throw InputError("cannot read " + path);
   try {
     json j;
     in >> j;
@@ -72,13 +68,43 @@ void read_joint(const json& j, JointFriction& f, JointEffects& e, const std::str
   if (e.rotor_inertia < 0) throw InputError(where + ".rotor_inertia must be >= 0");
 }
 
+/// A list of n numbers >= 0 under `key` of the drive.json `j`, or false when absent.
+bool joint_list(const json& j, const char* key, int n, const std::string& path, std::array<double, kMaxDriveJoints>& out) {
+  if (!j.contains(key)) return false;
+  const json& a = j[key];
+  if (!a.is_array() || static_cast<int>(a.size()) != n)
+    throw InputError(path + ": " + key + ": expected " + std::to_string(n) + " numbers (one per joint)");
+  for (int k = 0; k < n; ++k) {
+    const std::string field = std::string(key) + "[" + std::to_string(k + 1) + "]";
+    const json& v = a[static_cast<size_t>(k)];
+    if (!v.is_number() || !std::isfinite(v.get<double>()) || v.get<double>() < 0)
+      throw InputError(path + ": " + field + ": expected a number >= 0");
+    out[static_cast<size_t>(k)] = v.get<double>();
+  }
+  return true;
+}
+
 }  // namespace
 
 Scenario default_scenario(const RobotDescription& robot) {
-  if (robot.num_joints != kDriveJoints) throw InputError("the simulated drive needs a six-axis robot");
+  if (robot.num_joints < 1 || robot.num_joints > kMaxDriveJoints)
+    throw InputError("the simulated drive runs 1 to " + std::to_string(kMaxDriveJoints) + " joints, '" + robot.name +
+                     "' has " + std::to_string(robot.num_joints));
   Scenario s;
   s.robot = robot.name;
-  for (int j = 0; j < kDriveJoints; ++j) {
+  s.num_joints = robot.num_joints;
+  std::array<double, kMaxDriveJoints> motor_inertia{};
+  bool noise_given = false;
+  const std::string drive_file = robot.directory + "/drive.json";
+  if (std::ifstream(drive_file)) {
+    const json d = read_json(drive_file);
+    if (!d.is_object()) throw InputError(drive_file + ": expected an object");
+    joint_list(d, "motor_inertia", robot.num_joints, drive_file, motor_inertia);
+    noise_given = joint_list(d, "tau_noise_std", robot.num_joints, drive_file, s.tau_noise_std);
+  }
+  for (int j = 0; j < robot.num_joints; ++j) {
+    if (!noise_given)
+      s.tau_noise_std[j] = robot.tau_max.size() == robot.num_joints ? kDefaultNoiseFractionOfTauMax * robot.tau_max[j] : 0.0;
     const NominalFriction f =
         static_cast<size_t>(j) < robot.friction.size() ? robot.friction[static_cast<size_t>(j)] : NominalFriction{};
     s.friction[j].Fc = f.Fc;
@@ -86,7 +112,7 @@ Scenario default_scenario(const RobotDescription& robot) {
     s.friction[j].Fs = f.Fs;
     s.friction[j].qds = f.qds;
     const double n = robot.gear_ratios[j];
-    s.effects[j].rotor_inertia = kMotorInertia[j] * n * n;
+    s.effects[j].rotor_inertia = motor_inertia[j] * n * n;
   }
   return s;
 }
@@ -113,10 +139,10 @@ Scenario load_scenario(const std::string& path, const RobotDescription& robot) {
     const json& a = j["tau_noise_std"];
     if (a.is_number()) {
       s.tau_noise_std.fill(a.get<double>());
-    } else if (a.is_array() && a.size() == kDriveJoints) {
-      for (int k = 0; k < kDriveJoints; ++k) s.tau_noise_std[k] = a[static_cast<size_t>(k)].get<double>();
+    } else if (a.is_array() && static_cast<int>(a.size()) == s.num_joints) {
+      for (int k = 0; k < s.num_joints; ++k) s.tau_noise_std[k] = a[static_cast<size_t>(k)].get<double>();
     } else {
-      throw InputError(w + ": tau_noise_std must be a number or an array of 6");
+      throw InputError(w + ": tau_noise_std must be a number or an array of " + std::to_string(s.num_joints));
     }
   }
   if (j.contains("couplings")) {
@@ -126,9 +152,9 @@ Scenario load_scenario(const std::string& path, const RobotDescription& robot) {
         throw InputError(w + ": a coupling needs \"joints\": [i, j]");
       cf.joint_i = c["joints"][0].get<int>() - 1;
       cf.joint_j = c["joints"][1].get<int>() - 1;
-      if (cf.joint_i < 0 || cf.joint_j < 0 || cf.joint_i >= kDriveJoints || cf.joint_j >= kDriveJoints ||
+      if (cf.joint_i < 0 || cf.joint_j < 0 || cf.joint_i >= s.num_joints || cf.joint_j >= s.num_joints ||
           cf.joint_i == cf.joint_j) {
-        throw InputError(w + ": coupling joints must be two different joints 1..6");
+        throw InputError(w + ": coupling joints must be two different joints 1.." + std::to_string(s.num_joints));
       }
       cf.sign = number(c, "sign", 1.0, w + ".couplings");
       cf.Fc = number(c, "Fc", 0, w + ".couplings");
@@ -138,8 +164,9 @@ Scenario load_scenario(const std::string& path, const RobotDescription& robot) {
   }
   if (j.contains("joints")) {
     const json& js = j["joints"];
-    if (!js.is_array() || js.size() != kDriveJoints) throw InputError(w + ": 'joints' must be an array of 6 objects");
-    for (int k = 0; k < kDriveJoints; ++k) {
+    if (!js.is_array() || static_cast<int>(js.size()) != s.num_joints)
+      throw InputError(w + ": 'joints' must be an array of " + std::to_string(s.num_joints) + " objects");
+    for (int k = 0; k < s.num_joints; ++k) {
       read_joint(js[static_cast<size_t>(k)], s.friction[k], s.effects[k],
                  w + ": joints[" + std::to_string(k + 1) + "]");
     }

@@ -49,8 +49,8 @@ const CompiledRobot& compiled_robot(const std::string& name) {
   if (it == registry().end() || it->second.num_joints == 0) {
     std::string known;
     for (const std::string& n : compiled_robot_names()) known += (known.empty() ? "" : ", ") + n;
-    throw InputError("robot '" + name + "' has no compiled model in this build (compiled: " + known +
-                     "); add robots/" + name + "/ (docs/robots.md) and build again");
+    throw InputError("robot '" + name + "' has no compiled model in this build (compiled: " + known + "); add robots/" +
+                     name + "/ (docs/robots.md) and build again");
   }
   return it->second;
 }

@@ -56,12 +56,12 @@ void set_study_friction(JointFriction& f, FrictionModel model) {
 /// The control law's feed-forward table: the set base parameters and the set Fc, beta (Eq. 7 part
 /// of the set friction), as Fig. 3 ("the inverse dynamic and friction model also takes phi_s").
 std::vector<std::uint8_t> set_parameter_table(const Scenario& s) {
-  std::array<double, kDriveJoints> Fc{}, beta{};
-  for (int j = 0; j < kDriveJoints; ++j) {
+  JointArray Fc{}, beta{};
+  for (int j = 0; j < kSurveyJoints; ++j) {
     Fc[static_cast<size_t>(j)] = s.friction[j].Fc;
     beta[static_cast<size_t>(j)] = s.friction[j].beta;
   }
-  const ParameterTable t = nominal_table(Fc, beta);
+  const ParameterTable t = nominal_table(s.robot, Fc, beta);
   std::vector<std::uint8_t> bytes(kTableMaxBytes);
   int size = 0;
   if (encode_table(t, bytes.data(), static_cast<int>(bytes.size()), &size) != TableStatus::ok) {
@@ -77,8 +77,8 @@ std::vector<SimulatedDrive::PlantSample> play(const RobotDescription& robot, con
                                               const DriveTrajectory& trajectory, int periods, double rate_hz,
                                               const std::vector<std::uint8_t>& table,
                                               const std::vector<double>& plant_standard,
-                                              const std::array<double, kDriveJoints>* kp,
-                                              const std::array<double, kDriveJoints>* kd) {
+                                              const JointArray* kp,
+                                              const JointArray* kd) {
   const std::string path = scratch_table_path(scenario.seed);
   std::filesystem::remove(path);
   std::vector<SimulatedDrive::PlantSample> out;
@@ -115,8 +115,8 @@ std::vector<SimulatedDrive::PlantSample> play(const RobotDescription& robot, con
 /// inertia each joint sees along the trajectory instead of at its start pose: without rotor inertia
 /// the arm's inertia about joint 1 changes several-fold as it folds, and a discrete PD loop tuned
 /// at a heavy pose goes unstable at a light one.
-void gains_along(const DriveTrajectory& trajectory, const Scenario& scenario, std::array<double, kDriveJoints>& kp,
-                 std::array<double, kDriveJoints>& kd) {
+void gains_along(const DriveTrajectory& trajectory, const Scenario& scenario, JointArray& kp,
+                 JointArray& kd) {
   using Vec = Eigen::Matrix<double, 6, 1>;
   Eigen::Matrix<double, Robot::kNumStandard, 1> phi;
   for (int i = 0; i < Robot::kNumStandard; ++i) phi[i] = dyncal::generated::er20::kNominalStandard[i];
@@ -130,7 +130,7 @@ void gains_along(const DriveTrajectory& trajectory, const Scenario& scenario, st
     m_min = m_min.cwiseMin(M.diagonal());
   }
   const double w = 2.0 * M_PI * scenario.bandwidth_hz;
-  for (int j = 0; j < kDriveJoints; ++j) {
+  for (int j = 0; j < kSurveyJoints; ++j) {
     const double m = m_min[j] + scenario.effects[j].rotor_inertia;
     kp[j] = m * w * w;
     kd[j] = 2.0 * scenario.damping * m * w;
@@ -148,7 +148,7 @@ SurveyData simulate_survey_data(const RobotDescription& robot, const SurveyDataO
   d.scenario.sample_rate_hz = o.sample_rate_hz;
   d.scenario.encoder_counts = 0;  // exact q_m (Sec. 6.1 step 1); position noise is studied separately
   if (!o.torque_noise) d.scenario.tau_noise_std.fill(0.0);
-  for (int j = 0; j < kDriveJoints; ++j) {
+  for (int j = 0; j < kSurveyJoints; ++j) {
     set_study_friction(d.scenario.friction[j], o.friction);
     d.scenario.effects[j].rotor_inertia = 0.0;  // the survey's model (Eq. 2) has none
   }
@@ -165,7 +165,7 @@ SurveyData simulate_survey_data(const RobotDescription& robot, const SurveyDataO
   d.trajectory_cond = designed.cond;
   d.trajectory.f_f = traj.f_f;
   d.trajectory.harmonics = traj.harmonics;
-  for (int j = 0; j < kDriveJoints; ++j) {
+  for (int j = 0; j < kSurveyJoints; ++j) {
     d.trajectory.q0[j] = traj.q0[j];
     for (int l = 0; l < modbus_map::kMaxHarmonics; ++l) {
       d.trajectory.a(j, l) = traj.a(j, l);
@@ -177,19 +177,19 @@ SurveyData simulate_survey_data(const RobotDescription& robot, const SurveyDataO
   const auto samples = play(robot, d.scenario, d.trajectory, o.periods, o.sample_rate_hz, d.table, {}, &d.kp, &d.kd);
   const Eigen::Index S = static_cast<Eigen::Index>(samples.size());
   d.t.resize(S);
-  d.q.resize(S, kDriveJoints);
-  d.qd.resize(S, kDriveJoints);
-  d.qdd.resize(S, kDriveJoints);
-  d.tau.resize(S, kDriveJoints);
-  d.tau_cmd.resize(S, kDriveJoints);
-  d.q_meas.resize(S, kDriveJoints);
+  d.q.resize(S, kSurveyJoints);
+  d.qd.resize(S, kSurveyJoints);
+  d.qdd.resize(S, kSurveyJoints);
+  d.tau.resize(S, kSurveyJoints);
+  d.tau_cmd.resize(S, kSurveyJoints);
+  d.q_meas.resize(S, kSurveyJoints);
   if (!(o.position_noise_std >= 0)) throw InputError("survey data: position noise >= 0");
   std::mt19937_64 rng(o.seed ^ 0x9e3779b97f4a7c15ULL);  // independent of the drive's torque noise
   std::normal_distribution<double> normal(0.0, 1.0);
   for (Eigen::Index s = 0; s < S; ++s) {
     const auto& p = samples[static_cast<size_t>(s)];
     d.t[s] = p.t;
-    for (int j = 0; j < kDriveJoints; ++j) {
+    for (int j = 0; j < kSurveyJoints; ++j) {
       d.q(s, j) = p.q[j];
       d.qd(s, j) = p.qd[j];
       d.qdd(s, j) = p.qdd[j];
@@ -200,17 +200,17 @@ SurveyData simulate_survey_data(const RobotDescription& robot, const SurveyDataO
   }
   // Only Eq. 9 reads the load torque (the Table 12 stand-in computes its own from its states).
   d.tau_load = o.friction == FrictionModel::eq9 ? load_torque(d.q, d.qd, d.qdd, d.tau)
-                                                : Eigen::MatrixXd::Zero(S, kDriveJoints).eval();
+                                                : Eigen::MatrixXd::Zero(S, kSurveyJoints).eval();
   return d;
 }
 
 std::vector<SimulatedDrive::PlantSample> simulate_closed_loop(const RobotDescription& robot, const SurveyData& data,
                                                               const std::vector<double>& phi_standard,
-                                                              const std::array<double, kDriveJoints>& Fc,
-                                                              const std::array<double, kDriveJoints>& beta) {
+                                                              const JointArray& Fc,
+                                                              const JointArray& beta) {
   Scenario s = data.scenario;
   s.tau_noise_std.fill(0.0);
-  for (int j = 0; j < kDriveJoints; ++j) {
+  for (int j = 0; j < kSurveyJoints; ++j) {
     s.friction[j] = JointFriction{};
     s.friction[j].model = FrictionModel::eq7;
     s.friction[j].Fc = Fc[j];
@@ -233,18 +233,21 @@ SurveyData sample_rows(const SurveyData& d, Eigen::Index from, Eigen::Index n) {
 ClosedLoopSimulation closed_loop_of(const RobotDescription& robot, const SurveyData& data) {
   return [&robot, &data](const Eigen::VectorXd& phi_standard, const std::array<double, 6>& Fc,
                          const std::array<double, 6>& beta) {
+    JointArray fc{}, b{};
+    std::copy(Fc.begin(), Fc.end(), fc.begin());
+    std::copy(beta.begin(), beta.end(), b.begin());
     const auto sim = simulate_closed_loop(
-        robot, data, std::vector<double>(phi_standard.data(), phi_standard.data() + phi_standard.size()), Fc, beta);
-    Eigen::MatrixXd q(static_cast<Eigen::Index>(sim.size()), kDriveJoints);
+        robot, data, std::vector<double>(phi_standard.data(), phi_standard.data() + phi_standard.size()), fc, b);
+    Eigen::MatrixXd q(static_cast<Eigen::Index>(sim.size()), kSurveyJoints);
     for (Eigen::Index s = 0; s < q.rows(); ++s)
-      for (int j = 0; j < kDriveJoints; ++j) q(s, j) = sim[static_cast<size_t>(s)].q[j];
+      for (int j = 0; j < kSurveyJoints; ++j) q(s, j) = sim[static_cast<size_t>(s)].q[j];
     return q;
   };
 }
 
 std::vector<double> set_friction(const Scenario& s, FrictionModel model) {
   std::vector<double> out;
-  for (int j = 0; j < kDriveJoints; ++j) {
+  for (int j = 0; j < kSurveyJoints; ++j) {
     const JointFriction& f = s.friction[j];
     switch (model) {
       case FrictionModel::eq7:

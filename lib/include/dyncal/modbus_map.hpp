@@ -83,15 +83,19 @@ inline constexpr std::uint16_t kModelErrorReg = 18;       // f32[kMaxJoints]
 inline constexpr std::uint16_t kActiveTableSizeReg = 32;  // u16 bytes
 inline constexpr std::uint16_t kActiveTableReg = 33;      // bytes, kTableMaxBytes
 inline constexpr std::uint16_t kTableWords = kTableMaxBytes / 2;
-inline constexpr std::uint16_t kFaultReg = 460;              // u16 DriveFault
-inline constexpr std::uint16_t kFaultJointReg = 461;         // u16 1-based joint that tripped, 0: none
-inline constexpr std::uint16_t kFaultValueReg = 462;         // f32 the measured q [rad] or qd [rad/s] at the trip
-inline constexpr std::uint16_t kRingReg = 500;               // u32 first seq, u16 count, samples
-inline constexpr std::uint16_t kRingWords = 123;             // one read of at most 125 registers
+inline constexpr std::uint16_t kFaultReg = 460;       // u16 DriveFault
+inline constexpr std::uint16_t kFaultJointReg = 461;  // u16 1-based joint that tripped, 0: none
+inline constexpr std::uint16_t kFaultValueReg = 462;  // f32 the measured q [rad] or qd [rad/s] at the trip
+inline constexpr std::uint16_t kRingReg = 500;        // u32 first seq, u16 count, samples
+inline constexpr std::uint16_t kRingWords = 123;      // one read of at most 125 registers
 /// Registers of one ring sample of a drive with `joints` joints: u32 seq, f32 q, qd, tau [joints].
-constexpr int sample_words(int joints) noexcept { return 2 + 3 * 2 * joints; }
+constexpr int sample_words(int joints) noexcept {
+  return 2 + 3 * 2 * joints;
+}
 /// Samples per ring block for `joints` joints (1 joint: 15, 3: 6, 6: 3, 7: 2).
-constexpr int samples_per_block(int joints) noexcept { return (kRingWords - 3) / sample_words(joints); }
+constexpr int samples_per_block(int joints) noexcept {
+  return (kRingWords - 3) / sample_words(joints);
+}
 inline constexpr std::uint16_t kInputWords = kRingReg + kRingWords;
 
 // --- holding registers (function codes 03, 06, 16, 23)

@@ -93,8 +93,8 @@ port::PortStatus ModbusDrive::read_info(DriveInfo& info) {
   }
   info.num_joints = r[mm::kNumJointsReg];
   if (info.num_joints < 1 || info.num_joints > mm::kMaxJoints) {
-    error_ = "the drive reports " + std::to_string(info.num_joints) + " joints (1.." +
-             std::to_string(mm::kMaxJoints) + " supported)";
+    error_ = "the drive reports " + std::to_string(info.num_joints) + " joints (1.." + std::to_string(mm::kMaxJoints) +
+             " supported)";
     return port::PortStatus::rejected;
   }
   joints_ = info.num_joints;

@@ -58,6 +58,7 @@ struct VerificationErrors {
 };
 
 struct CalibrateResult {
+  int num_joints = 0;              ///< the robot's; per-joint arrays are filled to here
   IdentifyResult batch;            ///< OLS fit of the excitation run, with cross-validation
   std::vector<std::string> names;  ///< parameter names, model order
   std::vector<double> phi_batch, phi_kf, phi_rls;

@@ -16,9 +16,9 @@ struct TrueParameter {
 
 /// True base parameters (nominal standard parameters mapped to the base set, rotor inertia of
 /// joints whose Ia is not separable added to the base parameter that absorbs it) followed by the
-/// true term values (Fc, beta, Ia, offset ...) of `scenario`, for the er20 model with `terms`.
-/// Throws InputError for a term set that is not built, or a scenario whose friction is not the
-/// model's (Eq. 7, or Eq. 8 for the power term).
+/// true term values (Fc, beta, Ia, offset ...) of `scenario`, for the model of scenario.robot
+/// (compiled into this build, drive_plant.hpp) with `terms`. Throws InputError for a robot not
+/// compiled in, a term set that is not built, or rotor inertia on a joint the model gives no column.
 std::vector<TrueParameter> true_parameters(const Scenario& scenario, unsigned terms);
 
 }  // namespace dyncal::host

@@ -13,7 +13,10 @@
 
 namespace dyncal::host {
 
-inline constexpr int kDriveJoints = 6;
+/// Joints a simulated drive can have (the register map's).
+inline constexpr int kMaxDriveJoints = 7;
+/// Torque noise of a robot without a drive.json: this fraction of each joint's tau_max [Nm].
+inline constexpr double kDefaultNoiseFractionOfTauMax = 0.005;
 
 /// Friction of one joint. Eq. 7: Fc sgn(qd) + beta qd. Eq. 4: [Fc + (Fs - Fc) exp(-|qd/qds|^delta_s)]
 /// sgn(qd) + beta qd. Eq. 5: f1 sgn - f2 sgn exp(-|qd|/f3) - f4 sgn exp(-1/(f5 |qd|)) + beta qd.
@@ -46,24 +49,28 @@ struct CoupledFriction {
   double Fc = 0, beta = 0;
 };
 
+/// Per joint, joint 1 first; entries past num_joints are unused.
 struct Scenario {
   std::string robot = "er20";
+  int num_joints = 6;
   std::uint64_t seed = 1;
   double control_rate_hz = 1000;  ///< control and integration step (RK4, `substeps` per step)
   int substeps = 2;
   double sample_rate_hz = 1000;  ///< recording rate (a divisor of the control rate)
   double bandwidth_hz = 8;       ///< PD loop natural frequency per joint (gains from M(q0))
   double damping = 1.0;
-  std::array<double, kDriveJoints> tau_noise_std{10, 10, 10, 1.78, 1.78, 1.78};  ///< Table 7 [Nm]
+  std::array<double, kMaxDriveJoints> tau_noise_std{};  ///< torque measurement noise [Nm]
   double encoder_counts = 131072;  ///< per motor revolution (quantisation: 2 pi / (counts N_j))
-  std::array<JointFriction, kDriveJoints> friction{};
-  std::array<JointEffects, kDriveJoints> effects{};
+  std::array<JointFriction, kMaxDriveJoints> friction{};
+  std::array<JointEffects, kMaxDriveJoints> effects{};
   std::vector<CoupledFriction> couplings;
 };
 
-/// The default scenario for `robot`: Eq. 7 friction with the robot file's Fc and beta, the
-/// rotor inertia a 20 kg-class arm's motors reflect (Ia = J_m N^2, J_m = 2e-4 kg m^2 / N^2 scaled,
-/// see docs/modbus.md), Table 7 noise, no undeclared effects.
+/// The default scenario for `robot`: Eq. 7 friction with the robot file's Fc and beta; from the
+/// folder's optional drive.json (docs/robots.md) the motor inertias J_m [kg m^2] (reflected rotor
+/// inertia Ia = J_m N^2, N the gear ratio; none without the file) and the torque noise [Nm]
+/// (kDefaultNoiseFractionOfTauMax of tau_max without it); no undeclared effects. Throws InputError
+/// (a malformed drive.json, a robot of more than kMaxDriveJoints joints).
 Scenario default_scenario(const RobotDescription& robot);
 
 /// Reads a scenario JSON file over the defaults of `robot`. Throws InputError naming the field.

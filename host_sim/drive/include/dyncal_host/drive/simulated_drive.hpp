@@ -1,5 +1,5 @@
 #pragma once
-// The simulated six-axis drive without its transport: plant (forward dynamics of the generated
+// The simulated drive of any compiled robot (1 to 7 joints) without its transport: plant (forward dynamics of the generated
 // model, RK4), control law (PD + inverse-dynamics feed-forward from the active parameter table,
 // survey Fig. 3), friction and effects from the scenario, measurement (encoder quantisation, torque
 // noise), recording into a ring buffer, and the parameter table (checked, persisted atomically).
@@ -17,13 +17,11 @@
 #include "dyncal/port.hpp"
 #include "dyncal_host/common/excitation_trajectory.hpp"
 #include "dyncal_host/common/robot_description.hpp"
+#include "dyncal_host/drive/drive_plant.hpp"
 #include "dyncal_host/drive/scenario.hpp"
 
 namespace dyncal::host {
 
-/// The trajectory as the register map carries it (modbus_map::kMaxJoints slots; the drive plays
-/// its robot's joints, the first slots).
-using DriveTrajectory = ExcitationTrajectory;
 
 class SimulatedDrive {
  public:
@@ -35,6 +33,7 @@ class SimulatedDrive {
   ~SimulatedDrive();
 
   std::uint32_t robot_id() const;
+  int num_joints() const;
   /// Trajectory and recording settings; only while not playing.
   DriveTrajectory trajectory;
   int periods = 2;
@@ -85,29 +84,28 @@ class SimulatedDrive {
   int flash_chunk_delay_ms = 0;
 
   /// Per joint RMS of tau_cmd - tau_ff [Nm] since start(): the drive's own model error.
-  std::array<double, kDriveJoints> model_error_rms() const;
+  JointArray model_error_rms() const;
 
   /// The exact plant state at one recorded sample (simulation studies, survey Fig. 3): q [rad],
   /// qd [rad/s], qdd [rad/s^2] of the plant at the sample instant, the commanded torque [Nm] and the
   /// measured (noisy) torque [Nm] recorded with it.
   struct PlantSample {
     double t = 0;
-    std::array<double, kDriveJoints> q{}, qd{}, qdd{}, tau_cmd{}, tau_measured{};
+    JointArray q{}, qd{}, qdd{}, tau_cmd{}, tau_measured{};
   };
   /// If set, every recorded sample also appends its PlantSample here (not through the ring).
   std::vector<PlantSample>* plant_log = nullptr;
-  /// Standard parameters of the plant (60, generated StandardParam order); nominal by default.
+  /// Standard parameters of the plant (10 N, generated StandardParam order); nominal by default.
   /// Only while not playing. Throws InputError on a size mismatch.
   void set_plant_parameters(const std::vector<double>& phi_standard);
   /// PD gains of the control law (computed by start() from M(q0) unless fixed here; the known
   /// control law IDIM-IV simulates). Only while not playing.
-  void fix_gains(const std::array<double, kDriveJoints>& kp, const std::array<double, kDriveJoints>& kd);
-  std::array<double, kDriveJoints> kp() const;
-  std::array<double, kDriveJoints> kd() const;
+  void fix_gains(const JointArray& kp, const JointArray& kd);
+  JointArray kp() const;
+  JointArray kd() const;
 
  private:
-  struct Impl;
-  std::unique_ptr<Impl> impl_;
+  std::unique_ptr<DrivePlant> plant_;  ///< the robot's compiled model (drive_plant.hpp)
   Scenario scenario_;
   std::string table_path_;
   modbus_map::DriveState state_ = modbus_map::DriveState::idle;
@@ -122,17 +120,17 @@ class SimulatedDrive {
   std::vector<std::uint8_t> active_bytes_;
   std::uint32_t table_generation_ = 0;
   std::string startup_note_;
-  std::array<double, kDriveJoints> error_sq_{};
+  JointArray error_sq_{};
   bool gains_fixed_ = false;
   long error_n_ = 0;
   std::mt19937_64 rng_;
+  std::normal_distribution<double> normal_{0.0, 1.0};
 };
 
-/// The er20 table of the nominal (CAD) base parameters with Eq. 7 friction Fc [Nm], beta [Nm s/rad]
-/// per joint: with zero friction, the drive's factory table; with a scenario's, the survey's
-/// set-parameter feed-forward (Fig. 3).
-ParameterTable nominal_table(const std::array<double, kDriveJoints>& Fc = {},
-                             const std::array<double, kDriveJoints>& beta = {});
+/// The table of robot `robot`'s nominal (CAD) base parameters with Eq. 7 friction Fc [Nm], beta
+/// [Nm s/rad] per joint: with zero friction, the drive's factory table; with a scenario's, the
+/// survey's set-parameter feed-forward (Fig. 3). Throws InputError for a robot not compiled in.
+ParameterTable nominal_table(const std::string& robot, const JointArray& Fc = {}, const JointArray& beta = {});
 
 /// Writes `bytes` to `path` atomically (temporary file in the same directory, fsync, rename, fsync
 /// of the directory): a crash at any moment leaves the old or the new content. Throws

@@ -29,13 +29,16 @@ struct SurveyDataOptions {
 /// the samples: q_m, qd_m, qdd_m of Fig. 3; q_meas with position_noise_std noise; tau the measured
 /// torque tau_jm, with noise if chosen; tau_load Eq. 9's on an Eq. 9 run, zeros on the others), and
 /// what the study knows beside them. Matrices S x 6.
+/// Joints of the study's arm (er20; the study stays er20-specific).
+inline constexpr int kSurveyJoints = 6;
+
 struct SurveyData : RunData {
   Eigen::MatrixXd tau_cmd;                      ///< commanded torque tau_jc [Nm] (noise-free)
   Scenario scenario;                            ///< friction, noise and seed the drive ran
   DriveTrajectory trajectory;                   ///< the excitation
   double trajectory_cond = 0;                   ///< cond(K) of the designed excitation for the run's
                                                 ///< friction model (Eq. 26, unit-scaled columns)
-  std::array<double, kDriveJoints> kp{}, kd{};  ///< the drive's PD gains (its known control law), set
+  JointArray kp{}, kd{};  ///< the drive's PD gains (its known control law), set
                                                 ///< from the lightest inertia along the trajectory
   std::vector<std::uint8_t> table;              ///< the drive's active table (feed-forward: set parameters)
 };
@@ -53,8 +56,8 @@ SurveyData sample_rows(const SurveyData& d, Eigen::Index from, Eigen::Index n);
 /// instruments from (Gautier et al. 2013).
 std::vector<SimulatedDrive::PlantSample> simulate_closed_loop(const RobotDescription& robot, const SurveyData& data,
                                                               const std::vector<double>& phi_standard,
-                                                              const std::array<double, kDriveJoints>& Fc,
-                                                              const std::array<double, kDriveJoints>& beta);
+                                                              const JointArray& Fc,
+                                                              const JointArray& beta);
 
 /// simulate_closed_loop as IDIM-IV takes it: the plant's positions at the run's samples (S x 6).
 ClosedLoopSimulation closed_loop_of(const RobotDescription& robot, const SurveyData& data);

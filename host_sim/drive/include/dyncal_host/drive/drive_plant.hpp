@@ -1,0 +1,88 @@
+#pragma once
+// The robot-specific half of the simulated drive: the generated model of one robot (fixed-size
+// Eigen types, N joints) as the drive runs it — forward dynamics (RK4 on M(q) qdd = tau - h(q, qd) -
+// friction - effects), the control law's feed-forward from the active table, the table check, the
+// nominal table and the true parameters of a scenario. One implementation per robot folder
+// (DrivePlantOf<Robot>, drive_plant_of.hpp) registers itself by name when the program starts
+// (host_sim/robots/); SimulatedDrive looks its robot up here.
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "dyncal/modbus_map.hpp"
+#include "dyncal/parameter_table.hpp"
+#include "dyncal_host/common/excitation_trajectory.hpp"
+#include "dyncal_host/common/robot_description.hpp"
+#include "dyncal_host/drive/ground_truth.hpp"
+#include "dyncal_host/drive/scenario.hpp"
+
+namespace dyncal::host {
+
+/// The trajectory as the register map carries it (modbus_map::kMaxJoints slots; the drive plays
+/// its robot's joints, the first slots).
+using DriveTrajectory = ExcitationTrajectory;
+/// One value per joint, joint 1 first; entries past the robot's joints are 0.
+using JointArray = std::array<double, kMaxDriveJoints>;
+
+/// A drive trip: which limit, the 0-based joint, the measured value that broke it.
+struct Trip {
+  modbus_map::DriveFault fault = modbus_map::DriveFault::none;
+  int joint = 0;
+  double value = 0;
+};
+
+/// One control period's numbers (SI units, joint side).
+struct PlantStep {
+  Trip trip;  ///< a trip stops the period before the control law; the rest is then unset
+  JointArray q_meas{}, qd_meas{};  ///< quantised encoder position, its backward difference
+  JointArray tau_ff{}, tau_cmd{};  ///< feed-forward of the active table; commanded torque (+ PD)
+  JointArray q{}, qd{}, qdd{};     ///< the exact plant state at the period's start
+};
+
+class DrivePlant {
+ public:
+  virtual ~DrivePlant() = default;
+  virtual std::uint32_t robot_id() const = 0;
+  virtual int num_joints() const = 0;
+  virtual int num_standard() const = 0;
+  /// Format-independent checks of a decoded table: robot id, a model this drive runs (the built
+  /// term sets, model_terms.hpp), parameter count and values (check_table).
+  virtual TableStatus check(const ParameterTable& table) const = 0;
+  /// The table of the nominal (CAD) base parameters with Eq. 7 friction Fc [Nm], beta [Nm s/rad].
+  virtual ParameterTable nominal_table(const JointArray& Fc, const JointArray& beta) const = 0;
+  /// ground_truth.hpp's true_parameters for this robot.
+  virtual std::vector<TrueParameter> true_parameters(const Scenario& scenario, unsigned terms) const = 0;
+  /// Limits, encoder resolution and rotor inertia from the robot file and the scenario.
+  virtual void configure(const RobotDescription& robot, const Scenario& scenario) = 0;
+  /// Standard parameters of the plant (num_standard(), generated order). Throws InputError on a size mismatch.
+  virtual void set_plant_parameters(const std::vector<double>& phi_standard) = 0;
+  /// The feed-forward model of `table`, which passed check().
+  virtual void set_active(const ParameterTable& table) = 0;
+  /// Puts the plant on the trajectory at t = 0; unless the gains are fixed, PD gains from M(q0)
+  /// (natural frequency bandwidth_hz, damping of the scenario).
+  virtual void begin(const DriveTrajectory& trajectory, const Scenario& scenario, bool gains_fixed, double dt) = 0;
+  /// One control period at `time` (the trajectory's clock; `clock`: time since the drive started,
+  /// for warm-up effects): measure, check limits, control law, then integrate the plant by dt.
+  virtual PlantStep step(const DriveTrajectory& trajectory, const Scenario& scenario, const ParameterTable& active,
+                         double time, double clock, double dt) = 0;
+  virtual void fix_gains(const JointArray& kp, const JointArray& kd) = 0;
+  virtual JointArray kp() const = 0;
+  virtual JointArray kd() const = 0;
+};
+
+using DrivePlantFactory = std::unique_ptr<DrivePlant> (*)();
+
+/// Registers robot `name`'s plant; called from static initialisers (host_sim/robots/). Returns true.
+bool register_drive_plant(const std::string& name, DrivePlantFactory factory);
+
+/// A new plant of `robot` (its joint count checked). Throws InputError listing the robots compiled
+/// into this build when it is not one of them.
+std::unique_ptr<DrivePlant> make_drive_plant(const RobotDescription& robot);
+
+/// A new plant of the compiled robot `name`. Throws InputError as above.
+std::unique_ptr<DrivePlant> make_drive_plant(const std::string& name);
+
+}  // namespace dyncal::host

@@ -1,0 +1,370 @@
+#pragma once
+// DrivePlantOf<Robot>: the simulated drive's plant for one generated robot model (drive_plant.hpp).
+// Included by the robots' registration units (host_sim/robots/robot_drive.cpp.in) only: each robot
+// compiles its own fixed-size copy.
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+#include <cmath>
+#include <limits>
+#include <optional>
+
+#include "dyncal/effect_terms.hpp"
+#include "dyncal/identification_model.hpp"
+#include "dyncal/table_check.hpp"
+#include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/common/model_terms.hpp"
+#include "dyncal_host/drive/drive_plant.hpp"
+
+namespace dyncal::host {
+
+/// The generated model's namespace-level data a plant needs besides the Robot type.
+struct GeneratedRobotData {
+  const double* nominal_standard;                 ///< kNominalStandard [kNumStandard]
+  const double* rotor_inertia_absorbed_coefficient;  ///< kRotorInertiaAbsorbedCoefficient [kNumJoints]
+};
+
+template <class Robot>
+class DrivePlantOf final : public DrivePlant {
+ public:
+  static constexpr int N = Robot::kNumJoints;
+  static_assert(N >= 1 && N <= kMaxDriveJoints, "the simulated drive runs 1 to kMaxDriveJoints joints");
+  using Vec = Eigen::Matrix<double, N, 1>;
+  using Mat = Eigen::Matrix<double, N, N>;
+  using StdVec = Eigen::Matrix<double, Robot::kNumStandard, 1>;
+
+  explicit DrivePlantOf(const GeneratedRobotData& data) : data_(data) {
+    for (int i = 0; i < Robot::kNumStandard; ++i) phi_true_[i] = data_.nominal_standard[i];
+  }
+
+  std::uint32_t robot_id() const override { return Robot::kRobotId; }
+  int num_joints() const override { return N; }
+  int num_standard() const override { return Robot::kNumStandard; }
+
+  TableStatus check(const ParameterTable& t) const override {
+    if (t.robot_id != Robot::kRobotId) return TableStatus::wrong_robot;
+    const std::optional<ModelOps> ops = find_ops(t.model_id);
+    return ops ? ops->check(t) : TableStatus::wrong_model;
+  }
+
+  ParameterTable nominal_table(const JointArray& Fc, const JointArray& beta) const override {
+    using Model = IdentificationModel<Robot, kFrictionEq7>;
+    StdVec phi_std;
+    for (int i = 0; i < Robot::kNumStandard; ++i) phi_std[i] = data_.nominal_standard[i];
+    Eigen::Matrix<double, Robot::kNumBase, 1> phi_b;
+    Robot::standard_to_base(phi_std, phi_b);
+    typename Model::template ParamVector<double> phi = Model::template ParamVector<double>::Zero();
+    phi.template head<Robot::kNumBase>() = phi_b;
+    for (int i = Robot::kNumBase; i < Model::kNumParams; ++i) {
+      const ParamInfo info = Model::info(i);
+      const size_t j = static_cast<size_t>(info.joint - 1);
+      phi[i] = info.term == term::coulomb ? Fc[j] : beta[j];
+    }
+    ParameterTable t;
+    make_table<Model>(phi, t);
+    return t;
+  }
+
+  std::vector<TrueParameter> true_parameters(const Scenario& s, unsigned terms) const override {
+    return with_term_set<Truth>(terms, s, data_);
+  }
+
+  void configure(const RobotDescription& robot, const Scenario& scenario) override {
+    q_min_ = robot.q_min;
+    q_max_ = robot.q_max;
+    qd_max_ = robot.qd_max;
+    for (int j = 0; j < N; ++j) {
+      ia_[j] = scenario.effects[j].rotor_inertia;
+      quantum_[j] = scenario.encoder_counts > 0
+                        ? 2.0 * M_PI / (scenario.encoder_counts * std::fabs(robot.gear_ratios[j]))
+                        : 0.0;
+    }
+  }
+
+  void set_plant_parameters(const std::vector<double>& phi_standard) override {
+    if (static_cast<int>(phi_standard.size()) != Robot::kNumStandard) {
+      throw InputError("plant parameters: expected " + std::to_string(Robot::kNumStandard) + " standard parameters");
+    }
+    for (int i = 0; i < Robot::kNumStandard; ++i) phi_true_[i] = phi_standard[static_cast<size_t>(i)];
+  }
+
+  void set_active(const ParameterTable& table) override { ops_ = *find_ops(table.model_id); }
+
+  void begin(const DriveTrajectory& trajectory, const Scenario& scenario, bool gains_fixed, double dt) override {
+    Vec q_d, qd_d, qdd_d;
+    trajectory.evaluate(0.0, q_d, qd_d, qdd_d);  // the simulation starts on the trajectory
+    q_ = q_d;
+    qd_ = qd_d;
+    q_meas_prev_ = quantise(q_) - qd_d * dt;
+    if (gains_fixed) return;
+    // PD gains (natural frequency bandwidth_hz, damping zeta) from the smallest effective inertia
+    // 1 / (M + Ia)^-1_jj each joint has along the trajectory: the loop closes on the velocity of a
+    // backward difference, one sample late, and a gain set for a heavy pose (or from the diagonal
+    // of M, which ignores the coupling of the links) makes it oscillate at a light one.
+    constexpr int kGrid = 400;
+    Vec m = Vec::Constant(std::numeric_limits<double>::infinity());
+    for (int k = 0; k < kGrid; ++k) {
+      Vec q, qd, qdd;
+      trajectory.evaluate(trajectory.period() * k / kGrid, q, qd, qdd);
+      Mat M;
+      Robot::mass_matrix(q, phi_true_, M);
+      M.diagonal() += ia_;
+      const Mat M_inv = M.ldlt().solve(Mat::Identity());
+      m = m.cwiseMin(M_inv.diagonal().cwiseInverse());
+    }
+    const double w = 2.0 * M_PI * scenario.bandwidth_hz;
+    for (int j = 0; j < N; ++j) {
+      kp_[j] = m[j] * w * w;
+      kd_[j] = 2.0 * scenario.damping * m[j] * w;
+    }
+  }
+
+  PlantStep step(const DriveTrajectory& trajectory, const Scenario& scenario, const ParameterTable& active,
+                 double time, double clock, double dt) override {
+    PlantStep out;
+    // Measurement: quantised encoder position, velocity by backward difference.
+    const Vec q_meas = quantise(q_);
+    const Vec qd_meas = (q_meas - q_meas_prev_) / dt;
+    q_meas_prev_ = q_meas;
+    out.trip = check_limits(q_meas, qd_meas);
+    if (out.trip.fault != modbus_map::DriveFault::none) return out;
+    // Control law (survey Fig. 3): feed-forward from the active table plus PD on the tracking error.
+    Vec q_d, qd_d, qdd_d, tau_ff;
+    trajectory.evaluate(time, q_d, qd_d, qdd_d);
+    ops_.feedforward(active, q_d, qd_d, qdd_d, tau_ff);
+    const Vec tau_cmd = tau_ff + kp_.cwiseProduct(q_d - q_meas) + kd_.cwiseProduct(qd_d - qd_meas);
+    for (int j = 0; j < N; ++j) {
+      out.q_meas[j] = q_meas[j];
+      out.qd_meas[j] = qd_meas[j];
+      out.tau_ff[j] = tau_ff[j];
+      out.tau_cmd[j] = tau_cmd[j];
+      out.q[j] = q_[j];
+      out.qd[j] = qd_[j];
+    }
+    integrate(scenario, tau_cmd, clock, dt, out.qdd);
+    return out;
+  }
+
+  void fix_gains(const JointArray& kp, const JointArray& kd) override {
+    for (int j = 0; j < N; ++j) {
+      kp_[j] = kp[j];
+      kd_[j] = kd[j];
+    }
+  }
+  JointArray kp() const override { return to_array(kp_); }
+  JointArray kd() const override { return to_array(kd_); }
+
+ private:
+  /// Feed-forward tau = K(q, qd, qdd) phi and table check of one supported model.
+  struct ModelOps {
+    unsigned terms = 0;
+    TableStatus (*check)(const ParameterTable&) = nullptr;
+    void (*feedforward)(const ParameterTable&, const Vec&, const Vec&, const Vec&, Vec&) = nullptr;
+  };
+
+  template <unsigned Terms>
+  static void feedforward(const ParameterTable& t, const Vec& q, const Vec& qd, const Vec& qdd, Vec& tau) {
+    using Model = IdentificationModel<Robot, Terms>;
+    typename Model::template Regressor<double> K;
+    Model::regressor(q, qd, qdd, Vec::Zero().eval(), K);
+    typename Model::template ParamVector<double> phi;
+    for (int i = 0; i < Model::kNumParams; ++i) phi[i] = t.values[i];
+    tau = K * phi;
+    // Effect terms of the table (dyncal diagnose); load friction needs the rigid-body torque.
+    const Vec tau_rb = K.template leftCols<Robot::kNumBase>() * phi.template head<Robot::kNumBase>();
+    add_effect_torques(t.effects, t.effect_count, q, qd, qdd, tau_rb, tau);
+  }
+
+  template <unsigned Terms>
+  struct OpsFor {
+    static ModelOps run() {
+      return ModelOps{Terms, &check_table<IdentificationModel<Robot, Terms>>, &feedforward<Terms>};
+    }
+  };
+
+  /// The models this drive runs: the term sets the host tools build (model_terms.hpp).
+  static std::optional<ModelOps> find_ops(std::uint32_t model_id) {
+    if (!is_built_term_set(model_id)) return std::nullopt;
+    return with_term_set<OpsFor>(model_id);
+  }
+
+  template <unsigned Terms>
+  struct Truth {
+    static std::vector<TrueParameter> run(const Scenario& s, const GeneratedRobotData& data);
+  };
+
+  Vec quantise(const Vec& q) const {
+    Vec out = q;
+    for (int j = 0; j < N; ++j) {
+      if (quantum_[j] > 0) out[j] = quantum_[j] * std::round(out[j] / quantum_[j]);
+    }
+    return out;
+  }
+
+  /// The first limit the measurements break: a non-finite q or qd on any joint first (the plant
+  /// diverged), then positions outside [q_min, q_max], then speeds above qd_max; joint 1 first.
+  Trip check_limits(const Vec& q, const Vec& qd) const {
+    for (int j = 0; j < N; ++j) {
+      if (!std::isfinite(q[j]) || !std::isfinite(qd[j]))
+        return {modbus_map::DriveFault::non_finite_state, j, std::numeric_limits<double>::quiet_NaN()};
+    }
+    for (int j = 0; j < N; ++j) {
+      if (q[j] < q_min_[j] || q[j] > q_max_[j]) return {modbus_map::DriveFault::position_limit, j, q[j]};
+    }
+    for (int j = 0; j < N; ++j) {
+      if (std::fabs(qd[j]) > qd_max_[j]) return {modbus_map::DriveFault::velocity_limit, j, qd[j]};
+    }
+    return {};
+  }
+
+  void integrate(const Scenario& scenario, const Vec& tau_cmd, double clock, double dt, JointArray& qdd0);
+
+  static JointArray to_array(const Vec& v) {
+    JointArray a{};
+    for (int j = 0; j < N; ++j) a[j] = v[j];
+    return a;
+  }
+
+  GeneratedRobotData data_;
+  StdVec phi_true_;
+  Vec ia_ = Vec::Zero();
+  Vec q_ = Vec::Zero(), qd_ = Vec::Zero();  // plant state
+  Vec q_meas_prev_ = Vec::Zero();
+  Vec kp_ = Vec::Zero(), kd_ = Vec::Zero();
+  Vec quantum_ = Vec::Zero();  // encoder resolution on the joint side [rad]
+  Vec q_min_ = Vec::Zero(), q_max_ = Vec::Zero(), qd_max_ = Vec::Zero();  // the drive's trips
+  ModelOps ops_{};  // feed-forward and check of the active table's model
+};
+
+/// Plant: (M(q) + diag(Ia)) qdd = tau - h(q, qd) - friction - effects, RK4 with zero-order hold.
+/// qdd0: the acceleration at the period's start (the first RK4 stage).
+template <class Robot>
+void DrivePlantOf<Robot>::integrate(const Scenario& scenario, const Vec& tau_cmd, double clock, double dt,
+                                    JointArray& qdd0) {
+  const double warm = clock;
+  auto accel = [&](const Vec& q, const Vec& qd, Vec& qdd) {
+    Mat M;
+    Robot::mass_matrix(q, phi_true_, M);
+    M.diagonal() += ia_;
+    Vec h;
+    Robot::inverse_dynamics(q, qd, Vec::Zero().eval(), phi_true_, h);
+    Vec rhs = tau_cmd - h;
+    for (int j = 0; j < N; ++j) {
+      const JointEffects& e = scenario.effects[j];
+      JointFriction f = scenario.friction[j];
+      if (e.viscous_drift != 0) f.beta *= 1.0 + e.viscous_drift * (1.0 - std::exp(-warm / e.drift_time_constant));
+      double tf = friction_torque(f, qd[j], h[j]) + e.offset;
+      if (e.load_friction != 0) tf += e.load_friction * std::fabs(h[j]) * (qd[j] > 0 ? 1.0 : (qd[j] < 0 ? -1.0 : 0.0));
+      if (e.cogging_amplitude != 0) tf += e.cogging_amplitude * std::sin(e.cogging_cycles * q[j] + e.cogging_phase);
+      rhs[j] -= tf;
+    }
+    for (const CoupledFriction& c : scenario.couplings) {
+      const double v = qd[c.joint_i] + c.sign * qd[c.joint_j];
+      const double f = c.Fc * (v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0)) + c.beta * v;
+      rhs[c.joint_i] -= f;
+      rhs[c.joint_j] -= c.sign * f;
+    }
+    qdd = M.ldlt().solve(rhs);
+  };
+  // Explicit RK4 is stable for a damping rate lambda while h lambda < 2.78. The viscous friction of
+  // a light link (no rotor inertia, or a light plant under test) can exceed that at the nominal
+  // substep: substeps grow with lambda_max(M^-1 B), B = diag(beta), at the step's start.
+  int substeps = scenario.substeps;
+  {
+    Mat M;
+    Robot::mass_matrix(q_, phi_true_, M);
+    M.diagonal() += ia_;
+    const Eigen::LLT<Mat> llt(M);
+    if (llt.info() == Eigen::Success) {
+      Mat B = Mat::Zero();
+      for (int j = 0; j < N; ++j) {
+        const JointEffects& e = scenario.effects[j];
+        double beta = scenario.friction[j].beta;
+        if (e.viscous_drift != 0) beta *= 1.0 + e.viscous_drift;
+        B(j, j) = std::max(beta, 0.0);
+      }
+      // lambda_max(M^-1 B) = lambda_max(L^-1 B L^-T), bounded by its largest row sum.
+      const Mat A = llt.matrixL().solve(llt.matrixL().solve(B).transpose());
+      const double lambda = A.cwiseAbs().rowwise().sum().maxCoeff();
+      substeps = std::max(substeps, static_cast<int>(std::ceil(dt * lambda / 2.0)));
+    }
+  }
+  const double hstep = dt / substeps;
+  for (int k = 0; k < substeps; ++k) {
+    Vec a1, a2, a3, a4;
+    accel(q_, qd_, a1);
+    if (k == 0) {
+      for (int j = 0; j < N; ++j) qdd0[j] = a1[j];
+    }
+    accel(q_ + 0.5 * hstep * qd_, qd_ + 0.5 * hstep * a1, a2);
+    accel(q_ + 0.5 * hstep * (qd_ + 0.5 * hstep * a1), qd_ + 0.5 * hstep * a2, a3);
+    accel(q_ + hstep * (qd_ + 0.5 * hstep * a2), qd_ + hstep * a3, a4);
+    q_ += hstep * qd_ + hstep * hstep / 6.0 * (a1 + a2 + a3);
+    qd_ += hstep / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4);
+  }
+}
+
+/// True base parameters (nominal standard parameters mapped to the base set, rotor inertia of
+/// joints whose Ia is not separable added to the base parameter that absorbs it) followed by the
+/// scenario's term values, in the order of IdentificationModel<Robot, Terms>.
+template <class Robot>
+template <unsigned Terms>
+std::vector<TrueParameter> DrivePlantOf<Robot>::Truth<Terms>::run(const Scenario& s, const GeneratedRobotData& data) {
+  using Model = IdentificationModel<Robot, Terms>;
+  StdVec phi;
+  for (int i = 0; i < Robot::kNumStandard; ++i) phi[i] = data.nominal_standard[i];
+  Eigen::Matrix<double, Robot::kNumBase, 1> phi_b;
+  Robot::standard_to_base(phi, phi_b);
+  for (int j = 0; j < N; ++j) {
+    const bool own_column = Model::has_column(term::rotor_inertia, j);
+    if (!Robot::rotor_inertia_separate(j)) {
+      phi_b[Robot::rotor_inertia_absorbed_into(j)] +=
+          data.rotor_inertia_absorbed_coefficient[j] * s.effects[j].rotor_inertia;
+    } else if (!own_column && s.effects[j].rotor_inertia != 0) {
+      throw InputError("joint " + std::to_string(j + 1) + " has rotor inertia the model does not declare");
+    }
+  }
+  std::vector<TrueParameter> out;
+  for (int i = 0; i < Model::kNumParams; ++i) {
+    const ParamInfo info = Model::info(i);
+    TrueParameter p;
+    if (info.kind == ParamKind::base) {
+      p.name = Robot::base_param_name(info.base_index);
+      p.value = phi_b[info.base_index];
+    } else {
+      const int j = info.joint - 1;
+      p.name = std::string(term_name(info.term)) + std::to_string(info.joint);
+      switch (info.term) {
+        case term::coulomb:
+          p.value = s.friction[j].Fc;
+          break;
+        case term::viscous:
+          p.value = s.friction[j].beta;
+          break;
+        case term::power:
+          p.value = s.friction[j].fp;
+          break;
+        case term::rotor_inertia:
+          p.value = s.effects[j].rotor_inertia;
+          break;
+        case term::offset:
+          p.value = s.effects[j].offset;
+          break;
+        default:
+          p.value = 0;
+      }
+    }
+    out.push_back(p);
+  }
+  return out;
+}
+
+/// Registers DrivePlantOf<Robot> under Robot::kName; returns true (for a static initialiser).
+template <class Robot>
+bool register_drive_plant_of(const double (&nominal_standard)[Robot::kNumStandard],
+                             const double (&rotor_inertia_absorbed_coefficient)[Robot::kNumJoints]) {
+  static const GeneratedRobotData data{nominal_standard, rotor_inertia_absorbed_coefficient};
+  return register_drive_plant(Robot::kName, [] { return std::unique_ptr<DrivePlant>(new DrivePlantOf<Robot>(data)); });
+}
+
+}  // namespace dyncal::host
