@@ -2,9 +2,9 @@
 #include <fstream>
 
 #include "commands.hpp"
-#include "dyncal_host/identification/compiled_robot.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/robot_description.hpp"
+#include "dyncal_host/identification/compiled_robot.hpp"
 
 namespace dyncal::app {
 

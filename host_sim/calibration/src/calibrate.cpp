@@ -11,8 +11,8 @@
 #include <ostream>
 #include <random>
 
-#include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/calibration/online_model.hpp"
+#include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/model_terms.hpp"
 #include "dyncal_host/identification/compiled_robot.hpp"
 #include "dyncal_host/identification/excitation.hpp"
@@ -38,7 +38,8 @@ void progress_bar(std::ostream& out, double fraction, long samples, const char* 
 
 /// Verification run: stream a fresh trajectory and read the drive's model error.
 JointLog verification_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory& t, const CalibrateOptions& o,
-                          std::ostream* progress, std::uint32_t* lost, std::array<double, modbus_map::kMaxJoints>& drive_error) {
+                          std::ostream* progress, std::uint32_t* lost,
+                          std::array<double, modbus_map::kMaxJoints>& drive_error) {
   JointLog log = stream_run(drive, t, {"verification", o.verify_periods, o.sample_rate_hz, o.fault_dir}, progress, lost,
                             nullptr, nullptr);
   linux_port::DriveInfo info;

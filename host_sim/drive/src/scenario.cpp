@@ -69,7 +69,8 @@ void read_joint(const json& j, JointFriction& f, JointEffects& e, const std::str
 }
 
 /// A list of n numbers >= 0 under `key` of the drive.json `j`, or false when absent.
-bool joint_list(const json& j, const char* key, int n, const std::string& path, std::array<double, kMaxDriveJoints>& out) {
+bool joint_list(const json& j, const char* key, int n, const std::string& path,
+                std::array<double, kMaxDriveJoints>& out) {
   if (!j.contains(key)) return false;
   const json& a = j[key];
   if (!a.is_array() || static_cast<int>(a.size()) != n)
@@ -104,7 +105,8 @@ Scenario default_scenario(const RobotDescription& robot) {
   }
   for (int j = 0; j < robot.num_joints; ++j) {
     if (!noise_given)
-      s.tau_noise_std[j] = robot.tau_max.size() == robot.num_joints ? kDefaultNoiseFractionOfTauMax * robot.tau_max[j] : 0.0;
+      s.tau_noise_std[j] =
+          robot.tau_max.size() == robot.num_joints ? kDefaultNoiseFractionOfTauMax * robot.tau_max[j] : 0.0;
     const NominalFriction f =
         static_cast<size_t>(j) < robot.friction.size() ? robot.friction[static_cast<size_t>(j)] : NominalFriction{};
     s.friction[j].Fc = f.Fc;

@@ -76,8 +76,7 @@ std::vector<std::uint8_t> set_parameter_table(const Scenario& s) {
 std::vector<SimulatedDrive::PlantSample> play(const RobotDescription& robot, const Scenario& scenario,
                                               const DriveTrajectory& trajectory, int periods, double rate_hz,
                                               const std::vector<std::uint8_t>& table,
-                                              const std::vector<double>& plant_standard,
-                                              const JointArray* kp,
+                                              const std::vector<double>& plant_standard, const JointArray* kp,
                                               const JointArray* kd) {
   const std::string path = scratch_table_path(scenario.seed);
   std::filesystem::remove(path);
@@ -115,8 +114,7 @@ std::vector<SimulatedDrive::PlantSample> play(const RobotDescription& robot, con
 /// inertia each joint sees along the trajectory instead of at its start pose: without rotor inertia
 /// the arm's inertia about joint 1 changes several-fold as it folds, and a discrete PD loop tuned
 /// at a heavy pose goes unstable at a light one.
-void gains_along(const DriveTrajectory& trajectory, const Scenario& scenario, JointArray& kp,
-                 JointArray& kd) {
+void gains_along(const DriveTrajectory& trajectory, const Scenario& scenario, JointArray& kp, JointArray& kd) {
   using Vec = Eigen::Matrix<double, 6, 1>;
   Eigen::Matrix<double, Robot::kNumStandard, 1> phi;
   for (int i = 0; i < Robot::kNumStandard; ++i) phi[i] = dyncal::generated::er20::kNominalStandard[i];
@@ -206,8 +204,7 @@ SurveyData simulate_survey_data(const RobotDescription& robot, const SurveyDataO
 
 std::vector<SimulatedDrive::PlantSample> simulate_closed_loop(const RobotDescription& robot, const SurveyData& data,
                                                               const std::vector<double>& phi_standard,
-                                                              const JointArray& Fc,
-                                                              const JointArray& beta) {
+                                                              const JointArray& Fc, const JointArray& beta) {
   Scenario s = data.scenario;
   s.tau_noise_std.fill(0.0);
   for (int j = 0; j < kSurveyJoints; ++j) {

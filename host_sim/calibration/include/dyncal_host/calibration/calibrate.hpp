@@ -53,7 +53,7 @@ struct CalibrateOptions {
 };
 
 struct VerificationErrors {
-  std::array<double, modbus_map::kMaxJoints> rms{};     ///< per joint RMS of tau - K phi on the fresh trajectory [Nm]
+  std::array<double, modbus_map::kMaxJoints> rms{};      ///< per joint RMS of tau - K phi on the fresh trajectory [Nm]
   std::array<double, modbus_map::kMaxJoints> rms_tau{};  ///< per joint RMS of tau [Nm]
 };
 
@@ -68,8 +68,9 @@ struct CalibrateResult {
   double stream_seconds = 0;      ///< wall time of the excitation stream
   double samples_per_second = 0;  ///< streamed samples per wall second
   long online_updates = 0, online_rejected = 0;
-  VerificationErrors verify_batch, verify_kf, verify_rls;           ///< fresh trajectory, identified models
-  std::array<double, modbus_map::kMaxJoints> drive_error_before{}, drive_error_after{};  ///< drive's own RMS(tau - tau_ff)
+  VerificationErrors verify_batch, verify_kf, verify_rls;  ///< fresh trajectory, identified models
+  std::array<double, modbus_map::kMaxJoints> drive_error_before{},
+      drive_error_after{};           ///< drive's own RMS(tau - tau_ff)
   std::vector<std::string> effects;  ///< explanations of the effects diagnosed and flashed
   std::vector<std::string> effects_not_flashed;
   bool flashed = false;

@@ -36,7 +36,7 @@ struct Trip {
 
 /// One control period's numbers (SI units, joint side).
 struct PlantStep {
-  Trip trip;  ///< a trip stops the period before the control law; the rest is then unset
+  Trip trip;                       ///< a trip stops the period before the control law; the rest is then unset
   JointArray q_meas{}, qd_meas{};  ///< quantised encoder position, its backward difference
   JointArray tau_ff{}, tau_cmd{};  ///< feed-forward of the active table; commanded torque (+ PD)
   JointArray q{}, qd{}, qdd{};     ///< the exact plant state at the period's start

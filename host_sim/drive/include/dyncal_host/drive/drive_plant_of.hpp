@@ -20,7 +20,7 @@ namespace dyncal::host {
 
 /// The generated model's namespace-level data a plant needs besides the Robot type.
 struct GeneratedRobotData {
-  const double* nominal_standard;                 ///< kNominalStandard [kNumStandard]
+  const double* nominal_standard;                    ///< kNominalStandard [kNumStandard]
   const double* rotor_inertia_absorbed_coefficient;  ///< kRotorInertiaAbsorbedCoefficient [kNumJoints]
 };
 
@@ -75,9 +75,8 @@ class DrivePlantOf final : public DrivePlant {
     qd_max_ = robot.qd_max;
     for (int j = 0; j < N; ++j) {
       ia_[j] = scenario.effects[j].rotor_inertia;
-      quantum_[j] = scenario.encoder_counts > 0
-                        ? 2.0 * M_PI / (scenario.encoder_counts * std::fabs(robot.gear_ratios[j]))
-                        : 0.0;
+      quantum_[j] =
+          scenario.encoder_counts > 0 ? 2.0 * M_PI / (scenario.encoder_counts * std::fabs(robot.gear_ratios[j])) : 0.0;
     }
   }
 
@@ -119,8 +118,8 @@ class DrivePlantOf final : public DrivePlant {
     }
   }
 
-  PlantStep step(const DriveTrajectory& trajectory, const Scenario& scenario, const ParameterTable& active,
-                 double time, double clock, double dt) override {
+  PlantStep step(const DriveTrajectory& trajectory, const Scenario& scenario, const ParameterTable& active, double time,
+                 double clock, double dt) override {
     PlantStep out;
     // Measurement: quantised encoder position, velocity by backward difference.
     const Vec q_meas = quantise(q_);
@@ -231,7 +230,7 @@ class DrivePlantOf final : public DrivePlant {
   Vec q_ = Vec::Zero(), qd_ = Vec::Zero();  // plant state
   Vec q_meas_prev_ = Vec::Zero();
   Vec kp_ = Vec::Zero(), kd_ = Vec::Zero();
-  Vec quantum_ = Vec::Zero();  // encoder resolution on the joint side [rad]
+  Vec quantum_ = Vec::Zero();                                             // encoder resolution on the joint side [rad]
   Vec q_min_ = Vec::Zero(), q_max_ = Vec::Zero(), qd_max_ = Vec::Zero();  // the drive's trips
   ModelOps ops_{};  // feed-forward and check of the active table's model
 };

@@ -60,7 +60,7 @@ struct Scenario {
   double bandwidth_hz = 8;       ///< PD loop natural frequency per joint (gains from M(q0))
   double damping = 1.0;
   std::array<double, kMaxDriveJoints> tau_noise_std{};  ///< torque measurement noise [Nm]
-  double encoder_counts = 131072;  ///< per motor revolution (quantisation: 2 pi / (counts N_j))
+  double encoder_counts = 131072;                       ///< per motor revolution (quantisation: 2 pi / (counts N_j))
   std::array<JointFriction, kMaxDriveJoints> friction{};
   std::array<JointEffects, kMaxDriveJoints> effects{};
   std::vector<CoupledFriction> couplings;

@@ -1,8 +1,8 @@
 #pragma once
-// The simulated drive of any compiled robot (1 to 7 joints) without its transport: plant (forward dynamics of the generated
-// model, RK4), control law (PD + inverse-dynamics feed-forward from the active parameter table,
-// survey Fig. 3), friction and effects from the scenario, measurement (encoder quantisation, torque
-// noise), recording into a ring buffer, and the parameter table (checked, persisted atomically).
+// The simulated drive of any compiled robot (1 to 7 joints) without its transport: plant (forward dynamics of the
+// generated model, RK4), control law (PD + inverse-dynamics feed-forward from the active parameter table, survey Fig.
+// 3), friction and effects from the scenario, measurement (encoder quantisation, torque noise), recording into a ring
+// buffer, and the parameter table (checked, persisted atomically).
 
 #include <cstdint>
 #include <deque>
@@ -21,7 +21,6 @@
 #include "dyncal_host/drive/scenario.hpp"
 
 namespace dyncal::host {
-
 
 class SimulatedDrive {
  public:
