@@ -158,6 +158,20 @@ TEST_P(RobotFolder, DiagnoseFindsNothingOnALogWithNothingUndeclared) {
   for (const DiagnosedEffect& e : r.effects) ADD_FAILURE() << "false positive: " << effect_name(e.kind);
 }
 
+// robot.json declares no rotor inertia ("rotor_inertia": false, as `robot import` writes): a model
+// asking for it identifies without it and says so, per joint.
+TEST_P(RobotFolder, RotorInertiaTheFileDoesNotDeclareIsANoteNotACrash) {
+  const RobotDescription robot = test_robot(GetParam());
+  const SimulatedLog s = simulate(robot, 3);
+  IdentifyOptions o;
+  o.terms = dyncal::kFrictionEq7 | dyncal::term::rotor_inertia;
+  const IdentifyResult r = identify(robot, s.log, o);
+  EXPECT_EQ(static_cast<Eigen::Index>(r.params.size()), s.phi.size());  // no Ia column
+  int notes = 0;
+  for (const std::string& n : r.notes) notes += n.find("declares no rotor inertia") != std::string::npos;
+  EXPECT_EQ(notes, robot.num_joints);
+}
+
 INSTANTIATE_TEST_SUITE_P(TestRobots, RobotFolder, ::testing::Values("arm3", "cobot7"));
 
 }  // namespace

@@ -32,7 +32,8 @@ inline constexpr int kMaxRobotJoints = 7;
 /// - `standard_to_base(phi, phi_b)`: the b base parameters of n standard ones;
 /// - names and structure: `base_param_name(i)`, `standard_param_name(i)`,
 ///   `base_column_first_row(b)` / `base_column_last_row(b)` (rows where base column b can be
-///   nonzero), `rotor_inertia_separate(j)` / `rotor_inertia_absorbed_into(j)` (0-based joint),
+///   nonzero), `rotor_inertia_separate(j)` / `rotor_inertia_absorbed_into(j)` (0-based joint;
+///   the base parameter Ia_j is grouped into, -1 when the description declares no rotor inertia),
 ///   `gravity(i)` [m/s^2] along base axis i.
 template <class R, class = void>
 struct is_robot_model : std::false_type {};

@@ -316,7 +316,12 @@ std::vector<TrueParameter> DrivePlantOf<Robot>::Truth<Terms>::run(const Scenario
   Robot::standard_to_base(phi, phi_b);
   for (int j = 0; j < N; ++j) {
     const bool own_column = Model::has_column(term::rotor_inertia, j);
-    if (!Robot::rotor_inertia_separate(j)) {
+    if (!Robot::rotor_inertia_separate(j) && Robot::rotor_inertia_absorbed_into(j) < 0) {
+      // The description declares no rotor inertia: the model has no place for it.
+      if (s.effects[j].rotor_inertia != 0)
+        throw InputError("joint " + std::to_string(j + 1) +
+                         " has rotor inertia, and the robot file declares none (\"rotor_inertia\": false)");
+    } else if (!Robot::rotor_inertia_separate(j)) {
       phi_b[Robot::rotor_inertia_absorbed_into(j)] +=
           data.rotor_inertia_absorbed_coefficient[j] * s.effects[j].rotor_inertia;
     } else if (!own_column && s.effects[j].rotor_inertia != 0) {

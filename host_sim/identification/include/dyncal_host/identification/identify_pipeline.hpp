@@ -319,7 +319,12 @@ IdentifyResult run_identify(const RobotDescription& robot, const JointLog& log, 
   res.fit_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   for (int i = 0; i < P; ++i) res.params.push_back({Pipe::param_name(i), phi[i], stdev[i]});
   for (int j = 0; j < N; ++j) {
-    if ((Terms & term::rotor_inertia) && !Robot::rotor_inertia_separate(j)) {
+    if (!(Terms & term::rotor_inertia) || Robot::rotor_inertia_separate(j)) continue;
+    if (Robot::rotor_inertia_absorbed_into(j) < 0) {  // robot.json: "rotor_inertia": false
+      res.notes.push_back("Ia" + std::to_string(j + 1) +
+                          ": the robot file declares no rotor inertia, so none is modelled (set \"rotor_inertia\": "
+                          "true in robot.json and build again to add it)");
+    } else {
       res.notes.push_back("Ia" + std::to_string(j + 1) + " is not separable from the rigid body: it is included in " +
                           Robot::base_param_name(Robot::rotor_inertia_absorbed_into(j)));
     }
