@@ -1,7 +1,7 @@
 // The test robots (tests/robots/: a 3-joint arm, a 7-joint cobot with y-axis joints, fixed tool frames
 // and a massive base) through the whole loop: their simulated drive (built from robot.json, Coulomb +
-// viscous friction from tests/data/scenarios/<robot>_friction.json, torque noise, 20-bit encoders)
-// served over Modbus TCP by a fixture, `calibrate` (excitation, online KF/RLS, batch fit, flash,
+// viscous friction from tests/data/scenarios/<robot>_friction.json, torque noise,
+// 20-bit joint encoders) served over Modbus TCP by a fixture, `calibrate` (excitation, online KF/RLS, batch fit, flash,
 // verification), run twice. Stated tolerances after the second run: friction (Fc, Fv) within 5 % of
 // its value, every other parameter's error moving no joint's torque by more than 1 % of that joint's
 // RMS torque over the excitation; each flashed table at least halves the drive's model error

@@ -96,10 +96,25 @@ class DrivePlantOf final : public DrivePlant {
     qd_ = qd_d;
     q_meas_prev_ = quantise(q_) - qd_d * dt;
     if (gains_fixed) return;
-    // PD gains (natural frequency bandwidth_hz, damping zeta) from the smallest effective inertia
-    // 1 / (M + Ia)^-1_jj each joint has along the trajectory: the loop closes on the velocity of a
-    // backward difference, one sample late, and a gain set for a heavy pose (or from the diagonal
-    // of M, which ignores the coupling of the links) makes it oscillate at a light one.
+    // PD gains from the arm's inertia at the start pose, M_jj(q0) + Ia_j: natural frequency
+    // bandwidth_hz, damping zeta. Capped for stability where the arm is light: the loop closes on
+    // a backward-difference velocity, and the discrete velocity loop needs kd dt / m_eff < 2 at
+    // every pose, m_eff = 1 / (M + Ia)^-1_jj the joint's effective inertia (the diagonal of M
+    // ignores the coupling of the links). With half that margin, kd dt / min m_eff <= 1, the
+    // inertia the gains are set for is at most min_trajectory m_eff / (2 zeta w dt).
+    const double w = 2.0 * M_PI * scenario.bandwidth_hz;
+    Mat M;
+    Robot::mass_matrix(q_, phi_true_, M);
+    const Vec m_eff = lightest_effective_inertia(trajectory);
+    for (int j = 0; j < N; ++j) {
+      const double m = std::min(M(j, j) + ia_[j], m_eff[j] / (2.0 * scenario.damping * w * dt));
+      kp_[j] = m * w * w;
+      kd_[j] = 2.0 * scenario.damping * m * w;
+    }
+  }
+
+  /// Per joint, the smallest 1 / (M + Ia)^-1_jj on 400 points of one period of `trajectory`.
+  Vec lightest_effective_inertia(const DriveTrajectory& trajectory) const {
     constexpr int kGrid = 400;
     Vec m = Vec::Constant(std::numeric_limits<double>::infinity());
     for (int k = 0; k < kGrid; ++k) {
@@ -108,14 +123,9 @@ class DrivePlantOf final : public DrivePlant {
       Mat M;
       Robot::mass_matrix(q, phi_true_, M);
       M.diagonal() += ia_;
-      const Mat M_inv = M.ldlt().solve(Mat::Identity());
-      m = m.cwiseMin(M_inv.diagonal().cwiseInverse());
+      m = m.cwiseMin(M.ldlt().solve(Mat::Identity()).diagonal().cwiseInverse());
     }
-    const double w = 2.0 * M_PI * scenario.bandwidth_hz;
-    for (int j = 0; j < N; ++j) {
-      kp_[j] = m[j] * w * w;
-      kd_[j] = 2.0 * scenario.damping * m[j] * w;
-    }
+    return m;
   }
 
   PlantStep step(const DriveTrajectory& trajectory, const Scenario& scenario, const ParameterTable& active, double time,
