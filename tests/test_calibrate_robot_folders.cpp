@@ -20,6 +20,7 @@
 #include "dyncal_host/drive/ground_truth.hpp"
 #include "dyncal_host/drive/scenario.hpp"
 #include "dyncal_host/identification/compiled_robot.hpp"
+#include "support/torque_share.hpp"
 
 namespace {
 
@@ -51,35 +52,22 @@ void calibrate_test_robot(const std::string& name) {
   EXPECT_EQ(r.num_joints, robot.num_joints);
   const auto truth = true_parameters(scenario, o.terms);
   ASSERT_EQ(truth.size(), r.phi_batch.size());
-  // Columns of the Eq. 7 model on the played excitation: Y_b, then sgn(qd_j), qd_j per joint.
+  // The Eq. 7 model's columns on the played excitation (2000 points of one period).
   const CompiledRobot& c = compiled_robot_for(robot);
   const int n = robot.num_joints, cols = static_cast<int>(truth.size());
   const ExcitationTrajectory traj = default_excitation(robot, o.f_f, o.harmonics, o.candidates, o.seed, nullptr);
   Eigen::VectorXd phi_true(cols);
   for (int i = 0; i < cols; ++i) phi_true[i] = truth[static_cast<size_t>(i)].value;
-  Eigen::MatrixXd col_ss = Eigen::MatrixXd::Zero(n, cols);
-  Eigen::VectorXd tau_ss = Eigen::VectorXd::Zero(n);
-  const int grid = 2000;
-  for (int k = 0; k < grid; ++k) {
+  dyncal::test::Eq7TorqueShare shares(c, phi_true);
+  for (int k = 0; k < 2000; ++k) {
     Eigen::Matrix<double, 7, 1> q7, qd7, qdd7;
-    traj.evaluate(traj.period() * k / grid, q7, qd7, qdd7);
-    const Eigen::VectorXd q = q7.head(n), qd = qd7.head(n), qdd = qdd7.head(n);
-    Eigen::MatrixXd K = Eigen::MatrixXd::Zero(n, cols);
-    K.leftCols(c.num_base) = c.base_regressor(q, qd, qdd);
-    for (int j = 0; j < n; ++j) {
-      K(j, c.num_base + 2 * j) = qd[j] > 0 ? 1.0 : (qd[j] < 0 ? -1.0 : 0.0);
-      K(j, c.num_base + 2 * j + 1) = qd[j];
-    }
-    col_ss += K.cwiseAbs2();
-    tau_ss += (K * phi_true).cwiseAbs2();
+    traj.evaluate(traj.period() * k / 2000, q7, qd7, qdd7);
+    shares.add(q7.head(n), qd7.head(n), qdd7.head(n));
   }
-  const Eigen::MatrixXd col_rms = (col_ss / grid).cwiseSqrt();
-  const Eigen::VectorXd tau_rms = (tau_ss / grid).cwiseSqrt();
   double worst = 0;
   for (size_t i = 0; i < truth.size(); ++i) {
     const double t = truth[i].value, e = r.phi_batch[i];
-    const double share =
-        (col_rms.col(static_cast<Eigen::Index>(i)) * std::abs(e - t)).cwiseQuotient(tau_rms).maxCoeff();
+    const double share = shares.share(static_cast<int>(i), e - t);
     SCOPED_TRACE(truth[i].name + ": true " + std::to_string(t) + ", identified " + std::to_string(e));
     EXPECT_EQ(truth[i].name, r.names[i]);
     const bool friction = truth[i].name.rfind("Fc", 0) == 0 || truth[i].name.rfind("Fv", 0) == 0;

@@ -15,6 +15,7 @@
 #include "dyncal_host/identification/compiled_robot.hpp"
 #include "dyncal_host/identification/excitation.hpp"
 #include "dyncal_host/identification/identify.hpp"
+#include "support/torque_share.hpp"
 
 namespace {
 
@@ -110,28 +111,13 @@ TEST_P(RobotFolder, IdentifyRecoversTheSimulatedParameters) {
   // 0.01 RMS_k |tau_kj|; the parameters' own standard deviations are not used, because the filtered
   // residual is not white (see the closing note of issue 20).
   const CompiledRobot& c = compiled_robot_for(robot);
-  const int n = robot.num_joints, cols = static_cast<int>(s.phi.size());
-  Eigen::MatrixXd col_ss = Eigen::MatrixXd::Zero(n, cols);
-  Eigen::VectorXd tau_ss = Eigen::VectorXd::Zero(n);
-  for (Eigen::Index k = 0; k < s.log.samples(); ++k) {
-    const Eigen::VectorXd q = s.log.q.row(k).transpose(), qd = s.log.qd.row(k).transpose(),
-                          qdd = s.log.qdd.row(k).transpose();
-    Eigen::MatrixXd K = Eigen::MatrixXd::Zero(n, cols);
-    K.leftCols(c.num_base) = c.base_regressor(q, qd, qdd);
-    for (int j = 0; j < n; ++j) {
-      K(j, c.num_base + 2 * j) = qd[j] > 0 ? 1.0 : (qd[j] < 0 ? -1.0 : 0.0);
-      K(j, c.num_base + 2 * j + 1) = qd[j];
-    }
-    col_ss += K.cwiseAbs2();
-    tau_ss += (K * s.phi).cwiseAbs2();
-  }
-  const Eigen::MatrixXd col_rms = (col_ss / static_cast<double>(s.log.samples())).cwiseSqrt();
-  const Eigen::VectorXd tau_rms = (tau_ss / static_cast<double>(s.log.samples())).cwiseSqrt();
+  dyncal::test::Eq7TorqueShare shares(c, s.phi);
+  for (Eigen::Index k = 0; k < s.log.samples(); ++k)
+    shares.add(s.log.q.row(k).transpose(), s.log.qd.row(k).transpose(), s.log.qdd.row(k).transpose());
   double worst = 0;
   for (size_t i = 0; i < r.params.size(); ++i) {
     const double truth = s.phi[static_cast<Eigen::Index>(i)], est = r.params[i].value;
-    const double share =
-        (col_rms.col(static_cast<Eigen::Index>(i)) * std::abs(est - truth)).cwiseQuotient(tau_rms).maxCoeff();
+    const double share = shares.share(static_cast<int>(i), est - truth);
     SCOPED_TRACE(r.params[i].name + ": true " + std::to_string(truth) + ", identified " + std::to_string(est));
     EXPECT_EQ(r.params[i].name.rfind("Fc", 0) == 0 || r.params[i].name.rfind("Fv", 0) == 0,
               static_cast<int>(i) >= c.num_base);

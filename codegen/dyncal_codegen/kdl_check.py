@@ -73,14 +73,16 @@ def _subtree_mass(link, links, children):
     return sum(_link_inertial(links[name], name).mass for name in _subtree_links(link, children))
 
 
-def check(links, joints, chain, gravity, trials=20, seed=1):
-    """Returns (max frame error, max torque error or None when the ID check does not apply)."""
+def _urdf_path(links, joints, chain):
+    """The URDF's joints from the chain's base to its tip, extended past the tip through the fixed
+    links that carry mass while they form one chain (a flange, a tool); and whether any link off
+    that path below the first moving joint carries mass (then the chain alone is not the URDF's
+    dynamics)."""
     children, parent_joint = {}, {}
     for j in joints:
         children.setdefault(j.parent, []).append(j)
         parent_joint[j.child] = j
     path_joints = _path(chain.base, chain.tip, parent_joint, children)
-    # Past the tip, the fixed links that carry mass, while they form one chain (a flange, a tool).
     link = chain.tip
     while True:
         massive = [j for j in children.get(link, []) if _subtree_mass(j.child, links, children) > 0]
@@ -88,12 +90,18 @@ def check(links, joints, chain, gravity, trials=20, seed=1):
             break
         path_joints.append(massive[0])
         link = massive[0].child
-    original, moving_segments = urdf_chain(links, path_joints)
-    normalised = normalised_chain(chain)
-    n = len(chain.joints)
     moving_body = {j.child for j in path_joints[path_joints.index(_first(path_joints)):]}
     below = _subtree_links(_first(path_joints).child, children)
     off_path_mass = any(_link_inertial(links[name], name).mass > 0 for name in below if name not in moving_body)
+    return path_joints, off_path_mass
+
+
+def check(links, joints, chain, gravity, trials=20, seed=1):
+    """Returns (max frame error, max torque error or None when the ID check does not apply)."""
+    path_joints, off_path_mass = _urdf_path(links, joints, chain)
+    original, moving_segments = urdf_chain(links, path_joints)
+    normalised = normalised_chain(chain)
+    n = len(chain.joints)
     fk_o, fk_n = kdl.ChainFkSolverPos_recursive(original), kdl.ChainFkSolverPos_recursive(normalised)
     g = kdl.Vector(*gravity)
     id_o, id_n = kdl.ChainIdSolver_RNE(original, g), kdl.ChainIdSolver_RNE(normalised, g)
@@ -129,21 +137,8 @@ def torque_samples(links, joints, chain, gravity, count=200, seed=7):
     random states: a list of {"q", "qd", "qdd", "tau"} (joint order of `chain`; rad, rad/s, rad/s^2,
     Nm), or None when mass hangs off the chain below the first joint (then the chain alone is not the
     URDF's dynamics). The oracle `dyncal robot check` runs the compiled model against."""
-    children, parent_joint = {}, {}
-    for j in joints:
-        children.setdefault(j.parent, []).append(j)
-        parent_joint[j.child] = j
-    path_joints = _path(chain.base, chain.tip, parent_joint, children)
-    link = chain.tip
-    while True:
-        massive = [j for j in children.get(link, []) if _subtree_mass(j.child, links, children) > 0]
-        if len(massive) != 1:
-            break
-        path_joints.append(massive[0])
-        link = massive[0].child
-    moving_body = {j.child for j in path_joints[path_joints.index(_first(path_joints)):]}
-    below = _subtree_links(_first(path_joints).child, children)
-    if any(_link_inertial(links[name], name).mass > 0 for name in below if name not in moving_body):
+    path_joints, off_path_mass = _urdf_path(links, joints, chain)
+    if off_path_mass:
         return None
     original, _ = urdf_chain(links, path_joints)
     solver = kdl.ChainIdSolver_RNE(original, kdl.Vector(*gravity))
