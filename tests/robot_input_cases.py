@@ -88,6 +88,8 @@ def robot_json_cases(good):
         ("q_max_below_q_min", edit(lambda d: d["limits"]["q_max"].__setitem__(1, -5.0)), "limits.q_max[2]"),
         ("negative_qd_max", edit(lambda d: d["limits"]["qd_max"].__setitem__(0, -1.0)), "limits.qd_max[1]"),
         ("string_tau_max", edit(lambda d: d["limits"].__setitem__("tau_max", ["a", 1, 1])), "limits.tau_max[1]"),
+        ("zero_tau_max", edit(lambda d: d["limits"].__setitem__("tau_max", [10, 0, 10])), "limits.tau_max[2]"),
+        ("negative_tau_max", edit(lambda d: d["limits"].__setitem__("tau_max", [10, 10, -3])), "limits.tau_max[3]"),
         ("zero_gear", edit(lambda d: d.__setitem__("transmission", {"gear_ratios": [1, 0, 1]})),
          "transmission.gear_ratios[2]"),
         ("coupling_out_of_range", edit(lambda d: d.__setitem__(

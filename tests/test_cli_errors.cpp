@@ -128,4 +128,157 @@ TEST(CliErrors, TrajectoryFileBeyondALimitIsRefused) {
   std::filesystem::remove(path);
 }
 
+// Every identify option is range-checked against the log before any work (issue 23, fault 8):
+// one-sample folds, a validated tail of one sample, a filter order that runs for minutes and a
+// cut-off that overflows the edge computation were all accepted with exit 0.
+TEST(CliErrors, IdentifyOptionsOutsideTheirRangeAreRefused) {
+  const std::string tx40 = std::string("identify --format tx40 --data ") + DYNCAL_TX40_DATA + " ";
+  expect_error(tx40 + "--block 0", "--block 0 s must be at least one cut-off period");
+  expect_error(tx40 + "--block -1", "--block -1 s must be at least one cut-off period");
+  expect_error(tx40 + "--block 0.01", "must be at least one cut-off period (0.05 s)");
+  expect_error(tx40 + "--folds 1", "--folds 1 must be >= 2");
+  expect_error(tx40 + "--folds 1000", "need at least");
+  expect_error(tx40 + "--validate-last 1e-9", "less than one cut-off period");
+  expect_error(tx40 + "--validate-last 0.95", "--validate-last 0.95 must lie in (0, 0.9]");
+  expect_error(tx40 + "--validate-last -0.2", "must lie in (0, 0.9]");
+  expect_error(tx40 + "--filter-order 1000", "--filter-order 1000 must be even, 2..8");
+  expect_error(tx40 + "--filter-order 3", "must be even");
+  expect_error(tx40 + "--cutoff 1e-300", "the cut-off must exceed");
+  expect_error(tx40 + "--cutoff 0", "--cutoff 0 Hz must lie in (0, ");
+  expect_error(tx40 + "--cutoff 1e9", "below the Nyquist frequency");
+  expect_error(tx40 + "--mu 1.5", "--mu 1.5 must lie in (0, 1]");
+  expect_error(tx40 + "--p0 0", "--p0 0 must be finite and > 0");
+  expect_error(tx40 + "--min-speed 1", "--min-speed 1 must lie in [0, 1)");
+  expect_error(tx40 + "--decimate -3", "--decimate -3 must be >= 0");
+}
+
+// A log whose time step is absurdly small cannot overflow the filter's edge computation: the
+// cut-off check against the log's duration refuses it first.
+TEST(CliErrors, ALogOfAFemtosecondIsRefusedByTheCutoffCheck) {
+  std::string text = header(6);
+  for (int i = 0; i < 200; ++i) {
+    text += std::to_string(i) + "e-300";
+    for (int j = 0; j < 12; ++j) text += "," + std::to_string(0.1 * j + 0.01 * i);
+    text += "\n";
+  }
+  expect_error("identify --robot er20 --data " + write_csv("tiny_dt", text), "the cut-off must exceed");
+}
+
+// calibrate's run settings are checked before the drive is contacted (the URI serves nothing):
+// --omega-f 1e-9 used to reserve memory for 1e14 samples after start (std::bad_alloc).
+TEST(CliErrors, CalibrateRunSettingsAreCheckedBeforeTheDrive) {
+  const std::string cal = "calibrate --drive tcp://127.0.0.1:1 ";
+  expect_error(cal + "--omega-f 1e-9", "longer than a drive plays");
+  expect_error(cal + "--omega-f 0", "--omega-f 0 Hz must lie in (0, 10] Hz");
+  expect_error(cal + "--omega-f 11", "must lie in (0, 10] Hz");
+  expect_error(cal + "--rate 50", "--rate 50 Hz must lie in 100..1000 Hz");
+  expect_error(cal + "--harmonics 9", "--harmonics 9 must lie in 1..8");
+  expect_error(cal + "--periods 0", "--periods 0 must lie in 1..100");
+  expect_error(cal + "--verify-periods 101", "--verify-periods 101 must lie in 1..100");
+}
+
+// dyncal flash builds the table from the parameter file alone (issue 23, fault 3): the robot id
+// and model are the file's, every value is checked by name against that model, and a missing
+// field is one line naming it. All before the drive (the URI serves nothing) is contacted.
+TEST(CliErrors, FlashChecksTheParameterFileAgainstItsModel) {
+  const auto dir = std::filesystem::temp_directory_path() / ("dyncal_flash_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string good = (dir / "tx40.json").string();
+  const auto made = run_dyncal(std::string("identify --format tx40 --data ") + DYNCAL_TX40_DATA + " --params " + good);
+  ASSERT_EQ(made.exit_code, 0) << made.err;
+  std::ifstream in(good);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  auto variant = [&](const std::string& name, const std::string& from, const std::string& to) {
+    std::string t = text;
+    const auto at = t.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    if (at != std::string::npos) t.replace(at, from.size(), to);
+    const std::string path = (dir / (name + ".json")).string();
+    std::ofstream(path) << t;
+    return "flash --drive tcp://127.0.0.1:1 --params " + path;
+  };
+  // The unmodified file passes every check: the error is the missing drive.
+  const auto passed = run_dyncal("flash --drive tcp://127.0.0.1:1 --params " + good);
+  EXPECT_EQ(passed.exit_code, 2);
+  EXPECT_NE(passed.err.find("cannot connect to the drive"), std::string::npos) << passed.err;
+  expect_error(variant("renamed", "\"name\": \"Fc1\"", "\"name\": \"Fv1\""), "is 'Fv1', parameter");
+  expect_error(variant("no_value", "\"value\":", "\"v\":"), "expected an object with a number 'value'");
+  expect_error(variant("no_name", "\"name\": \"Fc1\"", "\"nom\": \"Fc1\""), "'name' missing");
+  expect_error(variant("no_model", "\"model\":", "\"m\":"), "'model' missing");
+  expect_error(variant("other_robot", "\"robot\": \"tx40\"", "\"robot\": \"er20\""), "of robot 'er20' with model");
+  expect_error("flash --drive tcp://127.0.0.1:1 --robot er20 --params " + good, "are for robot 'tx40', not 'er20'");
+  std::filesystem::remove_all(dir);
+}
+
+// A copy of the real TX40 log with one cell replaced (data row `row`, 1-based; column `col`,
+// 0-based) in `file`.
+std::string corrupt_tx40(const std::string& name, const std::string& file, int row, int col, const std::string& value) {
+  const auto dir = std::filesystem::temp_directory_path() / ("dyncal_tx40_" + name + "_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  for (const char* f : {"pos_read_data.csv", "curr_data.csv"}) {
+    std::ifstream in(std::string(DYNCAL_TX40_DATA) + "/" + f);
+    std::ofstream out(dir / f);
+    std::string line;
+    for (int n = 0; std::getline(in, line); ++n) {
+      if (f == file && n == row) {
+        std::string cells;
+        size_t start = 0;
+        for (int c = 0; c < 6; ++c) {
+          const size_t end = line.find(',', start);
+          cells += (c ? "," : "") + (c == col ? value : line.substr(start, end - start));
+          start = end + 1;
+        }
+        line = cells;
+      }
+      out << line << '\n';
+    }
+  }
+  return dir.string();
+}
+
+// One corrupt cell in a real log (issue 23, fault 7): a position of 1e300 made diagnose report
+// RMS 0 and R2 1 (exit 0), a torque of 1e300 made identify write parameters near 1e293. Both are
+// refused with the cell's row and column, or, with --drop-outliers, replaced and reported.
+TEST(CliErrors, ACorruptCellInARealLogIsRefusedOrDroppedWithItsRow) {
+  const std::string q_bad = corrupt_tx40("q", "pos_read_data.csv", 1000, 2, "1e300");
+  expect_error("identify --format tx40 --data " + q_bad, "at data row 1000 (outside [q_min, q_max]");
+  expect_error("diagnose --format tx40 --data " + q_bad, "implausible value q3 = ");
+  const std::string tau_bad = corrupt_tx40("tau", "curr_data.csv", 2000, 0, "1e300");
+  expect_error("identify --format tx40 --data " + tau_bad, "implausible value tau1 = ");
+  expect_error("identify --format tx40 --data " + tau_bad, "at data row 2000 (outside 10 x tau_max");
+  // --drop-outliers: the cell is replaced and named in the report; the fit equals the clean log's
+  // to the digits the report prints on every joint but the corrupted one's neighbourhood.
+  const auto out_file = std::filesystem::temp_directory_path() / ("dyncal_drop_" + std::to_string(::getpid()));
+  const std::string cmd = std::string(DYNCAL_BINARY) + " identify --format tx40 --drop-outliers --data " + tau_bad +
+                          " > " + out_file.string() + " 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0);
+  std::ifstream in(out_file);
+  const std::string report((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(report.find("note: dropped tau1 = "), std::string::npos) << report;
+  EXPECT_NE(report.find("at data row 2000"), std::string::npos) << report;
+  EXPECT_EQ(report.find("inf"), std::string::npos) << report;
+  std::filesystem::remove(out_file);
+  std::filesystem::remove_all(q_bad);
+  std::filesystem::remove_all(tau_bad);
+}
+
+// Messages that misled (issue 23, fault 10): a directory is named as such, a UTF-8 byte-order
+// mark is not part of the column 't', a subnormal number is a number, an overflowing one says so.
+TEST(CliErrors, MisleadingCsvMessagesAreFixed) {
+  expect_error("identify --robot er20 --data " + std::filesystem::temp_directory_path().string(),
+               "is a directory, not a CSV file");
+  // With the mark stripped the file reads on to the next problem (too few samples), not "missing column 't'".
+  const auto bom =
+      run_dyncal("identify --robot er20 --data " + write_csv("bom", "\xEF\xBB\xBF" + header(6) + rows(6, 2)));
+  EXPECT_EQ(bom.exit_code, 2);
+  EXPECT_EQ(bom.err.find("missing column"), std::string::npos) << bom.err;
+  EXPECT_NE(bom.err.find("fewer than 3 samples"), std::string::npos) << bom.err;
+  const auto tiny = run_dyncal("identify --robot er20 --data " +
+                               write_csv("subnormal", header(6) + rows(6, 5) + "0.05,1e-320,2,3,4,5,6,1,2,3,4,5,6\n"));
+  EXPECT_EQ(tiny.err.find("is not a number"), std::string::npos) << tiny.err;
+  expect_error("identify --robot er20 --data " +
+                   write_csv("overflow", header(6) + rows(6, 5) + "0.05,1e400,2,3,4,5,6,1,2,3,4,5,6\n"),
+               "'1e400' is beyond the range of a double");
+}
+
 }  // namespace

@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <chrono>
 #include <cstring>
 #include <thread>
 #include <vector>
@@ -83,7 +84,9 @@ TEST_F(DriveModbus, EveryRegisterTypeRoundTrips) {
   ASSERT_EQ(drive_->write_holding(mm::kAckReg, 2, a), dyncal::port::PortStatus::ok) << drive_->error();
   ASSERT_EQ(drive_->read_holding(mm::kAckReg, 2, ab), dyncal::port::PortStatus::ok);
   EXPECT_EQ(mm::get_u32(ab), info.produced);
-  // bytes (staging bank)
+  // bytes (staging bank; a session first)
+  const std::uint16_t key = mm::kUnlockKey;
+  ASSERT_EQ(drive_->write_holding(mm::kUnlockReg, 1, &key), dyncal::port::PortStatus::ok) << drive_->error();
   std::vector<std::uint16_t> bytes(100), bb(100);
   for (int k = 0; k < 100; ++k) bytes[k] = static_cast<std::uint16_t>(0xA500 + k);
   ASSERT_EQ(drive_->write_holding(mm::kStagingTableReg, 100, bytes.data()), dyncal::port::PortStatus::ok);
@@ -104,7 +107,7 @@ TEST_F(DriveModbus, EveryRegisterTypeRoundTrips) {
 TEST_F(DriveModbus, IllegalAddressesAndValuesGetModbusExceptions) {
   modbus_t* ctx = raw();
   std::uint16_t r[4];
-  EXPECT_EQ(modbus_read_registers(ctx, 1, 1, r), -1);  // hole between command and ack
+  EXPECT_EQ(modbus_read_registers(ctx, 250, 1, r), -1);  // hole between coefficients and staging
   EXPECT_EQ(errno, EMBXILADD);
   EXPECT_EQ(modbus_read_input_registers(ctx, mm::kRingReg - 1, 2, r), -1);
   EXPECT_EQ(errno, EMBXILADD);
@@ -160,13 +163,19 @@ dyncal::TableStatus commit_raw(ModbusDrive& d, const std::uint8_t* bytes, int si
   mm::bytes_to_regs(bytes, size, regs.data() + 1);
   std::uint16_t before = 0;
   EXPECT_EQ(d.read_input(mm::kCommitCounterReg, 1, &before), dyncal::port::PortStatus::ok);
+  const std::uint16_t key = mm::kUnlockKey;
+  EXPECT_EQ(d.write_holding(mm::kUnlockReg, 1, &key), dyncal::port::PortStatus::ok) << d.error();
   EXPECT_EQ(d.write_holding(mm::kStagingSizeReg, static_cast<int>(regs.size()), regs.data()),
             dyncal::port::PortStatus::ok)
       << d.error();
   const std::uint16_t cmd = static_cast<std::uint16_t>(mm::Command::commit_table);
   EXPECT_EQ(d.write_holding(mm::kCommandReg, 1, &cmd), dyncal::port::PortStatus::ok) << d.error();
   std::uint16_t r[2] = {0, before};
-  while (r[1] == before) EXPECT_EQ(d.read_input(mm::kCommitResultReg, 2, r), dyncal::port::PortStatus::ok);
+  for (int k = 0; k < 10000 && r[1] == before; ++k) {
+    EXPECT_EQ(d.read_input(mm::kCommitResultReg, 2, r), dyncal::port::PortStatus::ok);
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  EXPECT_NE(r[1], before) << "the commit never completed";
   return static_cast<dyncal::TableStatus>(r[0]);
 }
 
@@ -221,40 +230,143 @@ TEST_F(DriveModbus, FlashRejectsBadTablesAndKeepsTheActiveOne) {
   EXPECT_EQ(active.values[5], good.values[5]);
 }
 
+// Access (docs/modbus.md "Access and states"): staging and commit only in a session the writing
+// connection opened with the documented key; a wrong key is refused; the session belongs to its
+// connection and ends with the commit; start while playing is refused (it would jump the arm).
+TEST_F(DriveModbus, StagingNeedsASessionOfItsOwnConnectionAndStartWhilePlayingIsRefused) {
+  modbus_t* a = raw();
+  modbus_t* b = raw();
+  EXPECT_EQ(modbus_write_register(a, mm::kStagingSizeReg, 10), -1);  // locked
+  EXPECT_EQ(errno, EMBXILFUN);
+  EXPECT_EQ(modbus_write_register(a, mm::kCommandReg, static_cast<int>(mm::Command::commit_table)), -1);
+  EXPECT_EQ(errno, EMBXILFUN);
+  EXPECT_EQ(modbus_write_register(a, mm::kUnlockReg, 0x1234), -1);  // wrong key
+  EXPECT_EQ(errno, EMBXILVAL);
+  ASSERT_EQ(modbus_write_register(a, mm::kUnlockReg, mm::kUnlockKey), 1) << modbus_strerror(errno);
+  std::uint16_t r = 99;
+  ASSERT_EQ(modbus_read_registers(a, mm::kUnlockReg, 1, &r), 1);
+  EXPECT_EQ(r, 0);  // the key is not readable back
+  EXPECT_EQ(modbus_write_register(a, mm::kStagingSizeReg, 10), 1) << modbus_strerror(errno);
+  EXPECT_EQ(modbus_write_register(b, mm::kStagingSizeReg, 10), -1);  // another connection: still locked
+  EXPECT_EQ(errno, EMBXILFUN);
+  // A commit (of a bad staging: 10 bytes) ends the session.
+  ASSERT_EQ(modbus_write_register(a, mm::kCommandReg, static_cast<int>(mm::Command::commit_table)), 1);
+  dyncal::linux_port::DriveInfo info;
+  for (int k = 0; k < 100; ++k) {  // the commit completes after its answer
+    ASSERT_EQ(drive_->read_info(info), dyncal::port::PortStatus::ok);
+    std::uint16_t res[2];
+    ASSERT_EQ(drive_->read_input(mm::kCommitResultReg, 2, res), dyncal::port::PortStatus::ok);
+    if (res[0] != 0) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  EXPECT_EQ(modbus_write_register(a, mm::kStagingSizeReg, 10), -1);
+  EXPECT_EQ(errno, EMBXILFUN);
+  // Start while playing: busy.
+  dyncal::linux_port::Trajectory t;
+  t.f_f = 0.1;
+  t.harmonics = 1;
+  ASSERT_EQ(drive_->write_trajectory(t, 100, 1000), dyncal::port::PortStatus::ok) << drive_->error();
+  ASSERT_EQ(drive_->start(), dyncal::port::PortStatus::ok) << drive_->error();
+  EXPECT_EQ(drive_->start(), dyncal::port::PortStatus::rejected);
+  EXPECT_NE(drive_->error().find("busy"), std::string::npos) << drive_->error();
+  ASSERT_EQ(modbus_write_register(a, mm::kUnlockReg, mm::kUnlockKey), 1);
+  EXPECT_EQ(modbus_write_register(a, mm::kStagingSizeReg, 10), -1);  // staging while playing: busy
+  EXPECT_EQ(errno, EMBXSBUSY);
+  ASSERT_EQ(drive_->stop(), dyncal::port::PortStatus::ok);
+  modbus_close(a);
+  modbus_free(a);
+  modbus_close(b);
+  modbus_free(b);
+}
+
 }  // namespace
 
-// A drive of another register map version (a real libmodbus server on loopback whose map_version
-// is 3, the six-axis map) is refused by the host with a message naming both versions.
+// A bare libmodbus server on loopback with a register map the test fills in: stands in for a drive
+// that misbehaves in one precise way (another map version, a commit that never completes).
+class BareModbusServer {
+ public:
+  BareModbusServer() {
+    server_ = modbus_new_tcp("127.0.0.1", 0);
+    listener_ = modbus_tcp_listen(server_, 1);
+    sockaddr_in addr{};
+    socklen_t len = sizeof addr;
+    getsockname(listener_, reinterpret_cast<sockaddr*>(&addr), &len);
+    port_ = ntohs(addr.sin_port);
+    map_ = modbus_mapping_new(0, 0, mm::kHoldingWords, mm::kInputWords);
+    map_->tab_input_registers[mm::kMapVersionReg] = mm::kMapVersion;
+    map_->tab_input_registers[mm::kNumJointsReg] = 6;
+  }
+  ~BareModbusServer() {
+    if (serve_.joinable()) serve_.join();
+    close(listener_);
+    modbus_mapping_free(map_);
+    modbus_free(server_);
+  }
+  bool listening() const { return listener_ >= 0; }
+  std::string uri() const { return "tcp://127.0.0.1:" + std::to_string(port_); }
+  modbus_mapping_t* map() { return map_; }
+  // Serves one client until it closes the connection.
+  void serve_one() {
+    serve_ = std::thread([this] {
+      modbus_tcp_accept(server_, &listener_);
+      std::uint8_t query[MODBUS_TCP_MAX_ADU_LENGTH];
+      for (;;) {
+        const int n = modbus_receive(server_, query);
+        if (n < 0) break;
+        if (n > 0) modbus_reply(server_, query, n, map_);
+      }
+    });
+  }
+
+ private:
+  modbus_t* server_ = nullptr;
+  int listener_ = -1;
+  int port_ = 0;
+  modbus_mapping_t* map_ = nullptr;
+  std::thread serve_;
+};
+
+// A drive of another register map version (map_version 3, the six-axis map) is refused by the host
+// with a message naming both versions.
 TEST(DriveModbusVersion, AnOlderMapIsRefusedWithBothVersions) {
-  modbus_t* server = modbus_new_tcp("127.0.0.1", 0);
-  ASSERT_NE(server, nullptr);
-  const int listener = modbus_tcp_listen(server, 1);
-  ASSERT_GE(listener, 0) << modbus_strerror(errno);
-  sockaddr_in addr{};
-  socklen_t len = sizeof addr;
-  ASSERT_EQ(getsockname(listener, reinterpret_cast<sockaddr*>(&addr), &len), 0);
-  const int port = ntohs(addr.sin_port);
-  modbus_mapping_t* map = modbus_mapping_new(0, 0, 0, mm::kInputWords);
-  map->tab_input_registers[mm::kMapVersionReg] = 3;
-  map->tab_input_registers[mm::kNumJointsReg] = 6;
-  std::thread serve([&] {
-    modbus_tcp_accept(server, const_cast<int*>(&listener));
-    std::uint8_t query[MODBUS_TCP_MAX_ADU_LENGTH];
-    for (;;) {
-      const int n = modbus_receive(server, query);
-      if (n < 0) break;
-      if (n > 0) modbus_reply(server, query, n, map);
-    }
-  });
+  BareModbusServer bare;
+  ASSERT_TRUE(bare.listening()) << modbus_strerror(errno);
+  bare.map()->tab_input_registers[mm::kMapVersionReg] = 3;
+  bare.serve_one();
   std::string error;
-  auto drive = ModbusDrive::connect("tcp://127.0.0.1:" + std::to_string(port), &error);
+  auto drive = ModbusDrive::connect(bare.uri(), &error);
   ASSERT_NE(drive, nullptr) << error;
   dyncal::linux_port::DriveInfo info;
   EXPECT_EQ(drive->read_info(info), dyncal::port::PortStatus::rejected);
-  EXPECT_NE(drive->error().find("register map version 3, this host version 4"), std::string::npos) << drive->error();
+  EXPECT_NE(drive->error().find("register map version 3, this host version 5"), std::string::npos) << drive->error();
   drive.reset();  // the server's receive fails when the client closes
-  serve.join();
-  close(listener);
-  modbus_mapping_free(map);
-  modbus_free(server);
+}
+
+// A drive that accepts the commit command but never advances its commit counter: the host gives up
+// at its deadline with transport_error and says what is unknown, instead of polling forever
+// (issue 23, fault 6).
+TEST(DriveModbusDeadline, ACommitThatNeverCompletesEndsAtTheDeadline) {
+  BareModbusServer bare;
+  ASSERT_TRUE(bare.listening()) << modbus_strerror(errno);
+  bare.serve_one();
+  std::string error;
+  auto drive = ModbusDrive::connect(bare.uri(), &error);
+  ASSERT_NE(drive, nullptr) << error;
+  drive->set_commit_timeout(0.2);
+  drive->set_commit_timeout(-1);  // ignored
+  EXPECT_EQ(drive->commit_timeout(), 0.2);
+  dyncal::ParameterTable table;
+  table.robot_id = 1;
+  table.model_id = 2;
+  table.count = 3;
+  for (int i = 0; i < table.count; ++i) table.values[i] = 1.0F + static_cast<float>(i);
+  dyncal::TableStatus reason = dyncal::TableStatus::ok;
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_EQ(drive->write(table, &reason), dyncal::port::PortStatus::transport_error);
+  const double waited = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_GE(waited, 0.2);
+  EXPECT_NE(drive->error().find("did not finish the commit within 0.2 s"), std::string::npos) << drive->error();
+  // The staged bytes did reach the server: the request path worked, only the counter never moved.
+  EXPECT_GT(bare.map()->tab_registers[mm::kStagingSizeReg], 0);
+  drive.reset();
 }

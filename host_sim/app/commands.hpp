@@ -8,6 +8,7 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "dyncal_host/common/robot_description.hpp"
 #include "dyncal_host/identification/joint_log.hpp"
@@ -51,11 +52,16 @@ struct LogOption {
   RobotOption robot;
   std::string format = "csv";
   std::string data;
+  bool drop_outliers = false;
+  /// Adds --format, --data, --drop-outliers and the robot options to `cmd`.
   void add_to(CLI::App* cmd);
   /// The robot (--robot, or tx40 for --format tx40). Throws InputError (no --robot for csv, ...).
   host::RobotDescription load_robot() const;
-  /// The log on the joint side (TX40 files through the robot's transmission). Throws InputError.
-  host::JointLog load_log(const host::RobotDescription& robot) const;
+  /// The log on the joint side (TX40 files through the robot's transmission), checked for physical
+  /// plausibility against the robot's limits (log_plausibility.hpp). Throws InputError (unreadable,
+  /// malformed, an implausible value without --drop-outliers). With --drop-outliers, *dropped (if
+  /// given) receives one line per replaced value.
+  host::JointLog load_log(const host::RobotDescription& robot, std::vector<std::string>* dropped = nullptr) const;
 };
 
 }  // namespace dyncal::app

@@ -17,8 +17,10 @@ struct DiagnoseSettings {
 int run_diagnose(DiagnoseSettings& s) {
   const auto robot = s.log.load_robot();
   s.options.identify.terms = host::parse_model(s.model);
-  const auto log = s.log.load_log(robot);
-  const auto result = host::diagnose(robot, log, s.options);
+  std::vector<std::string> dropped;
+  const auto log = s.log.load_log(robot, &dropped);
+  auto result = host::diagnose(robot, log, s.options);
+  result.notes.insert(result.notes.begin(), dropped.begin(), dropped.end());
   host::print_diagnose_report(std::cout, result);
   if (!s.report.empty()) write_json_file(s.report, host::diagnose_report_json(result));
   if (!s.plots.empty()) {

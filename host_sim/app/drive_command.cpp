@@ -22,6 +22,7 @@ struct DriveSettings {
   std::string listen = "127.0.0.1:1502";
   bool lockstep = false;
   int flash_delay_ms = 0;
+  double watchdog_s = 2.0;
 };
 
 int run_drive(DriveSettings& s) {
@@ -35,6 +36,7 @@ int run_drive(DriveSettings& s) {
             << drive.startup_note() << std::endl;
   host::DriveServerOptions o;
   o.ready_file = s.ready_file;
+  o.watchdog_s = s.watchdog_s;
   if (!s.rtu.empty()) {
     o.rtu_device = s.rtu;
   } else {
@@ -64,6 +66,10 @@ void add_drive_command(CLI::App& app, Action& run) {
   cmd->add_option("--table", s->table_file, "the simulated flash file (default dyncal-drive-<robot>.table)");
   cmd->add_option("--ready-file", s->ready_file, "write the drive's URI here once it serves requests");
   cmd->add_flag("--lockstep", s->lockstep, "virtual time: advance only as fast as the host reads samples");
+  cmd->add_option("--watchdog", s->watchdog_s,
+                  "stop a playing trajectory when no request arrives for this long [s] (0: off)")
+      ->check(CLI::Range(0.0, 3600.0))
+      ->capture_default_str();
   cmd->add_option("--flash-delay-ms", s->flash_delay_ms, "sleep per 64 bytes written to flash (tests)");
   cmd->callback([&run, s] { run = [s] { return run_drive(*s); }; });
 }

@@ -21,14 +21,17 @@ struct IdentifySettings {
 int run_identify(IdentifySettings& s) {
   const auto robot = s.log.load_robot();
   s.options.terms = host::parse_model(s.model);
-  const auto log = s.log.load_log(robot);
+  std::vector<std::string> dropped;
+  const auto log = s.log.load_log(robot, &dropped);
   if (s.compare_friction) {
+    for (const auto& line : dropped) std::cout << "note: " << line << "\n";
     const double last = s.options.validate_last > 0 ? s.options.validate_last : 0.3;
     const auto stacked = host::prepare_stacked(robot, log, s.options);
     host::print_friction_comparison(std::cout, host::compare_friction_models(stacked, last), last);
     return 0;
   }
-  const auto result = host::identify(robot, log, s.options);
+  auto result = host::identify(robot, log, s.options);
+  result.notes.insert(result.notes.begin(), dropped.begin(), dropped.end());
   host::print_identify_report(std::cout, result);
   if (!s.report.empty()) write_json_file(s.report, host::identify_report_json(result));
   if (!s.params.empty()) write_json_file(s.params, host::parameter_table_json(result));

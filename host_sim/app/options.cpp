@@ -5,6 +5,7 @@
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/robot_description.hpp"
 #include "dyncal_host/identification/compiled_robot.hpp"
+#include "dyncal_host/identification/log_plausibility.hpp"
 
 namespace dyncal::app {
 
@@ -51,6 +52,9 @@ void LogOption::add_to(CLI::App* cmd) {
   cmd->add_option("--format", format, "log format: csv (t,q1..qN,[qd..],[qdd..],tau1..tauN) or tx40")
       ->check(CLI::IsMember({"csv", "tx40"}));
   cmd->add_option("--data", data, "CSV log file, or the folder of the TX40 files")->required();
+  cmd->add_flag("--drop-outliers", drop_outliers,
+                "replace physically implausible values (beyond the robot's limits by a wide margin, docs/cli.md) by "
+                "interpolation and report each, instead of refusing the log");
 }
 
 host::RobotDescription LogOption::load_robot() const {
@@ -62,9 +66,12 @@ host::RobotDescription LogOption::load_robot() const {
   return r.load();
 }
 
-host::JointLog LogOption::load_log(const host::RobotDescription& r) const {
-  return format == "tx40" ? host::read_tx40_log(data, r.transmission, r.joint_offsets)
-                          : host::read_csv_log(data, r.num_joints);
+host::JointLog LogOption::load_log(const host::RobotDescription& r, std::vector<std::string>* dropped) const {
+  host::JointLog log = format == "tx40" ? host::read_tx40_log(data, r.transmission, r.joint_offsets)
+                                        : host::read_csv_log(data, r.num_joints);
+  const auto lines = host::check_plausibility(log, r, drop_outliers);
+  if (dropped) dropped->insert(dropped->end(), lines.begin(), lines.end());
+  return log;
 }
 
 }  // namespace dyncal::app

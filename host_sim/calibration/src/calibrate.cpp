@@ -3,6 +3,7 @@
 #include <Eigen/SVD>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <ctime>
 #include <filesystem>
 #include <functional>
@@ -89,6 +90,10 @@ JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory
   linux_port::DriveInfo info;
   if (drive.read_info(info) != port::PortStatus::ok) throw InputError("drive: " + drive.error());
   const int joints = info.num_joints;
+  if (info.state == mm::DriveState::fault) {  // a new run is the user's explicit reset of an earlier fault
+    if (progress) *progress << "the drive stands in fault (" << linux_port::describe_fault(info) << "): reset\n";
+    if (drive.reset() != port::PortStatus::ok) throw InputError("drive: " + drive.error());
+  }
   if (drive.write_trajectory(trajectory, run.periods, run.sample_rate_hz) != port::PortStatus::ok)
     throw InputError("drive: " + drive.error());
   const auto t0 = SteadyClock::now();
@@ -98,10 +103,21 @@ JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory
   samples.reserve(static_cast<size_t>(expected));
   port::DriveSample block[mm::samples_per_block(1)];  // the most a block can carry
   long last_shown = -1;
+  // Every wait has a deadline: a drive that delivers nothing new for kStallSeconds while it should
+  // be playing has stalled (a healthy one delivers a sample every period, at least 100 Hz).
+  constexpr double kStallSeconds = 10.0;
+  auto last_progress = SteadyClock::now();
   for (;;) {
     int n = 0;
     const port::PortStatus st = drive.read(block, mm::samples_per_block(1), &n);
     if (st == port::PortStatus::end_of_stream) break;
+    if (n > 0) {
+      last_progress = SteadyClock::now();
+    } else if (std::chrono::duration<double>(SteadyClock::now() - last_progress).count() > kStallSeconds) {
+      throw InputError("drive: no new sample for " + std::to_string(static_cast<int>(kStallSeconds)) + " s after " +
+                       std::to_string(samples.size()) + " of " + std::to_string(expected) + " (" + run.name +
+                       " run): the drive has stalled");
+    }
     if (st == port::PortStatus::transport_error) throw InputError("drive: " + drive.error());
     if (st == port::PortStatus::device_fault) {
       if (progress) *progress << "\n";
@@ -160,9 +176,11 @@ FlashOutcome flash_and_verify(linux_port::ModbusDrive& drive, const ParameterTab
   try {
     verify();
   } catch (const DriveFaultError& fault) {
-    // The new table made the drive trip: the one it replaced goes back before anything else.
+    // The new table made the drive trip: the one it replaced goes back before anything else. The
+    // drive takes no table in fault: this is the explicit reset that clears it.
     TableStatus reason = TableStatus::ok;
-    const port::PortStatus back = drive.write(previous, &reason);
+    port::PortStatus back = drive.reset();
+    if (back == port::PortStatus::ok) back = drive.write(previous, &reason);
     throw DriveFaultError("with the new table, " + std::string(fault.what()) + ". " +
                           (back == port::PortStatus::ok
                                ? "The previous table was flashed back."
@@ -172,8 +190,42 @@ FlashOutcome flash_and_verify(linux_port::ModbusDrive& drive, const ParameterTab
   return f;
 }
 
+namespace {
+
+// The run settings, checked before the drive is contacted against what the drive accepts
+// (docs/modbus.md): a bad value is named here, not discovered as a Modbus exception after start.
+void check_run_options(const CalibrateOptions& o) {
+  auto number = [](double v) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.4g", v);
+    return std::string(text);
+  };
+  if (!(o.sample_rate_hz >= 100 && o.sample_rate_hz <= 1000))
+    throw InputError("--rate " + number(o.sample_rate_hz) + " Hz must lie in 100..1000 Hz");
+  const double f_f = o.excitation ? o.excitation->f_f : o.f_f;
+  const int harmonics = o.excitation ? o.excitation->harmonics : o.harmonics;
+  if (!(f_f > 0 && f_f <= 10)) throw InputError("--omega-f " + number(f_f) + " Hz must lie in (0, 10] Hz");
+  if (harmonics < 1 || harmonics > mm::kMaxHarmonics)
+    throw InputError("--harmonics " + std::to_string(harmonics) + " must lie in 1.." +
+                     std::to_string(mm::kMaxHarmonics));
+  if (o.candidates < 1) throw InputError("--candidates " + std::to_string(o.candidates) + " must be >= 1");
+  for (const auto& [name, periods] :
+       {std::pair{"--periods", o.periods}, std::pair{"--verify-periods", o.verify_periods}}) {
+    if (periods < 1 || periods > 100)
+      throw InputError(std::string(name) + " " + std::to_string(periods) + " must lie in 1..100");
+    const double n = mm::run_samples(periods, f_f, o.sample_rate_hz);
+    if (!(n <= mm::kMaxRunSamples))
+      throw InputError(std::string(name) + " " + std::to_string(periods) + " at --omega-f " + number(f_f) +
+                       " Hz and --rate " + number(o.sample_rate_hz) + " Hz make a run of " + number(n) +
+                       " samples, longer than a drive plays (" + number(mm::kMaxRunSamples) + ", docs/modbus.md)");
+  }
+}
+
+}  // namespace
+
 CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions& o, std::ostream& progress) {
   const auto t0 = SteadyClock::now();
+  check_run_options(o);
   const CompiledRobot& compiled = compiled_robot_for(robot);
   const OnlineModel& online = online_model(robot.name);
   const int term_set = built_term_set_index(o.terms);

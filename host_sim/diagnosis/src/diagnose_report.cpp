@@ -10,7 +10,9 @@ namespace dyncal::host {
 void print_diagnose_report(std::ostream& out, const DiagnoseResult& r) {
   out << "dyncal diagnose: robot " << r.robot << ", declared model " << r.declared_model << ", " << r.samples
       << " samples, " << r.validation << ", BIC with n_eff = " << std::lround(r.effective_samples_per_joint)
-      << " per joint (mean, from the residual's autocorrelation)\n\n";
+      << " per joint (mean, from the residual's autocorrelation)\n";
+  for (const auto& n : r.notes) out << "note: " << n << "\n";
+  out << "\n";
   out << "effects added (greedy, by validation gain, each with BIC evidence):\n";
   if (r.effects.empty()) out << "  none: nothing significant is left in the residual\n";
   for (const auto& e : r.effects) {
@@ -72,6 +74,7 @@ nlohmann::json diagnose_report_json(const DiagnoseResult& r) {
   j["samples"] = r.samples;
   j["validation"] = r.validation;
   j["effective_samples_per_joint"] = r.effective_samples_per_joint;
+  j["notes"] = r.notes;
   j["effects"] = nlohmann::json::array();
   for (const auto& e : r.effects) {
     nlohmann::json p = nlohmann::json::object();

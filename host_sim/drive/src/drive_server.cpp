@@ -1,18 +1,23 @@
 #include "dyncal_host/drive/drive_server.hpp"
 
 #include <arpa/inet.h>
+#include <fcntl.h>
 #include <modbus/modbus.h>
 #include <netinet/in.h>
-#include <sys/select.h>
+#include <poll.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <stdexcept>
 #include <vector>
+
+#include "mbap_frame.hpp"
 
 namespace dyncal::host {
 namespace {
@@ -94,15 +99,38 @@ bool overlaps(int address, int count, std::uint16_t reg, int words) {
   return address < reg + words && reg < address + count;
 }
 
-/// Checks the holding registers after a write (applied to a scratch copy). Returns a Modbus
-/// exception code or 0.
-int check_holding(const SimulatedDrive& d, const std::uint16_t* h, int address, int count, double control_rate) {
+/// Checks the holding registers after a write (applied to a scratch copy) against the access and
+/// state rules (docs/modbus.md "Access and states"). `session`: the writing connection holds an
+/// open staging session. Returns a Modbus exception code or 0.
+int check_holding(const SimulatedDrive& d, const std::uint16_t* h, int address, int count, double control_rate,
+                  bool session) {
   const bool playing = d.state() == mm::DriveState::playing;
+  const bool fault = d.state() == mm::DriveState::fault;
+  // Staging and committing: only in a session, only while no trajectory plays and no fault stands.
+  auto staging_rule = [&]() -> int {
+    if (!session) return MODBUS_EXCEPTION_ILLEGAL_FUNCTION;  // locked: the server is in the wrong state for it
+    if (playing) return MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY;
+    if (fault) return MODBUS_EXCEPTION_SLAVE_OR_SERVER_FAILURE;
+    return 0;
+  };
   if (overlaps(address, count, mm::kCommandReg, 1)) {
     const std::uint16_t c = h[mm::kCommandReg];
-    if (c > static_cast<std::uint16_t>(mm::Command::commit_table)) return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
-    if (c == static_cast<std::uint16_t>(mm::Command::commit_table) && playing)
-      return MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY;
+    if (c > static_cast<std::uint16_t>(mm::Command::reset)) return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+    if (c == static_cast<std::uint16_t>(mm::Command::commit_table)) {
+      if (const int e = staging_rule()) return e;
+    }
+    if (c == static_cast<std::uint16_t>(mm::Command::start)) {
+      if (playing) return MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY;   // would jump the arm back to the start pose
+      if (fault) return MODBUS_EXCEPTION_SLAVE_OR_SERVER_FAILURE;  // only reset clears a fault
+      if (!(mm::run_samples(h[mm::kPeriodsReg], mm::get_f32(h + mm::kOmegaFReg), mm::get_f32(h + mm::kSampleRateReg)) <=
+            mm::kMaxRunSamples))
+        return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;  // the run would outlast the sample counter's resolution
+    }
+  }
+  if (overlaps(address, count, mm::kUnlockReg, 1) && h[mm::kUnlockReg] != mm::kUnlockKey)
+    return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+  if (overlaps(address, count, mm::kStagingSizeReg, mm::kHoldingWords - mm::kStagingSizeReg)) {
+    if (const int e = staging_rule()) return e;
   }
   if (overlaps(address, count, mm::kAckReg, 2)) {
     const std::uint32_t a = mm::get_u32(h + mm::kAckReg);
@@ -167,7 +195,7 @@ class Server {
     map_->tab_registers[mm::kPeriodsReg] = 2;
   }
   ~Server() {
-    for (int fd : clients_) ::close(fd);
+    for (const auto& c : clients_) ::close(c.fd);
     if (listen_fd_ >= 0) ::close(listen_fd_);
     if (ctx_) {
       if (!options_.rtu_device.empty()) modbus_close(ctx_);
@@ -186,8 +214,8 @@ class Server {
     }
     ctx_ = modbus_new_tcp(options_.tcp_host.c_str(), options_.tcp_port);
     if (!ctx_) throw std::runtime_error("cannot create a Modbus TCP context");
-    listen_fd_ = modbus_tcp_listen(ctx_, 4);
-    if (listen_fd_ < 0) {
+    listen_fd_ = modbus_tcp_listen(ctx_, 64);
+    if (listen_fd_ < 0 || ::fcntl(listen_fd_, F_SETFL, ::fcntl(listen_fd_, F_GETFL) | O_NONBLOCK) != 0) {
       throw std::runtime_error("cannot listen on " + options_.tcp_host + ":" + std::to_string(options_.tcp_port) +
                                ": " + modbus_strerror(errno));
     }
@@ -209,11 +237,22 @@ class Server {
         }
       }
       poll_requests(timeout_us);
+      watch_communication();
       advance();
     }
   }
 
  private:
+  // The host streams while a trajectory plays: silence for watchdog_s means it is gone.
+  void watch_communication() {
+    if (options_.watchdog_s <= 0 || drive_.state() != mm::DriveState::playing) return;
+    const double silent = std::chrono::duration<double>(Clock::now() - last_request_).count();
+    if (silent <= options_.watchdog_s) return;
+    drive_.trip(mm::DriveFault::communication_lost, silent);
+    std::printf("dyncal drive: no request for %.3f s while playing: trajectory stopped (communication lost)\n", silent);
+    std::fflush(stdout);
+  }
+
   // Real time: simulated time since start() follows the wall clock since the start command.
   void advance() {
     if (drive_.state() != mm::DriveState::playing) return;
@@ -230,51 +269,133 @@ class Server {
     }
   }
 
+  // One Modbus TCP client: its socket (non-blocking) and the bytes of its next frame so far.
+  struct Connection {
+    int fd = -1;
+    std::vector<std::uint8_t> in;
+    Clock::time_point frame_start;   ///< when the first byte of the pending partial frame arrived
+    Clock::time_point last_request;  ///< accept time, then the last complete frame
+  };
+
+  // Waits at most timeout_us for requests and serves what has arrived. Never waits on one client:
+  // sockets are non-blocking, each poll reads at most kReadBudget bytes per client, a partial frame
+  // older than frame_timeout_s or a client silent for idle_timeout_s is disconnected, and a reply
+  // that does not fit the client's send buffer (a client that does not read) disconnects it.
   void poll_requests(long timeout_us) {
-    fd_set set;
-    FD_ZERO(&set);
-    int maxfd = -1;
-    auto add = [&](int fd) {
-      FD_SET(fd, &set);
-      maxfd = std::max(maxfd, fd);
-    };
+    std::vector<pollfd> fds;
     if (!options_.rtu_device.empty()) {
-      add(modbus_get_socket(ctx_));
+      fds.push_back({modbus_get_socket(ctx_), POLLIN, 0});
     } else {
-      add(listen_fd_);
-      for (int fd : clients_) add(fd);
+      fds.push_back({listen_fd_, POLLIN, 0});
+      for (const auto& c : clients_) fds.push_back({c.fd, POLLIN, 0});
     }
-    timeval tv{timeout_us / 1000000, timeout_us % 1000000};
-    if (::select(maxfd + 1, &set, nullptr, nullptr, &tv) <= 0) return;
+    const timespec ts{timeout_us / 1000000, (timeout_us % 1000000) * 1000};
+    const int ready = ::ppoll(fds.data(), fds.size(), &ts, nullptr);
     if (!options_.rtu_device.empty()) {
-      serve_one();
+      if (ready > 0) serve_rtu();
       return;
     }
-    if (FD_ISSET(listen_fd_, &set)) {
-      const int fd = ::accept(listen_fd_, nullptr, nullptr);
-      if (fd >= 0) clients_.push_back(fd);
+    const Clock::time_point now = Clock::now();
+    std::vector<char> keep(clients_.size(), 1);
+    for (size_t i = 0; i < clients_.size(); ++i) {
+      if (ready > 0 && (fds[i + 1].revents & (POLLIN | POLLHUP | POLLERR))) keep[i] = read_and_serve(clients_[i], now);
+      const Connection& c = clients_[i];
+      if (keep[i] && !c.in.empty() && now - c.frame_start > seconds(options_.frame_timeout_s)) keep[i] = 0;
+      if (keep[i] && now - c.last_request > seconds(options_.idle_timeout_s)) keep[i] = 0;
     }
-    for (size_t i = 0; i < clients_.size();) {
-      const int fd = clients_[i];
-      if (FD_ISSET(fd, &set)) {
-        modbus_set_socket(ctx_, fd);
-        if (!serve_one()) {
-          ::close(fd);
-          clients_.erase(clients_.begin() + static_cast<long>(i));
-          continue;
+    for (size_t i = clients_.size(); i-- > 0;) {
+      if (keep[i]) continue;
+      forget(clients_[i].fd);
+      ::close(clients_[i].fd);
+      clients_.erase(clients_.begin() + static_cast<long>(i));
+    }
+    if (ready > 0 && (fds[0].revents & POLLIN)) accept_clients(now);
+  }
+
+  static Clock::duration seconds(double s) {
+    return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+  }
+
+  // Accepts every pending connection. At max_connections, the client silent for longest makes room
+  // if it has sent nothing for frame_timeout_s (a polling host is never that client); otherwise the
+  // newcomer is closed at once: a clean refusal that leaves the connected clients served.
+  void accept_clients(Clock::time_point now) {
+    for (;;) {
+      const int fd = ::accept4(listen_fd_, nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC);
+      if (fd < 0) return;  // EAGAIN: none left (or a transient error; the next poll retries)
+      if (static_cast<int>(clients_.size()) >= options_.max_connections) {
+        auto idlest = std::min_element(clients_.begin(), clients_.end(), [](const Connection& a, const Connection& b) {
+          return a.last_request < b.last_request;
+        });
+        if (idlest != clients_.end() && now - idlest->last_request > seconds(options_.frame_timeout_s)) {
+          forget(idlest->fd);
+          ::close(idlest->fd);
+          clients_.erase(idlest);
         }
       }
-      ++i;
+      if (static_cast<int>(clients_.size()) >= options_.max_connections) {
+        ::close(fd);
+        if (refused_++ == 0) {
+          std::printf("dyncal drive: refusing connections beyond %d\n", options_.max_connections);
+          std::fflush(stdout);
+        }
+        continue;
+      }
+      refused_ = 0;
+      Connection c;
+      c.fd = fd;
+      c.last_request = now;
+      clients_.push_back(std::move(c));
     }
   }
 
-  /// Receives and answers one request. False when the connection closed.
-  bool serve_one() {
-    std::uint8_t query[MODBUS_RTU_MAX_ADU_LENGTH > MODBUS_TCP_MAX_ADU_LENGTH ? MODBUS_RTU_MAX_ADU_LENGTH
-                                                                             : MODBUS_TCP_MAX_ADU_LENGTH];
+  // Reads what `c` has sent (at most kReadBudget bytes) and answers its complete frames. False when
+  // the connection is to be closed: closed by the peer, framing lost, or a reply not sent in full.
+  bool read_and_serve(Connection& c, Clock::time_point now) {
+    constexpr size_t kReadBudget = 4096;
+    std::uint8_t chunk[kReadBudget];
+    const ssize_t got = ::recv(c.fd, chunk, sizeof chunk, 0);
+    if (got == 0) return false;
+    if (got < 0) return errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR;
+    if (c.in.empty()) c.frame_start = now;
+    c.in.insert(c.in.end(), chunk, chunk + got);
+    size_t used = 0;
+    for (;;) {
+      const MbapFrame f = next_mbap_frame(c.in.data() + used, c.in.size() - used);
+      if (f.status == MbapFrame::Status::invalid) return false;
+      if (f.status == MbapFrame::Status::incomplete) break;
+      std::uint8_t frame[kMaxTcpAduBytes + 8] = {};  // zero beyond the frame: a short PDU reads zeros
+      std::memcpy(frame, c.in.data() + used, f.bytes);
+      used += f.bytes;
+      c.last_request = now;
+      // Protocol id 0 is Modbus; the unit id is 0xFF (the spec's value for a server addressed by its
+      // IP address) or the drive's unit id. Other frames are not for this drive: ignored.
+      if (f.protocol != 0 || (f.unit != 0xFF && f.unit != options_.rtu_slave)) continue;
+      modbus_set_socket(ctx_, c.fd);
+      current_client_ = c.fd;
+      if (!request_pdu_consistent(frame + kMbapHeaderBytes, f.bytes - kMbapHeaderBytes)) {
+        if (modbus_reply_exception(ctx_, frame, MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE) < 0) return false;
+        continue;
+      }
+      if (!answer(frame, static_cast<int>(f.bytes))) return false;
+    }
+    c.in.erase(c.in.begin(), c.in.begin() + static_cast<long>(used));
+    if (!c.in.empty() && used > 0) c.frame_start = now;  // the rest is the start of a new frame
+    return true;
+  }
+
+  // RTU: one point-to-point line; libmodbus receives a frame (its byte time-out ends a partial one).
+  void serve_rtu() {
+    std::uint8_t query[MODBUS_RTU_MAX_ADU_LENGTH];
     const int rc = modbus_receive(ctx_, query);
-    if (rc == 0) return true;                         // RTU: addressed to another slave
-    if (rc < 0) return !options_.rtu_device.empty();  // RTU: bad frame, keep serving
+    current_client_ = kRtuClient;
+    if (rc > 0) answer(query, rc);  // 0: addressed to another slave; < 0: bad frame, keep serving
+  }
+
+  /// Answers one complete request (ADU of `rc` bytes). False when the reply could not be sent in
+  /// full (TCP: the connection is then closed).
+  bool answer(const std::uint8_t* query, int rc) {
+    last_request_ = Clock::now();
     const int off = modbus_get_header_length(ctx_);
     const int function = query[off];
     const int address = be16(query + off + 1);
@@ -327,14 +448,14 @@ class Server {
       if (splits_element(write_address, write_count)) {
         exception = MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS;
       } else {
-        exception = check_holding(drive_, scratch.data(), write_address, write_count, 1.0 / drive_.control_period());
+        exception = check_holding(drive_, scratch.data(), write_address, write_count, 1.0 / drive_.control_period(),
+                                  session_open());
       }
     }
     if (exception) {
-      modbus_reply_exception(ctx_, query, static_cast<unsigned>(exception));
-      return true;
+      return modbus_reply_exception(ctx_, query, static_cast<unsigned>(exception)) >= 0;
     }
-    if (modbus_reply(ctx_, query, rc, map_) < 0) return !options_.rtu_device.empty();
+    if (modbus_reply(ctx_, query, rc, map_) < 0) return false;
     if (write_count > 0) apply_write(write_address, write_count);
     return true;
   }
@@ -342,6 +463,11 @@ class Server {
   void apply_write(int address, int count) {
     std::uint16_t* h = map_->tab_registers;
     if (overlaps(address, count, mm::kAckReg, 2)) drive_.ack(mm::get_u32(h + mm::kAckReg));
+    if (overlaps(address, count, mm::kUnlockReg, 1)) {
+      session_client_ = current_client_;
+      session_until_ = Clock::now() + seconds(mm::kSessionSeconds);
+      h[mm::kUnlockReg] = 0;
+    }
     if (!overlaps(address, count, mm::kCommandReg, 1)) return;
     switch (static_cast<mm::Command>(h[mm::kCommandReg])) {
       case mm::Command::start:
@@ -353,7 +479,11 @@ class Server {
       case mm::Command::stop:
         drive_.stop();
         break;
+      case mm::Command::reset:
+        drive_.reset();
+        break;
       case mm::Command::commit_table: {
+        session_client_ = kNoClient;  // a commit ends the session
         const int size = h[mm::kStagingSizeReg];
         std::vector<std::uint8_t> bytes(static_cast<size_t>(size));
         mm::regs_to_bytes(h + mm::kStagingTableReg, size, bytes.data());
@@ -381,7 +511,23 @@ class Server {
   modbus_t* ctx_ = nullptr;
   modbus_mapping_t* map_ = nullptr;
   int listen_fd_ = -1;
-  std::vector<int> clients_;
+  std::vector<Connection> clients_;
+  long refused_ = 0;
+  static constexpr int kNoClient = -1;
+  static constexpr int kRtuClient = -2;  ///< the RTU line: one client
+  int current_client_ = kNoClient;       ///< socket (or kRtuClient) of the request being answered
+  int session_client_ = kNoClient;       ///< the client holding the staging session
+  Clock::time_point session_until_ = Clock::now();
+
+  bool session_open() const {
+    return session_client_ != kNoClient && session_client_ == current_client_ && Clock::now() < session_until_;
+  }
+  // A closed connection's session ends with it (a later client may get the same descriptor).
+  void forget(int fd) {
+    if (session_client_ == fd) session_client_ = kNoClient;
+  }
+  Clock::time_point last_request_ = Clock::now();  ///< the last complete request of any client  ///< connections
+                                                   ///< refused since the cap was last below its limit
   long table_generation_ = -1;
   Clock::time_point wall_start_ = Clock::now();
 };

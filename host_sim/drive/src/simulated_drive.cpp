@@ -93,6 +93,22 @@ void SimulatedDrive::start() {
   state_ = modbus_map::DriveState::playing;
 }
 
+void SimulatedDrive::trip(modbus_map::DriveFault fault, double value) {
+  if (state_ != modbus_map::DriveState::playing) return;
+  state_ = modbus_map::DriveState::fault;
+  fault_ = fault;
+  fault_joint_ = 0;
+  fault_value_ = value;
+}
+
+void SimulatedDrive::reset() {
+  if (state_ != modbus_map::DriveState::fault) return;
+  state_ = modbus_map::DriveState::idle;
+  fault_ = modbus_map::DriveFault::none;
+  fault_joint_ = 0;
+  fault_value_ = 0;
+}
+
 void SimulatedDrive::stop() {
   if (state_ == modbus_map::DriveState::playing) state_ = modbus_map::DriveState::finished;
 }

@@ -30,6 +30,7 @@ bool register_robot(const CompiledRobot& robot) {
     const auto k = static_cast<size_t>(i);
     if (robot.identify[k]) entry.identify[k] = robot.identify[k];
     if (robot.prepare[k]) entry.prepare[k] = robot.prepare[k];
+    if (robot.param_names[k]) entry.param_names[k] = robot.param_names[k];
   }
   if (robot.excitation_regressor) entry.excitation_regressor = robot.excitation_regressor;
   if (robot.inverse_dynamics) entry.inverse_dynamics = robot.inverse_dynamics;

@@ -3,6 +3,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 
 #include "dyncal_host/common/input_error.hpp"
@@ -32,11 +33,15 @@ std::vector<std::string> split(const std::string& line) {
 }  // namespace
 
 NumericCsv read_numeric_csv(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw InputError("'" + path + "' is a directory, not a CSV file");
   std::ifstream in(path);
   if (!in) throw InputError("cannot read '" + path + "'");
   NumericCsv csv;
   std::string line;
   if (!std::getline(in, line) || trim(line).empty()) throw InputError(path + ": empty file (no header line)");
+  // A UTF-8 byte-order mark (spreadsheet exports) is not part of the first column's name.
+  if (line.compare(0, 3, "\xEF\xBB\xBF") == 0) line.erase(0, 3);
   csv.header = split(line);
   const size_t cols = csv.header.size();
   std::vector<double> data;
@@ -54,9 +59,15 @@ NumericCsv read_numeric_csv(const std::string& path) {
       char* end = nullptr;
       errno = 0;
       const double v = std::strtod(f.c_str(), &end);
-      if (f.empty() || end != f.c_str() + f.size() || errno == ERANGE) {
+      if (f.empty() || end != f.c_str() + f.size()) {
         throw InputError(path + ":" + std::to_string(line_no) + ": column '" + csv.header[c] + "': '" + f +
                          "' is not a number");
+      }
+      // ERANGE: overflow gives +-HUGE_VAL (refused below as non-finite, with its own words);
+      // underflow (1e-320) gives the nearest subnormal or zero, a faithful reading of the text.
+      if (errno == ERANGE && std::isinf(v)) {
+        throw InputError(path + ":" + std::to_string(line_no) + ": column '" + csv.header[c] + "': '" + f +
+                         "' is beyond the range of a double");
       }
       if (!std::isfinite(v)) {
         throw InputError(path + ":" + std::to_string(line_no) + ": column '" + csv.header[c] + "': non-finite value '" +

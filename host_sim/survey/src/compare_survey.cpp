@@ -11,6 +11,21 @@ namespace dyncal::host::survey {
 
 using nlohmann::json;
 
+namespace {
+
+// The genetic algorithm and gradient descent (survey Sec. 4.3) follow chaotic paths: a last-bit
+// difference in a libm function (glibc picks its exp/sin/pow variant by CPU at run time, so the
+// same binary differs between machines) changes a selection or a line-search step and the run ends
+// elsewhere in the basin. Measured between two AMD EPYC machines with the same binary: up to 140 %
+// relative on GA values and more on gradient descent's smallest parameters, while every
+// deterministic method agreed within 2e-4. Their values are therefore checked for presence and
+// finiteness only; test_survey_optimisers checks what they recover.
+bool chaotic_path(const std::string& path) {
+  return path.find("/genetic algorithm/") != std::string::npos || path.find("/gradient descent/") != std::string::npos;
+}
+
+}  // namespace
+
 std::string compare_survey(const json& ours, const json& ref, double tol) {
   std::ostringstream diff;
   std::function<void(const json&, const json&, const std::string&)> walk = [&](const json& a, const json& b,
@@ -38,6 +53,10 @@ std::string compare_survey(const json& ours, const json& ref, double tol) {
       for (size_t i = 0; i < a.size(); ++i) walk(a[i], b[i], path + "/" + std::to_string(i));
     } else if (a.is_number()) {
       const double x = a.get<double>(), y = b.get<double>();
+      if (chaotic_path(path)) {
+        if (!std::isfinite(x) && std::isfinite(y)) diff << path << ": " << x << ", reference finite\n";
+        return;
+      }
       if (!(std::fabs(x - y) <= tol * std::max(std::fabs(x), std::fabs(y)) + 1e-9)) {
         diff << path << ": " << std::setprecision(10) << x << " vs reference " << y << "\n";
       }

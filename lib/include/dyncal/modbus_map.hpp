@@ -28,11 +28,28 @@ struct Field {
 inline constexpr int kMaxJoints = 7;  ///< dyncal::kMaxRobotJoints (dyncal/robot_model.hpp)
 inline constexpr int kMaxHarmonics = 8;
 /// 4: up to 7 joints (model error and coefficients sized for 7; ring samples packed for the
-/// drive's num_joints, as many per block as fit).
-inline constexpr std::uint16_t kMapVersion = 4;
+/// drive's num_joints, as many per block as fit). 5: the `unlock` register and the `reset`
+/// command (access and state rules, docs/modbus.md "Access and states").
+inline constexpr std::uint16_t kMapVersion = 5;
+
+/// Key that, written to `unlock`, opens a staging session for the writing connection.
+inline constexpr std::uint16_t kUnlockKey = 0xCA1B;
+/// A staging session ends this long after the unlock [s], at the commit, or when its connection
+/// closes, whichever comes first.
+inline constexpr double kSessionSeconds = 10.0;
+
+/// Longest run a drive plays, in samples. The sample counter is a u32 and the drive's time an f32,
+/// whose 24-bit mantissa still resolves one sample period after 2^24 samples (4.66 h at 1 kHz); a
+/// start command whose run would be longer is refused (illegal data value).
+inline constexpr double kMaxRunSamples = 16777216.0;
+/// Samples in a run of `periods` periods of a Fourier trajectory of fundamental frequency f_f [Hz]
+/// sampled at fs [Hz] (Eq. 27: one period lasts 1 / f_f s).
+constexpr double run_samples(double periods, double f_f, double fs) noexcept {
+  return periods / f_f * fs;
+}
 
 /// Drive states (input register `state`). `fault`: the drive stopped the trajectory on a trip
-/// (register `fault` says which); the next start command clears it.
+/// (register `fault` says which); only the reset command clears it.
 enum class DriveState : std::uint16_t { idle = 0, playing = 1, finished = 2, fault = 3 };
 
 /// Why the drive tripped (input register `fault`). Every trip is judged on the measurements, as a
@@ -42,6 +59,9 @@ enum class DriveFault : std::uint16_t {
   non_finite_state = 1,  ///< a measured q or qd is NaN or infinite (the plant diverged)
   position_limit = 2,    ///< measured q outside [q_min, q_max] of the joint (software limit)
   velocity_limit = 3,    ///< measured |qd| above qd_max of the joint (overspeed)
+  /// No complete request from any client for the drive's watchdog time while playing: the host is
+  /// gone, the trajectory stops (fault_joint 0, fault_value the silence in seconds).
+  communication_lost = 4,
 };
 
 constexpr const char* to_string(DriveFault f) noexcept {
@@ -54,6 +74,8 @@ constexpr const char* to_string(DriveFault f) noexcept {
       return "position limit";
     case DriveFault::velocity_limit:
       return "velocity limit";
+    case DriveFault::communication_lost:
+      return "communication lost";
   }
   return "unknown fault";
 }
@@ -64,6 +86,7 @@ enum class Command : std::uint16_t {
   start = 1,         ///< play the Fourier trajectory from its start; clears the ring and the statistics
   stop = 2,          ///< stop playing and hold the current position
   commit_table = 3,  ///< check the staging table and make it active (see docs/modbus.md)
+  reset = 4,         ///< clear a fault: the drive becomes idle (no-op in any other state)
 };
 
 // --- input registers (function code 04), read-only
@@ -100,6 +123,7 @@ inline constexpr std::uint16_t kInputWords = kRingReg + kRingWords;
 
 // --- holding registers (function codes 03, 06, 16, 23)
 inline constexpr std::uint16_t kCommandReg = 0;        // u16 Command
+inline constexpr std::uint16_t kUnlockReg = 1;         // u16 kUnlockKey opens a staging session
 inline constexpr std::uint16_t kAckReg = 2;            // u32 host consumed all samples with seq < ack
 inline constexpr std::uint16_t kSampleRateReg = 4;     // f32 [Hz], 100..1000, divides 1000
 inline constexpr std::uint16_t kOmegaFReg = 6;         // f32 [Hz] fundamental frequency, (0, 10]
@@ -145,7 +169,10 @@ inline constexpr Field kRegisterMap[] = {
     {"ring", Bank::input, kRingReg, kRingWords, Type::bytes, "-",
      "u32 first seq, u16 count n <= 120 / (2 + 6 N), then n samples of N = num_joints: u32 seq, "
      "f32 q[N] rad, qd[N] rad/s, tau[N] Nm"},
-    {"command", Bank::holding, kCommandReg, 1, Type::u16, "-", "1 start, 2 stop, 3 commit table; reads 0"},
+    {"command", Bank::holding, kCommandReg, 1, Type::u16, "-",
+     "1 start, 2 stop, 3 commit table, 4 reset a fault; reads 0"},
+    {"unlock", Bank::holding, kUnlockReg, 1, Type::u16, "-",
+     "0xCA1B opens a staging session for this connection (10 s, until commit or disconnect); reads 0"},
     {"ack", Bank::holding, kAckReg, 2, Type::u32, "-", "samples with seq < ack are consumed and freed"},
     {"sample_rate", Bank::holding, kSampleRateReg, 2, Type::f32, "Hz", "recording rate, 100..1000, divides 1000"},
     {"omega_f", Bank::holding, kOmegaFReg, 2, Type::f32, "Hz", "Fourier fundamental frequency (Eq. 27), (0, 10]"},

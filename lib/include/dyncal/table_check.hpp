@@ -41,6 +41,60 @@ TableStatus check_table(const ParameterTable& table) noexcept {
   return TableStatus::ok;
 }
 
+/// Per-joint ratings of the drive's robot (robot.json's limits, joint side, SI units), joint 1
+/// first. A rating <= 0 (unknown) bounds nothing.
+template <int N>
+struct JointRatings {
+  float tau_max[N];  ///< [Nm]
+  float qd_max[N];   ///< [rad/s]
+  float qdd_max[N];  ///< [rad/s^2]
+};
+
+/// How many times a joint's tau_max one term of a table may demand at the joint's rated motion.
+/// robot.json's tau_max may be a continuous rating or a scale derived from the nominal model
+/// (docs/robots.md), and drives peak at two to three times their continuous rating: the shipped
+/// ER20 stand-in's own viscous friction at qd_max is 1.6 tau_max on joint 6. Ten times is beyond
+/// any drive, and the same bound the log loader applies to measured torques.
+inline constexpr float kTableRatingMultiple = 10.0f;
+
+/// check_table, then physical plausibility against the robot's own ratings: no per-joint term may
+/// alone demand more than kTableRatingMultiple x the joint's tau_max at its rated motion —
+/// |offset|, Fc; Fv qd_max; |Fp| qd_max^(1/3) (Eq. 8); Ia qdd_max. Such a table is a unit slip or a
+/// diverged fit (every value 1e5, offsets of 1e5 Nm). Returns out_of_range for such a term (the
+/// first failing check otherwise, as check_table).
+template <class Model>
+TableStatus check_table(const ParameterTable& table, const JointRatings<Model::kNumJoints>& r) noexcept {
+  const TableStatus st = check_table<Model>(table);
+  if (st != TableStatus::ok) return st;
+  for (int i = 0; i < table.count; ++i) {
+    const ParamInfo info = Model::info(i);
+    if (info.kind != ParamKind::term || info.joint < 1 || info.joint > Model::kNumJoints) continue;
+    const int j = info.joint - 1;
+    if (!(r.tau_max[j] > 0.0f)) continue;
+    const float v = std::fabs(table.values[i]);
+    float torque = 0.0f;  // the term's torque magnitude at the joint's rated motion [Nm]
+    switch (info.term) {
+      case term::offset:
+      case term::coulomb:
+        torque = v;
+        break;
+      case term::viscous:
+        torque = v * r.qd_max[j];
+        break;
+      case term::power:
+        torque = v * std::cbrt(r.qd_max[j]);
+        break;
+      case term::rotor_inertia:
+        torque = v * r.qdd_max[j];
+        break;
+      default:
+        continue;
+    }
+    if (torque > kTableRatingMultiple * r.tau_max[j]) return TableStatus::out_of_range;
+  }
+  return TableStatus::ok;
+}
+
 /// Fills `table` from a parameter vector of Model (float32 values, model's column order).
 template <class Model, typename Derived>
 void make_table(const Eigen::MatrixBase<Derived>& phi, ParameterTable& table) noexcept {

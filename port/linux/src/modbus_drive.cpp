@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstring>
+#include <thread>
 #include <vector>
 
 namespace dyncal::linux_port {
@@ -123,6 +124,11 @@ port::PortStatus ModbusDrive::read_info(DriveInfo& info) {
 
 std::string describe_fault(const DriveInfo& info) {
   char text[160];
+  if (info.fault == mm::DriveFault::communication_lost) {
+    std::snprintf(text, sizeof text, "communication lost: no request for %.3g s while playing, stopped at t = %.3f s",
+                  info.fault_value, info.sim_time);
+    return text;
+  }
   const char* what = info.fault == mm::DriveFault::position_limit   ? "q = %.4g rad"
                      : info.fault == mm::DriveFault::velocity_limit ? "qd = %.4g rad/s"
                                                                     : nullptr;
@@ -134,6 +140,25 @@ std::string describe_fault(const DriveInfo& info) {
 }
 
 port::PortStatus ModbusDrive::write_trajectory(const Trajectory& t, int periods, double sample_rate_hz) {
+  // The drive checks these too (Modbus exception); checked here first to say which value and why.
+  char text[200] = "";
+  if (!(sample_rate_hz >= 100 && sample_rate_hz <= 1000))
+    std::snprintf(text, sizeof text, "sample rate %.4g Hz outside 100..1000 Hz", sample_rate_hz);
+  else if (!(t.f_f > 0 && t.f_f <= 10))
+    std::snprintf(text, sizeof text, "fundamental frequency f_f = %.4g Hz outside (0, 10] Hz", t.f_f);
+  else if (t.harmonics < 1 || t.harmonics > mm::kMaxHarmonics)
+    std::snprintf(text, sizeof text, "%d harmonics, 1..%d supported", t.harmonics, mm::kMaxHarmonics);
+  else if (periods < 1 || periods > 100)
+    std::snprintf(text, sizeof text, "%d periods, 1..100 supported", periods);
+  else if (!(mm::run_samples(periods, t.f_f, sample_rate_hz) <= mm::kMaxRunSamples))
+    std::snprintf(text, sizeof text,
+                  "a run of %d periods at f_f = %.4g Hz and %.4g Hz is %.4g samples, longer than the drive's "
+                  "%.0f (docs/modbus.md)",
+                  periods, t.f_f, sample_rate_hz, mm::run_samples(periods, t.f_f, sample_rate_hz), mm::kMaxRunSamples);
+  if (text[0] != '\0') {
+    error_ = text;
+    return port::PortStatus::rejected;
+  }
   std::uint16_t settings[6];
   mm::set_f32(settings, static_cast<float>(sample_rate_hz));
   mm::set_f32(settings + 2, static_cast<float>(t.f_f));
@@ -156,6 +181,11 @@ port::PortStatus ModbusDrive::start() {
   const std::uint16_t cmd = static_cast<std::uint16_t>(mm::Command::start);
   next_seq_ = 0;
   lost_ = 0;
+  return write_holding(mm::kCommandReg, 1, &cmd);
+}
+
+port::PortStatus ModbusDrive::reset() {
+  const std::uint16_t cmd = static_cast<std::uint16_t>(mm::Command::reset);
   return write_holding(mm::kCommandReg, 1, &cmd);
 }
 
@@ -239,11 +269,20 @@ port::PortStatus ModbusDrive::write(const ParameterTable& table, TableStatus* re
   std::uint16_t counter_before = 0;
   if (read_input(mm::kCommitCounterReg, 1, &counter_before) != port::PortStatus::ok)
     return port::PortStatus::transport_error;
-  if (write_holding(mm::kStagingSizeReg, 1 + (size + 1) / 2, regs) != port::PortStatus::ok)
+  // A staging session for this connection (docs/modbus.md "Access and states"); the commit ends it.
+  // The drive refuses staging while it plays (busy) or stands in fault (device failure).
+  const std::uint16_t key = mm::kUnlockKey;
+  if (write_holding(mm::kUnlockReg, 1, &key) != port::PortStatus::ok) return port::PortStatus::transport_error;
+  if (write_holding(mm::kStagingSizeReg, 1 + (size + 1) / 2, regs) != port::PortStatus::ok) {
+    if (errno == EMBXSFAIL) error_ = "the drive is in fault: it takes no table until reset (docs/modbus.md)";
+    if (errno == EMBXSBUSY) error_ = "the drive is playing a trajectory: it takes a table only when idle";
     return port::PortStatus::transport_error;
+  }
   const std::uint16_t cmd = static_cast<std::uint16_t>(mm::Command::commit_table);
   if (write_holding(mm::kCommandReg, 1, &cmd) != port::PortStatus::ok) return port::PortStatus::transport_error;
-  // The drive answers the command at once and flashes afterwards; requests wait until it is done.
+  // The drive answers the command at once and flashes afterwards: poll its commit counter, with a
+  // deadline (a drive that never counts must not hang the host).
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(commit_timeout_s_);
   for (;;) {
     std::uint16_t r[2];
     if (read_input(mm::kCommitResultReg, 2, r) != port::PortStatus::ok) return port::PortStatus::transport_error;
@@ -251,6 +290,16 @@ port::PortStatus ModbusDrive::write(const ParameterTable& table, TableStatus* re
       *reason = static_cast<TableStatus>(r[0]);
       break;
     }
+    if (std::chrono::steady_clock::now() >= deadline) {
+      char text[160];
+      std::snprintf(text, sizeof text,
+                    "the drive did not finish the commit within %.3g s (its commit counter stayed at %u); "
+                    "read the active table back before trusting it",
+                    commit_timeout_s_, static_cast<unsigned>(counter_before));
+      error_ = text;
+      return port::PortStatus::transport_error;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
   if (*reason != TableStatus::ok) return port::PortStatus::rejected;
   // Read back and compare byte for byte.

@@ -60,33 +60,48 @@ class ModbusDrive final : public port::SampleSource, public port::ParameterStore
   /// 1..kMaxJoints).
   port::PortStatus read_info(DriveInfo& info);
   /// Writes the trajectory (Eq. 27 coefficients), periods and sample rate; the drive must be idle.
-  /// Errors: transport_error, rejected (a value outside the register's range, docs/modbus.md).
+  /// Errors: transport_error, rejected (a value outside the register's range, or a run longer than
+  /// modbus_map::kMaxRunSamples: checked before sending, error() names the value; docs/modbus.md).
   port::PortStatus write_trajectory(const Trajectory& trajectory, int periods, double sample_rate_hz);
   /// Starts the written trajectory from its beginning (clears the ring and the statistics).
-  /// Errors: transport_error, rejected.
+  /// Errors: transport_error, rejected (the drive is playing already, or in fault: reset() first).
   port::PortStatus start();
+  /// Clears a drive fault (the only way to): the drive becomes idle. A no-op in any other state.
+  /// Errors: transport_error, rejected.
+  port::PortStatus reset();
   /// Stops playing; the drive holds its position. Errors: transport_error, rejected.
   port::PortStatus stop();
 
   // port::SampleSource
   /// Samples carry the drive's num_joints joints (the rest of each DriveSample is zero); the first
   /// call reads it with read_info.
-  /// Errors: transport_error, rejected (read_info's); sequence_gap when samples were lost (lost() counts them); device_fault
-  /// once every sample recorded before a drive fault has been read (error() then describes the fault).
+  /// Errors: transport_error, rejected (read_info's); sequence_gap when samples were lost (lost() counts them);
+  /// device_fault once every sample recorded before a drive fault has been read (error() then describes the fault).
   port::PortStatus read(port::DriveSample* out, int capacity, int* count) noexcept override;
   /// Samples lost to drive overruns so far (gaps in seq).
   std::uint32_t lost() const { return lost_; }
 
   // port::ParameterStore
-  /// Stages, commits and reads the table back byte for byte. Errors: rejected with *reason (the
-  /// table cannot be encoded, or the drive refused it: its active table is unchanged);
-  /// transport_error (link failure, or the read-back differs from what was sent).
+  /// Opens a staging session (writes modbus_map::kUnlockKey to `unlock`), stages, commits and reads
+  /// the table back byte for byte. Polls the drive's commit counter
+  /// (every 1 ms) until it moves, at most commit_timeout_s (set_commit_timeout). Errors: rejected
+  /// with *reason (the table cannot be encoded, or the drive refused it: its active table is
+  /// unchanged); transport_error (link failure, the read-back differs from what was sent, or the
+  /// drive did not finish the commit within the deadline: error() says so, the table's fate is
+  /// then unknown until read back).
   port::PortStatus write(const ParameterTable& table, TableStatus* reason) noexcept override;
   /// The active table, decoded and CRC-checked. Errors: transport_error; rejected with *reason.
   port::PortStatus read(ParameterTable& table, TableStatus* reason) noexcept override;
   /// Raw bytes of the active table (for comparison with what was sent). Errors: transport_error
   /// (also when the table is larger than `capacity`), rejected.
   port::PortStatus read_active_bytes(std::uint8_t* bytes, int capacity, int* size);
+
+  /// Deadline for a commit (default 10 s; a flash of the largest table takes milliseconds).
+  /// Values <= 0 or non-finite are ignored.
+  void set_commit_timeout(double seconds) {
+    if (seconds > 0 && seconds < 1e6) commit_timeout_s_ = seconds;
+  }
+  double commit_timeout() const { return commit_timeout_s_; }
 
   // port::Clock
   std::uint64_t now_us() noexcept override;
@@ -105,6 +120,7 @@ class ModbusDrive final : public port::SampleSource, public port::ParameterStore
   std::uint32_t next_seq_ = 0;
   std::uint32_t lost_ = 0;
   int joints_ = 0;  ///< the drive's num_joints (read_info), 0 until known
+  double commit_timeout_s_ = 10.0;
 };
 
 }  // namespace dyncal::linux_port

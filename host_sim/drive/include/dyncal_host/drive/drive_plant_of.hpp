@@ -44,7 +44,7 @@ class DrivePlantOf final : public DrivePlant {
   TableStatus check(const ParameterTable& t) const override {
     if (t.robot_id != Robot::kRobotId) return TableStatus::wrong_robot;
     const std::optional<ModelOps> ops = find_ops(t.model_id);
-    return ops ? ops->check(t) : TableStatus::wrong_model;
+    return ops ? ops->check(t, ratings_) : TableStatus::wrong_model;
   }
 
   ParameterTable nominal_table(const JointArray& Fc, const JointArray& beta) const override {
@@ -74,6 +74,9 @@ class DrivePlantOf final : public DrivePlant {
     q_max_ = robot.q_max;
     qd_max_ = robot.qd_max;
     for (int j = 0; j < N; ++j) {
+      ratings_.tau_max[j] = robot.tau_max.size() == N ? static_cast<float>(robot.tau_max[j]) : 0.0f;
+      ratings_.qd_max[j] = static_cast<float>(robot.qd_max[j]);
+      ratings_.qdd_max[j] = static_cast<float>(robot.qdd_max[j]);
       ia_[j] = scenario.effects[j].rotor_inertia;
       quantum_[j] =
           scenario.encoder_counts > 0 ? 2.0 * M_PI / (scenario.encoder_counts * std::fabs(robot.gear_ratios[j])) : 0.0;
@@ -167,7 +170,7 @@ class DrivePlantOf final : public DrivePlant {
   /// Feed-forward tau = K(q, qd, qdd) phi and table check of one supported model.
   struct ModelOps {
     unsigned terms = 0;
-    TableStatus (*check)(const ParameterTable&) = nullptr;
+    TableStatus (*check)(const ParameterTable&, const JointRatings<N>&) = nullptr;
     void (*feedforward)(const ParameterTable&, const Vec&, const Vec&, const Vec&, Vec&) = nullptr;
   };
 
@@ -187,7 +190,11 @@ class DrivePlantOf final : public DrivePlant {
   template <unsigned Terms>
   struct OpsFor {
     static ModelOps run() {
-      return ModelOps{Terms, &check_table<IdentificationModel<Robot, Terms>>, &feedforward<Terms>};
+      ModelOps ops;
+      ops.terms = Terms;
+      ops.check = &check_table<IdentificationModel<Robot, Terms>>;  // the overload with the ratings
+      ops.feedforward = &feedforward<Terms>;
+      return ops;
     }
   };
 
@@ -242,7 +249,8 @@ class DrivePlantOf final : public DrivePlant {
   Vec kp_ = Vec::Zero(), kd_ = Vec::Zero();
   Vec quantum_ = Vec::Zero();                                             // encoder resolution on the joint side [rad]
   Vec q_min_ = Vec::Zero(), q_max_ = Vec::Zero(), qd_max_ = Vec::Zero();  // the drive's trips
-  ModelOps ops_{};  // feed-forward and check of the active table's model
+  JointRatings<N> ratings_{};  ///< tau_max, qd_max, qdd_max: table plausibility (check_table)
+  ModelOps ops_{};             // feed-forward and check of the active table's model
 };
 
 /// Plant: (M(q) + diag(Ia)) qdd = tau - h(q, qd) - friction - effects, RK4 with zero-order hold.

@@ -14,11 +14,26 @@ struct DriveServerOptions {
   int tcp_port = 1502;     ///< 0: any free port (reported in the ready line and the ready file)
   std::string rtu_device;  ///< non-empty: serve Modbus RTU on this device instead of TCP
   int rtu_baud = 115200;
-  int rtu_slave = 1;
+  int rtu_slave = 1;       ///< the drive's unit id (RTU slave address; on TCP, 0xFF is accepted too)
   std::string ready_file;  ///< written (atomically) with the drive's URI once it serves requests
+  /// TCP clients served at once. A newcomer beyond it replaces the client silent for longest if that
+  /// one has sent nothing for frame_timeout_s, else it is closed at once (docs/reliability.md).
+  int max_connections = 16;
+  /// A TCP client whose frame is still incomplete after this long is disconnected [s] (a whole
+  /// Modbus TCP frame is at most 260 bytes: one segment).
+  double frame_timeout_s = 1.0;
+  /// A TCP client that sends no complete request for this long is disconnected [s].
+  double idle_timeout_s = 60.0;
+  /// Communication watchdog [s]: while a trajectory plays, no complete request from any client for
+  /// this long stops it with fault communication_lost. 0 disables it.
+  double watchdog_s = 2.0;
 };
 
-/// Serves `drive` until `stop` becomes true (checked at least every 50 ms). In lockstep mode
+/// Serves `drive` until `stop` becomes true (checked at least every 50 ms). The simulation never
+/// waits on the network: TCP sockets are non-blocking and polled (no fd_set limit), each client's
+/// bytes are framed by its MBAP header and served when a frame is complete, with the limits of
+/// DriveServerOptions; frames with a protocol id other than 0 or another unit id are ignored, a
+/// PDU whose length contradicts its function gets exception 3 (illegal data value). In lockstep mode
 /// (drive.lockstep) simulated time advances as fast as the host consumes samples; otherwise with
 /// the wall clock, dropping samples (counted as overruns) when the host falls behind.
 /// Prints "dyncal drive: ready <uri> pid <pid>" on stdout when it accepts requests. Throws

@@ -40,11 +40,17 @@ class SimulatedDrive {
 
   void start();
   void stop();
+  /// Stops a playing trajectory with `fault` (no joint; `value` in its unit), as a trip does: the
+  /// arm holds, no further sample is recorded. No-op unless playing.
+  void trip(modbus_map::DriveFault fault, double value);
+  /// Clears a fault: the drive becomes idle, holding its position. No-op in any other state.
+  void reset();
   modbus_map::DriveState state() const { return state_; }
   /// Why the drive stopped (state() == fault; none otherwise): each control period, before the
   /// control law, the measured q and qd of every joint are checked — finite, q within [q_min,
   /// q_max], |qd| <= qd_max of the robot file — and the first break stops the trajectory: no more
-  /// samples are recorded, the ring keeps those before it. start() clears the fault.
+  /// samples are recorded, the ring keeps those before it. reset() or start() clears the fault
+  /// (the Modbus server refuses start in fault: there only the reset command clears it).
   modbus_map::DriveFault fault() const { return fault_; }
   /// The 1-based joint that tripped (0: none).
   int fault_joint() const { return fault_joint_; }

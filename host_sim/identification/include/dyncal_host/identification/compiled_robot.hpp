@@ -45,7 +45,12 @@ struct CompiledRobot {
   using BaseRegressorFn = Eigen::MatrixXd (*)(const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
                                               const Eigen::VectorXd& qdd);
 
+  /// Names of the identified parameters in table order (base parameters, then the terms'), as
+  /// identify reports them and a parameter file lists them.
+  using ParamNamesFn = std::vector<std::string> (*)();
+
   std::array<IdentifyFn, kBuiltTermSets> identify{};  ///< by built_term_set_index
+  std::array<ParamNamesFn, kBuiltTermSets> param_names{};
   std::array<PrepareFn, kBuiltTermSets> prepare{};
   ExcitationRegressorFn excitation_regressor = nullptr;
   InverseDynamicsFn inverse_dynamics = nullptr;

@@ -10,6 +10,11 @@
 namespace dyncal::host {
 
 /// Options of `dyncal identify` (defaults follow the survey and Gautier's practice).
+/// Highest Butterworth order identify accepts (even orders, cascaded second-order sections).
+inline constexpr int kMaxFilterOrder = 8;
+
+/// Options of identify(); each is range-checked against the log before any work (InputError naming
+/// the option and its admissible range).
 struct IdentifyOptions {
   std::string method = "ols";       ///< ols | wls | kf | rls
   unsigned terms = 0;               ///< dyncal::term bits (rigid body always included)
@@ -53,8 +58,10 @@ struct IdentifyResult {
 };
 
 /// Identifies the model from `log` and validates it on data each fit never saw.
-/// Throws InputError on bad options, too little data, a robot not compiled into this build
-/// (compiled_robot.hpp) or a model not built (model_terms.hpp).
+/// Throws InputError on bad options (see check in identify.cpp: filter order, cut-off below Nyquist
+/// and above 2 / duration, folds >= 2 with blocks of at least one cut-off period, validate_last in
+/// (0, 0.9] covering at least one cut-off period, mu in (0, 1], p0 > 0), too little data, a robot not compiled into
+/// this build (compiled_robot.hpp) or a model not built (model_terms.hpp).
 IdentifyResult identify(const RobotDescription& robot, const JointLog& log, const IdentifyOptions& options);
 
 }  // namespace dyncal::host

@@ -84,6 +84,14 @@ StackedData prepare_stacked_with(const RobotDescription& robot, const JointLog& 
   return IdentifyPipeline<Robot, Terms>(robot, o).prepare(log);
 }
 
+template <class Robot, unsigned Terms>
+std::vector<std::string> param_names_of() {
+  std::vector<std::string> names;
+  for (int i = 0; i < IdentifyPipeline<Robot, Terms>::P; ++i)
+    names.push_back(IdentifyPipeline<Robot, Terms>::param_name(i));
+  return names;
+}
+
 /// Registers the robot's identity, nominal standard parameters (the generated kNominalStandard),
 /// excitation regressor and inverse dynamics.
 template <class Robot>
@@ -109,7 +117,8 @@ bool register_identification(std::integer_sequence<int, I...>) {
   CompiledRobot c;
   c.name = Robot::kName;
   ((c.identify[First + I] = &run_identify<Robot, built_term_set(First + I)>,
-    c.prepare[First + I] = &prepare_stacked_with<Robot, built_term_set(First + I)>),
+    c.prepare[First + I] = &prepare_stacked_with<Robot, built_term_set(First + I)>,
+    c.param_names[First + I] = &param_names_of<Robot, built_term_set(First + I)>),
    ...);
   return register_robot(c);
 }
