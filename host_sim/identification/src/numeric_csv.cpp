@@ -37,6 +37,10 @@ NumericCsv read_numeric_csv(const std::string& path) {
   if (std::filesystem::is_directory(path, ec)) throw InputError("'" + path + "' is a directory, not a CSV file");
   std::ifstream in(path);
   if (!in) throw InputError("cannot read '" + path + "'");
+  return parse_numeric_csv(in, path);
+}
+
+NumericCsv parse_numeric_csv(std::istream& in, const std::string& path) {
   NumericCsv csv;
   std::string line;
   if (!std::getline(in, line) || trim(line).empty()) throw InputError(path + ": empty file (no header line)");

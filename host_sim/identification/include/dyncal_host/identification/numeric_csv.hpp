@@ -1,6 +1,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <istream>
 #include <string>
 #include <vector>
 
@@ -16,5 +17,9 @@ struct NumericCsv {
 /// of fields than the header, a field that is not a number or is NaN/infinite (message names the
 /// file, line and column).
 NumericCsv read_numeric_csv(const std::string& path);
+
+/// Parses CSV text from `in` as read_numeric_csv does; `name` stands for the file in messages.
+/// Throws InputError as read_numeric_csv (the fuzz target tests/fuzz/fuzz_numeric_csv.cpp).
+NumericCsv parse_numeric_csv(std::istream& in, const std::string& name);
 
 }  // namespace dyncal::host
