@@ -187,20 +187,30 @@ JointArray SimulatedDrive::model_error_rms() const {
   return r;
 }
 
-void write_file_atomically(const std::string& path, const std::vector<std::uint8_t>& bytes, int chunk_delay_ms) {
+void write_file_atomically(const std::string& path, const std::vector<std::uint8_t>& bytes, int chunk_delay_ms,
+                           long cut_at) {
   const std::string tmp = path + ".tmp";
+  const long size = static_cast<long>(bytes.size());
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
   if (fd < 0) throw std::runtime_error("cannot create " + tmp);
   for (size_t off = 0; off < bytes.size(); off += 64) {
-    const size_t n = std::min<size_t>(64, bytes.size() - off);
+    size_t n = std::min<size_t>(64, bytes.size() - off);
+    const bool cut_here = cut_at >= 0 && cut_at <= static_cast<long>(off + n) && cut_at <= size;
+    if (cut_here) n = static_cast<size_t>(cut_at) - off;  // the write in progress torn at cut_at
     if (::write(fd, bytes.data() + off, n) != static_cast<ssize_t>(n)) {
       ::close(fd);
       throw std::runtime_error("cannot write " + tmp);
     }
+    if (cut_here) {
+      ::close(fd);
+      return;
+    }
     if (chunk_delay_ms > 0) std::this_thread::sleep_for(std::chrono::milliseconds(chunk_delay_ms));
   }
   if (::fsync(fd) != 0 || ::close(fd) != 0) throw std::runtime_error("cannot sync " + tmp);
+  if (cut_at == size + 1) return;
   if (::rename(tmp.c_str(), path.c_str()) != 0) throw std::runtime_error("cannot replace " + path);
+  if (cut_at == size + 2) return;
   const size_t slash = path.find_last_of('/');
   const std::string dir = slash == std::string::npos ? "." : path.substr(0, slash);
   const int dfd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY);

@@ -139,7 +139,12 @@ ParameterTable nominal_table(const std::string& robot, const JointArray& Fc = {}
 
 /// Writes `bytes` to `path` atomically (temporary file in the same directory, fsync, rename, fsync
 /// of the directory): a crash at any moment leaves the old or the new content. Throws
-/// std::runtime_error on I/O failure.
-void write_file_atomically(const std::string& path, const std::vector<std::uint8_t>& bytes, int chunk_delay_ms = 0);
+/// std::runtime_error on I/O failure. This is the parameter store's only write path, and its seam
+/// for crash tests: `cut_at` >= 0 simulates the process dying at that point and returns there —
+/// 0..size: after that many bytes of the temporary file (the write in progress torn at that
+/// offset), before its fsync; size + 1: after the fsync, before the rename; size + 2: after the
+/// rename, before the directory's fsync. -1: no cut.
+void write_file_atomically(const std::string& path, const std::vector<std::uint8_t>& bytes, int chunk_delay_ms = 0,
+                           long cut_at = -1);
 
 }  // namespace dyncal::host
