@@ -15,6 +15,7 @@
 #include "dyncal_host/calibration/online_model.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/model_terms.hpp"
+#include "dyncal_host/common/number_text.hpp"
 #include "dyncal_host/identification/compiled_robot.hpp"
 #include "dyncal_host/identification/excitation.hpp"
 #include "dyncal_host/identification/identify_report.hpp"
@@ -195,11 +196,7 @@ namespace {
 // The run settings, checked before the drive is contacted against what the drive accepts
 // (docs/modbus.md): a bad value is named here, not discovered as a Modbus exception after start.
 void check_run_options(const CalibrateOptions& o) {
-  auto number = [](double v) {
-    char text[32];
-    std::snprintf(text, sizeof text, "%.4g", v);
-    return std::string(text);
-  };
+  const auto number = [](double v) { return number_text(v); };
   if (!(o.sample_rate_hz >= 100 && o.sample_rate_hz <= 1000))
     throw InputError("--rate " + number(o.sample_rate_hz) + " Hz must lie in 100..1000 Hz");
   const double f_f = o.excitation ? o.excitation->f_f : o.f_f;

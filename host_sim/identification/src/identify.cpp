@@ -4,17 +4,12 @@
 #include <cstdio>
 
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/common/number_text.hpp"
 #include "dyncal_host/identification/compiled_robot.hpp"
 #include "dyncal_host/identification/stacked_data.hpp"
 
 namespace dyncal::host {
 namespace {
-
-std::string number(double v) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.4g", v);
-  return text;
-}
 
 // Every option range-checked against what it means on this log, before any work (issue 23, fault 8).
 // The bounds follow from the processing, not from tuning: the zero-phase filter correlates samples
@@ -28,34 +23,36 @@ void check_options(const IdentifyOptions& o, const JointLog& log) {
   const double fs = 1.0 / log.sample_period();
   const double duration = static_cast<double>(log.samples()) * log.sample_period();
   if (!(o.cutoff_hz > 0.0) || !(o.cutoff_hz < 0.5 * fs))
-    throw InputError("--cutoff " + number(o.cutoff_hz) + " Hz must lie in (0, " + number(0.5 * fs) +
-                     ") Hz, below the Nyquist frequency of the log's " + number(fs) + " Hz");
+    throw InputError("--cutoff " + number_text(o.cutoff_hz) + " Hz must lie in (0, " + number_text(0.5 * fs) +
+                     ") Hz, below the Nyquist frequency of the log's " + number_text(fs) + " Hz");
   if (!(o.cutoff_hz * duration > 2.0))
-    throw InputError("--cutoff " + number(o.cutoff_hz) + " Hz: one cut-off period is dropped at each end of the " +
-                     number(duration) + " s log, so the cut-off must exceed " + number(2.0 / duration) + " Hz");
+    throw InputError("--cutoff " + number_text(o.cutoff_hz) + " Hz: one cut-off period is dropped at each end of the " +
+                     number_text(duration) + " s log, so the cut-off must exceed " + number_text(2.0 / duration) +
+                     " Hz");
   if (o.decimate < 0) throw InputError("--decimate " + std::to_string(o.decimate) + " must be >= 0 (0: automatic)");
   const double period = 1.0 / o.cutoff_hz;
   if (o.validate_last != 0.0) {
     if (!(o.validate_last > 0.0 && o.validate_last <= 0.9))
-      throw InputError("--validate-last " + number(o.validate_last) + " must lie in (0, 0.9]");
+      throw InputError("--validate-last " + number_text(o.validate_last) + " must lie in (0, 0.9]");
     if (!(o.validate_last * duration >= period))
-      throw InputError("--validate-last " + number(o.validate_last) + " validates " +
-                       number(o.validate_last * duration) + " s, less than one cut-off period (" + number(period) +
-                       " s) of the filtered data: validation would share the fit's noise");
+      throw InputError("--validate-last " + number_text(o.validate_last) + " validates " +
+                       number_text(o.validate_last * duration) + " s, less than one cut-off period (" +
+                       number_text(period) + " s) of the filtered data: validation would share the fit's noise");
   } else {
     if (o.folds < 2) throw InputError("--folds " + std::to_string(o.folds) + " must be >= 2");
     if (!(o.block_seconds >= period) || !std::isfinite(o.block_seconds))
-      throw InputError("--block " + number(o.block_seconds) + " s must be at least one cut-off period (" +
-                       number(period) + " s): shorter blocks share their filtered noise with the neighbouring folds");
+      throw InputError("--block " + number_text(o.block_seconds) + " s must be at least one cut-off period (" +
+                       number_text(period) +
+                       " s): shorter blocks share their filtered noise with the neighbouring folds");
     if (!(o.block_seconds * o.folds <= duration))
-      throw InputError("--folds " + std::to_string(o.folds) + " of --block " + number(o.block_seconds) +
-                       " s need at least " + number(o.block_seconds * o.folds) + " s of log, this one lasts " +
-                       number(duration) + " s");
+      throw InputError("--folds " + std::to_string(o.folds) + " of --block " + number_text(o.block_seconds) +
+                       " s need at least " + number_text(o.block_seconds * o.folds) + " s of log, this one lasts " +
+                       number_text(duration) + " s");
   }
-  if (!(o.rls_mu > 0.0 && o.rls_mu <= 1.0)) throw InputError("--mu " + number(o.rls_mu) + " must lie in (0, 1]");
-  if (!(o.p0 > 0.0) || !std::isfinite(o.p0)) throw InputError("--p0 " + number(o.p0) + " must be finite and > 0");
+  if (!(o.rls_mu > 0.0 && o.rls_mu <= 1.0)) throw InputError("--mu " + number_text(o.rls_mu) + " must lie in (0, 1]");
+  if (!(o.p0 > 0.0) || !std::isfinite(o.p0)) throw InputError("--p0 " + number_text(o.p0) + " must be finite and > 0");
   if (!(o.min_speed_fraction >= 0.0 && o.min_speed_fraction < 1.0))
-    throw InputError("--min-speed " + number(o.min_speed_fraction) + " must lie in [0, 1)");
+    throw InputError("--min-speed " + number_text(o.min_speed_fraction) + " must lie in [0, 1)");
 }
 
 const CompiledRobot& checked(const RobotDescription& robot, const JointLog& log, const IdentifyOptions& options) {

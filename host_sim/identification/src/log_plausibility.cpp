@@ -5,15 +5,10 @@
 #include <type_traits>
 
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/common/number_text.hpp"
 
 namespace dyncal::host {
 namespace {
-
-std::string number(double v) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.6g", v);
-  return text;
-}
 
 template <class Matrix>
 struct Column {
@@ -38,15 +33,15 @@ void bounds(const RobotDescription& r, const std::string& name, int j, double* l
     const double margin = kPositionMargin * (r.q_max[j] - r.q_min[j]);
     *lo = r.q_min[j] - margin;
     *hi = r.q_max[j] + margin;
-    *words = "[q_min, q_max] = [" + number(r.q_min[j]) + ", " + number(r.q_max[j]) + "] rad widened by " +
-             number(100 * kPositionMargin) + " % of the range";
+    *words = "[q_min, q_max] = [" + number_text(r.q_min[j], 6) + ", " + number_text(r.q_max[j], 6) +
+             "] rad widened by " + number_text(100 * kPositionMargin, 6) + " % of the range";
     return;
   }
   const double rating = name == "qd" ? r.qd_max[j] : name == "qdd" ? r.qdd_max[j] : r.tau_max[j];
   *hi = kRatingMultiple * rating;
   *lo = -*hi;
   const std::string what = name == "qd" ? "qd_max" : name == "qdd" ? "qdd_max" : "tau_max";
-  *words = number(kRatingMultiple) + " x " + what + " = " + number(*hi) +
+  *words = number_text(kRatingMultiple, 6) + " x " + what + " = " + number_text(*hi, 6) +
            (name == "qd"    ? " rad/s"
             : name == "qdd" ? " rad/s^2"
                             : " Nm");
@@ -77,7 +72,8 @@ std::vector<std::string> check_plausibility(JointLog& log, const RobotDescriptio
   std::vector<std::string> lines;
   if (bad.empty()) return lines;
   auto describe = [&](const ImplausibleValue& b) {
-    return b.column + " = " + number(b.value) + " at data row " + std::to_string(b.row) + " (outside " + b.bound + ")";
+    return b.column + " = " + number_text(b.value, 6) + " at data row " + std::to_string(b.row) + " (outside " +
+           b.bound + ")";
   };
   if (!drop) {
     throw InputError(log.source + ": implausible value " + describe(bad.front()) + "; " + std::to_string(bad.size()) +
