@@ -96,7 +96,19 @@ std::vector<std::uint8_t> reply(int fd, double seconds) {
   return out;
 }
 
-// Streams a trajectory of `periods` periods from the drive with a real host and checks that every
+// Plays a one-harmonic trajectory of `periods` periods at f_f [Hz], 1 kHz, on `drive` (after a
+// reset: another test may have left a fault).
+void start_run(ModbusDrive& drive, double f_f, int periods) {
+  dyncal::linux_port::Trajectory t;
+  t.f_f = f_f;
+  t.harmonics = 1;
+  for (int j = 0; j < mm::kMaxJoints; ++j) t.a(j, 0) = 0.05;
+  ASSERT_EQ(drive.reset(), PortStatus::ok) << drive.error();
+  ASSERT_EQ(drive.write_trajectory(t, periods, 1000), PortStatus::ok) << drive.error();
+  ASSERT_EQ(drive.start(), PortStatus::ok) << drive.error();
+}
+
+// Streams a 2-period trajectory (2000 samples) from the drive with a real host and checks that every
 // sample arrives in order with none lost, while `attack` runs on other connections.
 void stream_while(const std::function<void(std::atomic<bool>&)>& attack) {
   std::atomic<bool> stop{false};
@@ -112,13 +124,7 @@ void stream_while(const std::function<void(std::atomic<bool>&)>& attack) {
   std::string error;
   auto drive = ModbusDrive::connect(uri(), &error);
   ASSERT_NE(drive, nullptr) << error;
-  dyncal::linux_port::Trajectory t;
-  t.f_f = 1.0;
-  t.harmonics = 1;
-  for (int j = 0; j < mm::kMaxJoints; ++j) t.a(j, 0) = 0.05;
-  ASSERT_EQ(drive->reset(), PortStatus::ok) << drive->error();  // another test may have left a fault
-  ASSERT_EQ(drive->write_trajectory(t, 2, 1000), PortStatus::ok) << drive->error();
-  ASSERT_EQ(drive->start(), PortStatus::ok) << drive->error();
+  ASSERT_NO_FATAL_FAILURE(start_run(*drive, 1.0, 2));
   dyncal::port::DriveSample block[16];
   long received = 0;
   std::uint32_t next = 0;
@@ -261,13 +267,7 @@ TEST(DriveHostileClients, ADrivePlayingForNoOneStopsOnItsWatchdog) {
   std::string error;
   auto drive = ModbusDrive::connect(uri(), &error);
   ASSERT_NE(drive, nullptr) << error;
-  dyncal::linux_port::Trajectory t;
-  t.f_f = 0.1;
-  t.harmonics = 1;
-  for (int j = 0; j < mm::kMaxJoints; ++j) t.a(j, 0) = 0.05;
-  ASSERT_EQ(drive->reset(), PortStatus::ok) << drive->error();  // another test may have left a fault
-  ASSERT_EQ(drive->write_trajectory(t, 100, 1000), PortStatus::ok) << drive->error();
-  ASSERT_EQ(drive->start(), PortStatus::ok) << drive->error();
+  ASSERT_NO_FATAL_FAILURE(start_run(*drive, 0.1, 100));
   dyncal::linux_port::DriveInfo info;
   ASSERT_EQ(drive->read_info(info), PortStatus::ok);
   EXPECT_EQ(info.state, mm::DriveState::playing);

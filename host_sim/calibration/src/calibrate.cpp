@@ -196,25 +196,32 @@ namespace {
 // The run settings, checked before the drive is contacted against what the drive accepts
 // (docs/modbus.md): a bad value is named here, not discovered as a Modbus exception after start.
 void check_run_options(const CalibrateOptions& o) {
-  const auto number = [](double v) { return number_text(v); };
-  if (!(o.sample_rate_hz >= 100 && o.sample_rate_hz <= 1000))
-    throw InputError("--rate " + number(o.sample_rate_hz) + " Hz must lie in 100..1000 Hz");
   const double f_f = o.excitation ? o.excitation->f_f : o.f_f;
   const int harmonics = o.excitation ? o.excitation->harmonics : o.harmonics;
-  if (!(f_f > 0 && f_f <= 10)) throw InputError("--omega-f " + number(f_f) + " Hz must lie in (0, 10] Hz");
-  if (harmonics < 1 || harmonics > mm::kMaxHarmonics)
-    throw InputError("--harmonics " + std::to_string(harmonics) + " must lie in 1.." +
-                     std::to_string(mm::kMaxHarmonics));
   if (o.candidates < 1) throw InputError("--candidates " + std::to_string(o.candidates) + " must be >= 1");
   for (const auto& [name, periods] :
        {std::pair{"--periods", o.periods}, std::pair{"--verify-periods", o.verify_periods}}) {
-    if (periods < 1 || periods > 100)
-      throw InputError(std::string(name) + " " + std::to_string(periods) + " must lie in 1..100");
-    const double n = mm::run_samples(periods, f_f, o.sample_rate_hz);
-    if (!(n <= mm::kMaxRunSamples))
-      throw InputError(std::string(name) + " " + std::to_string(periods) + " at --omega-f " + number(f_f) +
-                       " Hz and --rate " + number(o.sample_rate_hz) + " Hz make a run of " + number(n) +
-                       " samples, longer than a drive plays (" + number(mm::kMaxRunSamples) + ", docs/modbus.md)");
+    const std::string given = std::string(name) + " " + std::to_string(periods);
+    switch (mm::refused_trajectory_setting(o.sample_rate_hz, f_f, harmonics, periods)) {
+      case mm::TrajectorySetting::none:
+        break;
+      case mm::TrajectorySetting::sample_rate:
+        throw InputError("--rate " + number_text(o.sample_rate_hz) + " Hz must lie in " +
+                         number_text(mm::kMinSampleRateHz) + ".." + number_text(mm::kMaxSampleRateHz) + " Hz");
+      case mm::TrajectorySetting::omega_f:
+        throw InputError("--omega-f " + number_text(f_f) + " Hz must lie in (0, " + number_text(mm::kMaxFundamentalHz) +
+                         "] Hz");
+      case mm::TrajectorySetting::harmonics:
+        throw InputError("--harmonics " + std::to_string(harmonics) + " must lie in 1.." +
+                         std::to_string(mm::kMaxHarmonics));
+      case mm::TrajectorySetting::periods:
+        throw InputError(given + " must lie in 1.." + std::to_string(mm::kMaxPeriods));
+      case mm::TrajectorySetting::run_length:
+        throw InputError(
+            given + " at --omega-f " + number_text(f_f) + " Hz and --rate " + number_text(o.sample_rate_hz) +
+            " Hz make a run of " + number_text(mm::run_samples(periods, f_f, o.sample_rate_hz)) +
+            " samples, longer than a drive plays (" + number_text(mm::kMaxRunSamples) + ", docs/modbus.md)");
+    }
   }
 }
 

@@ -142,19 +142,19 @@ int check_holding(const SimulatedDrive& d, const std::uint16_t* h, int address, 
   if (overlaps(address, count, mm::kSampleRateReg, 2)) {
     const double fs = mm::get_f32(h + mm::kSampleRateReg);
     const double ratio = control_rate / fs;
-    if (!(fs >= 100 && fs <= 1000) || std::fabs(ratio - std::round(ratio)) > 1e-6)
+    if (!(fs >= mm::kMinSampleRateHz && fs <= mm::kMaxSampleRateHz) || std::fabs(ratio - std::round(ratio)) > 1e-6)
       return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
   }
   if (overlaps(address, count, mm::kOmegaFReg, 2)) {
     const double f = mm::get_f32(h + mm::kOmegaFReg);
-    if (!(f > 0 && f <= 10)) return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+    if (!(f > 0 && f <= mm::kMaxFundamentalHz)) return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
   }
   if (overlaps(address, count, mm::kHarmonicsReg, 1)) {
     if (h[mm::kHarmonicsReg] < 1 || h[mm::kHarmonicsReg] > mm::kMaxHarmonics)
       return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
   }
   if (overlaps(address, count, mm::kPeriodsReg, 1)) {
-    if (h[mm::kPeriodsReg] < 1 || h[mm::kPeriodsReg] > 100) return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+    if (h[mm::kPeriodsReg] < 1 || h[mm::kPeriodsReg] > mm::kMaxPeriods) return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
   }
   for (int k = 0; k < mm::kCoefficientWords; k += 2) {
     if (overlaps(address, count, static_cast<std::uint16_t>(mm::kCoefficientsReg + k), 2) &&
@@ -304,10 +304,7 @@ class Server {
       if (keep[i] && now - c.last_request > seconds(options_.idle_timeout_s)) keep[i] = 0;
     }
     for (size_t i = clients_.size(); i-- > 0;) {
-      if (keep[i]) continue;
-      forget(clients_[i].fd);
-      ::close(clients_[i].fd);
-      clients_.erase(clients_.begin() + static_cast<long>(i));
+      if (!keep[i]) disconnect(clients_.begin() + static_cast<long>(i));
     }
     if (ready > 0 && (fds[0].revents & POLLIN)) accept_clients(now);
   }
@@ -327,11 +324,8 @@ class Server {
         auto idlest = std::min_element(clients_.begin(), clients_.end(), [](const Connection& a, const Connection& b) {
           return a.last_request < b.last_request;
         });
-        if (idlest != clients_.end() && now - idlest->last_request > seconds(options_.frame_timeout_s)) {
-          forget(idlest->fd);
-          ::close(idlest->fd);
-          clients_.erase(idlest);
-        }
+        if (idlest != clients_.end() && now - idlest->last_request > seconds(options_.frame_timeout_s))
+          disconnect(idlest);
       }
       if (static_cast<int>(clients_.size()) >= options_.max_connections) {
         ::close(fd);
@@ -512,7 +506,7 @@ class Server {
   modbus_mapping_t* map_ = nullptr;
   int listen_fd_ = -1;
   std::vector<Connection> clients_;
-  long refused_ = 0;
+  long refused_ = 0;  ///< connections refused since the cap was last below its limit
   static constexpr int kNoClient = -1;
   static constexpr int kRtuClient = -2;  ///< the RTU line: one client
   int current_client_ = kNoClient;       ///< socket (or kRtuClient) of the request being answered
@@ -522,12 +516,13 @@ class Server {
   bool session_open() const {
     return session_client_ != kNoClient && session_client_ == current_client_ && Clock::now() < session_until_;
   }
-  // A closed connection's session ends with it (a later client may get the same descriptor).
-  void forget(int fd) {
-    if (session_client_ == fd) session_client_ = kNoClient;
+  // Closes a client; its session ends with it (a later client may get the same descriptor).
+  void disconnect(std::vector<Connection>::iterator c) {
+    if (session_client_ == c->fd) session_client_ = kNoClient;
+    ::close(c->fd);
+    clients_.erase(c);
   }
-  Clock::time_point last_request_ = Clock::now();  ///< the last complete request of any client  ///< connections
-                                                   ///< refused since the cap was last below its limit
+  Clock::time_point last_request_ = Clock::now();  ///< the last complete request of any client
   long table_generation_ = -1;
   Clock::time_point wall_start_ = Clock::now();
 };

@@ -48,6 +48,28 @@ constexpr double run_samples(double periods, double f_f, double fs) noexcept {
   return periods / f_f * fs;
 }
 
+/// Trajectory settings a drive accepts (holding registers sample_rate, omega_f, harmonics,
+/// periods; docs/modbus.md "Exceptions").
+inline constexpr double kMinSampleRateHz = 100.0;
+inline constexpr double kMaxSampleRateHz = 1000.0;
+inline constexpr double kMaxFundamentalHz = 10.0;
+inline constexpr int kMaxPeriods = 100;
+
+/// The trajectory setting a drive refuses first, or none.
+enum class TrajectorySetting : std::uint8_t { none, sample_rate, omega_f, harmonics, periods, run_length };
+
+/// Checks settings as the drive does: fs in [kMinSampleRateHz, kMaxSampleRateHz], f_f [Hz] in
+/// (0, kMaxFundamentalHz], harmonics 1..kMaxHarmonics, periods 1..kMaxPeriods, and a run of at
+/// most kMaxRunSamples. (The drive also requires fs to divide its control rate.)
+constexpr TrajectorySetting refused_trajectory_setting(double fs, double f_f, int harmonics, int periods) noexcept {
+  if (!(fs >= kMinSampleRateHz && fs <= kMaxSampleRateHz)) return TrajectorySetting::sample_rate;
+  if (!(f_f > 0 && f_f <= kMaxFundamentalHz)) return TrajectorySetting::omega_f;
+  if (harmonics < 1 || harmonics > kMaxHarmonics) return TrajectorySetting::harmonics;
+  if (periods < 1 || periods > kMaxPeriods) return TrajectorySetting::periods;
+  if (!(run_samples(periods, f_f, fs) <= kMaxRunSamples)) return TrajectorySetting::run_length;
+  return TrajectorySetting::none;
+}
+
 /// Drive states (input register `state`). `fault`: the drive stopped the trajectory on a trip
 /// (register `fault` says which); only the reset command clears it.
 enum class DriveState : std::uint16_t { idle = 0, playing = 1, finished = 2, fault = 3 };

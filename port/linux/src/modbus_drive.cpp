@@ -142,19 +142,31 @@ std::string describe_fault(const DriveInfo& info) {
 port::PortStatus ModbusDrive::write_trajectory(const Trajectory& t, int periods, double sample_rate_hz) {
   // The drive checks these too (Modbus exception); checked here first to say which value and why.
   char text[200] = "";
-  if (!(sample_rate_hz >= 100 && sample_rate_hz <= 1000))
-    std::snprintf(text, sizeof text, "sample rate %.4g Hz outside 100..1000 Hz", sample_rate_hz);
-  else if (!(t.f_f > 0 && t.f_f <= 10))
-    std::snprintf(text, sizeof text, "fundamental frequency f_f = %.4g Hz outside (0, 10] Hz", t.f_f);
-  else if (t.harmonics < 1 || t.harmonics > mm::kMaxHarmonics)
-    std::snprintf(text, sizeof text, "%d harmonics, 1..%d supported", t.harmonics, mm::kMaxHarmonics);
-  else if (periods < 1 || periods > 100)
-    std::snprintf(text, sizeof text, "%d periods, 1..100 supported", periods);
-  else if (!(mm::run_samples(periods, t.f_f, sample_rate_hz) <= mm::kMaxRunSamples))
-    std::snprintf(text, sizeof text,
-                  "a run of %d periods at f_f = %.4g Hz and %.4g Hz is %.4g samples, longer than the drive's "
-                  "%.0f (docs/modbus.md)",
-                  periods, t.f_f, sample_rate_hz, mm::run_samples(periods, t.f_f, sample_rate_hz), mm::kMaxRunSamples);
+  switch (mm::refused_trajectory_setting(sample_rate_hz, t.f_f, t.harmonics, periods)) {
+    case mm::TrajectorySetting::none:
+      break;
+    case mm::TrajectorySetting::sample_rate:
+      std::snprintf(text, sizeof text, "sample rate %.4g Hz outside %.0f..%.0f Hz", sample_rate_hz,
+                    mm::kMinSampleRateHz, mm::kMaxSampleRateHz);
+      break;
+    case mm::TrajectorySetting::omega_f:
+      std::snprintf(text, sizeof text, "fundamental frequency f_f = %.4g Hz outside (0, %.0f] Hz", t.f_f,
+                    mm::kMaxFundamentalHz);
+      break;
+    case mm::TrajectorySetting::harmonics:
+      std::snprintf(text, sizeof text, "%d harmonics, 1..%d supported", t.harmonics, mm::kMaxHarmonics);
+      break;
+    case mm::TrajectorySetting::periods:
+      std::snprintf(text, sizeof text, "%d periods, 1..%d supported", periods, mm::kMaxPeriods);
+      break;
+    case mm::TrajectorySetting::run_length:
+      std::snprintf(text, sizeof text,
+                    "a run of %d periods at f_f = %.4g Hz and %.4g Hz is %.4g samples, longer than the drive's "
+                    "%.0f (docs/modbus.md)",
+                    periods, t.f_f, sample_rate_hz, mm::run_samples(periods, t.f_f, sample_rate_hz),
+                    mm::kMaxRunSamples);
+      break;
+  }
   if (text[0] != '\0') {
     error_ = text;
     return port::PortStatus::rejected;
