@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <map>
 
 #include "dyncal_host/common/input_error.hpp"
@@ -43,10 +44,12 @@ TEST(FrictionComparison, NestedModelsFitTheirOwnDataAtLeastAsWellAsEq7) {
   }
 }
 
-TEST(FrictionComparison, RealTx40FrictionIsNonlinear) {
-  // The survey's conclusion for its robot (Table 12), on this real log: a nonlinear friction model
-  // predicts the held-out 30 % of the torque better than Coulomb + viscous. Measured: Eq. 7 4.45 Nm,
-  // Eq. 4 / 5 / 6 3.29 / 2.92 / 2.82 Nm.
+TEST(FrictionComparison, RealTx40FrictionNeedsNoNonlinearModelOnceRestsAreHandled) {
+  // The survey concludes (Table 12) that a nonlinear friction model predicts its robot's held-out
+  // torque better. On this real log, which rests about 20 % of the time, that held only while
+  // sgn(qd) took a random sign at rest (held-out std: Eq. 7 4.45 Nm, Eq. 4 / 5 / 6 3.29 / 2.92 /
+  // 2.82 Nm). With the standstill band (docs/cli.md, "Real logs") Eq. 7 predicts it best or within
+  // 5 % of the best nonlinear model: the nonlinear models had fitted the standstill sign error.
   double eq7 = 0, best_nonlinear = INFINITY;
   for (const auto& f : fits()) {
     if (f.model == FrictionModel::eq7) eq7 = f.validation_std;
@@ -54,7 +57,9 @@ TEST(FrictionComparison, RealTx40FrictionIsNonlinear) {
       best_nonlinear = std::min(best_nonlinear, f.validation_std);
     }
   }
-  EXPECT_LT(best_nonlinear, 0.85 * eq7);
+  EXPECT_LT(eq7, 1.05 * best_nonlinear);
+  EXPECT_LT(eq7, 0.75 * 4.45);  // the Eq. 7 held-out std before the standstill band [Nm]
+  std::printf("held-out torque std: Eq. 7 %.3f Nm, best nonlinear %.3f Nm\n", eq7, best_nonlinear);
 }
 
 // Every nonlinear model reports, per joint, an interval for each scale parameter that holds the

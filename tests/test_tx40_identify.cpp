@@ -47,4 +47,21 @@ TEST(Tx40Identify, RecursiveMethodsValidateCloseToOls) {
   }
 }
 
+// Physically consistent LS on the real log, robot.json's (URDF) inertials as the prior: every link
+// consistent, and the cross-validated R^2 within 0.01 of WLS on every joint (issue 21's target).
+TEST(Tx40Identify, PhysicallyConsistentLsFitsAsWellAsWls) {
+  const auto w = identify("wls");
+  const auto p = identify("pcls");
+  ASSERT_EQ(p["links"].size(), 6u);
+  for (const auto& l : p["links"]) {
+    EXPECT_GT(l["pseudo_inertia_min_eigenvalue"].get<double>(), 0.0) << "link " << l["link"];
+    EXPECT_GT(l["mass"].get<double>(), 0.0) << "link " << l["link"];
+  }
+  for (int j = 0; j < 6; ++j) {
+    const double rw = w["joints"][j]["r2_validation"].get<double>(), rp = p["joints"][j]["r2_validation"].get<double>();
+    EXPECT_GE(rp, rw - 0.01) << "joint " << j + 1;
+    std::printf("joint %d: cross-validated R^2 %.4f (pcls), %.4f (wls)\n", j + 1, rp, rw);
+  }
+}
+
 }  // namespace

@@ -28,6 +28,7 @@ void add_table_command(CLI::App& app, Action& run);
 void add_flash_command(CLI::App& app, Action& run);
 void add_registers_command(CLI::App& app, Action& run);
 void add_robot_command(CLI::App& app, Action& run);
+void add_predict_command(CLI::App& app, Action& run);
 
 /// Reads a JSON file. Throws InputError (unreadable, invalid JSON) naming the file.
 nlohmann::json read_json_file(const std::string& path);
@@ -51,17 +52,21 @@ struct RobotOption {
 struct LogOption {
   RobotOption robot;
   std::string format = "csv";
-  std::string data;
+  std::vector<std::string> data;  ///< one or more logs (--data A --data B): stacked as segments
   bool drop_outliers = false;
   /// Adds --format, --data, --drop-outliers and the robot options to `cmd`.
   void add_to(CLI::App* cmd);
   /// The robot (--robot, or tx40 for --format tx40). Throws InputError (no --robot for csv, ...).
   host::RobotDescription load_robot() const;
   /// The log on the joint side (TX40 files through the robot's transmission), checked for physical
-  /// plausibility against the robot's limits (log_plausibility.hpp). Throws InputError (unreadable,
-  /// malformed, an implausible value without --drop-outliers). With --drop-outliers, *dropped (if
-  /// given) receives one line per replaced value.
+  /// plausibility against the robot's limits (log_plausibility.hpp); several --data logs stacked as
+  /// segments (uniform_grid.hpp: stack_logs). Throws InputError (unreadable, malformed, an
+  /// implausible value without --drop-outliers). With --drop-outliers, *dropped (if given) receives
+  /// one line per replaced value.
   host::JointLog load_log(const host::RobotDescription& robot, std::vector<std::string>* dropped = nullptr) const;
+  /// As load_log, for the logs at `paths` (in --format) instead of --data.
+  host::JointLog load_logs(const host::RobotDescription& robot, const std::vector<std::string>& paths,
+                           std::vector<std::string>* dropped = nullptr) const;
 };
 
 }  // namespace dyncal::app

@@ -7,6 +7,7 @@
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/model_terms.hpp"
 #include "dyncal_host/identification/compiled_robot.hpp"
+#include "dyncal_host/identification/prediction.hpp"
 
 namespace dyncal::app {
 namespace {
@@ -18,44 +19,22 @@ struct FlashSettings {
 
 int run_flash(const FlashSettings& s) {
   using host::InputError;
-  const nlohmann::json j = read_json_file(s.params);
-  if (j.value("format", "") != "dyncal-parameters") throw InputError(s.params + ": not a dyncal parameter file");
-  if (!j.contains("robot") || !j["robot"].is_string()) throw InputError(s.params + ": 'robot' missing");
-  const std::string robot = j["robot"].get<std::string>();
-  if (!s.robot.empty() && robot != s.robot)
-    throw InputError(s.params + ": parameters are for robot '" + robot + "', not '" + s.robot + "'");
+  const host::ParameterSet p = host::read_parameter_file(s.params);  // names checked against the model
+  if (!s.robot.empty() && p.robot != s.robot)
+    throw InputError(s.params + ": parameters are for robot '" + p.robot + "', not '" + s.robot + "'");
   // The table carries the id of the robot the parameters were identified for: the drive refuses it
   // (wrong robot) unless it runs that robot.
-  const host::CompiledRobot& compiled = host::compiled_robot(robot);
   ParameterTable t;
-  t.robot_id = compiled.robot_id;
-  if (!j.contains("model") || !j["model"].is_string()) throw InputError(s.params + ": 'model' missing");
-  t.model_id = host::parse_model(j["model"].get<std::string>());
-  // The values are the identified parameters of that robot and model, in their order: checked by
-  // name, so that a file edited by hand or written for another model cannot flash shifted values.
-  const std::vector<std::string> names =
-      compiled.param_names[static_cast<size_t>(host::built_term_set_index(t.model_id))]();
-  if (!j.contains("params") || !j["params"].is_array()) throw InputError(s.params + ": 'params' missing");
-  const auto& p = j["params"];
-  if (p.size() != names.size())
-    throw InputError(s.params + ": " + std::to_string(p.size()) + " params, robot '" + robot + "' with model '" +
-                     j["model"].get<std::string>() + "' has " + std::to_string(names.size()));
-  if (p.size() > kTableMaxParams) throw InputError(s.params + ": more params than a table holds");
-  t.count = static_cast<std::uint16_t>(p.size());
-  for (size_t i = 0; i < p.size(); ++i) {
-    const auto& v = p[i];
-    const std::string where = s.params + ": params[" + std::to_string(i + 1) + "]";
-    if (!v.is_object() || !v.contains("value") || !v["value"].is_number())
-      throw InputError(where + ": expected an object with a number 'value'");
-    if (!v.contains("name") || !v["name"].is_string()) throw InputError(where + ": 'name' missing");
-    if (v["name"].get<std::string>() != names[i])
-      throw InputError(where + " is '" + v["name"].get<std::string>() + "', parameter " + std::to_string(i + 1) +
-                       " of robot '" + robot + "' with model '" + j["model"].get<std::string>() + "' is '" + names[i] +
-                       "'");
-    const double value = v["value"].get<double>();
-    if (!std::isfinite(value) || std::fabs(value) > 3.4e38)
-      throw InputError(where + " '" + names[i] + "': value " + v["value"].dump() + " is not a finite float");
-    t.values[i] = static_cast<float>(value);
+  t.robot_id = host::compiled_robot(p.robot).robot_id;
+  t.model_id = p.terms;
+  if (p.values.size() > static_cast<Eigen::Index>(kTableMaxParams))
+    throw InputError(s.params + ": more params than a table holds");
+  t.count = static_cast<std::uint16_t>(p.values.size());
+  for (Eigen::Index i = 0; i < p.values.size(); ++i) {
+    if (std::fabs(p.values[i]) > 3.4e38)
+      throw InputError(s.params + ": params[" + std::to_string(i + 1) + "] '" + p.names[static_cast<size_t>(i)] +
+                       "': value " + std::to_string(p.values[i]) + " is not a finite float");
+    t.values[static_cast<size_t>(i)] = static_cast<float>(p.values[i]);
   }
   auto d = connect_drive(s.uri);
   if (s.reset_fault && d->reset() != port::PortStatus::ok) throw InputError("reset failed: " + d->error());

@@ -6,6 +6,7 @@
 #include "dyncal_host/identification/friction_comparison.hpp"
 #include "dyncal_host/identification/identify.hpp"
 #include "dyncal_host/identification/identify_report.hpp"
+#include "dyncal_host/identification/prediction.hpp"
 #include "dyncal_host/identification/stacked_data.hpp"
 
 namespace dyncal::app {
@@ -15,6 +16,7 @@ struct IdentifySettings {
   LogOption log;
   host::IdentifyOptions options;
   std::string model = "eq7,rotor_inertia,offset", report, params;
+  std::vector<std::string> validate_on;
   bool compare_friction = false;
 };
 
@@ -27,11 +29,17 @@ int run_identify(IdentifySettings& s) {
     for (const auto& line : dropped) std::cout << "note: " << line << "\n";
     const double last = s.options.validate_last > 0 ? s.options.validate_last : 0.3;
     const auto stacked = host::prepare_stacked(robot, log, s.options);
+    for (const auto& line : stacked.notes) std::cout << "note: " << line << "\n";
     host::print_friction_comparison(std::cout, host::compare_friction_models(stacked, last), last);
     return 0;
   }
+  // Other logs read (and refused) before any work on the fit.
+  std::vector<host::JointLog> others;
+  for (const auto& path : s.validate_on) others.push_back(s.log.load_logs(robot, {path}, &dropped));
   auto result = host::identify(robot, log, s.options);
   result.notes.insert(result.notes.begin(), dropped.begin(), dropped.end());
+  const host::ParameterSet fitted = host::parameter_set(result);
+  for (const auto& other : others) result.other_logs.push_back(host::predict(robot, other, s.options, fitted));
   host::print_identify_report(std::cout, result);
   if (!s.report.empty()) write_json_file(s.report, host::identify_report_json(result));
   if (!s.params.empty()) write_json_file(s.params, host::parameter_table_json(result));
@@ -48,8 +56,12 @@ void add_identify_command(CLI::App& app, Action& run) {
   cmd->add_option("--model", s->model,
                   "terms besides the rigid body: eq7|eq8|coulomb|viscous|power|rotor_inertia|offset, comma-separated")
       ->capture_default_str();
-  cmd->add_option("--method", opt.method, "ols | wls | kf | rls")
-      ->check(CLI::IsMember({"ols", "wls", "kf", "rls"}))
+  cmd->add_option("--method", opt.method,
+                  "wls: weighted least squares, each joint's rows weighted by 1 / its residual noise (Gautier); ols: "
+                  "unweighted (the survey's IDIM-OLS); kf: Kalman filter (Eq. 19); rls: forgetting (Eq. 23); pcls: "
+                  "physically consistent WLS, every link's pseudo-inertia positive definite, robot.json's inertials "
+                  "as prior (Wensing et al.)")
+      ->check(CLI::IsMember({"wls", "ols", "kf", "rls", "pcls"}))
       ->capture_default_str();
   cmd->add_option("--cutoff", opt.cutoff_hz, "zero-phase Butterworth cut-off [Hz]")->capture_default_str();
   cmd->add_option("--filter-order", opt.filter_order, "Butterworth order (even)")->capture_default_str();
@@ -63,6 +75,10 @@ void add_identify_command(CLI::App& app, Action& run) {
   cmd->add_option("--min-speed", opt.min_speed_fraction,
                   "fit only rows where |qd_j| >= this fraction of joint j's top speed (stiction)")
       ->capture_default_str();
+  cmd->add_option("--validate-on", s->validate_on,
+                  "also predict this other log (same --format) with the final fit and report its per-joint RMS, R^2 "
+                  "and e_T; repeat for several")
+      ->take_all();
   cmd->add_option("--report", s->report, "write the report as JSON");
   cmd->add_option("--params", s->params, "write the identified parameter table as JSON");
   cmd->add_flag("--compare-friction", s->compare_friction,

@@ -1,11 +1,13 @@
 // Options and files several subcommands share.
 #include <fstream>
+#include <utility>
 
 #include "commands.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/robot_description.hpp"
 #include "dyncal_host/identification/compiled_robot.hpp"
 #include "dyncal_host/identification/log_plausibility.hpp"
+#include "dyncal_host/identification/uniform_grid.hpp"
 
 namespace dyncal::app {
 
@@ -51,7 +53,10 @@ void LogOption::add_to(CLI::App* cmd) {
   robot.add_to(cmd, "robot name (robots/<name>/); tx40 by default with --format tx40");
   cmd->add_option("--format", format, "log format: csv (t,q1..qN,[qd..],[qdd..],tau1..tauN) or tx40")
       ->check(CLI::IsMember({"csv", "tx40"}));
-  cmd->add_option("--data", data, "CSV log file, or the folder of the TX40 files")->required();
+  cmd->add_option("--data", data,
+                  "CSV log file (time-stamped; jitter and missing samples allowed), or the folder of the TX40 "
+                  "files; repeat to stack several logs as segments")
+      ->required();
   cmd->add_flag("--drop-outliers", drop_outliers,
                 "replace physically implausible values (beyond the robot's limits by a wide margin, docs/cli.md) by "
                 "interpolation and report each, instead of refusing the log");
@@ -67,11 +72,20 @@ host::RobotDescription LogOption::load_robot() const {
 }
 
 host::JointLog LogOption::load_log(const host::RobotDescription& r, std::vector<std::string>* dropped) const {
-  host::JointLog log = format == "tx40" ? host::read_tx40_log(data, r.transmission, r.joint_offsets)
-                                        : host::read_csv_log(data, r.num_joints);
-  const auto lines = host::check_plausibility(log, r, drop_outliers);
-  if (dropped) dropped->insert(dropped->end(), lines.begin(), lines.end());
-  return log;
+  return load_logs(r, data, dropped);
+}
+
+host::JointLog LogOption::load_logs(const host::RobotDescription& r, const std::vector<std::string>& paths,
+                                    std::vector<std::string>* dropped) const {
+  std::vector<host::JointLog> logs;
+  for (const std::string& path : paths) {
+    host::JointLog log = format == "tx40" ? host::read_tx40_log(path, r.transmission, r.joint_offsets)
+                                          : host::read_csv_log(path, r.num_joints);
+    const auto lines = host::check_plausibility(log, r, drop_outliers);
+    if (dropped) dropped->insert(dropped->end(), lines.begin(), lines.end());
+    logs.push_back(std::move(log));
+  }
+  return host::stack_logs(logs);
 }
 
 }  // namespace dyncal::app

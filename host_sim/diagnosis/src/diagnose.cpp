@@ -216,6 +216,7 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
   res.robot = robot.name;
   res.declared_model = model_name(io.terms);
   res.samples = static_cast<long>(S);
+  res.notes = d.notes;
   check_every_joint_moves(d);
   // Folds as in identify (blocked).
   const Index block = std::max<Index>(1, std::lround(io.block_seconds * d.rate_hz));

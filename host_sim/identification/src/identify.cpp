@@ -7,6 +7,7 @@
 #include "dyncal_host/common/number_text.hpp"
 #include "dyncal_host/identification/compiled_robot.hpp"
 #include "dyncal_host/identification/stacked_data.hpp"
+#include "dyncal_host/identification/uniform_grid.hpp"
 
 namespace dyncal::host {
 namespace {
@@ -21,7 +22,7 @@ void check_options(const IdentifyOptions& o, const JointLog& log) {
     throw InputError("--filter-order " + std::to_string(o.filter_order) + " must be even, 2.." +
                      std::to_string(kMaxFilterOrder) + " (cascaded second-order sections)");
   const double fs = 1.0 / log.sample_period();
-  const double duration = static_cast<double>(log.samples()) * log.sample_period();
+  const double duration = log.duration();
   if (!(o.cutoff_hz > 0.0) || !(o.cutoff_hz < 0.5 * fs))
     throw InputError("--cutoff " + number_text(o.cutoff_hz) + " Hz must lie in (0, " + number_text(0.5 * fs) +
                      ") Hz, below the Nyquist frequency of the log's " + number_text(fs) + " Hz");
@@ -55,26 +56,43 @@ void check_options(const IdentifyOptions& o, const JointLog& log) {
     throw InputError("--min-speed " + number_text(o.min_speed_fraction) + " must lie in [0, 1)");
 }
 
-const CompiledRobot& checked(const RobotDescription& robot, const JointLog& log, const IdentifyOptions& options) {
+/// The log on a uniform grid (uniform_grid.hpp: gaps longer than bridgeable_gap(cutoff) split it),
+/// checked against the robot and the options; the sampling summary into *note.
+const CompiledRobot& checked(const RobotDescription& robot, const JointLog& raw, const IdentifyOptions& options,
+                             JointLog& log, std::string& note) {
   const CompiledRobot& c = compiled_robot_for(robot);
-  if (log.joints() != c.num_joints) {
-    throw InputError("the log has " + std::to_string(log.joints()) + " joints, robot '" + robot.name + "' " +
+  if (raw.joints() != c.num_joints) {
+    throw InputError("the log has " + std::to_string(raw.joints()) + " joints, robot '" + robot.name + "' " +
                      std::to_string(c.num_joints));
   }
+  SamplingReport report;
+  // A cut-off that is no frequency splits nothing here; check_options then names it.
+  const bool valid_cutoff = options.cutoff_hz > 0.0 && std::isfinite(options.cutoff_hz);
+  const double max_gap = valid_cutoff ? bridgeable_gap(options.cutoff_hz) : INFINITY;
+  log = to_uniform_grid(raw, max_gap, report);
+  note = describe(report, max_gap);
   check_options(options, log);
   return c;
 }
 
 }  // namespace
 
-IdentifyResult identify(const RobotDescription& robot, const JointLog& log, const IdentifyOptions& options) {
-  const CompiledRobot& c = checked(robot, log, options);
-  return c.identify[static_cast<size_t>(built_term_set_index(options.terms))](robot, log, options);
+IdentifyResult identify(const RobotDescription& robot, const JointLog& raw, const IdentifyOptions& options) {
+  JointLog log;
+  std::string note;
+  const CompiledRobot& c = checked(robot, raw, options, log, note);
+  IdentifyResult r = c.identify[static_cast<size_t>(built_term_set_index(options.terms))](robot, log, options);
+  r.notes.insert(r.notes.begin(), note);
+  return r;
 }
 
-StackedData prepare_stacked(const RobotDescription& robot, const JointLog& log, const IdentifyOptions& options) {
-  const CompiledRobot& c = checked(robot, log, options);
-  return c.prepare[static_cast<size_t>(built_term_set_index(options.terms))](robot, log, options);
+StackedData prepare_stacked(const RobotDescription& robot, const JointLog& raw, const IdentifyOptions& options) {
+  JointLog log;
+  std::string note;
+  const CompiledRobot& c = checked(robot, raw, options, log, note);
+  StackedData d = c.prepare[static_cast<size_t>(built_term_set_index(options.terms))](robot, log, options);
+  d.notes.insert(d.notes.begin(), note);
+  return d;
 }
 
 }  // namespace dyncal::host

@@ -37,7 +37,52 @@ void print_identify_report(std::ostream& out, const IdentifyResult& r) {
     std::snprintf(line, sizeof line, "%-20s %12.5g %10.3g %8.1f\n", p.name.c_str(), p.value, p.std, rel);
     out << line;
   }
+  if (!r.links.empty()) {
+    out << "\nconsistent inertials per link (link frame; inertia about the centre of mass), pseudo-inertia's "
+           "smallest eigenvalue\n";
+    out << "link   mass [kg]   com x y z [m]                    I11 I12 I13 I22 I23 I33 [kg m^2]"
+           "                                  lambda_min\n";
+    for (const auto& l : r.links) {
+      char line[320];
+      std::snprintf(line, sizeof line,
+                    "%4d %11.4g   %9.4g %9.4g %9.4g   %10.4g %10.4g %10.4g %10.4g %10.4g %10.4g   %10.3g\n", l.link,
+                    l.mass, l.com[0], l.com[1], l.com[2], l.inertia[0], l.inertia[1], l.inertia[2], l.inertia[3],
+                    l.inertia[4], l.inertia[5], l.min_eigenvalue);
+      out << line;
+    }
+  }
+  for (const auto& o : r.other_logs) print_log_prediction(out, o);
   for (const auto& n : r.notes) out << "note: " << n << "\n";
+}
+
+void print_log_prediction(std::ostream& out, const LogPrediction& p) {
+  out << "\nprediction of another log (no sample of it fitted): " << p.source << ", " << p.samples << " samples\n";
+  out << "joint   RMS [Nm]   rel. RMS      R^2       e_T    e_T_Std   RMS tau [Nm]\n";
+  for (const auto& j : p.joints) {
+    char line[160];
+    std::snprintf(line, sizeof line, "%5d %10.4f %10.4f %8.4f %9.5f %10.5f %14.4f\n", j.joint, j.rms, j.relative_rms,
+                  j.r2, j.e_T, j.e_T_std, j.rms_tau);
+    out << line;
+  }
+  for (const auto& n : p.notes) out << "note (" << p.source << "): " << n << "\n";
+}
+
+nlohmann::json joint_metrics_json(const std::vector<JointMetrics>& joints) {
+  nlohmann::json a = nlohmann::json::array();
+  for (const auto& m : joints) {
+    a.push_back({{"joint", m.joint},
+                 {"rms_validation", m.rms},
+                 {"relative_rms_validation", m.relative_rms},
+                 {"r2_validation", m.r2},
+                 {"e_T", m.e_T},
+                 {"e_T_Std", m.e_T_std},
+                 {"rms_tau", m.rms_tau}});
+  }
+  return a;
+}
+
+nlohmann::json log_prediction_json(const LogPrediction& p) {
+  return {{"data", p.source}, {"samples", p.samples}, {"joints", joint_metrics_json(p.joints)}, {"notes", p.notes}};
 }
 
 nlohmann::json identify_report_json(const IdentifyResult& r) {
@@ -53,19 +98,19 @@ nlohmann::json identify_report_json(const IdentifyResult& r) {
   j["samples"] = r.samples_used;
   j["condition_number"] = r.condition_number;
   j["fit_seconds"] = r.fit_seconds;
-  j["joints"] = nlohmann::json::array();
-  for (const auto& m : r.joints) {
-    j["joints"].push_back({{"joint", m.joint},
-                           {"rms_validation", m.rms},
-                           {"relative_rms_validation", m.relative_rms},
-                           {"r2_validation", m.r2},
-                           {"e_T", m.e_T},
-                           {"e_T_Std", m.e_T_std},
-                           {"rms_tau", m.rms_tau}});
-  }
+  j["joints"] = joint_metrics_json(r.joints);
   j["params"] = nlohmann::json::array();
   for (const auto& p : r.params) j["params"].push_back({{"name", p.name}, {"value", p.value}, {"std", p.std}});
   j["notes"] = r.notes;
+  j["links"] = nlohmann::json::array();
+  for (const auto& l : r.links)
+    j["links"].push_back({{"link", l.link},
+                          {"mass", l.mass},
+                          {"com", l.com},
+                          {"inertia_about_com", l.inertia},
+                          {"pseudo_inertia_min_eigenvalue", l.min_eigenvalue}});
+  j["other_logs"] = nlohmann::json::array();
+  for (const auto& o : r.other_logs) j["other_logs"].push_back(log_prediction_json(o));
   return j;
 }
 

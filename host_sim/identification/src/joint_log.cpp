@@ -14,23 +14,12 @@
 namespace dyncal::host {
 namespace {
 
-// Relative tolerance on the sample period for a log to count as uniformly sampled.
-constexpr double kUniformTolerance = 0.01;
-
 void check_time(const Eigen::VectorXd& t, const std::string& path) {
   if (t.size() < 3) throw InputError(path + ": fewer than 3 samples");
-  const double dt = (t[t.size() - 1] - t[0]) / static_cast<double>(t.size() - 1);
   for (Eigen::Index i = 1; i < t.size(); ++i) {
     if (!(t[i] > t[i - 1])) {
       throw InputError(path + ": time is not strictly increasing at data row " + std::to_string(i + 1) +
                        " (t = " + std::to_string(t[i]) + " s after " + std::to_string(t[i - 1]) + " s)");
-    }
-  }
-  for (Eigen::Index i = 1; i < t.size(); ++i) {
-    const double step = t[i] - t[i - 1];
-    if (std::abs(step - dt) > kUniformTolerance * dt) {
-      throw InputError(path + ": non-uniform sampling at data row " + std::to_string(i + 1) + " (step " +
-                       std::to_string(step) + " s, mean " + std::to_string(dt) + " s)");
     }
   }
 }

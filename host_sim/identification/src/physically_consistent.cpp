@@ -8,6 +8,7 @@
 
 #include "dyncal/generated/er20/robot.hpp"
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/identification/log_cholesky.hpp"
 #include "dyncal_host/identification/objective.hpp"
 #include "dyncal_host/identification/standard_parameters.hpp"
 
@@ -17,50 +18,13 @@ namespace {
 using Robot = dyncal::generated::er20::Robot;
 using Vec6 = Eigen::Matrix<double, 6, 1>;
 
-/// L (lower triangular, diagonal exp(theta[0..3]), below-diagonal theta[4..9] row by row).
-Eigen::Matrix4d cholesky_factor(const double* th) {
-  Eigen::Matrix4d L = Eigen::Matrix4d::Zero();
-  for (int i = 0; i < 4; ++i) L(i, i) = std::exp(th[i]);
-  L(1, 0) = th[4];
-  L(2, 0) = th[5];
-  L(2, 1) = th[6];
-  L(3, 0) = th[7];
-  L(3, 1) = th[8];
-  L(3, 2) = th[9];
-  return L;
-}
-constexpr int kOffRow[6] = {1, 2, 2, 3, 3, 3};
-constexpr int kOffCol[6] = {0, 0, 1, 0, 1, 2};
-
-/// theta of the nearest positive definite pseudo-inertia to J.
-void theta_from_pseudo_inertia(const Eigen::Matrix4d& J, double* th) {
-  const Eigen::Matrix4d L = nearest_positive_definite(J).llt().matrixL();
-  for (int i = 0; i < 4; ++i) th[i] = std::log(L(i, i));
-  for (int k = 0; k < 6; ++k) th[4 + k] = L(kOffRow[k], kOffCol[k]);
-}
-
 constexpr int kLinkParams = 10;
 constexpr int kInertial = kLinks * kLinkParams;
 
-/// Standard parameters of link `link` from its log-Cholesky theta, and d phi / d theta (10 x 10).
+/// Standard parameters of link `link` from its log-Cholesky theta (log_cholesky.hpp), and d phi / d theta.
 void standard_from_theta(const double* x, Eigen::VectorXd& phi, Eigen::Matrix<double, kLinkParams, kLinkParams>* jac,
                          int link) {
-  const double* th = x + kLinkParams * link;
-  const Eigen::Matrix4d L = cholesky_factor(th);
-  standard_from_pseudo_inertia(L * L.transpose(), phi.data() + kLinkParams * link);
-  if (!jac) return;
-  for (int k = 0; k < kLinkParams; ++k) {
-    Eigen::Matrix4d E = Eigen::Matrix4d::Zero();
-    if (k < 4) {
-      E(k, k) = L(k, k);
-    } else {
-      E(kOffRow[k - 4], kOffCol[k - 4]) = 1.0;
-    }
-    const Eigen::Matrix4d dJ = E * L.transpose() + L * E.transpose();
-    double col[kLinkParams];
-    standard_from_pseudo_inertia(dJ, col);
-    for (int i = 0; i < kLinkParams; ++i) (*jac)(i, k) = col[i];
-  }
+  host::standard_from_theta(x + kLinkParams * link, phi.data() + kLinkParams * link, jac);
 }
 
 /// Residuals r = [A [phi(theta_L); F] + w f(theta_F, qd) - b ; W (phi - prior)] over
@@ -378,9 +342,7 @@ Estimate physically_consistent_ls(const RunData& d, FrictionModel model, const M
   for (int j = 0; j < 6; ++j) p.friction_of(x, j, e.friction.data() + kf * j);
   e.iterations = iterations;
   for (int l = 0; l < kLinks; ++l) {
-    const Eigen::Matrix4d L = cholesky_factor(x.data() + kLinkParams * l);
-    const double smin = Eigen::JacobiSVD<Eigen::Matrix4d>(L).singularValues().minCoeff();
-    e.pseudo_inertia_min_eigenvalue.push_back(smin * smin);
+    e.pseudo_inertia_min_eigenvalue.push_back(theta_min_eigenvalue(x.data() + kLinkParams * l));
   }
   e.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   complete_estimate(e, d, settings);

@@ -131,6 +131,8 @@ class StreamingLeastSquares {
   long rows() const noexcept { return rows_; }
   /// The triangular factor (R^T R = W^T W).
   const Matrix& r_factor() const noexcept { return R_; }
+  /// The rotated right-hand side z: ||W phi - y||^2 = ||R phi - z||^2 + residual_sum_of_squares().
+  const Vector& rotated_rhs() const noexcept { return z_; }
 
  private:
   // Rotates row_ (with right-hand side rhs) into R_, z_; rhs ends as the row's residual part.

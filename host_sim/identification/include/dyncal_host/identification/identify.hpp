@@ -1,5 +1,6 @@
 #pragma once
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -16,7 +17,7 @@ inline constexpr int kMaxFilterOrder = 8;
 /// Options of identify(); each is range-checked against the log before any work (InputError naming
 /// the option and its admissible range).
 struct IdentifyOptions {
-  std::string method = "ols";       ///< ols | wls | kf | rls
+  std::string method = "wls";       ///< wls (Gautier's per-joint weights) | ols (IDIM-OLS) | kf | rls | pcls
   unsigned terms = 0;               ///< dyncal::term bits (rigid body always included)
   int filter_order = 4;             ///< Butterworth order (zero-phase: twice the attenuation)
   double cutoff_hz = 20.0;          ///< low-pass cut-off for q, tau and the regressor columns
@@ -46,6 +47,24 @@ struct ParamEstimate {
   double std = 0;  ///< standard deviation (OLS/WLS: sigma^2 (W^T W)^-1; KF/RLS: sqrt(diag P))
 };
 
+/// A model's prediction of a log it was not fitted to (identify --validate-on, dyncal predict).
+struct LogPrediction {
+  std::string source;
+  long samples = 0;  ///< samples compared (after filtering and decimation)
+  std::vector<JointMetrics> joints;
+  std::vector<std::string> notes;  ///< the log's sampling and standstill notes
+};
+
+/// One link's identified inertials (identify --method pcls): Table 5's parametrisation of its
+/// consistent standard parameters, link frame (Khalil-Kleinfinger).
+struct LinkInertial {
+  int link = 0;                     ///< 1-based
+  double mass = 0;                  ///< [kg]
+  std::array<double, 3> com{};      ///< centre of mass [m]
+  std::array<double, 6> inertia{};  ///< about the centre of mass: I11 I12 I13 I22 I23 I33 [kg m^2]
+  double min_eigenvalue = 0;        ///< smallest eigenvalue of the pseudo-inertia (> 0: consistent)
+};
+
 struct IdentifyResult {
   std::string robot, method, model, validation, data_source;
   double sample_rate_hz = 0, decimated_rate_hz = 0, cutoff_hz = 0;
@@ -55,6 +74,8 @@ struct IdentifyResult {
   double condition_number = 0;  ///< cond(W) of the full stacked (weighted) regressor
   double fit_seconds = 0;       ///< wall time of the estimator over the full data
   std::vector<std::string> notes;
+  std::vector<LogPrediction> other_logs;  ///< --validate-on: the final fit's prediction of each other log
+  std::vector<LinkInertial> links;        ///< pcls: the final fit's consistent inertials per link
 };
 
 /// Identifies the model from `log` and validates it on data each fit never saw.

@@ -4,7 +4,11 @@
 #include <Eigen/Dense>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <memory>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "dyncal/identification_model.hpp"
 #include "dyncal/kalman_filter.hpp"
@@ -12,9 +16,13 @@
 #include "dyncal/streaming_least_squares.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/identification/butterworth.hpp"
+#include "dyncal_host/identification/compiled_robot.hpp"
+#include "dyncal_host/identification/consistent_least_squares.hpp"
 #include "dyncal_host/identification/identify.hpp"
+#include "dyncal_host/identification/prediction.hpp"
 #include "dyncal_host/identification/signal.hpp"
 #include "dyncal_host/identification/stacked_data.hpp"
+#include "dyncal_host/identification/standard_parameters.hpp"
 
 namespace dyncal::host {
 
@@ -29,90 +37,94 @@ class IdentifyPipeline {
 
   IdentifyPipeline(const RobotDescription& robot, const IdentifyOptions& options) : robot_(robot), opt_(options) {}
 
-  /// Filtering, differentiation, regressor, parallel filtering and decimation (Gautier 1997).
+  /// Filtering, differentiation, regressor, parallel filtering and decimation (Gautier 1997), each
+  /// segment of `log` (on a uniform grid, uniform_grid.hpp) on its own: nothing is filtered or
+  /// differentiated across a segment boundary, and one cut-off period is dropped at both ends of
+  /// every segment, where differentiation and filtering are one-sided.
   StackedData prepare(const JointLog& log) const {
     const double fs = 1.0 / log.sample_period();
     const ButterworthLowPass filter(opt_.filter_order, opt_.cutoff_hz, fs);
-    Eigen::MatrixXd q = log.q;
-    filter.filtfilt(q);
-    Eigen::MatrixXd qd, qdd;
-    if (log.has_qd) {
-      qd = log.qd;
-      filter.filtfilt(qd);
-    } else {
-      qd = central_difference(q, log.sample_period());
-    }
-    if (log.has_qdd) {
-      qdd = log.qdd;
-      filter.filtfilt(qdd);
-    } else {
-      qdd = central_difference(qd, log.sample_period());
-    }
-    Eigen::MatrixXd tau = log.tau;
-    filter.filtfilt(tau);
-    const Eigen::Index S = log.samples();
-    // Regressor columns over time: column (j * P + c) holds K(j, c) at every sample (parallel filtering).
-    const JointVec zero = JointVec::Zero();
-    auto regressor_over_time = [&](bool with_qdd) {
-      Eigen::MatrixXd Kt(S, N * P);
-      typename Model::template Regressor<double> K;
-      for (Eigen::Index s = 0; s < S; ++s) {
-        Model::regressor(JointVec(q.row(s).transpose()), JointVec(qd.row(s).transpose()),
-                         with_qdd ? JointVec(qdd.row(s).transpose()) : zero, zero, K);
-        for (int j = 0; j < N; ++j) Kt.row(s).segment(j * P, P) = K.row(j);
-      }
-      filter.filtfilt(Kt);
-      return Kt;
-    };
-    const Eigen::MatrixXd Kt = regressor_over_time(true);
-    const Eigen::MatrixXd Kt_load = opt_.load_regressor ? regressor_over_time(false) : Eigen::MatrixXd();
     int d = opt_.decimate > 0 ? opt_.decimate : static_cast<int>(std::floor(fs / (25.0 * opt_.cutoff_hz)));
     d = std::max(d, 1);
-    // Drop one cut-off period at each end, where differentiation and filtering are one-sided.
     const Eigen::Index edge = static_cast<Eigen::Index>(std::ceil(fs / opt_.cutoff_hz));
-    if (S <= 2 * edge + 2 * P / N * d) {
-      throw InputError("too few samples (" + std::to_string(S) + ") for " + std::to_string(P) + " parameters");
-    }
+    const auto segments = log.segments();
+    const JointVec band = standstill_band(log, segments);
     StackedData out;
-    const Eigen::Index kept = (S - 2 * edge + d - 1) / d;
+    out.rate_hz = fs / d;
+    out.cutoff_hz = opt_.cutoff_hz;
+    out.num_base = Robot::kNumBase;
+    for (int i = 0; i < P; ++i) out.names.push_back(param_name(i));
+    // Samples kept: every d-th of each segment's interior.
+    std::vector<std::pair<size_t, Eigen::Index>> kept_rows;  // (segment, row in it)
+    long short_segments = 0;
+    for (size_t g = 0; g < segments.size(); ++g) {
+      const Eigen::Index len = segments[g].second - segments[g].first;
+      if (len <= 2 * edge) {
+        ++short_segments;
+        continue;
+      }
+      for (Eigen::Index s = edge; s < len - edge; s += d) kept_rows.emplace_back(g, s);
+    }
+    const Eigen::Index kept = static_cast<Eigen::Index>(kept_rows.size());
+    if (kept * N <= 2 * P) {
+      throw InputError("too few samples (" + std::to_string(log.samples()) + ", " + std::to_string(kept) +
+                       " after filtering and decimation) for " + std::to_string(P) + " parameters");
+    }
+    if (short_segments > 0)
+      out.notes.push_back(std::to_string(short_segments) + " segment(s) not longer than two cut-off periods (" +
+                          std::to_string(2 * edge) + " samples) left out: filtering would only see their ends");
     out.W.resize(kept * N, P);
     if (opt_.load_regressor) out.W_load.resize(kept * N, P);
     out.y.resize(kept * N);
     out.t.resize(kept);
-    out.rate_hz = fs / d;
-    // Rows of a joint moving slower than min_speed_fraction of its top speed stay out of the fit:
-    // there a real joint sticks and Coulomb friction takes any value in [-Fc, Fc], which sgn(qd)
-    // cannot represent. They still count in the validation metrics.
-    JointVec threshold = JointVec::Zero();
-    for (Eigen::Index s = edge; s < S - edge; ++s)
-      threshold = threshold.cwiseMax(JointVec(qd.row(s).transpose()).cwiseAbs());
-    threshold *= opt_.min_speed_fraction;
-    out.fit_row.assign(static_cast<size_t>(kept * N), 1);
     out.q.resize(kept, N);
     out.qd.resize(kept, N);
     out.qdd.resize(kept, N);
-    out.cutoff_hz = opt_.cutoff_hz;
-    out.num_base = Robot::kNumBase;
-    for (int i = 0; i < P; ++i) out.names.push_back(param_name(i));
-    for (Eigen::Index k = 0; k < kept; ++k) {
-      const Eigen::Index s = edge + k * d;
-      out.t[k] = log.t[s];
-      out.q.row(k) = q.row(s);
-      out.qd.row(k) = qd.row(s);
-      out.qdd.row(k) = qdd.row(s);
-      for (int j = 0; j < N; ++j) {
-        out.W.row(k * N + j) = Kt.row(s).segment(j * P, P);
-        if (opt_.load_regressor) out.W_load.row(k * N + j) = Kt_load.row(s).segment(j * P, P);
-        out.y[k * N + j] = tau(s, j);
-        if (std::abs(qd(s, j)) < threshold[j]) out.fit_row[static_cast<size_t>(k * N + j)] = 0;
+    Eigen::Index k = 0;
+    for (size_t g = 0; g < segments.size(); ++g) {
+      const auto [a, b] = segments[g];
+      if (b - a <= 2 * edge) continue;
+      Segment seg = process_segment(log, a, b, filter, band);
+      for (; k < kept && kept_rows[static_cast<size_t>(k)].first == g; ++k) {
+        const Eigen::Index s = kept_rows[static_cast<size_t>(k)].second;
+        out.t[k] = log.t[a + s];
+        out.q.row(k) = seg.q.row(s);
+        out.qd.row(k) = seg.qd.row(s);
+        out.qdd.row(k) = seg.qdd.row(s);
+        for (int j = 0; j < N; ++j) {
+          out.W.row(k * N + j) = seg.Kt.row(s).segment(j * P, P);
+          if (opt_.load_regressor) out.W_load.row(k * N + j) = seg.Kt_load.row(s).segment(j * P, P);
+          out.y[k * N + j] = seg.tau(s, j);
+        }
       }
     }
+    // Rows of a joint moving slower than min_speed_fraction of its top speed stay out of the fit:
+    // there a real joint sticks and Coulomb friction takes any value in [-Fc, Fc], which sgn(qd)
+    // cannot represent. They still count in the validation metrics.
+    const JointVec threshold = out.qd.cwiseAbs().colwise().maxCoeff().transpose() * opt_.min_speed_fraction;
+    out.fit_row.assign(static_cast<size_t>(kept * N), 1);
+    for (Eigen::Index r = 0; r < kept; ++r) {
+      for (int j = 0; j < N; ++j) {
+        if (std::abs(out.qd(r, j)) < threshold[j]) out.fit_row[static_cast<size_t>(r * N + j)] = 0;
+      }
+    }
+    std::string line = "standstill: an unfiltered |qd| below " + std::to_string(kStandstillQuantile).substr(0, 4) +
+                       " x its own noise counts as rest (friction sign 0); dead band [rad/s]";
+    char v[32];
+    for (int j = 0; j < N; ++j) {
+      std::snprintf(v, sizeof v, " %.3g", band[j]);
+      line += v;
+    }
+    const double at_rest = static_cast<double>((out.qd.array() == 0.0).count()) / static_cast<double>(kept * N);
+    std::snprintf(v, sizeof v, "; %.3g %%", 100.0 * at_rest);
+    out.notes.push_back(line + v + " of the joint samples at rest");
     return out;
   }
 
-  /// Fits on the samples with train[s] true. Writes phi and parameter standard deviations.
+  /// Fits on the samples with train[s] true. Writes phi and parameter standard deviations; with
+  /// pcls, the consistent solution into *consistent if given.
   void fit(const StackedData& data, const std::vector<char>& train, ParamVec& phi, ParamVec& stdev,
-           double* cond = nullptr) const {
+           double* cond = nullptr, ConsistentSolution* consistent = nullptr) const {
     const Eigen::Index S = data.t.size();
     auto ls = std::make_unique<StreamingLeastSquares<double, P>>();
     for (Eigen::Index s = 0; s < S; ++s) {
@@ -152,6 +164,31 @@ class IdentifyPipeline {
       }
       if (ls->solve(phi) != UpdateStatus::ok) throw InputError("weighted regressor rank deficient");
       ls_statistics(*ls, stdev, cond);
+    } else if (m == "pcls") {
+      ls->reset();
+      for (Eigen::Index s = 0; s < S; ++s) {
+        if (!train[s]) continue;
+        for (int j = 0; j < N; ++j) {
+          if (data.fit_row[s * N + j])
+            check(ls->add_row(data.W.row(s * N + j).transpose(), data.y[s * N + j], 1.0 / sigma[j]));
+        }
+      }
+      ParamVec start;
+      if (ls->solve(start) != UpdateStatus::ok) throw InputError("weighted regressor rank deficient");
+      ConsistentProblem p;
+      p.R = ls->r_factor().template triangularView<Eigen::Upper>();
+      p.z = ls->rotated_rhs();
+      p.num_base = Robot::kNumBase;
+      p.K = base_map();
+      const CompiledRobot& compiled = compiled_robot_for(robot_);
+      p.prior = Eigen::Map<const Eigen::VectorXd>(compiled.nominal_standard.data(), Robot::kNumStandard);
+      p.sigma2 = ls->residual_sum_of_squares() / std::max(1.0, static_cast<double>(ls->rows() - P));
+      p.start = start;
+      ConsistentSolution sol = consistent_least_squares(p);
+      phi = sol.params;
+      stdev = sol.params_std;
+      if (cond) *cond = condition_number(*ls);
+      if (consistent) *consistent = std::move(sol);
     } else if (m == "kf") {
       auto kf = std::make_unique<KalmanFilter<double, P, N>>();
       check(kf->reset(ParamVec::Zero(), ParamVec::Constant(opt_.p0)));
@@ -165,8 +202,9 @@ class IdentifyPipeline {
       run_recursive(*rls, data, train, [&](auto& f, const auto& K, const auto& tau) { return f.update(K, tau, w); });
       recursive_result(*rls, *ls, phi, stdev, cond);
     } else {
-      throw InputError("unknown method '" + m + "' (expected ols, wls, kf or rls)");
+      throw InputError("unknown method '" + m + "' (expected wls, ols, kf, rls or pcls)");
     }
+    stdev *= std::sqrt(autocorrelation_inflation(data, train, phi));
   }
 
   static std::string param_name(int i) {
@@ -176,6 +214,115 @@ class IdentifyPipeline {
   }
 
  private:
+  /// The residuals of filtered, decimated data are autocorrelated, so the white-noise covariance
+  /// (sigma^2 (W^T W)^-1, or a filter's P) understates the parameters' variance: it is inflated by
+  /// the residual's integrated autocorrelation time S / n_eff (effective_samples, Geyer 1992), the
+  /// row-weighted mean over the joints, at least 1.
+  static double autocorrelation_inflation(const StackedData& data, const std::vector<char>& train,
+                                          const ParamVec& phi) {
+    const Eigen::Index S = data.t.size();
+    double rows = 0, weighted = 0;
+    Eigen::VectorXd e(S);
+    for (int j = 0; j < N; ++j) {
+      Eigen::Index n = 0;
+      for (Eigen::Index s = 0; s < S; ++s) {
+        if (!train[s] || !data.fit_row[s * N + j]) continue;
+        e[n++] = data.y[s * N + j] - data.W.row(s * N + j).dot(phi);
+      }
+      if (n < 8) continue;
+      const double dn = static_cast<double>(n);
+      rows += dn;
+      weighted += dn * dn / effective_samples(e.head(n));
+    }
+    return rows > 0 ? std::max(1.0, weighted / rows) : 1.0;
+  }
+
+  /// phi_b = K phi (num_base x num_standard), the generated standard_to_base as a matrix.
+  static Eigen::MatrixXd base_map() {
+    Eigen::MatrixXd K(Robot::kNumBase, Robot::kNumStandard);
+    for (int i = 0; i < Robot::kNumStandard; ++i) {
+      Eigen::Matrix<double, Robot::kNumStandard, 1> e = Eigen::Matrix<double, Robot::kNumStandard, 1>::Zero();
+      e[i] = 1.0;
+      Eigen::Matrix<double, Robot::kNumBase, 1> b;
+      Robot::standard_to_base(e, b);
+      K.col(i) = b;
+    }
+    return K;
+  }
+
+  /// One segment filtered and differentiated, its regressor over time (column j * P + c holds
+  /// K(j, c) at every sample) filtered in parallel.
+  struct Segment {
+    Eigen::MatrixXd q, qd, qdd, tau, Kt, Kt_load;
+  };
+
+  Segment process_segment(const JointLog& log, Eigen::Index a, Eigen::Index b, const ButterworthLowPass& filter,
+                          const JointVec& band) const {
+    const Eigen::Index S = b - a;
+    const double dt = log.sample_period();
+    Segment g;
+    g.q = log.q.middleRows(a, S);
+    filter.filtfilt(g.q);
+    if (log.has_qd) {
+      g.qd = log.qd.middleRows(a, S);
+      filter.filtfilt(g.qd);
+    } else {
+      g.qd = central_difference(g.q, dt);
+    }
+    if (log.has_qdd) {
+      g.qdd = log.qdd.middleRows(a, S);
+      filter.filtfilt(g.qdd);
+    } else {
+      g.qdd = central_difference(g.qd, dt);
+    }
+    // Friction sign from the unfiltered velocity (central differences of q, or the measured qd):
+    // sgn is discontinuous, and of a filtered velocity it would switch up to a cut-off period after
+    // a stop; the Coulomb column is then filtered in parallel, which averages the noise. Inside the
+    // noise band the joint is at rest: sign 0, and its filtered velocity 0.
+    const Eigen::MatrixXd v =
+        log.has_qd ? Eigen::MatrixXd(log.qd.middleRows(a, S)) : central_difference(log.q.middleRows(a, S), dt);
+    Eigen::MatrixXd sign = Eigen::MatrixXd::Zero(S, N);
+    for (Eigen::Index s = 0; s < S; ++s) {
+      for (int j = 0; j < N; ++j) {
+        if (std::abs(v(s, j)) < band[j]) {
+          g.qd(s, j) = 0.0;
+        } else {
+          sign(s, j) = v(s, j) > 0 ? 1.0 : -1.0;
+        }
+      }
+    }
+    g.tau = log.tau.middleRows(a, S);
+    filter.filtfilt(g.tau);
+    const JointVec zero = JointVec::Zero();
+    auto regressor_over_time = [&](bool with_qdd) {
+      Eigen::MatrixXd Kt(S, N * P);
+      typename Model::template Regressor<double> K;
+      for (Eigen::Index s = 0; s < S; ++s) {
+        Model::regressor(JointVec(g.q.row(s).transpose()), JointVec(g.qd.row(s).transpose()),
+                         with_qdd ? JointVec(g.qdd.row(s).transpose()) : zero, zero, K);
+        for (int j = 0; j < N; ++j) {
+          if (Model::column(term::coulomb, j) >= 0) K(j, Model::column(term::coulomb, j)) = sign(s, j);
+          Kt.row(s).segment(j * P, P) = K.row(j);
+        }
+      }
+      filter.filtfilt(Kt);
+      return Kt;
+    };
+    g.Kt = regressor_over_time(true);
+    if (opt_.load_regressor) g.Kt_load = regressor_over_time(false);
+    return g;
+  }
+
+  /// Per joint, kStandstillQuantile x the standard deviation of the unfiltered velocity's noise:
+  /// the white noise of the measured signal (white_noise_std of q, or of qd when measured) times the
+  /// noise gain of central differences, 1 / (dt sqrt(2)), for q.
+  JointVec standstill_band(const JointLog& log,
+                           const std::vector<std::pair<Eigen::Index, Eigen::Index>>& segments) const {
+    const Eigen::VectorXd sigma = white_noise_std(log.has_qd ? log.qd : log.q, segments);
+    const double gain = log.has_qd ? 1.0 : 1.0 / (log.sample_period() * std::sqrt(2.0));
+    return JointVec(sigma * (kStandstillQuantile * gain));
+  }
+
   static void check(UpdateStatus s) {
     if (s != UpdateStatus::ok) throw InputError(std::string("estimator rejected the data: ") + to_string(s));
   }
@@ -238,8 +385,9 @@ IdentifyResult run_identify(const RobotDescription& robot, const JointLog& log, 
                      std::to_string(N));
   Pipe pipe(robot, opt);
   const StackedData data = pipe.prepare(log);
-  const Eigen::Index S = data.t.size();
   IdentifyResult res;
+  res.notes = data.notes;
+  const Eigen::Index S = data.t.size();
   res.robot = robot.name;
   res.method = opt.method;
   res.model = model_name(Terms);
@@ -282,42 +430,22 @@ IdentifyResult run_identify(const RobotDescription& robot, const JointLog& log, 
     }
   }
   // Metrics from the pooled out-of-fold residuals.
-  for (int j = 0; j < N; ++j) {
-    double se = 0, st = 0, sum_tau = 0, sum_abs = 0, sum_abs2 = 0;
-    long n = 0;
-    for (Eigen::Index s = 0; s < S; ++s) {
-      if (std::isnan(pred[s * N + j])) continue;
-      const double y = data.y[s * N + j];
-      sum_tau += y;
-      ++n;
-    }
-    const double mean_tau = sum_tau / static_cast<double>(n);
-    for (Eigen::Index s = 0; s < S; ++s) {
-      if (std::isnan(pred[s * N + j])) continue;
-      const double y = data.y[s * N + j];
-      const double e = y - pred[s * N + j];
-      se += e * e;
-      st += (y - mean_tau) * (y - mean_tau);
-      const double a = std::abs(e) / robot.tau_max[j];
-      sum_abs += a;
-      sum_abs2 += a * a;
-    }
-    JointMetrics m;
-    m.joint = j + 1;
-    m.rms = std::sqrt(se / static_cast<double>(n));
-    m.rms_tau = std::sqrt((st + static_cast<double>(n) * mean_tau * mean_tau) / static_cast<double>(n));
-    m.relative_rms = m.rms / m.rms_tau;
-    m.r2 = 1.0 - se / st;
-    m.e_T = sum_abs / static_cast<double>(n);
-    m.e_T_std = std::sqrt(std::max(0.0, sum_abs2 / static_cast<double>(n) - m.e_T * m.e_T));
-    res.joints.push_back(m);
-  }
+  res.joints = torque_metrics(data.y, pred, N, robot.tau_max);
   // Final fit on all data: reported parameters.
   std::vector<char> all(static_cast<size_t>(S), 1);
   const auto t0 = std::chrono::steady_clock::now();
-  pipe.fit(data, all, phi, stdev, &res.condition_number);
+  ConsistentSolution consistent;
+  pipe.fit(data, all, phi, stdev, &res.condition_number, &consistent);
   res.fit_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   for (int i = 0; i < P; ++i) res.params.push_back({Pipe::param_name(i), phi[i], stdev[i]});
+  for (size_t l = 0; l < consistent.min_eigenvalue.size(); ++l) {
+    const std::array<double, 10> v = physical_parameters(consistent.standard.data() + 10 * l);
+    res.links.push_back({static_cast<int>(l) + 1,
+                         v[0],
+                         {v[1], v[2], v[3]},
+                         {v[4], v[5], v[6], v[7], v[8], v[9]},
+                         consistent.min_eigenvalue[l]});
+  }
   for (int j = 0; j < N; ++j) {
     if (!(Terms & term::rotor_inertia) || Robot::rotor_inertia_separate(j)) continue;
     if (Robot::rotor_inertia_absorbed_into(j) < 0) {  // robot.json: "rotor_inertia": false

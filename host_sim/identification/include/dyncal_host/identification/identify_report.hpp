@@ -10,6 +10,15 @@ namespace dyncal::host {
 /// Human-readable report: header, per-joint validation table, parameters with std deviations.
 void print_identify_report(std::ostream& out, const IdentifyResult& r);
 
+/// One other log's prediction (identify --validate-on, dyncal predict) as a table.
+void print_log_prediction(std::ostream& out, const LogPrediction& p);
+
+/// Per-joint metrics as the report's "joints" array.
+nlohmann::json joint_metrics_json(const std::vector<JointMetrics>& joints);
+
+/// One other log's prediction: data, samples, joints (as the report's), notes.
+nlohmann::json log_prediction_json(const LogPrediction& p);
+
 /// The `--report` JSON document (schema in docs/cli.md).
 nlohmann::json identify_report_json(const IdentifyResult& r);
 

@@ -2,27 +2,51 @@
 
 #include <Eigen/Core>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace dyncal::host {
 
 /// A measured or simulated log on the joint side. Rows are samples, columns joints (joint 1
-/// first). Units: t [s], q [rad], qd [rad/s], qdd [rad/s^2], tau [Nm]. Sampling is uniform.
+/// first). Units: t [s], q [rad], qd [rad/s], qdd [rad/s^2], tau [Nm]. Time strictly increases.
+/// A log may consist of segments (several logs, or one split at a gap): signals are never filtered
+/// or differentiated across a segment boundary. As read, time stamps may jitter and samples be
+/// missing; identification puts the log on a uniform grid first (uniform_grid.hpp).
 struct JointLog {
   Eigen::VectorXd t;
   Eigen::MatrixXd q, qd, qdd, tau;
   bool has_qd = false;   ///< qd was measured (else computed)
   bool has_qdd = false;  ///< qdd was measured (else computed)
   std::string source;
+  std::vector<Eigen::Index> segment_starts;  ///< first row of each segment after the first (empty: one segment)
+  double period = 0;                         ///< uniform grid period [s] of every segment; 0: not on a grid
 
   Eigen::Index samples() const { return t.size(); }
   int joints() const { return static_cast<int>(q.cols()); }
-  double sample_period() const { return (t[t.size() - 1] - t[0]) / static_cast<double>(t.size() - 1); }
+  /// The grid period if set, else the mean step of the log.
+  double sample_period() const {
+    return period > 0 ? period : (t[t.size() - 1] - t[0]) / static_cast<double>(t.size() - 1);
+  }
+  /// [first row, end row) of every segment, in order.
+  std::vector<std::pair<Eigen::Index, Eigen::Index>> segments() const {
+    std::vector<std::pair<Eigen::Index, Eigen::Index>> out;
+    Eigen::Index a = 0;
+    for (const Eigen::Index b : segment_starts) {
+      out.emplace_back(a, b);
+      a = b;
+    }
+    out.emplace_back(a, samples());
+    return out;
+  }
+  /// Total duration of the segments [s] (each as its sample count times the period).
+  double duration() const { return static_cast<double>(samples()) * sample_period(); }
 };
 
 /// Reads a CSV log with a header `t, q1..qN, [qd1..qdN], [qdd1..qddN], tau1..tauN` (any column
-/// order, names as given, 1-based joints). Throws InputError naming the problem: unreadable file,
-/// missing column, wrong joint count (N != expected_joints), a non-numeric or non-finite value
-/// (with its line and column), non-monotonic or non-uniform time, fewer than 3 samples.
+/// order, names as given, 1-based joints). Time stamps may jitter and rows be missing (see
+/// uniform_grid.hpp). Throws InputError naming the problem: unreadable file, missing column, wrong
+/// joint count (N != expected_joints), a non-numeric or non-finite value (with its line and column),
+/// time not strictly increasing (with its row), fewer than 3 samples.
 JointLog read_csv_log(const std::string& path, int expected_joints);
 
 /// Writes `log` as a CSV that read_csv_log reads back exactly: header `t, q1..qN, [qd1..qdN,]

@@ -24,6 +24,7 @@ struct StackedData {
   std::vector<std::string> names;  ///< P parameter names
   int num_base = 0;                ///< the first num_base columns are the base parameters (rigid body)
   double cutoff_hz = 0;
+  std::vector<std::string> notes;  ///< what preparation did that the user should know (standstill band, segments)
 };
 
 /// Prepares `log` for the declared model options.terms (a built term set, model_terms.hpp) of

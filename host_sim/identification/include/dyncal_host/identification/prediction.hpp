@@ -1,0 +1,42 @@
+#pragma once
+// A model validated on logs it was not fitted to: the identified parameters (a parameter file, or
+// identify's own result) predict the torque of another log, through the same filtering and
+// regressor as identification; per-joint RMS, R^2 and e_T of the prediction error.
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "dyncal_host/identification/identify.hpp"
+
+namespace dyncal::host {
+
+/// Identified parameters of one robot and model, in the model's parameter order.
+struct ParameterSet {
+  std::string robot, model, source;
+  unsigned terms = 0;              ///< dyncal::term bits of `model`
+  std::vector<std::string> names;  ///< the compiled robot's parameter names for `model`
+  Eigen::VectorXd values;
+};
+
+/// Reads a `dyncal identify --params` file (docs/cli.md). Throws InputError with the file and what
+/// is wrong: not JSON, not a dyncal parameter file, robot or model missing, a robot not compiled into
+/// this build, a model not built, a wrong parameter count, a name that is not the model's parameter
+/// at that place, a value that is not a finite number.
+ParameterSet read_parameter_file(const std::string& path);
+
+/// The parameters identify reports (IdentifyResult::params) as a set.
+ParameterSet parameter_set(const IdentifyResult& r);
+
+/// Per-joint metrics of a prediction: y and prediction stacked (row s * N + j), rows whose
+/// prediction is NaN skipped; e_T and e_T_std relative to tau_max (survey Sec. 5.1).
+std::vector<JointMetrics> torque_metrics(const Eigen::VectorXd& y, const Eigen::VectorXd& prediction, int N,
+                                         const Eigen::VectorXd& tau_max);
+
+/// The torque of `log` predicted by `params` (every sample, none fitted): log prepared as identify
+/// prepares it with `options` (filter, cut-off, decimation; terms taken from params), tau_hat = W phi.
+/// Throws InputError: params for another robot than `robot`, and whatever prepare_stacked throws.
+LogPrediction predict(const RobotDescription& robot, const JointLog& log, IdentifyOptions options,
+                      const ParameterSet& params);
+
+}  // namespace dyncal::host

@@ -1,0 +1,130 @@
+#include "dyncal_host/identification/prediction.hpp"
+
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/identification/compiled_robot.hpp"
+#include "dyncal_host/identification/stacked_data.hpp"
+
+namespace dyncal::host {
+
+ParameterSet read_parameter_file(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError("cannot read '" + path + "'");
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(path + ": invalid JSON: " + e.what());
+  }
+  if (!j.is_object() || j.value("format", "") != "dyncal-parameters")
+    throw InputError(path + ": not a dyncal parameter file (\"format\": \"dyncal-parameters\")");
+  if (!j.contains("robot") || !j["robot"].is_string()) throw InputError(path + ": 'robot' missing");
+  if (!j.contains("model") || !j["model"].is_string()) throw InputError(path + ": 'model' missing");
+  ParameterSet p;
+  p.source = path;
+  p.robot = j["robot"].get<std::string>();
+  p.model = j["model"].get<std::string>();
+  p.terms = parse_model(p.model);
+  const CompiledRobot& compiled = compiled_robot(p.robot);
+  p.names = compiled.param_names[static_cast<size_t>(built_term_set_index(p.terms))]();
+  // Checked by name, so that a file edited by hand or written for another model cannot give
+  // shifted values.
+  if (!j.contains("params") || !j["params"].is_array()) throw InputError(path + ": 'params' missing");
+  const auto& list = j["params"];
+  if (list.size() != p.names.size())
+    throw InputError(path + ": " + std::to_string(list.size()) + " params, robot '" + p.robot + "' with model '" +
+                     p.model + "' has " + std::to_string(p.names.size()));
+  p.values.resize(static_cast<Eigen::Index>(list.size()));
+  for (size_t i = 0; i < list.size(); ++i) {
+    const auto& v = list[i];
+    const std::string where = path + ": params[" + std::to_string(i + 1) + "]";
+    if (!v.is_object() || !v.contains("value") || !v["value"].is_number())
+      throw InputError(where + ": expected an object with a number 'value'");
+    if (!v.contains("name") || !v["name"].is_string()) throw InputError(where + ": 'name' missing");
+    if (v["name"].get<std::string>() != p.names[i])
+      throw InputError(where + " is '" + v["name"].get<std::string>() + "', parameter " + std::to_string(i + 1) +
+                       " of robot '" + p.robot + "' with model '" + p.model + "' is '" + p.names[i] + "'");
+    const double value = v["value"].get<double>();
+    if (!std::isfinite(value)) throw InputError(where + " '" + p.names[i] + "': value is not finite");
+    p.values[static_cast<Eigen::Index>(i)] = value;
+  }
+  return p;
+}
+
+ParameterSet parameter_set(const IdentifyResult& r) {
+  ParameterSet p;
+  p.robot = r.robot;
+  p.model = r.model;
+  p.terms = parse_model(r.model);
+  p.source = "identify";
+  p.values.resize(static_cast<Eigen::Index>(r.params.size()));
+  for (size_t i = 0; i < r.params.size(); ++i) {
+    p.names.push_back(r.params[i].name);
+    p.values[static_cast<Eigen::Index>(i)] = r.params[i].value;
+  }
+  return p;
+}
+
+std::vector<JointMetrics> torque_metrics(const Eigen::VectorXd& y, const Eigen::VectorXd& pred, int N,
+                                         const Eigen::VectorXd& tau_max) {
+  const Eigen::Index S = y.size() / N;
+  std::vector<JointMetrics> out;
+  for (int j = 0; j < N; ++j) {
+    double se = 0, st = 0, sum_tau = 0, sum_abs = 0, sum_abs2 = 0;
+    long n = 0;
+    for (Eigen::Index s = 0; s < S; ++s) {
+      if (std::isnan(pred[s * N + j])) continue;
+      sum_tau += y[s * N + j];
+      ++n;
+    }
+    JointMetrics m;
+    m.joint = j + 1;
+    if (n == 0) {
+      out.push_back(m);
+      continue;
+    }
+    const double mean_tau = sum_tau / static_cast<double>(n);
+    for (Eigen::Index s = 0; s < S; ++s) {
+      if (std::isnan(pred[s * N + j])) continue;
+      const double v = y[s * N + j];
+      const double e = v - pred[s * N + j];
+      se += e * e;
+      st += (v - mean_tau) * (v - mean_tau);
+      const double a = std::abs(e) / tau_max[j];
+      sum_abs += a;
+      sum_abs2 += a * a;
+    }
+    const double dn = static_cast<double>(n);
+    m.rms = std::sqrt(se / dn);
+    m.rms_tau = std::sqrt((st + dn * mean_tau * mean_tau) / dn);
+    m.relative_rms = m.rms / m.rms_tau;
+    m.r2 = 1.0 - se / st;
+    m.e_T = sum_abs / dn;
+    m.e_T_std = std::sqrt(std::max(0.0, sum_abs2 / dn - m.e_T * m.e_T));
+    out.push_back(m);
+  }
+  return out;
+}
+
+LogPrediction predict(const RobotDescription& robot, const JointLog& log, IdentifyOptions options,
+                      const ParameterSet& params) {
+  if (params.robot != robot.name)
+    throw InputError(params.source + ": parameters are for robot '" + params.robot + "', not '" + robot.name + "'");
+  options.terms = params.terms;
+  options.load_regressor = false;
+  const StackedData d = prepare_stacked(robot, log, options);
+  if (d.names != params.names)
+    throw InputError(params.source + ": parameter names differ from robot '" + robot.name + "' with model '" +
+                     params.model + "'");
+  LogPrediction p;
+  p.source = log.source;
+  p.samples = static_cast<long>(d.t.size());
+  p.notes = d.notes;
+  p.joints = torque_metrics(d.y, d.W * params.values, robot.num_joints, robot.tau_max);
+  return p;
+}
+
+}  // namespace dyncal::host

@@ -1,0 +1,406 @@
+// Real logs as they come (issue 21): time stamps that jitter, samples missing, gaps, rest periods,
+// several logs at once. Simulated logs of the test robots (exact inverse dynamics of their
+// robot.json inertials, Coulomb + viscous friction with sgn(0) = 0 at rest, Gaussian torque noise)
+// are degraded as a real logger degrades them, and identification must give what it gives on the
+// clean log, within the noise.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <random>
+
+#include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/identification/compiled_robot.hpp"
+#include "dyncal_host/identification/excitation.hpp"
+#include "dyncal_host/identification/identify.hpp"
+#include "dyncal_host/identification/signal.hpp"
+#include "dyncal_host/identification/stacked_data.hpp"
+#include "dyncal_host/identification/uniform_grid.hpp"
+#include "support/torque_share.hpp"
+
+namespace {
+
+using namespace dyncal::host;
+
+RobotDescription test_robot(const std::string& name) {
+  RobotDescription r = load_robot(std::string(DYNCAL_SOURCE_DIR) + "/tests/robots", name);
+  derive_tau_max(r);
+  return r;
+}
+
+/// The arm's motion clock: u(t) = t without rests; with rests, the designed trajectory is played
+/// for `move` seconds, then held still for `rest` seconds, repeatedly, with ramps of constant
+/// deceleration and acceleration of the clock (0.4 s) between, as a robot stops and starts.
+struct MotionClock {
+  bool rests = false;
+  double move = 3.0, rest = 1.5, ramp = 0.4;
+  /// Speed w(t) = du/dt and its derivative.
+  void speed(double t, double& w, double& wd) const {
+    w = 1, wd = 0;
+    if (!rests) return;
+    const double cycle = move + rest, x = std::fmod(t, cycle);
+    if (x < move - ramp) return;
+    if (x < move) {  // slowing down
+      w = (move - x) / ramp, wd = -1 / ramp;
+    } else if (x < cycle - ramp) {  // at rest
+      w = 0, wd = 0;
+    } else {  // starting
+      w = (x - (cycle - ramp)) / ramp, wd = 1 / ramp;
+    }
+  }
+};
+
+/// A 20-bit absolute encoder on every joint [rad].
+constexpr double kEncoderStep = 2 * M_PI / (1 << 20);
+
+struct SimulatedLog {
+  JointLog log;
+  Eigen::VectorXd phi, sigma;
+  std::vector<char> at_rest;  ///< per sample: every joint's true velocity is 0
+};
+
+/// Samples at times `times` of the designed excitation played on `clock`: tau = ID + Fc sgn(qd) +
+/// Fv qd + noise (Fc 2 %, Fv qd_max 1 %, noise 0.5 % of tau_max); q read by kEncoderStep encoders.
+SimulatedLog simulate(const RobotDescription& robot, const std::vector<double>& times, const MotionClock& clock,
+                      unsigned seed, unsigned trajectory_seed = 3) {
+  const CompiledRobot& c = compiled_robot_for(robot);
+  ExciteOptions xo;
+  xo.seed = trajectory_seed;
+  const ExcitationTrajectory traj = design_excitation(robot, xo).trajectory;
+  const int n = robot.num_joints;
+  SimulatedLog s;
+  const Eigen::VectorXd phi_std = Eigen::Map<const Eigen::VectorXd>(c.nominal_standard.data(), c.num_standard);
+  const Eigen::VectorXd Fc = 0.02 * robot.tau_max, Fv = (0.01 * robot.tau_max).cwiseQuotient(robot.qd_max);
+  s.sigma = 0.005 * robot.tau_max;
+  s.phi.resize(c.num_base + 2 * n);
+  s.phi.head(c.num_base) = c.standard_to_base(phi_std);
+  for (int j = 0; j < n; ++j) {
+    s.phi[c.num_base + 2 * j] = Fc[j];
+    s.phi[c.num_base + 2 * j + 1] = Fv[j];
+  }
+  const Eigen::Index S = static_cast<Eigen::Index>(times.size());
+  JointLog& log = s.log;
+  log.t.resize(S);
+  log.q.resize(S, n);
+  log.qd.resize(S, n);
+  log.qdd.resize(S, n);
+  log.tau.resize(S, n);
+  s.at_rest.assign(times.size(), 0);
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  double u = 0, t_prev = 0;
+  for (Eigen::Index k = 0; k < S; ++k) {
+    const double t = times[static_cast<size_t>(k)];
+    // u = integral of w: Simpson on each interval (w is a polynomial in t between its breaks).
+    if (k > 0) {
+      double w0, w1, wm, d;
+      clock.speed(t_prev, w0, d);
+      clock.speed(0.5 * (t_prev + t), wm, d);
+      clock.speed(t, w1, d);
+      u += (t - t_prev) / 6.0 * (w0 + 4 * wm + w1);
+    } else {
+      u = t;
+    }
+    t_prev = t;
+    double w, wd;
+    clock.speed(t, w, wd);
+    Eigen::Matrix<double, 7, 1> q7, qd7, qdd7;
+    traj.evaluate(u, q7, qd7, qdd7);
+    const Eigen::VectorXd q = q7.head(n), qd = w * qd7.head(n), qdd = w * w * qdd7.head(n) + wd * qd7.head(n);
+    s.at_rest[static_cast<size_t>(k)] = w == 0.0;
+    Eigen::VectorXd tau = c.inverse_dynamics(q, qd, qdd, phi_std);
+    for (int j = 0; j < n; ++j)
+      tau[j] += Fc[j] * (qd[j] > 0 ? 1.0 : (qd[j] < 0 ? -1.0 : 0.0)) + Fv[j] * qd[j] + s.sigma[j] * normal(rng);
+    log.t[k] = t;
+    log.q.row(k) = (q / kEncoderStep).array().round().matrix().transpose() * kEncoderStep;
+    log.qd.row(k) = qd.transpose();
+    log.qdd.row(k) = qdd.transpose();
+    log.tau.row(k) = tau.transpose();
+  }
+  log.has_qd = log.has_qdd = false;
+  log.source = "simulated " + robot.name;
+  return s;
+}
+
+std::vector<double> uniform_times(double fs, double seconds) {
+  std::vector<double> t;
+  for (long k = 0; k < std::lround(seconds * fs); ++k) t.push_back(static_cast<double>(k) / fs);
+  return t;
+}
+
+/// A logger's time stamps: nominal period 1 / fs, each stamp off by a uniform jitter of RMS
+/// `jitter` periods (never reordering), a fraction `drop` of the samples missing.
+std::vector<double> logger_times(double fs, double seconds, double jitter, double drop, unsigned seed) {
+  std::mt19937_64 rng(seed);
+  const double half = jitter * std::sqrt(3.0);  // uniform on [-half, half] has RMS `jitter`
+  std::uniform_real_distribution<double> u(-half, half), keep(0, 1);
+  std::vector<double> t;
+  for (long k = 0; k < std::lround(seconds * fs); ++k) {
+    if (k > 0 && keep(rng) < drop) continue;
+    t.push_back((static_cast<double>(k) + u(rng)) / fs);
+  }
+  return t;
+}
+
+IdentifyOptions wls_eq7() {
+  IdentifyOptions o;
+  o.method = "wls";
+  o.terms = dyncal::kFrictionEq7;
+  return o;
+}
+
+constexpr double kRate = 500.0;
+constexpr double kSeconds = 40.0;
+
+class RealLogs : public ::testing::TestWithParam<const char*> {};
+
+// A logger with 10 % jitter and 10 % missing samples gives the clean log's parameters: every
+// parameter's difference moves no joint's torque by more than 1 % of its RMS (the robot-folder
+// tests' tolerance), and the validation RMS stays at the noise.
+TEST_P(RealLogs, JitterAndMissingSamplesGiveTheCleanParameters) {
+  const RobotDescription robot = test_robot(GetParam());
+  const MotionClock plain;
+  const SimulatedLog clean = simulate(robot, uniform_times(kRate, kSeconds), plain, 11);
+  const SimulatedLog jittered = simulate(robot, logger_times(kRate, kSeconds, 0.10, 0.10, 5), plain, 11);
+  const IdentifyResult a = identify(robot, clean.log, wls_eq7());
+  const IdentifyResult b = identify(robot, jittered.log, wls_eq7());
+  ASSERT_EQ(a.params.size(), b.params.size());
+  ASSERT_FALSE(b.notes.empty());
+  EXPECT_NE(b.notes.front().find("resampled"), std::string::npos) << b.notes.front();
+  EXPECT_NE(a.notes.front().find("uniform"), std::string::npos) << a.notes.front();
+  std::printf("%s\n", b.notes.front().c_str());
+  const CompiledRobot& c = compiled_robot_for(robot);
+  dyncal::test::Eq7TorqueShare shares(c, clean.phi);
+  for (Eigen::Index k = 0; k < clean.log.samples(); ++k)
+    shares.add(clean.log.q.row(k).transpose(), clean.log.qd.row(k).transpose(), clean.log.qdd.row(k).transpose());
+  double worst = 0;
+  for (size_t i = 0; i < a.params.size(); ++i) {
+    const double share = shares.share(static_cast<int>(i), b.params[i].value - a.params[i].value);
+    SCOPED_TRACE(a.params[i].name);
+    EXPECT_LE(share, 0.01);
+    worst = std::max(worst, share);
+  }
+  for (int j = 0; j < robot.num_joints; ++j) {
+    SCOPED_TRACE("joint " + std::to_string(j + 1));
+    EXPECT_LT(b.joints[static_cast<size_t>(j)].rms, 1.15 * clean.sigma[j]);
+  }
+  std::printf("%s: largest parameter difference, clean vs jittered, %.4f of a joint's RMS torque\n", GetParam(), worst);
+}
+
+/// Residual y - W phi of identify's final parameters on the stacked data.
+Eigen::VectorXd final_residual(const StackedData& d, const IdentifyResult& r) {
+  Eigen::VectorXd phi(static_cast<Eigen::Index>(r.params.size()));
+  for (size_t i = 0; i < r.params.size(); ++i) phi[static_cast<Eigen::Index>(i)] = r.params[i].value;
+  return d.y - d.W * phi;
+}
+
+// Rest periods: at rest a filtered velocity is a tiny number of either sign, so without a dead band
+// sgn(qd) would add +-Fc at random to every standstill sample. With it the Coulomb columns are 0 at
+// rest, and the residual at rest and everywhere more than 0.1 s from a stop or a start is the
+// residual of the same motion without rests (within 15 %). Within 0.1 s of a stop or start it is
+// larger and reported, not asserted: the simulated Coulomb torque switches the instant the joint
+// moves, and a joint that starts slowly stays below the velocity resolution for tens of ms.
+TEST_P(RealLogs, RestPeriodsCarryNoSpuriousCoulombTorque) {
+  const RobotDescription robot = test_robot(GetParam());
+  MotionClock resting;
+  resting.rests = true;
+  const SimulatedLog moving = simulate(robot, uniform_times(kRate, kSeconds), MotionClock{}, 7);
+  const SimulatedLog rests = simulate(robot, uniform_times(kRate, kSeconds), resting, 7);
+  const IdentifyResult a = identify(robot, moving.log, wls_eq7());
+  const IdentifyResult b = identify(robot, rests.log, wls_eq7());
+  const StackedData da = prepare_stacked(robot, moving.log, wls_eq7());
+  const StackedData d = prepare_stacked(robot, rests.log, wls_eq7());
+  const Eigen::VectorXd ra = final_residual(da, a), rb = final_residual(d, b);
+  const int n = robot.num_joints;
+  const double cycle = resting.move + resting.rest, stop = resting.move, start = cycle - resting.ramp;
+  for (int j = 0; j < n; ++j) {
+    SCOPED_TRACE("joint " + std::to_string(j + 1));
+    double ss_moving = 0, ss[3] = {0, 0, 0};  // rests log: away from transitions, at rest, near transitions
+    long cnt[3] = {0, 0, 0};
+    for (Eigen::Index k = 0; k < da.t.size(); ++k) ss_moving += ra[k * n + j] * ra[k * n + j];
+    for (Eigen::Index k = 0; k < d.t.size(); ++k) {
+      const double x = std::fmod(d.t[k], cycle);
+      const bool near = std::abs(x - stop) < 0.1 || std::abs(x - start) < 0.1 || x > cycle - 0.1 || x < 0.1;
+      const int c = near ? 2 : (x > stop && x < start ? 1 : 0);
+      ss[c] += rb[k * n + j] * rb[k * n + j];
+      ++cnt[c];
+    }
+    const double rms_moving = std::sqrt(ss_moving / static_cast<double>(da.t.size()));
+    const double away = std::sqrt((ss[0] + ss[1]) / static_cast<double>(cnt[0] + cnt[1]));
+    const double at_rest = std::sqrt(ss[1] / static_cast<double>(cnt[1]));
+    const double near = std::sqrt(ss[2] / static_cast<double>(cnt[2]));
+    EXPECT_LT(away, 1.15 * rms_moving);
+    EXPECT_LT(at_rest, 1.15 * rms_moving);
+    std::printf(
+        "joint %d: residual RMS %.4g Nm without rests; with rests %.4g away from stops and starts "
+        "(%.4g at rest), %.4g within 0.1 s of them; cross-validated %.4g with rests, %.4g without\n",
+        j + 1, rms_moving, away, at_rest, near, b.joints[static_cast<size_t>(j)].rms,
+        a.joints[static_cast<size_t>(j)].rms);
+  }
+  // No standstill sample's Coulomb column carries more than 0.1 % of Fc (what the parallel filter
+  // brings from the motion 0.2 s away; a random sign would carry 100 %).
+  long checked = 0;
+  for (Eigen::Index k = 0; k < d.t.size(); ++k) {
+    const Eigen::Index s = std::lround(d.t[k] * kRate);
+    // The middle of a rest: the filter's reach away from any motion.
+    bool still = true;
+    for (Eigen::Index o = -100; o <= 100 && still; ++o) {
+      const Eigen::Index i = std::clamp<Eigen::Index>(s + o, 0, rests.log.samples() - 1);
+      still = rests.at_rest[static_cast<size_t>(i)] != 0;
+    }
+    if (!still) continue;
+    for (int j = 0; j < n; ++j) {
+      for (Eigen::Index col = 0; col < d.W.cols(); ++col) {
+        if (d.names[static_cast<size_t>(col)] != "Fc" + std::to_string(j + 1)) continue;
+        EXPECT_LT(std::abs(d.W(k * n + j, col)), 1e-3) << "joint " << j + 1 << " at t = " << d.t[k];
+        ++checked;
+      }
+    }
+  }
+  EXPECT_GT(checked, 100);
+  std::printf("%ld standstill joint samples checked\n", checked);
+}
+
+// A gap longer than the bridgeable one (half the cut-off period) splits the log: nothing is
+// filtered across it, and the two pieces identify as well as one log.
+TEST_P(RealLogs, AGapSplitsTheLogIntoSegments) {
+  const RobotDescription robot = test_robot(GetParam());
+  std::vector<double> times = uniform_times(kRate, kSeconds);
+  times.erase(times.begin() + 9000, times.begin() + 9500);  // 1 s missing
+  const SimulatedLog s = simulate(robot, times, MotionClock{}, 3);
+  SamplingReport rep;
+  const JointLog g = to_uniform_grid(s.log, bridgeable_gap(20.0), rep);
+  EXPECT_EQ(rep.segments, 2);
+  EXPECT_EQ(rep.gaps, 1);
+  EXPECT_EQ(rep.missing, 0);
+  ASSERT_EQ(g.segment_starts.size(), 1u);
+  EXPECT_EQ(g.segment_starts[0], 9000);
+  const IdentifyResult r = identify(robot, s.log, wls_eq7());
+  for (int j = 0; j < robot.num_joints; ++j) EXPECT_LT(r.joints[static_cast<size_t>(j)].rms, 1.15 * s.sigma[j]);
+}
+
+INSTANTIATE_TEST_SUITE_P(TestRobots, RealLogs, ::testing::Values("arm3", "cobot7"));
+
+int run_dyncal(const std::string& args) {
+  const int status = std::system((std::string(DYNCAL_BINARY) + " " + args + " >/dev/null 2>&1").c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+nlohmann::json read_json(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  return nlohmann::json::parse(in);
+}
+
+// Validation on another log: `identify --validate-on B` and `predict --params P --data B` report the
+// same prediction error of B (one computation), at the noise level (the model generalises to a
+// trajectory it never saw); parameters of another robot are refused with exit 2.
+TEST(RealLogsCli, ValidateOnAndPredictAgree) {
+  const RobotDescription robot = test_robot("arm3");
+  const auto dir = std::filesystem::temp_directory_path() / ("dyncal_real_logs_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const SimulatedLog a = simulate(robot, uniform_times(kRate, kSeconds), MotionClock{}, 11, 3);
+  const SimulatedLog b = simulate(robot, logger_times(kRate, kSeconds, 0.1, 0.05, 8), MotionClock{}, 12, 4);
+  write_csv_log((dir / "a.csv").string(), a.log);
+  write_csv_log((dir / "b.csv").string(), b.log);
+  const std::string robots = std::string(" --robots-dir ") + DYNCAL_SOURCE_DIR + "/tests/robots";
+  ASSERT_EQ(run_dyncal("identify --robot arm3" + robots + " --model eq7 --method wls --data " +
+                       (dir / "a.csv").string() + " --validate-on " + (dir / "b.csv").string() + " --report " +
+                       (dir / "rep.json").string() + " --params " + (dir / "p.json").string()),
+            0);
+  ASSERT_EQ(run_dyncal("predict" + robots + " --data " + (dir / "b.csv").string() + " --params " +
+                       (dir / "p.json").string() + " --report " + (dir / "pred.json").string()),
+            0);
+  const nlohmann::json rep = read_json(dir / "rep.json"), pred = read_json(dir / "pred.json");
+  ASSERT_EQ(rep["other_logs"].size(), 1u);
+  for (int j = 0; j < robot.num_joints; ++j) {
+    SCOPED_TRACE("joint " + std::to_string(j + 1));
+    const double via_identify = rep["other_logs"][0]["joints"][j]["rms_validation"].get<double>();
+    const double via_predict = pred["joints"][j]["rms_validation"].get<double>();
+    EXPECT_DOUBLE_EQ(via_identify, via_predict);
+    EXPECT_LT(via_predict, 1.2 * b.sigma[j]);
+    std::printf("joint %d: RMS on the other log %.4g Nm (noise %.4g), cross-validated %.4g\n", j + 1, via_predict,
+                b.sigma[j], rep["joints"][j]["rms_validation"].get<double>());
+  }
+  // The file names its robot: predicting a cobot7 log with arm3 parameters is refused.
+  EXPECT_EQ(run_dyncal("predict --robot cobot7" + robots + " --data " + (dir / "b.csv").string() + " --params " +
+                       (dir / "p.json").string()),
+            2);
+  std::filesystem::remove_all(dir);
+}
+
+// The period, jitter and missing samples of a logger are read off its time stamps, and the spline
+// puts a smooth signal on the grid within the cubic spline's error bound, 5/384 h^4 max|f^(4)|
+// (h the longest step; Hall and Meyer 1976), away from the ends: a 2 Hz sine sampled at 200 Hz with
+// 10 % jitter (each stamp; its steps jitter by sqrt(2) as much) and 10 % missing.
+TEST(UniformGrid, CubicSplineResamplesASmoothSignal) {
+  const std::vector<double> times = logger_times(200.0, 10.0, 0.1, 0.1, 9);
+  JointLog raw;
+  const Eigen::Index S = static_cast<Eigen::Index>(times.size());
+  raw.t = Eigen::Map<const Eigen::VectorXd>(times.data(), S);
+  raw.q = (2 * M_PI * 2.0 * raw.t.array()).sin().matrix();
+  raw.tau = (2 * M_PI * 1.0 * raw.t.array()).cos().matrix();
+  raw.source = "sine";
+  SamplingReport rep;
+  const JointLog g = to_uniform_grid(raw, bridgeable_gap(20.0), rep);
+  EXPECT_TRUE(rep.resampled);
+  // The period from the time spanned: off by the two end stamps' jitter (at most +-0.17 T each) over
+  // the 2000 periods.
+  EXPECT_NEAR(rep.period, 1.0 / 200.0, 0.35 / 2000 / 200.0);
+  EXPECT_NEAR(rep.jitter_rms, 0.1 * std::sqrt(2.0), 0.015);
+  EXPECT_NEAR(static_cast<double>(rep.missing) / static_cast<double>(rep.grid_samples), 0.1, 0.01);
+  double h = 0, worst = 0;
+  for (Eigen::Index k = 1; k < S; ++k) h = std::max(h, raw.t[k] - raw.t[k - 1]);
+  const double w = 2 * M_PI * 2.0, bound = 5.0 / 384.0 * std::pow(h, 4) * std::pow(w, 4);
+  for (Eigen::Index k = 20; k < g.samples() - 20; ++k)
+    worst = std::max(worst, std::abs(g.q(k, 0) - std::sin(w * g.t[k])));
+  EXPECT_LT(worst, bound);
+  std::printf("largest resampling error %.3g (bound %.3g, longest step %.3g ms)\n", worst, bound, 1e3 * h);
+}
+
+TEST(UniformGrid, TimeGoingBackwardsIsRefusedWithItsRow) {
+  JointLog raw;
+  raw.t = Eigen::VectorXd::LinSpaced(10, 0.0, 0.9);
+  raw.t[6] = 0.45;
+  raw.q = Eigen::MatrixXd::Zero(10, 1);
+  raw.tau = Eigen::MatrixXd::Zero(10, 1);
+  raw.source = "log.csv";
+  SamplingReport rep;
+  try {
+    to_uniform_grid(raw, 0.1, rep);
+    FAIL() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("row 7"), std::string::npos) << e.what();
+  }
+}
+
+TEST(UniformGrid, LogsOfDifferentRatesAreNotStacked) {
+  JointLog a, b;
+  a.t = Eigen::VectorXd::LinSpaced(100, 0.0, 0.99);
+  b.t = Eigen::VectorXd::LinSpaced(100, 0.0, 1.98);
+  for (JointLog* l : {&a, &b}) {
+    l->q = Eigen::MatrixXd::Zero(100, 1);
+    l->tau = Eigen::MatrixXd::Zero(100, 1);
+  }
+  a.source = "a.csv";
+  b.source = "b.csv";
+  const JointLog both = stack_logs({a, b});
+  ASSERT_EQ(both.segment_starts.size(), 1u);
+  SamplingReport rep;
+  EXPECT_THROW(to_uniform_grid(both, 0.1, rep), InputError);
+}
+
+// The velocity noise estimate: white noise of sigma on a smooth signal is found within 10 %.
+TEST(UniformGrid, WhiteNoiseOfASmoothSignal) {
+  std::mt19937_64 rng(4);
+  std::normal_distribution<double> normal(0.0, 1e-4);
+  Eigen::MatrixXd x(20000, 1);
+  for (Eigen::Index k = 0; k < x.rows(); ++k) x(k, 0) = std::sin(k * 1e-3) + normal(rng);
+  const Eigen::VectorXd s = white_noise_std(x, {{0, x.rows()}});
+  EXPECT_NEAR(s[0], 1e-4, 1e-5);
+}
+
+}  // namespace
