@@ -207,13 +207,6 @@ class IdentifyPipeline {
     stdev *= std::sqrt(autocorrelation_inflation(data, train, phi));
   }
 
-  static std::string param_name(int i) {
-    const ParamInfo info = Model::info(i);
-    if (info.kind == ParamKind::base) return Robot::base_param_name(info.base_index);
-    return std::string(term_name(info.term)) + std::to_string(info.joint);
-  }
-
- private:
   /// The residuals of filtered, decimated data are autocorrelated, so the white-noise covariance
   /// (sigma^2 (W^T W)^-1, or a filter's P) understates the parameters' variance: it is inflated by
   /// the residual's integrated autocorrelation time S / n_eff (effective_samples, Geyer 1992), the
@@ -237,6 +230,13 @@ class IdentifyPipeline {
     return rows > 0 ? std::max(1.0, weighted / rows) : 1.0;
   }
 
+  static std::string param_name(int i) {
+    const ParamInfo info = Model::info(i);
+    if (info.kind == ParamKind::base) return Robot::base_param_name(info.base_index);
+    return std::string(term_name(info.term)) + std::to_string(info.joint);
+  }
+
+ private:
   /// phi_b = K phi (num_base x num_standard), the generated standard_to_base as a matrix.
   static Eigen::MatrixXd base_map() {
     Eigen::MatrixXd K(Robot::kNumBase, Robot::kNumStandard);
@@ -438,6 +438,13 @@ IdentifyResult run_identify(const RobotDescription& robot, const JointLog& log, 
   pipe.fit(data, all, phi, stdev, &res.condition_number, &consistent);
   res.fit_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   for (int i = 0; i < P; ++i) res.params.push_back({Pipe::param_name(i), phi[i], stdev[i]});
+  {
+    char line[200];
+    std::snprintf(line, sizeof line,
+                  "parameter std: the white-noise figures times %.3g for the residual's autocorrelation (S / n_eff)",
+                  std::sqrt(Pipe::autocorrelation_inflation(data, all, phi)));
+    res.notes.push_back(line);
+  }
   for (size_t l = 0; l < consistent.min_eigenvalue.size(); ++l) {
     const std::array<double, 10> v = physical_parameters(consistent.standard.data() + 10 * l);
     res.links.push_back({static_cast<int>(l) + 1,
