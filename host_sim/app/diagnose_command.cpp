@@ -41,6 +41,9 @@ void add_diagnose_command(CLI::App& app, Action& run) {
   cmd->add_option("--cutoff", s->options.identify.cutoff_hz, "zero-phase Butterworth cut-off [Hz]")
       ->capture_default_str();
   cmd->add_option("--max-effects", s->options.max_effects, "greedy steps at most")->capture_default_str();
+  cmd->add_flag("--friction-per-joint", s->options.identify.friction_per_joint,
+                "friction and rotor inertia per joint, ignoring a coupling robot.json's transmission declares (so "
+                "that the diagnosis can find it)");
   cmd->add_option("--bic", s->options.bic_threshold, "BIC drop an effect needs")->capture_default_str();
   cmd->add_option("--report", s->report, "write the report as JSON");
   cmd->add_option("--plots", s->plots, "write SVG plots (gnuplot) into this directory");

@@ -79,6 +79,8 @@ void add_identify_command(CLI::App& app, Action& run) {
                   "also predict this other log (same --format) with the final fit and report its per-joint RMS, R^2 "
                   "and e_T; repeat for several")
       ->take_all();
+  cmd->add_flag("--friction-per-joint", opt.friction_per_joint,
+                "friction and rotor inertia per joint, ignoring a coupling robot.json's transmission declares");
   cmd->add_option("--report", s->report, "write the report as JSON");
   cmd->add_option("--params", s->params, "write the identified parameter table as JSON");
   cmd->add_flag("--compare-friction", s->compare_friction,

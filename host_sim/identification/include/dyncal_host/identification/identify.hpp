@@ -29,6 +29,8 @@ struct IdentifyOptions {
   double p0 = 1e6;                  ///< initial covariance diag of KF and RLS (prior ignorance)
   double min_speed_fraction = 0.0;  ///< fit only rows with |qd_j| >= this fraction of joint j's top speed
   bool load_regressor = false;      ///< also stack Y(q, qd, 0) (StackedData::W_load): the load torque's regressor
+  bool friction_per_joint = false;  ///< ignore robot.json's coupling: friction and rotor inertia per joint (the log's
+                                    ///< conversion still uses the transmission); lets diagnose rediscover a coupling
 };
 
 struct JointMetrics {

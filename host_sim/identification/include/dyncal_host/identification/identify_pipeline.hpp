@@ -35,7 +35,19 @@ class IdentifyPipeline {
   using JointVec = Eigen::Matrix<double, N, 1>;
   using ParamVec = Eigen::Matrix<double, P, 1>;
 
-  IdentifyPipeline(const RobotDescription& robot, const IdentifyOptions& options) : robot_(robot), opt_(options) {}
+  IdentifyPipeline(const RobotDescription& robot, const IdentifyOptions& options)
+      : robot_(robot),
+        opt_(options),
+        motor_(options.friction_per_joint ? Eigen::Matrix<double, N, N>::Identity() : motor_map(robot)) {
+    for (int m = 0; m < N; ++m) {
+      for (int j = 0; j < N; ++j) {
+        if (j != m && motor_(m, j) != 0.0) {
+          coupled_.push_back(m);
+          break;
+        }
+      }
+    }
+  }
 
   /// Filtering, differentiation, regressor, parallel filtering and decimation (Gautier 1997), each
   /// segment of `log` (on a uniform grid, uniform_grid.hpp) on its own: nothing is filtered or
@@ -118,6 +130,18 @@ class IdentifyPipeline {
     const double at_rest = static_cast<double>((out.qd.array() == 0.0).count()) / static_cast<double>(kept * N);
     std::snprintf(v, sizeof v, "; %.3g %%", 100.0 * at_rest);
     out.notes.push_back(line + v + " of the joint samples at rest");
+    for (const int m : coupled_) {
+      std::string t = "transmission (robot.json): motor " + std::to_string(m + 1) + " turns with";
+      std::string on;
+      for (int j = 0; j < N; ++j) {
+        if (motor_(m, j) == 0.0) continue;
+        std::snprintf(v, sizeof v, " %+.4g q%d", motor_(m, j), j + 1);
+        t += v;
+        on += (on.empty() ? "" : ", ") + std::to_string(j + 1);
+      }
+      out.notes.push_back(t + "; its friction and rotor inertia terms (joint " + std::to_string(m + 1) +
+                          "'s columns) act on joints " + on + " through the transmission's transpose");
+    }
     return out;
   }
 
@@ -237,6 +261,21 @@ class IdentifyPipeline {
   }
 
  private:
+  /// Motor velocities in joint units, v = T qd: T = diag(N)^-1 N of robot.json's transmission N
+  /// (q_motor = N q), so that an uncoupled motor's row is its joint's unit row and a coupled
+  /// motor's row says how much each joint turns it (TX40 motor 6: q5 + q6). Identity without a
+  /// transmission or with a zero gear ratio.
+  static Eigen::Matrix<double, N, N> motor_map(const RobotDescription& robot) {
+    Eigen::Matrix<double, N, N> T = Eigen::Matrix<double, N, N>::Identity();
+    if (robot.transmission.rows() != N || robot.transmission.cols() != N) return T;
+    for (int m = 0; m < N; ++m) {
+      const double d = robot.transmission(m, m);
+      if (d == 0.0) return Eigen::Matrix<double, N, N>::Identity();
+      T.row(m) = robot.transmission.row(m) / d;
+    }
+    return T;
+  }
+
   /// phi_b = K phi (num_base x num_standard), the generated standard_to_base as a matrix.
   static Eigen::MatrixXd base_map() {
     Eigen::MatrixXd K(Robot::kNumBase, Robot::kNumStandard);
@@ -291,6 +330,22 @@ class IdentifyPipeline {
         }
       }
     }
+    // Coupled motors (robot.json's transmission): their friction and rotor inertia act on every
+    // joint that turns them, through the transmission's transpose: the column of motor m's term
+    // in joint j's row is T(m, j) times the term at the motor's velocity v_m = T.row(m) qd (in
+    // joint units), its sign from the unfiltered motor velocity with the band of its noise.
+    const Eigen::Index C = static_cast<Eigen::Index>(coupled_.size());
+    Eigen::MatrixXd motor_sign(S, C), motor_v(S, C), motor_a(S, C);
+    for (Eigen::Index c = 0; c < C; ++c) {
+      const int m = coupled_[static_cast<size_t>(c)];
+      const double band_m = std::sqrt((motor_.row(m).transpose().cwiseProduct(band)).squaredNorm());
+      for (Eigen::Index s = 0; s < S; ++s) {
+        const double raw = motor_.row(m).dot(v.row(s)), vm = motor_.row(m).dot(g.qd.row(s));
+        motor_sign(s, c) = std::abs(raw) < band_m ? 0.0 : (raw > 0 ? 1.0 : -1.0);
+        motor_v(s, c) = motor_sign(s, c) == 0.0 ? 0.0 : vm;
+        motor_a(s, c) = motor_.row(m).dot(g.qdd.row(s));
+      }
+    }
     g.tau = log.tau.middleRows(a, S);
     filter.filtfilt(g.tau);
     const JointVec zero = JointVec::Zero();
@@ -302,8 +357,19 @@ class IdentifyPipeline {
                          with_qdd ? JointVec(g.qdd.row(s).transpose()) : zero, zero, K);
         for (int j = 0; j < N; ++j) {
           if (Model::column(term::coulomb, j) >= 0) K(j, Model::column(term::coulomb, j)) = sign(s, j);
-          Kt.row(s).segment(j * P, P) = K.row(j);
         }
+        for (Eigen::Index c = 0; c < C; ++c) {
+          const int m = coupled_[static_cast<size_t>(c)];
+          for (const unsigned t : {term::coulomb, term::viscous, term::power, term::rotor_inertia}) {
+            const int col = Model::column(t, m);
+            if (col < 0) continue;
+            const double value = t == term::coulomb
+                                     ? motor_sign(s, c)
+                                     : term_column(t, motor_v(s, c), with_qdd ? motor_a(s, c) : 0.0, 0.0);
+            for (int j = 0; j < N; ++j) K(j, col) = motor_(m, j) * value;
+          }
+        }
+        for (int j = 0; j < N; ++j) Kt.row(s).segment(j * P, P) = K.row(j);
       }
       filter.filtfilt(Kt);
       return Kt;
@@ -372,6 +438,8 @@ class IdentifyPipeline {
 
   const RobotDescription& robot_;
   const IdentifyOptions& opt_;
+  Eigen::Matrix<double, N, N> motor_;  ///< motor_map(robot_)
+  std::vector<int> coupled_;           ///< motors turning with more than their own joint (0-based)
 };
 
 /// Runs the whole `identify` job for one robot and term set.
