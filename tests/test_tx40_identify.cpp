@@ -2,6 +2,8 @@
 // Coulomb + viscous + offset by OLS reaches a cross-validated R^2 >= 0.94 on joints 1-4.
 // Reference (independent OLS, 20 Hz zero-phase, 500 Hz): 0.991 / 0.976 / 0.951 / 0.946.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
@@ -65,6 +67,37 @@ TEST(Tx40Identify, DeclaredCouplingInTheModelLiftsTheWrist) {
                 per_joint["joints"][j]["r2_validation"].get<double>());
   }
   EXPECT_LT(per_joint["joints"][4]["r2_validation"].get<double>(), 0.7);  // the coupling is what lifts joint 5
+}
+
+// A parameter file with a coupled motor's friction says so ("friction_per": "motor"): predict applies
+// it as identify fitted it (the same figures as identify's final fit on the same log), and flash
+// refuses it (exit 2, before any connection) because the drive's feed-forward applies friction per
+// joint; with --friction-per-joint the file says "joint".
+TEST(Tx40Identify, ParameterFileSaysHowFrictionIsApplied) {
+  const auto dir = std::filesystem::temp_directory_path() / ("dyncal_tx40_files_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string bin = DYNCAL_BINARY, data = std::string(" --format tx40 --data ") + DYNCAL_TX40_DATA;
+  const auto motor = dir / "motor.json", joint = dir / "joint.json", pred = dir / "pred.json";
+  ASSERT_EQ(std::system((bin + " identify" + data + " --params " + motor.string() + " > /dev/null").c_str()), 0);
+  ASSERT_EQ(
+      std::system(
+          (bin + " identify" + data + " --friction-per-joint --params " + joint.string() + " > /dev/null").c_str()),
+      0);
+  auto read = [](const std::filesystem::path& p) {
+    std::ifstream in(p);
+    return nlohmann::json::parse(in);
+  };
+  EXPECT_EQ(read(motor)["friction_per"], "motor");
+  EXPECT_EQ(read(joint)["friction_per"], "joint");
+  ASSERT_EQ(std::system((bin + " predict" + data + " --params " + motor.string() + " --report " + pred.string() +
+                         " > /dev/null")
+                            .c_str()),
+            0);
+  for (int j = 0; j < 6; ++j) EXPECT_GT(read(pred)["joints"][j]["r2_validation"].get<double>(), 0.97) << j + 1;
+  const int refused =
+      std::system((bin + " flash --uri tcp://127.0.0.1:1 --params " + motor.string() + " 2> /dev/null").c_str());
+  EXPECT_TRUE(WIFEXITED(refused) && WEXITSTATUS(refused) == 2);
+  std::filesystem::remove_all(dir);
 }
 
 // Physically consistent LS on the real log, robot.json's (URDF) inertials as the prior: every link

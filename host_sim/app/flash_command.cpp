@@ -20,6 +20,10 @@ struct FlashSettings {
 int run_flash(const FlashSettings& s) {
   using host::InputError;
   const host::ParameterSet p = host::read_parameter_file(s.params);  // names checked against the model
+  if (p.friction_per_motor)
+    throw InputError(s.params +
+                     ": friction per motor (robot.json's coupling in the model): the drive's feed-forward "
+                     "applies friction per joint; identify with --friction-per-joint for a drive table");
   if (!s.robot.empty() && p.robot != s.robot)
     throw InputError(s.params + ": parameters are for robot '" + p.robot + "', not '" + s.robot + "'");
   // The table carries the id of the robot the parameters were identified for: the drive refuses it

@@ -278,6 +278,9 @@ CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions&
   r.samples_per_second = static_cast<double>(r.samples) / std::max(1e-9, r.stream_seconds);
   IdentifyOptions io = o.identify;
   io.terms = o.terms;
+  // The drive's feed-forward (lib IdentificationModel) applies friction and rotor inertia per joint,
+  // so the table it gets is identified that way, whatever coupling robot.json declares.
+  io.friction_per_joint = true;
   r.batch = identify(robot, log, io);
   for (const auto& p : r.batch.params) {
     r.names.push_back(p.name);

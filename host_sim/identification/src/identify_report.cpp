@@ -121,6 +121,9 @@ nlohmann::json parameter_table_json(const IdentifyResult& r) {
   j["robot"] = r.robot;
   j["model"] = r.model;
   j["method"] = r.method;
+  // "motor": a coupled motor's friction and rotor inertia act on every joint that turns it (the
+  // drive's feed-forward cannot apply that yet); "joint": per joint, as the drive applies them.
+  j["friction_per"] = r.friction_per_motor ? "motor" : "joint";
   j["params"] = nlohmann::json::array();
   for (const auto& p : r.params) j["params"].push_back({{"name", p.name}, {"value", p.value}});
   return j;

@@ -28,6 +28,11 @@ ParameterSet read_parameter_file(const std::string& path) {
   p.robot = j["robot"].get<std::string>();
   p.model = j["model"].get<std::string>();
   p.terms = parse_model(p.model);
+  const std::string per =
+      j.contains("friction_per") && j["friction_per"].is_string() ? j["friction_per"].get<std::string>() : "joint";
+  if (per != "joint" && per != "motor")
+    throw InputError(path + ": 'friction_per' is '" + per + "', expected 'joint' or 'motor'");
+  p.friction_per_motor = per == "motor";
   const CompiledRobot& compiled = compiled_robot(p.robot);
   p.names = compiled.param_names[static_cast<size_t>(built_term_set_index(p.terms))]();
   // Checked by name, so that a file edited by hand or written for another model cannot give
@@ -59,6 +64,7 @@ ParameterSet parameter_set(const IdentifyResult& r) {
   p.robot = r.robot;
   p.model = r.model;
   p.terms = parse_model(r.model);
+  p.friction_per_motor = r.friction_per_motor;
   p.source = "identify";
   p.values.resize(static_cast<Eigen::Index>(r.params.size()));
   for (size_t i = 0; i < r.params.size(); ++i) {
@@ -114,6 +120,7 @@ LogPrediction predict(const RobotDescription& robot, const JointLog& log, Identi
   if (params.robot != robot.name)
     throw InputError(params.source + ": parameters are for robot '" + params.robot + "', not '" + robot.name + "'");
   options.terms = params.terms;
+  options.friction_per_joint = !params.friction_per_motor;
   options.load_regressor = false;
   const StackedData d = prepare_stacked(robot, log, options);
   if (d.names != params.names)

@@ -78,6 +78,7 @@ struct IdentifyResult {
   std::vector<std::string> notes;
   std::vector<LogPrediction> other_logs;  ///< --validate-on: the final fit's prediction of each other log
   std::vector<LinkInertial> links;        ///< pcls: the final fit's consistent inertials per link
+  bool friction_per_motor = false;        ///< a coupled motor's terms act on several joints (robot.json's coupling)
 };
 
 /// Identifies the model from `log` and validates it on data each fit never saw.

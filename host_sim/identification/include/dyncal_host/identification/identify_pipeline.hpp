@@ -145,6 +145,10 @@ class IdentifyPipeline {
     return out;
   }
 
+  /// True when a coupled motor's friction and rotor inertia act on several joints (robot.json's
+  /// transmission, not --friction-per-joint).
+  bool models_coupled_motors() const { return !coupled_.empty(); }
+
   /// Fits on the samples with train[s] true. Writes phi and parameter standard deviations; with
   /// pcls, the consistent solution into *consistent if given.
   void fit(const StackedData& data, const std::vector<char>& train, ParamVec& phi, ParamVec& stdev,
@@ -459,6 +463,7 @@ IdentifyResult run_identify(const RobotDescription& robot, const JointLog& log, 
   res.robot = robot.name;
   res.method = opt.method;
   res.model = model_name(Terms);
+  res.friction_per_motor = pipe.models_coupled_motors();
   res.data_source = log.source;
   res.sample_rate_hz = 1.0 / log.sample_period();
   res.decimated_rate_hz = data.rate_hz;
