@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 namespace dyncal::host {
 namespace {
@@ -13,6 +14,17 @@ std::string format(const char* fmt, double v) {
   return buf;
 }
 
+/// The per-joint validation table of identify and predict.
+void print_joint_table(std::ostream& out, const std::vector<JointMetrics>& joints) {
+  out << "joint   RMS [Nm]   rel. RMS      R^2       e_T    e_T_Std   RMS tau [Nm]\n";
+  for (const auto& j : joints) {
+    char line[160];
+    std::snprintf(line, sizeof line, "%5d %10.4f %10.4f %8.4f %9.5f %10.5f %14.4f\n", j.joint, j.rms, j.relative_rms,
+                  j.r2, j.e_T, j.e_T_std, j.rms_tau);
+    out << line;
+  }
+}
+
 }  // namespace
 
 void print_identify_report(std::ostream& out, const IdentifyResult& r) {
@@ -21,13 +33,7 @@ void print_identify_report(std::ostream& out, const IdentifyResult& r) {
       << format("%.0f", r.decimated_rate_hz) << " Hz (from " << format("%.0f", r.sample_rate_hz)
       << " Hz; zero-phase Butterworth " << format("%g", r.cutoff_hz) << " Hz, parallel decimation)\n";
   out << "validation: " << r.validation << " (every sample predicted by a fit that did not see it)\n\n";
-  out << "joint   RMS [Nm]   rel. RMS      R^2       e_T    e_T_Std   RMS tau [Nm]\n";
-  for (const auto& j : r.joints) {
-    char line[160];
-    std::snprintf(line, sizeof line, "%5d %10.4f %10.4f %8.4f %9.5f %10.5f %14.4f\n", j.joint, j.rms, j.relative_rms,
-                  j.r2, j.e_T, j.e_T_std, j.rms_tau);
-    out << line;
-  }
+  print_joint_table(out, r.joints);
   out << "\nregressor condition number cond(W): " << format("%.4g", r.condition_number) << "; full-data fit in "
       << format("%.3f", r.fit_seconds) << " s\n";
   out << "\nparameter                   value        std    std %\n";
@@ -57,13 +63,7 @@ void print_identify_report(std::ostream& out, const IdentifyResult& r) {
 
 void print_log_prediction(std::ostream& out, const LogPrediction& p) {
   out << "\nprediction of another log (no sample of it fitted): " << p.source << ", " << p.samples << " samples\n";
-  out << "joint   RMS [Nm]   rel. RMS      R^2       e_T    e_T_Std   RMS tau [Nm]\n";
-  for (const auto& j : p.joints) {
-    char line[160];
-    std::snprintf(line, sizeof line, "%5d %10.4f %10.4f %8.4f %9.5f %10.5f %14.4f\n", j.joint, j.rms, j.relative_rms,
-                  j.r2, j.e_T, j.e_T_std, j.rms_tau);
-    out << line;
-  }
+  print_joint_table(out, p.joints);
   for (const auto& n : p.notes) out << "note (" << p.source << "): " << n << "\n";
 }
 

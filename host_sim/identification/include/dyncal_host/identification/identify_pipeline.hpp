@@ -181,7 +181,7 @@ class IdentifyPipeline {
     const std::string& m = opt_.method;
     if (m == "ols") {
       ls_statistics(*ls, stdev, cond);
-    } else if (m == "wls") {
+    } else if (m == "wls" || m == "pcls") {
       ls->reset();
       for (Eigen::Index s = 0; s < S; ++s) {
         if (!train[s]) continue;
@@ -191,32 +191,24 @@ class IdentifyPipeline {
         }
       }
       if (ls->solve(phi) != UpdateStatus::ok) throw InputError("weighted regressor rank deficient");
-      ls_statistics(*ls, stdev, cond);
-    } else if (m == "pcls") {
-      ls->reset();
-      for (Eigen::Index s = 0; s < S; ++s) {
-        if (!train[s]) continue;
-        for (int j = 0; j < N; ++j) {
-          if (data.fit_row[s * N + j])
-            check(ls->add_row(data.W.row(s * N + j).transpose(), data.y[s * N + j], 1.0 / sigma[j]));
-        }
+      if (m == "wls") {
+        ls_statistics(*ls, stdev, cond);
+      } else {  // pcls: the WLS solution starts the consistent fit of the same weighted data
+        ConsistentProblem p;
+        p.R = ls->r_factor().template triangularView<Eigen::Upper>();
+        p.z = ls->rotated_rhs();
+        p.num_base = Robot::kNumBase;
+        p.K = base_map();
+        const CompiledRobot& compiled = compiled_robot_for(robot_);
+        p.prior = Eigen::Map<const Eigen::VectorXd>(compiled.nominal_standard.data(), Robot::kNumStandard);
+        p.sigma2 = ls->residual_sum_of_squares() / std::max(1.0, static_cast<double>(ls->rows() - P));
+        p.start = phi;
+        ConsistentSolution sol = consistent_least_squares(p);
+        phi = sol.params;
+        stdev = sol.params_std;
+        if (cond) *cond = condition_number(*ls);
+        if (consistent) *consistent = std::move(sol);
       }
-      ParamVec start;
-      if (ls->solve(start) != UpdateStatus::ok) throw InputError("weighted regressor rank deficient");
-      ConsistentProblem p;
-      p.R = ls->r_factor().template triangularView<Eigen::Upper>();
-      p.z = ls->rotated_rhs();
-      p.num_base = Robot::kNumBase;
-      p.K = base_map();
-      const CompiledRobot& compiled = compiled_robot_for(robot_);
-      p.prior = Eigen::Map<const Eigen::VectorXd>(compiled.nominal_standard.data(), Robot::kNumStandard);
-      p.sigma2 = ls->residual_sum_of_squares() / std::max(1.0, static_cast<double>(ls->rows() - P));
-      p.start = start;
-      ConsistentSolution sol = consistent_least_squares(p);
-      phi = sol.params;
-      stdev = sol.params_std;
-      if (cond) *cond = condition_number(*ls);
-      if (consistent) *consistent = std::move(sol);
     } else if (m == "kf") {
       auto kf = std::make_unique<KalmanFilter<double, P, N>>();
       check(kf->reset(ParamVec::Zero(), ParamVec::Constant(opt_.p0)));
@@ -280,16 +272,19 @@ class IdentifyPipeline {
     return T;
   }
 
-  /// phi_b = K phi (num_base x num_standard), the generated standard_to_base as a matrix.
-  static Eigen::MatrixXd base_map() {
-    Eigen::MatrixXd K(Robot::kNumBase, Robot::kNumStandard);
-    for (int i = 0; i < Robot::kNumStandard; ++i) {
-      Eigen::Matrix<double, Robot::kNumStandard, 1> e = Eigen::Matrix<double, Robot::kNumStandard, 1>::Zero();
-      e[i] = 1.0;
-      Eigen::Matrix<double, Robot::kNumBase, 1> b;
-      Robot::standard_to_base(e, b);
-      K.col(i) = b;
-    }
+  /// phi_b = K phi (num_base x num_standard), the generated standard_to_base as a matrix (built once).
+  static const Eigen::MatrixXd& base_map() {
+    static const Eigen::MatrixXd K = [] {
+      Eigen::MatrixXd m(Robot::kNumBase, Robot::kNumStandard);
+      for (int i = 0; i < Robot::kNumStandard; ++i) {
+        Eigen::Matrix<double, Robot::kNumStandard, 1> e = Eigen::Matrix<double, Robot::kNumStandard, 1>::Zero();
+        e[i] = 1.0;
+        Eigen::Matrix<double, Robot::kNumBase, 1> b;
+        Robot::standard_to_base(e, b);
+        m.col(i) = b;
+      }
+      return m;
+    }();
     return K;
   }
 
