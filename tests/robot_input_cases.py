@@ -95,6 +95,12 @@ def robot_json_cases(good):
         ("coupling_out_of_range", edit(lambda d: d.__setitem__(
             "transmission", {"gear_ratios": [1, 1, 1], "coupling": [{"motor": 4, "joint": 1, "ratio": 1}]})),
          "transmission.coupling[1].motor"),
+        ("zero_torque_constant", edit(lambda d: d.__setitem__(
+            "transmission", {"gear_ratios": [1, 1, 1], "torque_constants": [0.1, 0.1, 0]})),
+         "transmission.torque_constants[3]"),
+        ("short_torque_constants", edit(lambda d: d.__setitem__(
+            "transmission", {"gear_ratios": [1, 1, 1], "torque_constants": [0.1, 0.1]})),
+         "transmission.torque_constants"),
         ("name_differs", edit(lambda d: d.__setitem__("name", "other")), "name"),
         ("friction_not_object", edit(lambda d: d.__setitem__("friction", [1, 2, 3])), "friction[1]"),
         ("too_many_joints", edit(lambda d: [d["limits"][k].extend([1.0] * 5) for k in d["limits"]]),

@@ -184,7 +184,7 @@ TEST(CliErrors, FlashChecksTheParameterFileAgainstItsModel) {
   const auto dir = std::filesystem::temp_directory_path() / ("dyncal_flash_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   const std::string good = (dir / "tx40.json").string();
-  // Friction per joint, as the drive's feed-forward applies it (a "motor" file is refused below).
+  // Friction per joint, as the drive's feed-forward applies it.
   const auto made = run_dyncal(std::string("identify --format tx40 --data ") + DYNCAL_TX40_DATA +
                                " --friction-per-joint --params " + good);
   ASSERT_EQ(made.exit_code, 0) << made.err;
@@ -209,8 +209,13 @@ TEST(CliErrors, FlashChecksTheParameterFileAgainstItsModel) {
   expect_error(variant("no_model", "\"model\":", "\"m\":"), "'model' missing");
   expect_error(variant("other_robot", "\"robot\": \"tx40\"", "\"robot\": \"er20\""), "of robot 'er20' with model");
   expect_error("flash --drive tcp://127.0.0.1:1 --robot er20 --params " + good, "are for robot 'tx40', not 'er20'");
+  // Friction per motor passes: the coupled motor becomes a coupling term (drive_table.hpp); the
+  // error is again the missing drive.
   expect_error(variant("per_motor", "\"friction_per\": \"joint\"", "\"friction_per\": \"motor\""),
-               "friction per motor");
+               "cannot connect to the drive");
+  expect_error(variant("bad_effect", "\"model\": \"rigid_body,coulomb,viscous,rotor_inertia,offset\"",
+                       "\"model\": \"rigid_body,coulomb,viscous,rotor_inertia,offset,position_periodic:9:3\""),
+               "position_periodic:9:3");
   expect_error(variant("per_what", "\"friction_per\": \"joint\"", "\"friction_per\": \"wheel\""),
                "'friction_per' is 'wheel'");
   std::filesystem::remove_all(dir);

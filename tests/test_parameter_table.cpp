@@ -120,12 +120,25 @@ TEST(ParameterTable, EffectTermsRoundTripAndAreChecked) {
   EXPECT_NEAR(tau[1], 1.5 * std::sin(3.6) - 0.5 * std::cos(3.6), 1e-6);
   EXPECT_NEAR(tau[4], 0.8 + 0.3 * 0.75, 1e-6);  // v = qd5 - qd6 = 0.75
   EXPECT_NEAR(tau[5], -(0.8 + 0.3 * 0.75), 1e-6);
+  // A coupling with ratio 0.5 (shape): v = qd5 - 0.5 qd6 = 0.875, joint 6 takes -0.5 f.
+  auto ratio = back;
+  ratio.effect_count = 1;
+  ratio.effects[0] = back.effects[1];
+  ratio.effects[0].shape = 0.5f;
+  EXPECT_EQ(dyncal::check_table<Model>(ratio), dyncal::TableStatus::ok);
+  tau.setZero();
+  dyncal::add_effect_torques(ratio.effects, ratio.effect_count, q, qd, qdd, rb, tau);
+  EXPECT_NEAR(tau[4], 0.8 + 0.3 * 0.875, 1e-6);
+  EXPECT_NEAR(tau[5], -0.5 * (0.8 + 0.3 * 0.875), 1e-6);
   // Malformed terms are refused by the drive.
   auto bad = back;
   bad.effects[1].joint2 = 4;  // coupled with itself
   EXPECT_EQ(dyncal::check_table<Model>(bad), dyncal::TableStatus::bad_effect);
   bad = back;
   bad.effects[0].shape = 0.0f;  // no period
+  EXPECT_EQ(dyncal::check_table<Model>(bad), dyncal::TableStatus::bad_effect);
+  bad = back;
+  bad.effects[1].shape = -1.0f;  // a negative ratio (its sign is `sign`)
   EXPECT_EQ(dyncal::check_table<Model>(bad), dyncal::TableStatus::bad_effect);
   bad = back;
   bad.effects[0].kind = static_cast<dyncal::EffectKind>(42);

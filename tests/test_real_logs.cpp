@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <Eigen/LU>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -20,131 +21,13 @@
 #include "dyncal_host/identification/signal.hpp"
 #include "dyncal_host/identification/stacked_data.hpp"
 #include "dyncal_host/identification/uniform_grid.hpp"
+#include "support/simulated_log.hpp"
 #include "support/torque_share.hpp"
 
 namespace {
 
 using namespace dyncal::host;
-
-RobotDescription test_robot(const std::string& name) {
-  RobotDescription r = load_robot(std::string(DYNCAL_SOURCE_DIR) + "/tests/robots", name);
-  derive_tau_max(r);
-  return r;
-}
-
-/// The arm's motion clock: u(t) = t without rests; with rests, the designed trajectory is played
-/// for `move` seconds, then held still for `rest` seconds, repeatedly, with ramps of constant
-/// deceleration and acceleration of the clock (0.4 s) between, as a robot stops and starts.
-struct MotionClock {
-  bool rests = false;
-  double move = 3.0, rest = 1.5, ramp = 0.4;
-  /// Speed w(t) = du/dt and its derivative.
-  void speed(double t, double& w, double& wd) const {
-    w = 1, wd = 0;
-    if (!rests) return;
-    const double cycle = move + rest, x = std::fmod(t, cycle);
-    if (x < move - ramp) return;
-    if (x < move) {  // slowing down
-      w = (move - x) / ramp, wd = -1 / ramp;
-    } else if (x < cycle - ramp) {  // at rest
-      w = 0, wd = 0;
-    } else {  // starting
-      w = (x - (cycle - ramp)) / ramp, wd = 1 / ramp;
-    }
-  }
-};
-
-/// A 20-bit absolute encoder on every joint [rad].
-constexpr double kEncoderStep = 2 * M_PI / (1 << 20);
-
-struct SimulatedLog {
-  JointLog log;
-  Eigen::VectorXd phi, sigma;
-  std::vector<char> at_rest;  ///< per sample: every joint's true velocity is 0
-};
-
-/// Samples at times `times` of the designed excitation played on `clock`: tau = ID + Fc sgn(qd) +
-/// Fv qd + noise (Fc 2 %, Fv qd_max 1 %, noise 0.5 % of tau_max); q read by kEncoderStep encoders.
-SimulatedLog simulate(const RobotDescription& robot, const std::vector<double>& times, const MotionClock& clock,
-                      unsigned seed, unsigned trajectory_seed = 3) {
-  const CompiledRobot& c = compiled_robot_for(robot);
-  ExciteOptions xo;
-  xo.seed = trajectory_seed;
-  const ExcitationTrajectory traj = design_excitation(robot, xo).trajectory;
-  const int n = robot.num_joints;
-  SimulatedLog s;
-  const Eigen::VectorXd phi_std = Eigen::Map<const Eigen::VectorXd>(c.nominal_standard.data(), c.num_standard);
-  const Eigen::VectorXd Fc = 0.02 * robot.tau_max, Fv = (0.01 * robot.tau_max).cwiseQuotient(robot.qd_max);
-  s.sigma = 0.005 * robot.tau_max;
-  s.phi.resize(c.num_base + 2 * n);
-  s.phi.head(c.num_base) = c.standard_to_base(phi_std);
-  for (int j = 0; j < n; ++j) {
-    s.phi[c.num_base + 2 * j] = Fc[j];
-    s.phi[c.num_base + 2 * j + 1] = Fv[j];
-  }
-  const Eigen::Index S = static_cast<Eigen::Index>(times.size());
-  JointLog& log = s.log;
-  log.t.resize(S);
-  log.q.resize(S, n);
-  log.qd.resize(S, n);
-  log.qdd.resize(S, n);
-  log.tau.resize(S, n);
-  s.at_rest.assign(times.size(), 0);
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> normal(0.0, 1.0);
-  double u = 0, t_prev = 0;
-  for (Eigen::Index k = 0; k < S; ++k) {
-    const double t = times[static_cast<size_t>(k)];
-    // u = integral of w: Simpson on each interval (w is a polynomial in t between its breaks).
-    if (k > 0) {
-      double w0, w1, wm, d;
-      clock.speed(t_prev, w0, d);
-      clock.speed(0.5 * (t_prev + t), wm, d);
-      clock.speed(t, w1, d);
-      u += (t - t_prev) / 6.0 * (w0 + 4 * wm + w1);
-    } else {
-      u = t;
-    }
-    t_prev = t;
-    double w, wd;
-    clock.speed(t, w, wd);
-    Eigen::Matrix<double, 7, 1> q7, qd7, qdd7;
-    traj.evaluate(u, q7, qd7, qdd7);
-    const Eigen::VectorXd q = q7.head(n), qd = w * qd7.head(n), qdd = w * w * qdd7.head(n) + wd * qd7.head(n);
-    s.at_rest[static_cast<size_t>(k)] = w == 0.0;
-    Eigen::VectorXd tau = c.inverse_dynamics(q, qd, qdd, phi_std);
-    for (int j = 0; j < n; ++j)
-      tau[j] += Fc[j] * (qd[j] > 0 ? 1.0 : (qd[j] < 0 ? -1.0 : 0.0)) + Fv[j] * qd[j] + s.sigma[j] * normal(rng);
-    log.t[k] = t;
-    log.q.row(k) = (q / kEncoderStep).array().round().matrix().transpose() * kEncoderStep;
-    log.qd.row(k) = qd.transpose();
-    log.qdd.row(k) = qdd.transpose();
-    log.tau.row(k) = tau.transpose();
-  }
-  log.has_qd = log.has_qdd = false;
-  log.source = "simulated " + robot.name;
-  return s;
-}
-
-std::vector<double> uniform_times(double fs, double seconds) {
-  std::vector<double> t;
-  for (long k = 0; k < std::lround(seconds * fs); ++k) t.push_back(static_cast<double>(k) / fs);
-  return t;
-}
-
-/// A logger's time stamps: nominal period 1 / fs, each stamp off by a uniform jitter of RMS
-/// `jitter` periods (never reordering), a fraction `drop` of the samples missing.
-std::vector<double> logger_times(double fs, double seconds, double jitter, double drop, unsigned seed) {
-  std::mt19937_64 rng(seed);
-  const double half = jitter * std::sqrt(3.0);  // uniform on [-half, half] has RMS `jitter`
-  std::uniform_real_distribution<double> u(-half, half), keep(0, 1);
-  std::vector<double> t;
-  for (long k = 0; k < std::lround(seconds * fs); ++k) {
-    if (k > 0 && keep(rng) < drop) continue;
-    t.push_back((static_cast<double>(k) + u(rng)) / fs);
-  }
-  return t;
-}
+using namespace dyncal::test;
 
 IdentifyOptions wls_eq7() {
   IdentifyOptions o;
@@ -338,6 +221,74 @@ TEST(RealLogsCli, ValidateOnAndPredictAgree) {
   EXPECT_EQ(run_dyncal("predict --robot cobot7" + robots + " --data " + (dir / "b.csv").string() + " --params " +
                        (dir / "p.json").string()),
             2);
+  std::filesystem::remove_all(dir);
+}
+
+// A log of motor currents (`--torque-from current`) gives the model of the same log in joint
+// torques: arm3 is given a transmission with signed gear ratios, a coupled motor (motor 3 also turns
+// with joint 2) and signed torque constants; the test converts the simulated joint torque to motor
+// currents itself, i = (N^T diag(Kt))^-1 tau, and identify must reach the torque log's parameters.
+// A wrong transpose, a lost coupling or a lost sign would move them by the coupled torque, far
+// beyond rounding. A robot without torque constants is refused with exit 2.
+TEST(RealLogsCli, MotorCurrentLogGivesTheTorqueLogsModel) {
+  const auto dir = std::filesystem::temp_directory_path() / ("dyncal_current_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir / "robots");
+  std::filesystem::copy(std::string(DYNCAL_SOURCE_DIR) + "/tests/robots/arm3", dir / "robots" / "arm3");
+  nlohmann::json desc = read_json(dir / "robots" / "arm3" / "robot.json");
+  const std::vector<double> gear{100.0, -80.0, 50.0}, kt{0.12, -0.09, 0.05};
+  desc["transmission"] = {
+      {"gear_ratios", gear}, {"torque_constants", kt}, {"coupling", {{{"motor", 3}, {"joint", 2}, {"ratio", 50.0}}}}};
+  std::ofstream(dir / "robots" / "arm3" / "robot.json") << desc.dump(2);
+  const RobotDescription robot = test_robot("arm3");
+  const SimulatedLog a = simulate(robot, uniform_times(kRate, kSeconds), MotionClock{}, 21, 3);
+  write_csv_log((dir / "tau.csv").string(), a.log);
+  Eigen::Matrix3d N = Eigen::Map<const Eigen::Vector3d>(gear.data()).asDiagonal();
+  N(2, 1) = 50.0;
+  const Eigen::Matrix3d to_tau = N.transpose() * Eigen::Map<const Eigen::Vector3d>(kt.data()).asDiagonal();
+  {
+    std::ofstream out(dir / "i.csv");
+    out << "t,q1,q2,q3,i1,i2,i3\n";
+    char number[32];
+    for (Eigen::Index k = 0; k < a.log.samples(); ++k) {
+      const Eigen::Vector3d i = to_tau.lu().solve(a.log.tau.row(k).transpose());
+      std::snprintf(number, sizeof number, "%.17g", a.log.t[k]);
+      out << number;
+      for (int j = 0; j < 3; ++j) {
+        std::snprintf(number, sizeof number, ",%.17g", a.log.q(k, j));
+        out << number;
+      }
+      for (int j = 0; j < 3; ++j) {
+        std::snprintf(number, sizeof number, ",%.17g", i[j]);
+        out << number;
+      }
+      out << "\n";
+    }
+  }
+  const std::string robots = " --robot arm3 --robots-dir " + (dir / "robots").string() + " --model eq7";
+  ASSERT_EQ(run_dyncal("identify" + robots + " --data " + (dir / "tau.csv").string() + " --report " +
+                       (dir / "tau.json").string()),
+            0);
+  ASSERT_EQ(run_dyncal("identify" + robots + " --torque-from current --data " + (dir / "i.csv").string() +
+                       " --report " + (dir / "i.json").string()),
+            0);
+  const nlohmann::json from_tau = read_json(dir / "tau.json"), from_i = read_json(dir / "i.json");
+  ASSERT_EQ(from_tau["params"].size(), from_i["params"].size());
+  for (size_t k = 0; k < from_tau["params"].size(); ++k) {
+    const double x = from_tau["params"][k]["value"].get<double>(), y = from_i["params"][k]["value"].get<double>();
+    SCOPED_TRACE(from_tau["params"][k]["name"].get<std::string>());
+    EXPECT_NEAR(y, x, 1e-8 * (1 + std::fabs(x)));  // the conversion's rounding, 17 digits written
+  }
+  for (int j = 0; j < 3; ++j)
+    EXPECT_NEAR(from_i["joints"][j]["rms_validation"].get<double>(),
+                from_tau["joints"][j]["rms_validation"].get<double>(), 1e-9 * a.sigma[j]);
+  // Without torque constants the current log cannot be converted: refused, nothing written.
+  desc["transmission"].erase("torque_constants");
+  std::ofstream(dir / "robots" / "arm3" / "robot.json") << desc.dump(2);
+  EXPECT_EQ(run_dyncal("identify" + robots + " --torque-from current --data " + (dir / "i.csv").string() +
+                       " --report " + (dir / "none.json").string()),
+            2);
+  EXPECT_FALSE(std::filesystem::exists(dir / "none.json"));
   std::filesystem::remove_all(dir);
 }
 

@@ -15,68 +15,25 @@
 #include "dyncal_host/identification/compiled_robot.hpp"
 #include "dyncal_host/identification/excitation.hpp"
 #include "dyncal_host/identification/identify.hpp"
+#include "support/simulated_log.hpp"
 #include "support/torque_share.hpp"
 
 namespace {
 
 using namespace dyncal::host;
+using dyncal::test::MotionClock;
+using dyncal::test::SimulatedLog;
+using dyncal::test::test_robot;
+using dyncal::test::uniform_times;
 
-struct SimulatedLog {
-  JointLog log;
-  Eigen::VectorXd phi;    ///< true base parameters then Fc, Fv per joint (the Eq. 7 model's order)
-  Eigen::VectorXd sigma;  ///< torque noise per joint [Nm]
-};
-
-RobotDescription test_robot(const std::string& name) {
-  RobotDescription r = load_robot(std::string(DYNCAL_SOURCE_DIR) + "/tests/robots", name);
-  derive_tau_max(r);
-  return r;
-}
-
-/// Two periods of a designed excitation at 500 Hz; tau = ID(q, qd, qdd; nominal) + Fc sgn(qd) +
-/// Fv qd + noise, Fc = 2 % and Fv qd_max = 1 % of tau_max, noise 0.5 % of tau_max per joint.
+/// Two periods of a designed excitation at 500 Hz (trajectory seed = noise seed), exact q
+/// (support/simulated_log.hpp: tau = ID(nominal) + Fc sgn(qd) + Fv qd + noise, Fc = 2 % and
+/// Fv qd_max = 1 % of tau_max, noise 0.5 % of tau_max per joint).
 SimulatedLog simulate(const RobotDescription& robot, unsigned seed) {
-  const CompiledRobot& c = compiled_robot_for(robot);
   ExciteOptions xo;
   xo.seed = seed;
-  const ExcitationTrajectory traj = design_excitation(robot, xo).trajectory;
-  const int n = robot.num_joints;
-  const double fs = 500;
-  const int samples = static_cast<int>(2 * traj.period() * fs);
-  SimulatedLog s;
-  const Eigen::VectorXd phi_std = Eigen::Map<const Eigen::VectorXd>(c.nominal_standard.data(), c.num_standard);
-  const Eigen::VectorXd Fc = 0.02 * robot.tau_max, Fv = (0.01 * robot.tau_max).cwiseQuotient(robot.qd_max);
-  s.sigma = 0.005 * robot.tau_max;
-  s.phi.resize(c.num_base + 2 * n);
-  s.phi.head(c.num_base) = c.standard_to_base(phi_std);
-  for (int j = 0; j < n; ++j) {
-    s.phi[c.num_base + 2 * j] = Fc[j];
-    s.phi[c.num_base + 2 * j + 1] = Fv[j];
-  }
-  JointLog& log = s.log;
-  log.t.resize(samples);
-  log.q.resize(samples, n);
-  log.qd.resize(samples, n);
-  log.qdd.resize(samples, n);
-  log.tau.resize(samples, n);
-  std::mt19937_64 rng(seed);
-  std::normal_distribution<double> normal(0.0, 1.0);
-  for (int k = 0; k < samples; ++k) {
-    Eigen::Matrix<double, 7, 1> q7, qd7, qdd7;
-    log.t[k] = k / fs;
-    traj.evaluate(log.t[k], q7, qd7, qdd7);
-    const Eigen::VectorXd q = q7.head(n), qd = qd7.head(n), qdd = qdd7.head(n);
-    Eigen::VectorXd tau = c.inverse_dynamics(q, qd, qdd, phi_std);
-    for (int j = 0; j < n; ++j)
-      tau[j] += Fc[j] * (qd[j] > 0 ? 1.0 : (qd[j] < 0 ? -1.0 : 0.0)) + Fv[j] * qd[j] + s.sigma[j] * normal(rng);
-    log.q.row(k) = q.transpose();
-    log.qd.row(k) = qd.transpose();
-    log.qdd.row(k) = qdd.transpose();
-    log.tau.row(k) = tau.transpose();
-  }
-  log.has_qd = log.has_qdd = false;  // as a real log: positions and torques, the rest from the filter
-  log.source = "simulated " + robot.name;
-  return s;
+  const double period = design_excitation(robot, xo).trajectory.period();
+  return dyncal::test::simulate(robot, uniform_times(500.0, 2 * period), MotionClock{}, seed, seed, {}, 0.0);
 }
 
 class RobotFolder : public ::testing::TestWithParam<const char*> {};

@@ -101,6 +101,10 @@ def validate(desc, robot_dir):
             if g == 0:
                 raise SchemaError(f"transmission.gear_ratios[{i + 1}]: is 0")
         _vector(tr, "joint_offsets", n, "transmission", required=False)
+        kt = _vector(tr, "torque_constants", n, "transmission", required=False)
+        for i, k in enumerate(kt or []):
+            if k == 0:
+                raise SchemaError(f"transmission.torque_constants[{i + 1}]: is 0")
         cs = tr.get("coupling", [])
         if not isinstance(cs, list):
             raise SchemaError("transmission.coupling: expected a list of {motor, joint, ratio}")

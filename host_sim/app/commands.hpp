@@ -52,9 +52,10 @@ struct RobotOption {
 struct LogOption {
   RobotOption robot;
   std::string format = "csv";
-  std::vector<std::string> data;  ///< one or more logs (--data A --data B): stacked as segments
+  std::string torque_from = "torque";  ///< csv logs: "torque" (tau1..tauN [Nm]) or "current" (i1..iN [A])
+  std::vector<std::string> data;       ///< one or more logs (--data A --data B): stacked as segments
   bool drop_outliers = false;
-  /// Adds --format, --data, --drop-outliers and the robot options to `cmd`.
+  /// Adds --format, --torque-from, --data, --drop-outliers and the robot options to `cmd`.
   void add_to(CLI::App* cmd);
   /// The robot (--robot, or tx40 for --format tx40). Throws InputError (no --robot for csv, ...).
   host::RobotDescription load_robot() const;

@@ -11,12 +11,14 @@ namespace {
 struct DiagnoseSettings {
   LogOption log;
   host::DiagnoseOptions options;
-  std::string model = "eq7", report, plots;
+  std::string model = "eq7,rotor_inertia,offset", report, plots;  // identify's default model
 };
 
 int run_diagnose(DiagnoseSettings& s) {
   const auto robot = s.log.load_robot();
-  s.options.identify.terms = host::parse_model(s.model);
+  const host::ModelSpec spec = host::parse_model_spec(s.model, robot.num_joints);
+  s.options.identify.terms = spec.terms;
+  s.options.identify.effects = spec.effects;
   std::vector<std::string> dropped;
   const auto log = s.log.load_log(robot, &dropped);
   auto result = host::diagnose(robot, log, s.options);
@@ -36,7 +38,14 @@ void add_diagnose_command(CLI::App& app, Action& run) {
   auto s = std::make_shared<DiagnoseSettings>();
   auto* cmd = app.add_subcommand("diagnose", "find what the declared model lacks in a measured log, add it, report");
   s->log.add_to(cmd);
-  cmd->add_option("--model", s->model, "declared model: eq7 or eq8, optionally with rotor_inertia and offset")
+  cmd->add_option("--model", s->model,
+                  "declared model, identify's vocabulary: eq7 or eq8, optionally rotor_inertia and offset, and effect "
+                  "items KIND:JOINT[:SHAPE] (docs/cli.md)")
+      ->capture_default_str();
+  cmd->add_option("--method", s->options.identify.method,
+                  "wls: each joint's rows weighted by 1 / its residual noise under the declared model (Gautier); ols: "
+                  "unweighted")
+      ->check(CLI::IsMember({"wls", "ols"}))
       ->capture_default_str();
   cmd->add_option("--cutoff", s->options.identify.cutoff_hz, "zero-phase Butterworth cut-off [Hz]")
       ->capture_default_str();

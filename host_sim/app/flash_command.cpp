@@ -6,40 +6,48 @@
 #include "commands.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/model_terms.hpp"
+#include "dyncal_host/common/robot_description.hpp"
 #include "dyncal_host/identification/compiled_robot.hpp"
+#include "dyncal_host/identification/drive_table.hpp"
 #include "dyncal_host/identification/prediction.hpp"
 
 namespace dyncal::app {
 namespace {
 
 struct FlashSettings {
-  std::string uri = "tcp://127.0.0.1:1502", robot, params;
+  std::string uri = "tcp://127.0.0.1:1502", robot, params, robots_dir = host::default_robots_dir();
   bool reset_fault = false;
 };
 
 int run_flash(const FlashSettings& s) {
   using host::InputError;
   const host::ParameterSet p = host::read_parameter_file(s.params);  // names checked against the model
-  if (p.friction_per_motor)
-    throw InputError(s.params +
-                     ": friction per motor (robot.json's coupling in the model): the drive's feed-forward "
-                     "applies friction per joint; identify with --friction-per-joint for a drive table");
   if (!s.robot.empty() && p.robot != s.robot)
     throw InputError(s.params + ": parameters are for robot '" + p.robot + "', not '" + s.robot + "'");
+  // The drive's form: compiled values per joint, a coupled motor's terms and the file's effects as
+  // effect terms (drive_table.hpp), applied by the drive's feed-forward.
+  const host::DriveTableContent content = host::drive_table_content(p, host::load_robot(s.robots_dir, p.robot));
   // The table carries the id of the robot the parameters were identified for: the drive refuses it
   // (wrong robot) unless it runs that robot.
   ParameterTable t;
   t.robot_id = host::compiled_robot(p.robot).robot_id;
   t.model_id = p.terms;
-  if (p.values.size() > static_cast<Eigen::Index>(kTableMaxParams))
+  if (content.values.size() > static_cast<size_t>(kTableMaxParams))
     throw InputError(s.params + ": more params than a table holds");
-  t.count = static_cast<std::uint16_t>(p.values.size());
-  for (Eigen::Index i = 0; i < p.values.size(); ++i) {
-    if (std::fabs(p.values[i]) > 3.4e38)
-      throw InputError(s.params + ": params[" + std::to_string(i + 1) + "] '" + p.names[static_cast<size_t>(i)] +
-                       "': value " + std::to_string(p.values[i]) + " is not a finite float");
-    t.values[static_cast<size_t>(i)] = static_cast<float>(p.values[i]);
+  t.count = static_cast<std::uint16_t>(content.values.size());
+  for (size_t i = 0; i < content.values.size(); ++i) {
+    if (std::fabs(content.values[i]) > 3.4e38)
+      throw InputError(s.params + ": params[" + std::to_string(i + 1) + "] '" + p.names[i] + "': value " +
+                       std::to_string(content.values[i]) + " is not a finite float");
+    t.values[i] = static_cast<float>(content.values[i]);
   }
+  for (size_t i = 0; i < content.effects.size(); ++i) {
+    for (float c : content.effects[i].c)
+      if (!std::isfinite(c)) throw InputError(s.params + ": an effect coefficient is not a finite float");
+    t.effects[i] = content.effects[i];
+  }
+  t.effect_count = static_cast<std::uint16_t>(content.effects.size());
+  for (const auto& line : content.notes) std::cout << "note: " << line << "\n";
   auto d = connect_drive(s.uri);
   if (s.reset_fault && d->reset() != port::PortStatus::ok) throw InputError("reset failed: " + d->error());
   TableStatus reason = TableStatus::ok;
@@ -49,7 +57,8 @@ int run_flash(const FlashSettings& s) {
     return 3;
   }
   if (st != port::PortStatus::ok) throw InputError("flash failed: " + d->error());
-  std::cout << "flashed " << t.count << " parameters; read back and compared: identical\n";
+  std::cout << "flashed " << t.count << " parameters and " << t.effect_count
+            << " effect terms; read back and compared: identical\n";
   return 0;
 }
 
@@ -61,6 +70,7 @@ void add_flash_command(CLI::App& app, Action& run) {
   cmd->add_option("--drive", s->uri)->capture_default_str();
   cmd->add_option("--robot", s->robot, "robot the drive runs (default: the parameter file's)");
   cmd->add_option("--params", s->params, "parameter JSON from dyncal identify --params")->required();
+  cmd->add_option("--robots-dir", s->robots_dir, "directory holding the robot descriptions (the transmission)");
   cmd->add_flag("--reset-fault", s->reset_fault, "clear a drive fault first (a drive in fault takes no table)");
   cmd->callback([&run, s] { run = [s] { return run_flash(*s); }; });
 }

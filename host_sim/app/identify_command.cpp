@@ -15,17 +15,32 @@ namespace {
 struct IdentifySettings {
   LogOption log;
   host::IdentifyOptions options;
-  std::string model = "eq7,rotor_inertia,offset", report, params;
+  std::string model = "eq7,rotor_inertia,offset", report, params, effects;
   std::vector<std::string> validate_on;
   bool compare_friction = false;
 };
 
 int run_identify(IdentifySettings& s) {
   const auto robot = s.log.load_robot();
-  s.options.terms = host::parse_model(s.model);
   std::vector<std::string> dropped;
+  host::ModelSpec spec = host::parse_model_spec(s.model, robot.num_joints);
+  if (!s.effects.empty()) {
+    // A diagnosis report's effects join the model; one the model already has is not added twice.
+    std::vector<std::string> skipped;
+    for (const auto& e : host::read_diagnosed_effects(s.effects, robot.num_joints, &skipped)) {
+      if (host::model_contains(spec, e))
+        dropped.push_back(s.effects + ": " + host::effect_item(e) + " is already in the model");
+      else
+        host::add_effect(spec, e, s.effects);
+    }
+    for (const auto& k : skipped) dropped.push_back(s.effects + ": " + k + " has no model term (a change over time)");
+  }
+  s.options.terms = spec.terms;
+  s.options.effects = spec.effects;
   const auto log = s.log.load_log(robot, &dropped);
   if (s.compare_friction) {
+    if (!s.options.effects.empty())
+      throw host::InputError("--compare-friction compares the friction models of the declared terms, without effects");
     for (const auto& line : dropped) std::cout << "note: " << line << "\n";
     const double last = s.options.validate_last > 0 ? s.options.validate_last : 0.3;
     const auto stacked = host::prepare_stacked(robot, log, s.options);
@@ -53,9 +68,15 @@ void add_identify_command(CLI::App& app, Action& run) {
   host::IdentifyOptions& opt = s->options;
   auto* cmd = app.add_subcommand("identify", "identify base parameters and friction from a measured log");
   s->log.add_to(cmd);
-  cmd->add_option("--model", s->model,
-                  "terms besides the rigid body: eq7|eq8|coulomb|viscous|power|rotor_inertia|offset, comma-separated")
+  cmd->add_option(
+         "--model", s->model,
+         "terms besides the rigid body, comma-separated: eq7|eq8|coulomb|viscous|power|rotor_inertia|offset, and "
+         "the effects diagnose adds, KIND:JOINT[:SHAPE]: stribeck:J:qds, asymmetric_friction:J, "
+         "velocity_power:J, load_friction:J, rotor_inertia:J, offset:J, position_periodic:J:cycles, "
+         "coupling:I+J or coupling:I-J (docs/cli.md)")
       ->capture_default_str();
+  cmd->add_option("--effects", s->effects,
+                  "add the effects of a dyncal diagnose --report file to the model (wls or ols)");
   cmd->add_option("--method", opt.method,
                   "wls: weighted least squares, each joint's rows weighted by 1 / its residual noise (Gautier); ols: "
                   "unweighted (the survey's IDIM-OLS); kf: Kalman filter (Eq. 19); rls: forgetting (Eq. 23); pcls: "

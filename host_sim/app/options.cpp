@@ -53,6 +53,11 @@ void LogOption::add_to(CLI::App* cmd) {
   robot.add_to(cmd, "robot name (robots/<name>/); tx40 by default with --format tx40");
   cmd->add_option("--format", format, "log format: csv (t,q1..qN,[qd..],[qdd..],tau1..tauN) or tx40")
       ->check(CLI::IsMember({"csv", "tx40"}));
+  cmd->add_option("--torque-from", torque_from,
+                  "csv logs: torque (columns tau1..tauN, joint torque [Nm]) or current (columns i1..iN, motor "
+                  "current [A]; tau = N^T diag(Kt) i with robot.json's transmission.torque_constants and gear "
+                  "ratios)")
+      ->check(CLI::IsMember({"torque", "current"}));
   cmd->add_option("--data", data,
                   "CSV log file (time-stamped; jitter and missing samples allowed), or the folder of the TX40 "
                   "files; repeat to stack several logs as segments")
@@ -77,10 +82,18 @@ host::JointLog LogOption::load_log(const host::RobotDescription& r, std::vector<
 
 host::JointLog LogOption::load_logs(const host::RobotDescription& r, const std::vector<std::string>& paths,
                                     std::vector<std::string>* dropped) const {
+  if (torque_from == "current") {
+    if (format == "tx40") throw InputError("--torque-from current: the TX40 format holds motor torques already");
+    if (r.torque_constants.size() == 0)
+      throw InputError("--torque-from current: " + r.directory +
+                       "/robot.json has no transmission.torque_constants (Nm/A per motor; docs/robots.md)");
+  }
   std::vector<host::JointLog> logs;
   for (const std::string& path : paths) {
     host::JointLog log = format == "tx40" ? host::read_tx40_log(path, r.transmission, r.joint_offsets)
-                                          : host::read_csv_log(path, r.num_joints);
+                         : torque_from == "current"
+                             ? host::read_current_csv_log(path, r.transmission, r.torque_constants)
+                             : host::read_csv_log(path, r.num_joints);
     const auto lines = host::check_plausibility(log, r, drop_outliers);
     if (dropped) dropped->insert(dropped->end(), lines.begin(), lines.end());
     logs.push_back(std::move(log));

@@ -25,9 +25,12 @@ unsigned parse_model(const std::string& model) {
       terms |= term::offset;
     else if (item == "rigid_body" || item.empty())
       continue;
-    else {
+    else if (item.find(':') != std::string::npos) {
+      throw InputError("model item '" + item + "': effect terms are taken by identify, diagnose and predict, not here");
+    } else {
       throw InputError("unknown model term '" + item +
-                       "' (expected eq7, eq8, coulomb, viscous, power, rotor_inertia, offset)");
+                       "' (expected eq7, eq8, coulomb, viscous, power, rotor_inertia, offset, or an effect "
+                       "KIND:JOINT[:SHAPE])");
     }
   }
   return terms;

@@ -110,6 +110,9 @@ void read_transmission(const Reader& rd, const json& j, RobotDescription& r) {
       if (r.gear_ratios[i] == 0) rd.fail("transmission.gear_ratios[" + std::to_string(i + 1) + "]", "is 0");
     const Eigen::VectorXd off = rd.vector(*tr, "joint_offsets", n, "transmission.joint_offsets", false);
     if (off.size() > 0) r.joint_offsets = off;
+    r.torque_constants = rd.vector(*tr, "torque_constants", n, "transmission.torque_constants", false);
+    for (Eigen::Index i = 0; i < r.torque_constants.size(); ++i)
+      if (r.torque_constants[i] == 0) rd.fail("transmission.torque_constants[" + std::to_string(i + 1) + "]", "is 0");
   }
   r.transmission = r.gear_ratios.asDiagonal();
   if (!tr || !tr->contains("coupling")) return;

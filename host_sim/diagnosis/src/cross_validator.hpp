@@ -16,11 +16,16 @@ using Eigen::VectorXd;
 
 /// Blocked cross-validation from per-fold, per-joint Gram matrices of the design [X C] and y. The
 /// base design X is fixed for a greedy step (set_base), so each candidate C only costs its cross
-/// products with X over the rows where C is not zero.
+/// products with X over the rows where C is not zero. The fit weighs joint j's rows by w_j
+/// (set_joint_weights; 1 by default: OLS); the RSS it reports are per joint and unweighted [Nm^2].
 class CrossValidator {
  public:
   CrossValidator(const StackedData& d, int N, const std::vector<int>& fold, int folds)
-      : d_(d), N_(N), fold_(fold), folds_(folds) {}
+      : d_(d), N_(N), fold_(fold), folds_(folds), w2_(VectorXd::Ones(N)) {}
+
+  /// Row weights per joint (weighted least squares: w_j = 1 / sigma_j, Gautier). Takes effect at
+  /// the next set_base.
+  void set_joint_weights(const VectorXd& w) { w2_ = w.cwiseAbs2(); }
 
   void set_base(const MatrixXd& X) {
     X_ = &X;
@@ -42,8 +47,8 @@ class CrossValidator {
         Gxx_all_[f][j].selfadjointView<Eigen::Lower>().rankUpdate(x);
         gx_all_[f][j] += x * y;
         yy_[f][j] += y * y;
-        Gxx_fit_[f].selfadjointView<Eigen::Lower>().rankUpdate(x);
-        gx_fit_[f] += x * y;
+        Gxx_fit_[f].selfadjointView<Eigen::Lower>().rankUpdate(x, w2_[j]);
+        gx_fit_[f] += w2_[j] * y * x;
       }
     }
     for (auto& G : Gxx_fit_) G = MatrixXd(G.selfadjointView<Eigen::Lower>());
@@ -103,14 +108,14 @@ class CrossValidator {
           const double y = d_.y[r];
           const MatrixXd xc = x * c.transpose();
           const MatrixXd cc = c * c.transpose();
-          auto add = [&](MatrixXd& G, VectorXd& g) {
-            G.topRightCorner(p, m) += xc;
-            G.bottomLeftCorner(m, p) += xc.transpose();
-            G.bottomRightCorner(m, m) += cc;
-            g.tail(m) += c * y;
+          auto add = [&](MatrixXd& G, VectorXd& g, double w2) {
+            G.topRightCorner(p, m) += w2 * xc;
+            G.bottomLeftCorner(m, p) += w2 * xc.transpose();
+            G.bottomRightCorner(m, m) += w2 * cc;
+            g.tail(m) += w2 * y * c;
           };
-          add(G_all[f][j], g_all[f][j]);
-          add(G_fit[f], g_fit[f]);
+          add(G_all[f][j], g_all[f][j], 1.0);
+          add(G_fit[f], g_fit[f], w2_[j]);
         }
       }
     }
@@ -173,6 +178,7 @@ class CrossValidator {
   int N_;
   const std::vector<int>& fold_;
   int folds_;
+  VectorXd w2_;  ///< squared joint weights of the fit
   const MatrixXd* X_ = nullptr;
   VectorXd sx_;
   std::vector<MatrixXd> Gxx_fit_;

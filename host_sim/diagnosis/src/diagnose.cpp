@@ -12,6 +12,7 @@
 #include "candidates.hpp"
 #include "cross_validator.hpp"
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/identification/effect_model.hpp"
 #include "dyncal_host/identification/signal.hpp"
 #include "dyncal_host/identification/stacked_data.hpp"
 #include "harmonic_fit.hpp"
@@ -203,18 +204,34 @@ std::vector<DiagnoseJoint> joint_metrics(const StackedData& d, const RobotDescri
   return out;
 }
 
+/// Per-joint residual standard deviation [Nm] of a fit with `p` parameters from its training RSS:
+/// sigma_j^2 = RSS_j / (n_j - p / N), n_j the joint's fitted rows (identify's WLS weights).
+VectorXd residual_std_per_joint(const StackedData& d, const VectorXd& train_rss, Index p) {
+  const int N = static_cast<int>(train_rss.size());
+  VectorXd n = VectorXd::Zero(N);
+  for (Index r = 0; r < d.y.size(); ++r)
+    if (d.fit_row[r]) n[r % N] += 1;
+  VectorXd sigma(N);
+  for (int j = 0; j < N; ++j)
+    sigma[j] = std::max(1e-12, std::sqrt(train_rss[j] / std::max(1.0, n[j] - static_cast<double>(p) / N)));
+  return sigma;
+}
+
 }  // namespace
 
 DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, const DiagnoseOptions& o) {
   IdentifyOptions io = o.identify;
   if (io.terms == 0) io.terms = kFrictionEq7;
+  if (io.method != "wls" && io.method != "ols")
+    throw InputError("diagnose fits by wls or ols, not '" + io.method + "'");
   io.load_regressor = true;  // the load-friction candidate's load torque h(q, qd)
   const StackedData d = prepare_stacked(robot, log, io);
   const int N = robot.num_joints;
   const Index S = d.t.size();
   DiagnoseResult res;
   res.robot = robot.name;
-  res.declared_model = model_name(io.terms);
+  res.declared_model = model_spec_name({io.terms, io.effects});
+  res.method = io.method;
   res.samples = static_cast<long>(S);
   res.notes = d.notes;
   check_every_joint_moves(d);
@@ -230,6 +247,29 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
   Model m{d.W, d.names, {}, {}, {}};
   cv.set_base(m.X);
   cv.evaluate(none, m.val, m.train, &m.phi);
+  if (!io.effects.empty()) {
+    // Declared effect terms (identify's --model vocabulary): [W E], load friction's rigid-body
+    // torque from the fit of W alone.
+    m.X = model_design(d, io.effects, m.phi);
+    for (const ModelEffect& e : io.effects)
+      for (const std::string& n : effect_param_names(e)) m.names.push_back(n);
+    cv.set_base(m.X);
+    cv.evaluate(none, m.val, m.train, &m.phi);
+  }
+  if (io.method == "wls") {
+    // Gautier's weights, as identify: 1 / sigma_j from the declared model's OLS residual, fixed for
+    // the whole search so that every step minimises the same criterion.
+    const VectorXd sigma = residual_std_per_joint(d, m.train, m.X.cols());
+    cv.set_joint_weights(sigma.cwiseInverse());
+    cv.set_base(m.X);
+    cv.evaluate(none, m.val, m.train, &m.phi);
+    std::ostringstream note;
+    note << std::setprecision(3) << "weighted least squares (Gautier): joint j's rows weighted by 1/sigma_j, sigma ="
+         << " [";
+    for (int j = 0; j < N; ++j) note << (j ? ", " : "") << sigma[j];
+    note << "] Nm from the declared model's OLS residual";
+    res.notes.push_back(note.str());
+  }
   const Model declared = m;
   const VectorXd oof_before = cv.predict_out_of_fold();
   detail::CandidateContext library{d, o.max_cycles, load_torques(d, m.phi), {}, {}};
@@ -277,8 +317,8 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
     res.effects.push_back(e);
   }
 
-  res.declared_names = d.names;
-  res.declared_params.assign(m.phi.data(), m.phi.data() + d.W.cols());
+  res.declared_names = declared.names;
+  res.declared_params.assign(m.phi.data(), m.phi.data() + declared.X.cols());
   res.traces = traces(d, declared.X * declared.phi, m.X * m.phi, o.max_cycles);
   res.joints = joint_metrics(d, robot, declared, m, oof_before, cv.predict_out_of_fold());
   return res;

@@ -8,8 +8,9 @@
 namespace dyncal::host {
 
 void print_diagnose_report(std::ostream& out, const DiagnoseResult& r) {
-  out << "dyncal diagnose: robot " << r.robot << ", declared model " << r.declared_model << ", " << r.samples
-      << " samples, " << r.validation << ", BIC with n_eff = " << std::lround(r.effective_samples_per_joint)
+  out << "dyncal diagnose: robot " << r.robot << ", declared model " << r.declared_model << " (" << r.method << "), "
+      << r.samples << " samples, " << r.validation
+      << ", BIC with n_eff = " << std::lround(r.effective_samples_per_joint)
       << " per joint (mean, from the residual's autocorrelation)\n";
   for (const auto& n : r.notes) out << "note: " << n << "\n";
   out << "\n";
@@ -44,25 +45,30 @@ void print_diagnose_report(std::ostream& out, const DiagnoseResult& r) {
   out << std::defaultfloat;
 }
 
+std::optional<ModelEffect> model_effect(const DiagnosedEffect& e) {
+  const std::optional<EffectKind> kind = detail::effect_spec(e.kind).table_kind;
+  if (!kind) return std::nullopt;
+  ModelEffect m;
+  m.kind = *kind;
+  m.joint = e.joints.front() - 1;
+  m.shape = e.shape;
+  if (m.kind == EffectKind::coupling) {
+    m.joint2 = e.joints.back() - 1;
+    m.sign = e.sign > 0 ? 1 : -1;
+  }
+  return m;
+}
+
 std::vector<EffectTerm> effect_terms(const DiagnoseResult& r, std::vector<std::string>* skipped) {
   std::vector<EffectTerm> out;
   for (const auto& e : r.effects) {
-    const std::optional<EffectKind> kind = detail::effect_spec(e.kind).table_kind;
-    if (!kind) {
+    const std::optional<ModelEffect> m = model_effect(e);
+    if (!m) {
       if (skipped)
         skipped->push_back(std::string(effect_name(e.kind)) + " on joint " + std::to_string(e.joints.front()));
       continue;
     }
-    EffectTerm t;
-    t.kind = *kind;
-    t.joint = static_cast<std::uint8_t>(e.joints.front() - 1);
-    for (size_t k = 0; k < e.params.size() && k < 3; ++k) t.c[k] = static_cast<float>(e.params[k]);
-    t.shape = static_cast<float>(e.shape);
-    if (t.kind == EffectKind::coupling) {
-      t.joint2 = static_cast<std::uint8_t>(e.joints.back() - 1);
-      t.sign = static_cast<std::int8_t>(e.sign > 0 ? 1 : -1);
-    }
-    out.push_back(t);
+    out.push_back(effect_term(*m, e.params.data()));
   }
   return out;
 }
@@ -71,17 +77,24 @@ nlohmann::json diagnose_report_json(const DiagnoseResult& r) {
   nlohmann::json j;
   j["robot"] = r.robot;
   j["declared_model"] = r.declared_model;
+  j["method"] = r.method;
   j["samples"] = r.samples;
   j["validation"] = r.validation;
   j["effective_samples_per_joint"] = r.effective_samples_per_joint;
   j["notes"] = r.notes;
   j["effects"] = nlohmann::json::array();
   for (const auto& e : r.effects) {
+    // The effect as a --model item for identify (none for drift, which has no model term).
+    const std::optional<ModelEffect> me = model_effect(e);
+    const std::string item = me ? effect_item(*me) : "";
     nlohmann::json p = nlohmann::json::object();
     for (size_t i = 0; i < e.params.size(); ++i) p[e.param_names[i]] = e.params[i];
     j["effects"].push_back({{"kind", effect_name(e.kind)},
                             {"joint", e.joints.front()},
                             {"joints", e.joints},
+                            {"shape", e.shape},
+                            {"sign", e.sign},
+                            {"item", item},
                             {"parameters", p},
                             {"evidence", {{"delta_bic", e.delta_bic}, {"validation_gain", e.validation_gain}}},
                             {"explanation", e.explanation}});

@@ -6,6 +6,7 @@
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/number_text.hpp"
 #include "dyncal_host/identification/compiled_robot.hpp"
+#include "dyncal_host/identification/signal.hpp"
 #include "dyncal_host/identification/stacked_data.hpp"
 #include "dyncal_host/identification/uniform_grid.hpp"
 
@@ -18,6 +19,8 @@ namespace {
 // shares its noise with the fit (leaky validation); one cut-off period is dropped at each end of
 // the log, so the log must last more than two.
 void check_options(const IdentifyOptions& o, const JointLog& log) {
+  if (!o.effects.empty() && o.method != "wls" && o.method != "ols")
+    throw InputError("--method " + o.method + ": a model with effect terms is fitted by wls or ols");
   if (o.filter_order < 2 || o.filter_order > kMaxFilterOrder || o.filter_order % 2 != 0)
     throw InputError("--filter-order " + std::to_string(o.filter_order) + " must be even, 2.." +
                      std::to_string(kMaxFilterOrder) + " (cascaded second-order sections)");
@@ -84,6 +87,26 @@ IdentifyResult identify(const RobotDescription& robot, const JointLog& raw, cons
   IdentifyResult r = c.identify[static_cast<size_t>(built_term_set_index(options.terms))](robot, log, options);
   r.notes.insert(r.notes.begin(), note);
   return r;
+}
+
+double autocorrelation_inflation(const StackedData& d, const std::vector<char>& train,
+                                 const Eigen::VectorXd& residual) {
+  const int N = static_cast<int>(d.q.cols());
+  const Eigen::Index S = d.t.size();
+  double rows = 0, weighted = 0;
+  Eigen::VectorXd e(S);
+  for (int j = 0; j < N; ++j) {
+    Eigen::Index n = 0;
+    for (Eigen::Index s = 0; s < S; ++s) {
+      if (!train[static_cast<size_t>(s)] || !d.fit_row[s * N + j]) continue;
+      e[n++] = residual[s * N + j];
+    }
+    if (n < 8) continue;
+    const double dn = static_cast<double>(n);
+    rows += dn;
+    weighted += dn * dn / effective_samples(e.head(n));
+  }
+  return rows > 0 ? std::max(1.0, weighted / rows) : 1.0;
 }
 
 StackedData prepare_stacked(const RobotDescription& robot, const JointLog& raw, const IdentifyOptions& options) {

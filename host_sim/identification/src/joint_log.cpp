@@ -55,7 +55,10 @@ void write_csv_log(const std::string& path, const JointLog& log) {
   if (!out) throw InputError("cannot write '" + path + "'");
 }
 
-JointLog read_csv_log(const std::string& path, int expected_joints) {
+namespace {
+
+/// read_csv_log with the torque columns named `effort` (tau or i) followed by the joint number.
+JointLog read_csv_columns(const std::string& path, int expected_joints, const std::string& effort) {
   const NumericCsv csv = read_numeric_csv(path);
   std::map<std::string, Eigen::Index> col;
   for (size_t i = 0; i < csv.header.size(); ++i) {
@@ -69,19 +72,20 @@ JointLog read_csv_log(const std::string& path, int expected_joints) {
     return n;
   };
   if (!col.count("t")) throw InputError(path + ": missing column 't'");
-  const int nq = count("q"), ntau = count("tau");
+  const int nq = count("q"), ntau = count(effort);
   if (nq == 0) throw InputError(path + ": missing column 'q1'");
   if (nq != expected_joints) {
     throw InputError(path + ": " + std::to_string(nq) + " joints (q1..q" + std::to_string(nq) + "), robot has " +
                      std::to_string(expected_joints));
   }
   for (int j = 1; j <= expected_joints; ++j) {
-    if (!col.count("tau" + std::to_string(j)))
-      throw InputError(path + ": missing column 'tau" + std::to_string(j) + "'");
+    if (!col.count(effort + std::to_string(j)))
+      throw InputError(path + ": missing column '" + effort + std::to_string(j) + "'" +
+                       (effort == "i" ? " (motor current, --torque-from current)" : ""));
   }
   if (ntau != expected_joints)
-    throw InputError(path + ": " + std::to_string(ntau) + " torque columns, robot has " +
-                     std::to_string(expected_joints));
+    throw InputError(path + ": " + std::to_string(ntau) + (effort == "i" ? " current" : " torque") +
+                     " columns, robot has " + std::to_string(expected_joints));
   const int nqd = count("qd"), nqdd = count("qdd");
   for (auto [name, n] : {std::pair<const char*, int>{"qd", nqd}, {"qdd", nqdd}}) {
     if (n != 0 && n != expected_joints) {
@@ -100,11 +104,32 @@ JointLog read_csv_log(const std::string& path, int expected_joints) {
     return m;
   };
   log.q = block("q");
-  log.tau = block("tau");
+  log.tau = block(effort);
   log.has_qd = nqd > 0;
   log.has_qdd = nqdd > 0;
   if (log.has_qd) log.qd = block("qd");
   if (log.has_qdd) log.qdd = block("qdd");
+  return log;
+}
+
+}  // namespace
+
+JointLog read_csv_log(const std::string& path, int expected_joints) {
+  return read_csv_columns(path, expected_joints, "tau");
+}
+
+JointLog read_current_csv_log(const std::string& path, const Eigen::MatrixXd& transmission,
+                              const Eigen::VectorXd& torque_constants) {
+  const int n = static_cast<int>(transmission.rows());
+  if (torque_constants.size() != n) {
+    throw InputError(path +
+                     ": --torque-from current needs the robot's transmission.torque_constants (Nm/A "
+                     "per motor, docs/robots.md)");
+  }
+  JointLog log = read_csv_columns(path, n, "i");
+  // tau_m = Kt i per motor; tau = N^T tau_m   (rows are samples: Tau = I diag(Kt) N)
+  log.tau = log.tau * torque_constants.asDiagonal() * transmission;
+  log.source = path + " (torque from motor current: tau = N^T diag(Kt) i)";
   return log;
 }
 

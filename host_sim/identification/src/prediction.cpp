@@ -6,6 +6,7 @@
 
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/identification/compiled_robot.hpp"
+#include "dyncal_host/identification/effect_model.hpp"
 #include "dyncal_host/identification/stacked_data.hpp"
 
 namespace dyncal::host {
@@ -27,14 +28,22 @@ ParameterSet read_parameter_file(const std::string& path) {
   p.source = path;
   p.robot = j["robot"].get<std::string>();
   p.model = j["model"].get<std::string>();
-  p.terms = parse_model(p.model);
   const std::string per =
       j.contains("friction_per") && j["friction_per"].is_string() ? j["friction_per"].get<std::string>() : "joint";
   if (per != "joint" && per != "motor")
     throw InputError(path + ": 'friction_per' is '" + per + "', expected 'joint' or 'motor'");
   p.friction_per_motor = per == "motor";
   const CompiledRobot& compiled = compiled_robot(p.robot);
+  try {
+    const ModelSpec spec = parse_model_spec(p.model, compiled.num_joints);
+    p.terms = spec.terms;
+    p.effects = spec.effects;
+  } catch (const InputError& e) {
+    throw InputError(path + ": " + e.what());
+  }
   p.names = compiled.param_names[static_cast<size_t>(built_term_set_index(p.terms))]();
+  for (const ModelEffect& e : p.effects)
+    for (const std::string& n : effect_param_names(e)) p.names.push_back(n);
   // Checked by name, so that a file edited by hand or written for another model cannot give
   // shifted values.
   if (!j.contains("params") || !j["params"].is_array()) throw InputError(path + ": 'params' missing");
@@ -63,7 +72,9 @@ ParameterSet parameter_set(const IdentifyResult& r) {
   ParameterSet p;
   p.robot = r.robot;
   p.model = r.model;
-  p.terms = parse_model(r.model);
+  const ModelSpec spec = parse_model_spec(r.model, static_cast<int>(r.joints.size()));
+  p.terms = spec.terms;
+  p.effects = spec.effects;
   p.friction_per_motor = r.friction_per_motor;
   p.source = "identify";
   p.values.resize(static_cast<Eigen::Index>(r.params.size()));
@@ -120,17 +131,24 @@ LogPrediction predict(const RobotDescription& robot, const JointLog& log, Identi
   if (params.robot != robot.name)
     throw InputError(params.source + ": parameters are for robot '" + params.robot + "', not '" + robot.name + "'");
   options.terms = params.terms;
+  options.effects = params.effects;
   options.friction_per_joint = !params.friction_per_motor;
   options.load_regressor = false;
   const StackedData d = prepare_stacked(robot, log, options);
-  if (d.names != params.names)
+  std::vector<std::string> names = d.names;
+  for (const ModelEffect& e : params.effects)
+    for (const std::string& n : effect_param_names(e)) names.push_back(n);
+  if (names != params.names)
     throw InputError(params.source + ": parameter names differ from robot '" + robot.name + "' with model '" +
                      params.model + "'");
   LogPrediction p;
   p.source = log.source;
   p.samples = static_cast<long>(d.t.size());
   p.notes = d.notes;
-  p.joints = torque_metrics(d.y, d.W * params.values, robot.num_joints, robot.tau_max);
+  const Eigen::VectorXd tau_hat = params.effects.empty()
+                                      ? Eigen::VectorXd(d.W * params.values)
+                                      : Eigen::VectorXd(model_design(d, params.effects, params.values) * params.values);
+  p.joints = torque_metrics(d.y, tau_hat, robot.num_joints, robot.tau_max);
   return p;
 }
 

@@ -19,8 +19,9 @@ enum class EffectKind : std::uint8_t {
   rotor_inertia = 5,        ///< c0 qdd
   offset = 6,               ///< c0
   position_periodic = 7,    ///< c0 sin(shape q) + c1 cos(shape q), shape = cycles per revolution
-  coupling = 8,             ///< motor turning with v = qd_i + sign qd_j: f = c0 sgn(v) + c1 v + c2 a,
-                            ///< a = qdd_i + sign qdd_j; f on joint i, sign f on joint j
+  coupling = 8,             ///< motor turning with v = qd_i + r qd_j: f = c0 sgn(v) + c1 v + c2 a,
+                            ///< a = qdd_i + r qdd_j; f on joint i, r f on joint j (the transmission's
+                            ///< transpose), r = sign * shape (shape: the ratio |r|; 0 means 1)
 };
 
 /// One effect term: 20 bytes in the table (kind, joint, joint2, sign, shape, c0, c1, c2).
@@ -29,7 +30,8 @@ struct EffectTerm {
   std::uint8_t joint = 0;   ///< 0-based
   std::uint8_t joint2 = 0;  ///< coupling only
   std::int8_t sign = 1;     ///< coupling only: +1 or -1
-  float shape = 0;          ///< velocity scale [rad/s] (stribeck) or cycles per revolution (periodic)
+  float shape = 0;          ///< velocity scale [rad/s] (stribeck), cycles per revolution (periodic), or the
+                            ///< coupling's ratio |r| (0: 1)
   float c[3] = {0, 0, 0};
 };
 
@@ -44,6 +46,7 @@ inline bool effect_term_valid(const EffectTerm& e, int num_joints) noexcept {
     if (!std::isfinite(v)) return false;
   if (!std::isfinite(e.shape)) return false;
   if ((e.kind == EffectKind::stribeck || e.kind == EffectKind::position_periodic) && !(e.shape > 0.0f)) return false;
+  if (e.kind == EffectKind::coupling && e.shape < 0.0f) return false;
   if (e.kind == EffectKind::coupling &&
       (e.joint2 >= num_joints || e.joint2 == e.joint || (e.sign != 1 && e.sign != -1)))
     return false;
@@ -51,12 +54,12 @@ inline bool effect_term_valid(const EffectTerm& e, int num_joints) noexcept {
 }
 
 /// The regressor columns of an effect at one sample: the torque it adds is sum_k c_k column[k] on
-/// its joint and, for a coupling, `sign` times the same on its second joint (the motor's torque
+/// its joint and, for a coupling, `sign` (the signed ratio r) times the same on its second joint (the motor's torque
 /// reflected by the transmission). One joint's q [rad], qd [rad/s], qdd [rad/s^2] and tau_rb [Nm]
 /// (the rigid-body torque, read by load friction); a coupling's motor turns with v = qd + sign qd2,
-/// a = qdd + sign qdd2. shape: velocity scale [rad/s] (stribeck) or cycles per revolution
-/// (position_periodic). Writes the kind's columns (1 to 3) and returns their count; 0 for an
-/// unknown kind. The coefficients' meaning is EffectKind's.
+/// a = qdd + sign qdd2 (sign: the term's signed ratio r, sign * (shape > 0 ? shape : 1)). shape: velocity scale [rad/s]
+/// (stribeck) or cycles per revolution (position_periodic). Writes the kind's columns (1 to 3) and returns their count;
+/// 0 for an unknown kind. The coefficients' meaning is EffectKind's.
 template <typename Scalar>
 int effect_columns(EffectKind kind, Scalar shape, Scalar sign, Scalar q, Scalar qd, Scalar qdd, Scalar qd2, Scalar qdd2,
                    Scalar tau_rb, Scalar columns[3]) noexcept {
@@ -110,7 +113,8 @@ void add_effect_torques(const EffectTerm* effects, int count, const Eigen::Matri
     const EffectTerm& e = effects[i];
     DYNCAL_ASSERT(effect_term_valid(e, N));
     const int j = e.joint, k = e.kind == EffectKind::coupling ? e.joint2 : e.joint;
-    const Scalar s = Scalar(e.sign);
+    // A coupling's signed ratio r: the second joint turns the motor by r, and takes r times its torque.
+    const Scalar s = Scalar(e.sign) * (e.kind == EffectKind::coupling && e.shape > 0.0f ? Scalar(e.shape) : Scalar(1));
     Scalar columns[3];
     const int m = effect_columns(e.kind, Scalar(e.shape), s, q[j], qd[j], qdd[j], qd[k], qdd[k], tau_rb[j], columns);
     if (m == 0) continue;

@@ -28,6 +28,10 @@ struct RobotDescription {
   Eigen::VectorXd gear_ratios;    ///< motor turns per joint turn (signed); 1 without "transmission"
   Eigen::MatrixXd transmission;   ///< N: q_motor = N q_joint, tau_joint = N^T tau_motor
   Eigen::VectorXd joint_offsets;  ///< added to N^-1 q_motor to give the model's q [rad]; default 0
+  /// Motor torque per ampere of motor current [Nm/A], per motor (signed: a negative constant is a
+  /// drive whose current sign is opposite to its motor torque); empty when the file gives none.
+  /// Used by logs of motor current: tau_joint = N^T diag(torque_constants) i_motor.
+  Eigen::VectorXd torque_constants;
   Eigen::VectorXd q_min, q_max, qd_max;
   Eigen::VectorXd qdd_max;  ///< [rad/s^2]; kDefaultQddPerQd * qd_max when the file gives none
   /// Maximum joint driving torque [Nm] (survey Sec. 5.1). Empty when the file gives none: then
@@ -39,7 +43,8 @@ struct RobotDescription {
 
 /// Loads robots/<name>/robot.json below `robots_dir`. Throws InputError on one line naming the file
 /// and the field as docs/robots.md does (unknown robot, not a file, invalid JSON, a field missing,
-/// of the wrong type or length, non-finite, q_max <= q_min, a zero gear ratio, a coupling out of range,
+/// of the wrong type or length, non-finite, q_max <= q_min, a zero gear ratio or torque constant, a
+/// coupling out of range,
 /// more than 7 joints).
 RobotDescription load_robot(const std::string& robots_dir, const std::string& name);
 

@@ -3,6 +3,7 @@
 // residual, add the significant ones greedily (validation error and BIC), and report before/after.
 
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -13,7 +14,7 @@
 namespace dyncal::host {
 
 struct DiagnoseOptions {
-  IdentifyOptions identify;   ///< filtering, declared model (terms), folds, block length
+  IdentifyOptions identify;   ///< filtering, declared model (terms and effects), method (wls or ols), folds, blocks
   int max_effects = 16;       ///< greedy steps at most
   int max_cycles = 64;        ///< position-periodic search: 1..max_cycles cycles per revolution
   double bic_threshold = 10;  ///< accept when BIC falls by more than this (Kass-Raftery "very strong")
@@ -76,6 +77,7 @@ struct DiagnoseTraces {
 
 struct DiagnoseResult {
   std::string robot, declared_model, validation;
+  std::string method;  ///< wls (Gautier's per-joint weights, from the declared model's OLS residual) or ols
   long samples = 0;
   double effective_samples_per_joint = 0;  ///< n_eff used by BIC: duration x 2 f_c
   std::vector<DiagnoseJoint> joints;
@@ -88,7 +90,7 @@ struct DiagnoseResult {
 };
 
 /// Runs the diagnosis. Throws InputError on bad input (too few samples, a joint that does not
-/// move, constant velocity on every joint).
+/// move, constant velocity on every joint, a method other than wls or ols).
 DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, const DiagnoseOptions& options);
 
 void print_diagnose_report(std::ostream& out, const DiagnoseResult& r);
@@ -97,6 +99,9 @@ void print_diagnose_report(std::ostream& out, const DiagnoseResult& r);
 /// position, residual spectrum over the joint angle, measured and predicted torque before/after.
 /// Returns the files written. Throws InputError when gnuplot is missing or fails.
 std::vector<std::string> write_diagnose_plots(const DiagnoseResult& r, const std::string& dir);
+
+/// The effect as a model term (identify's --model vocabulary); none for drift.
+std::optional<ModelEffect> model_effect(const DiagnosedEffect& e);
 
 /// The effects as parameter-table terms (dyncal/effect_terms.hpp). Drift has no table term (it is a
 /// change over time, not a model term): it is skipped and named in *skipped.

@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "dyncal_host/common/model_effects.hpp"
 #include "dyncal_host/common/model_terms.hpp"
 #include "dyncal_host/common/robot_description.hpp"
 #include "dyncal_host/identification/joint_log.hpp"
@@ -17,20 +18,21 @@ inline constexpr int kMaxFilterOrder = 8;
 /// Options of identify(); each is range-checked against the log before any work (InputError naming
 /// the option and its admissible range).
 struct IdentifyOptions {
-  std::string method = "wls";       ///< wls (Gautier's per-joint weights) | ols (IDIM-OLS) | kf | rls | pcls
-  unsigned terms = 0;               ///< dyncal::term bits (rigid body always included)
-  int filter_order = 4;             ///< Butterworth order (zero-phase: twice the attenuation)
-  double cutoff_hz = 20.0;          ///< low-pass cut-off for q, tau and the regressor columns
-  int decimate = 0;                 ///< decimation factor; 0: floor(fs / (25 * cutoff)), at least 1
-  int folds = 5;                    ///< blocked k-fold cross-validation
-  double block_seconds = 0.5;       ///< length of the contiguous blocks dealt to the folds in turn
-  double validate_last = 0.0;       ///< > 0: plain time split, this fraction at the end validates
-  double rls_mu = 0.9999;           ///< forgetting factor of RLS (survey Eq. 23)
-  double p0 = 1e6;                  ///< initial covariance diag of KF and RLS (prior ignorance)
-  double min_speed_fraction = 0.0;  ///< fit only rows with |qd_j| >= this fraction of joint j's top speed
-  bool load_regressor = false;      ///< also stack Y(q, qd, 0) (StackedData::W_load): the load torque's regressor
-  bool friction_per_joint = false;  ///< ignore robot.json's coupling: friction and rotor inertia per joint (the log's
-                                    ///< conversion still uses the transmission); lets diagnose rediscover a coupling
+  std::string method = "wls";        ///< wls (Gautier's per-joint weights) | ols (IDIM-OLS) | kf | rls | pcls
+  unsigned terms = 0;                ///< dyncal::term bits (rigid body always included)
+  std::vector<ModelEffect> effects;  ///< effect terms after the compiled ones (model_effects.hpp): wls or ols only
+  int filter_order = 4;              ///< Butterworth order (zero-phase: twice the attenuation)
+  double cutoff_hz = 20.0;           ///< low-pass cut-off for q, tau and the regressor columns
+  int decimate = 0;                  ///< decimation factor; 0: floor(fs / (25 * cutoff)), at least 1
+  int folds = 5;                     ///< blocked k-fold cross-validation
+  double block_seconds = 0.5;        ///< length of the contiguous blocks dealt to the folds in turn
+  double validate_last = 0.0;        ///< > 0: plain time split, this fraction at the end validates
+  double rls_mu = 0.9999;            ///< forgetting factor of RLS (survey Eq. 23)
+  double p0 = 1e6;                   ///< initial covariance diag of KF and RLS (prior ignorance)
+  double min_speed_fraction = 0.0;   ///< fit only rows with |qd_j| >= this fraction of joint j's top speed
+  bool load_regressor = false;       ///< also stack Y(q, qd, 0) (StackedData::W_load): the load torque's regressor
+  bool friction_per_joint = false;   ///< ignore robot.json's coupling: friction and rotor inertia per joint (the log's
+                                     ///< conversion still uses the transmission); lets diagnose rediscover a coupling
 };
 
 struct JointMetrics {

@@ -18,6 +18,7 @@
 #include "dyncal_host/identification/butterworth.hpp"
 #include "dyncal_host/identification/compiled_robot.hpp"
 #include "dyncal_host/identification/consistent_least_squares.hpp"
+#include "dyncal_host/identification/effect_model.hpp"
 #include "dyncal_host/identification/identify.hpp"
 #include "dyncal_host/identification/prediction.hpp"
 #include "dyncal_host/identification/signal.hpp"
@@ -87,6 +88,8 @@ class IdentifyPipeline {
                           std::to_string(2 * edge) + " samples) left out: filtering would only see their ends");
     out.W.resize(kept * N, P);
     if (opt_.load_regressor) out.W_load.resize(kept * N, P);
+    const Eigen::Index num_effect_cols = effect_column_count(opt_.effects);
+    out.E.resize(kept * N, num_effect_cols);
     out.y.resize(kept * N);
     out.t.resize(kept);
     out.q.resize(kept, N);
@@ -106,6 +109,7 @@ class IdentifyPipeline {
         for (int j = 0; j < N; ++j) {
           out.W.row(k * N + j) = seg.Kt.row(s).segment(j * P, P);
           if (opt_.load_regressor) out.W_load.row(k * N + j) = seg.Kt_load.row(s).segment(j * P, P);
+          if (num_effect_cols > 0) out.E.row(k * N + j) = seg.Et.row(s).segment(j * num_effect_cols, num_effect_cols);
           out.y[k * N + j] = seg.tau(s, j);
         }
       }
@@ -224,30 +228,7 @@ class IdentifyPipeline {
     } else {
       throw InputError("unknown method '" + m + "' (expected wls, ols, kf, rls or pcls)");
     }
-    stdev *= std::sqrt(autocorrelation_inflation(data, train, phi));
-  }
-
-  /// The residuals of filtered, decimated data are autocorrelated, so the white-noise covariance
-  /// (sigma^2 (W^T W)^-1, or a filter's P) understates the parameters' variance: it is inflated by
-  /// the residual's integrated autocorrelation time S / n_eff (effective_samples, Geyer 1992), the
-  /// row-weighted mean over the joints, at least 1.
-  static double autocorrelation_inflation(const StackedData& data, const std::vector<char>& train,
-                                          const ParamVec& phi) {
-    const Eigen::Index S = data.t.size();
-    double rows = 0, weighted = 0;
-    Eigen::VectorXd e(S);
-    for (int j = 0; j < N; ++j) {
-      Eigen::Index n = 0;
-      for (Eigen::Index s = 0; s < S; ++s) {
-        if (!train[s] || !data.fit_row[s * N + j]) continue;
-        e[n++] = data.y[s * N + j] - data.W.row(s * N + j).dot(phi);
-      }
-      if (n < 8) continue;
-      const double dn = static_cast<double>(n);
-      rows += dn;
-      weighted += dn * dn / effective_samples(e.head(n));
-    }
-    return rows > 0 ? std::max(1.0, weighted / rows) : 1.0;
+    stdev *= std::sqrt(autocorrelation_inflation(data, train, data.y - data.W * phi));
   }
 
   static std::string param_name(int i) {
@@ -292,6 +273,7 @@ class IdentifyPipeline {
   /// K(j, c) at every sample) filtered in parallel.
   struct Segment {
     Eigen::MatrixXd q, qd, qdd, tau, Kt, Kt_load;
+    Eigen::MatrixXd Et;  ///< effect columns over time (column j * m + c), filtered in parallel
   };
 
   Segment process_segment(const JointLog& log, Eigen::Index a, Eigen::Index b, const ButterworthLowPass& filter,
@@ -375,6 +357,10 @@ class IdentifyPipeline {
     };
     g.Kt = regressor_over_time(true);
     if (opt_.load_regressor) g.Kt_load = regressor_over_time(false);
+    if (!opt_.effects.empty()) {
+      g.Et = effect_columns_over_time(opt_.effects, g.q, g.qd, g.qdd, v, Eigen::VectorXd(band));
+      filter.filtfilt(g.Et);
+    }
     return g;
   }
 
@@ -486,40 +472,46 @@ IdentifyResult run_identify(const RobotDescription& robot, const JointLog& log, 
     res.validation = "blocked " + std::to_string(folds) + "-fold cross-validation, " +
                      std::to_string(opt.block_seconds).substr(0, 4) + " s blocks";
   }
-  Eigen::VectorXd pred = Eigen::VectorXd::Constant(S * N, std::nan(""));
-  typename Pipe::ParamVec phi, stdev;
-  for (int f = 0; f < folds; ++f) {
-    std::vector<char> train(static_cast<size_t>(S));
-    for (Eigen::Index s = 0; s < S; ++s) train[s] = fold[s] != f;
-    pipe.fit(data, train, phi, stdev);
-    for (Eigen::Index s = 0; s < S; ++s) {
-      if (fold[s] != f) continue;
-      pred.segment(s * N, N) = data.W.block(s * N, 0, N, P) * phi;
+  if (!opt.effects.empty()) {
+    // Effect terms (model_effects.hpp): [W E] fitted at run time, validated the same way.
+    fit_effect_model(data, opt.effects, fold, folds, robot, opt, res);
+    res.model = model_spec_name({Terms, opt.effects});
+  } else {
+    Eigen::VectorXd pred = Eigen::VectorXd::Constant(S * N, std::nan(""));
+    typename Pipe::ParamVec phi, stdev;
+    for (int f = 0; f < folds; ++f) {
+      std::vector<char> train(static_cast<size_t>(S));
+      for (Eigen::Index s = 0; s < S; ++s) train[s] = fold[s] != f;
+      pipe.fit(data, train, phi, stdev);
+      for (Eigen::Index s = 0; s < S; ++s) {
+        if (fold[s] != f) continue;
+        pred.segment(s * N, N) = data.W.block(s * N, 0, N, P) * phi;
+      }
     }
-  }
-  // Metrics from the pooled out-of-fold residuals.
-  res.joints = torque_metrics(data.y, pred, N, robot.tau_max);
-  // Final fit on all data: reported parameters.
-  std::vector<char> all(static_cast<size_t>(S), 1);
-  const auto t0 = std::chrono::steady_clock::now();
-  ConsistentSolution consistent;
-  pipe.fit(data, all, phi, stdev, &res.condition_number, &consistent);
-  res.fit_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  for (int i = 0; i < P; ++i) res.params.push_back({Pipe::param_name(i), phi[i], stdev[i]});
-  {
-    char line[200];
-    std::snprintf(line, sizeof line,
-                  "parameter std: the white-noise figures times %.3g for the residual's autocorrelation (S / n_eff)",
-                  std::sqrt(Pipe::autocorrelation_inflation(data, all, phi)));
-    res.notes.push_back(line);
-  }
-  for (size_t l = 0; l < consistent.min_eigenvalue.size(); ++l) {
-    const std::array<double, 10> v = physical_parameters(consistent.standard.data() + 10 * l);
-    res.links.push_back({static_cast<int>(l) + 1,
-                         v[0],
-                         {v[1], v[2], v[3]},
-                         {v[4], v[5], v[6], v[7], v[8], v[9]},
-                         consistent.min_eigenvalue[l]});
+    // Metrics from the pooled out-of-fold residuals.
+    res.joints = torque_metrics(data.y, pred, N, robot.tau_max);
+    // Final fit on all data: reported parameters.
+    std::vector<char> all(static_cast<size_t>(S), 1);
+    const auto t0 = std::chrono::steady_clock::now();
+    ConsistentSolution consistent;
+    pipe.fit(data, all, phi, stdev, &res.condition_number, &consistent);
+    res.fit_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    for (int i = 0; i < P; ++i) res.params.push_back({Pipe::param_name(i), phi[i], stdev[i]});
+    {
+      char line[200];
+      std::snprintf(line, sizeof line,
+                    "parameter std: the white-noise figures times %.3g for the residual's autocorrelation (S / n_eff)",
+                    std::sqrt(autocorrelation_inflation(data, all, data.y - data.W * phi)));
+      res.notes.push_back(line);
+    }
+    for (size_t l = 0; l < consistent.min_eigenvalue.size(); ++l) {
+      const std::array<double, 10> v = physical_parameters(consistent.standard.data() + 10 * l);
+      res.links.push_back({static_cast<int>(l) + 1,
+                           v[0],
+                           {v[1], v[2], v[3]},
+                           {v[4], v[5], v[6], v[7], v[8], v[9]},
+                           consistent.min_eigenvalue[l]});
+    }
   }
   for (int j = 0; j < N; ++j) {
     if (!(Terms & term::rotor_inertia) || Robot::rotor_inertia_separate(j)) continue;

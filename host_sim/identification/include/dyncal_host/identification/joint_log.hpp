@@ -49,6 +49,15 @@ struct JointLog {
 /// time not strictly increasing (with its row), fewer than 3 samples.
 JointLog read_csv_log(const std::string& path, int expected_joints);
 
+/// Reads a CSV log of motor currents: as read_csv_log with columns `i1..iN` [A] (motor k's current
+/// in column ik) in place of `tau1..tauN`. Joint torque tau = N^T diag(Kt) i [Nm]: each motor's
+/// torque Kt_k i_k reflected to the joints by the transpose of the transmission matrix N (q_motor =
+/// N q; coupled motors included). Friction and rotor inertia stay in the fitted model (they are not
+/// subtracted here). Throws InputError as read_csv_log, and when `torque_constants` is not one per
+/// motor (the robot file gives none).
+JointLog read_current_csv_log(const std::string& path, const Eigen::MatrixXd& transmission,
+                              const Eigen::VectorXd& torque_constants);
+
 /// Writes `log` as a CSV that read_csv_log reads back exactly: header `t, q1..qN, [qd1..qdN,]
 /// [qdd1..qddN,] tau1..tauN` (qd, qdd only when measured), 17 significant digits. Throws
 /// InputError when the file cannot be written.

@@ -14,9 +14,10 @@ namespace dyncal::host {
 /// Identified parameters of one robot and model, in the model's parameter order.
 struct ParameterSet {
   std::string robot, model, source;
-  unsigned terms = 0;               ///< dyncal::term bits of `model`
-  bool friction_per_motor = false;  ///< "friction_per": "motor" (robot.json's coupling modelled) or "joint"
-  std::vector<std::string> names;   ///< the compiled robot's parameter names for `model`
+  unsigned terms = 0;                ///< dyncal::term bits of `model`
+  std::vector<ModelEffect> effects;  ///< effect terms of `model` after the compiled ones (model_effects.hpp)
+  bool friction_per_motor = false;   ///< "friction_per": "motor" (robot.json's coupling modelled) or "joint"
+  std::vector<std::string> names;    ///< the compiled robot's parameter names for the terms, then the effects'
   Eigen::VectorXd values;
 };
 
@@ -36,7 +37,7 @@ std::vector<JointMetrics> torque_metrics(const Eigen::VectorXd& y, const Eigen::
 
 /// The torque of `log` predicted by `params` (every sample, none fitted): log prepared as identify
 /// prepares it with `options` (filter, cut-off, decimation; terms and friction per motor or per joint
-/// taken from params), tau_hat = W phi.
+/// taken from params), tau_hat = W phi, or [W E] phi with effect terms (effect_model.hpp).
 /// Throws InputError: params for another robot than `robot`, and whatever prepare_stacked throws.
 LogPrediction predict(const RobotDescription& robot, const JointLog& log, IdentifyOptions options,
                       const ParameterSet& params);

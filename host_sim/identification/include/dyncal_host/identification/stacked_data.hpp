@@ -16,6 +16,9 @@ struct StackedData {
   Eigen::MatrixXd W_load;          ///< (S N) x P regressor at qdd = 0, filtered and stacked as W (only with
                                    ///< IdentifyOptions::load_regressor, else empty): its rigid-body columns times
                                    ///< phi give the load torque h(q, qd), gravity and velocity products [Nm]
+  Eigen::MatrixXd E;               ///< (S N) x m columns of IdentifyOptions::effects, computed at the log's rate
+                                   ///< and filtered in parallel as W (effect_model.hpp); load friction's are 0
+                                   ///< here (they need the fit's rigid-body torque: effect_design)
   Eigen::VectorXd y;               ///< (S N) torques [Nm]
   Eigen::VectorXd t;               ///< S sample times [s]
   double rate_hz = 0;              ///< after decimation
@@ -26,6 +29,13 @@ struct StackedData {
   double cutoff_hz = 0;
   std::vector<std::string> notes;  ///< what preparation did that the user should know (standstill band, segments)
 };
+
+/// The residuals of filtered, decimated data are autocorrelated, so the white-noise covariance
+/// (sigma^2 (W^T W)^-1, or a filter's P) understates the parameters' variance: the factor S / n_eff
+/// to inflate it by, n_eff the residual's effective samples (signal.hpp: effective_samples, Geyer
+/// 1992) per joint over the rows with train[s] and fit_row, the row-weighted mean over the joints, at
+/// least 1. residual: (S N) stacked, y - W phi.
+double autocorrelation_inflation(const StackedData& d, const std::vector<char>& train, const Eigen::VectorXd& residual);
 
 /// Prepares `log` for the declared model options.terms (a built term set, model_terms.hpp) of
 /// `robot` (a compiled robot, compiled_robot.hpp). Throws InputError.

@@ -1,0 +1,268 @@
+#include "dyncal_host/common/model_effects.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <utility>
+
+#include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/common/model_terms.hpp"
+
+namespace dyncal::host {
+namespace {
+
+struct KindInfo {
+  EffectKind kind;
+  const char* name;
+  bool needs_shape;
+};
+
+constexpr KindInfo kKinds[] = {
+    {EffectKind::stribeck, "stribeck", true},
+    {EffectKind::asymmetric_friction, "asymmetric_friction", false},
+    {EffectKind::velocity_power, "velocity_power", false},
+    {EffectKind::load_friction, "load_friction", false},
+    {EffectKind::rotor_inertia, "rotor_inertia", false},
+    {EffectKind::offset, "offset", false},
+    {EffectKind::position_periodic, "position_periodic", true},
+    {EffectKind::coupling, "coupling", false},
+};
+
+const KindInfo* find_kind(const std::string& name) {
+  for (const KindInfo& k : kKinds)
+    if (name == k.name) return &k;
+  return nullptr;
+}
+
+const KindInfo& info(EffectKind kind) {
+  for (const KindInfo& k : kKinds)
+    if (k.kind == kind) return k;
+  return kKinds[5];
+}
+
+std::string kind_list() {
+  std::string out;
+  for (const KindInfo& k : kKinds) out += std::string(out.empty() ? "" : ", ") + k.name;
+  return out;
+}
+
+/// A 1-based joint number of 1..N from `text`, or -1.
+int joint_number(const std::string& text, int num_joints) {
+  if (text.empty() || text.size() > 2 || text.find_first_not_of("0123456789") != std::string::npos) return -1;
+  const int j = std::atoi(text.c_str());
+  return j >= 1 && j <= num_joints ? j : -1;
+}
+
+std::string J(int j) {
+  return std::to_string(j + 1);
+}
+
+/// A coupling's ratio |r| (shape; 0 means 1).
+double ratio(const ModelEffect& e) {
+  return e.shape > 0 ? e.shape : 1.0;
+}
+
+bool same_effect(const ModelEffect& a, const ModelEffect& b) {
+  if (a.kind != b.kind || a.joint != b.joint) return false;
+  if (a.kind == EffectKind::coupling) return a.joint2 == b.joint2 && a.sign == b.sign && ratio(a) == ratio(b);
+  return a.shape == b.shape;
+}
+
+}  // namespace
+
+const char* effect_kind_name(EffectKind k) {
+  return info(k).name;
+}
+
+std::string effect_item(const ModelEffect& e) {
+  std::string out = std::string(effect_kind_name(e.kind)) + ":" + J(e.joint);
+  if (e.kind == EffectKind::coupling) out += (e.sign > 0 ? "+" : "-") + J(e.joint2);
+  if (info(e.kind).needs_shape || (e.kind == EffectKind::coupling && ratio(e) != 1.0)) {
+    char number[32];
+    std::snprintf(number, sizeof number, ":%.17g", e.shape);
+    out += number;
+  }
+  return out;
+}
+
+std::vector<std::string> effect_param_names(const ModelEffect& e) {
+  const std::string j = J(e.joint);
+  switch (e.kind) {
+    case EffectKind::stribeck:
+      return {"Fs" + j};
+    case EffectKind::asymmetric_friction:
+      return {"Fc+" + j, "Fv+" + j};
+    case EffectKind::velocity_power:
+      return {"Fp" + j};
+    case EffectKind::load_friction:
+      return {"Fl" + j};
+    case EffectKind::rotor_inertia:
+      return {"Ia" + j};
+    case EffectKind::offset:
+      return {"offset" + j};
+    case EffectKind::position_periodic:
+      return {"A" + j + "_sin", "A" + j + "_cos"};
+    case EffectKind::coupling: {
+      const std::string tag = j + (e.sign > 0 ? "+" : "-") + J(e.joint2);
+      return {"Fc" + tag, "Fv" + tag, "Ia" + tag};
+    }
+  }
+  return {};
+}
+
+EffectTerm effect_term(const ModelEffect& e, const double* coefficients) {
+  EffectTerm t;
+  t.kind = e.kind;
+  t.joint = static_cast<std::uint8_t>(e.joint);
+  if (e.kind == EffectKind::coupling) {
+    t.joint2 = static_cast<std::uint8_t>(e.joint2);
+    t.sign = static_cast<std::int8_t>(e.sign > 0 ? 1 : -1);
+  }
+  t.shape = static_cast<float>(e.shape);
+  const size_t m = effect_param_names(e).size();
+  for (size_t k = 0; k < m && k < 3; ++k) t.c[k] = static_cast<float>(coefficients[k]);
+  return t;
+}
+
+ModelSpec parse_model_spec(const std::string& model, int num_joints) {
+  ModelSpec spec;
+  std::vector<std::pair<ModelEffect, std::string>> effects;
+  std::string terms_only;
+  std::stringstream ss(model);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    const size_t colon = item.find(':');
+    if (colon == std::string::npos) {
+      terms_only += item + ",";
+      continue;
+    }
+    const std::string where = "model item '" + item + "'";
+    const KindInfo* k = find_kind(item.substr(0, colon));
+    if (!k) throw InputError(where + ": unknown effect (expected one of " + kind_list() + ")");
+    std::string rest = item.substr(colon + 1), shape_text;
+    const size_t colon2 = rest.find(':');
+    if (colon2 != std::string::npos) {
+      shape_text = rest.substr(colon2 + 1);
+      rest = rest.substr(0, colon2);
+    }
+    ModelEffect e;
+    e.kind = k->kind;
+    if (k->kind == EffectKind::coupling) {
+      const size_t op = rest.find_first_of("+-");
+      const int a = op == std::string::npos ? -1 : joint_number(rest.substr(0, op), num_joints);
+      const int b = op == std::string::npos ? -1 : joint_number(rest.substr(op + 1), num_joints);
+      if (a < 0 || b < 0)
+        throw InputError(where + ": expected coupling:I+J or coupling:I-J with joints 1.." +
+                         std::to_string(num_joints));
+      if (a == b) throw InputError(where + ": a joint coupled with itself");
+      e.joint = a - 1;
+      e.joint2 = b - 1;
+      e.sign = rest[op] == '+' ? 1 : -1;
+    } else {
+      const int a = joint_number(rest, num_joints);
+      if (a < 0) throw InputError(where + ": joint '" + rest + "' is not 1.." + std::to_string(num_joints));
+      e.joint = a - 1;
+    }
+    if (k->needs_shape) {
+      char* end = nullptr;
+      e.shape = shape_text.empty() ? 0.0 : std::strtod(shape_text.c_str(), &end);
+      if (shape_text.empty() || *end != '\0' || !std::isfinite(e.shape) || !(e.shape > 0))
+        throw InputError(where + ": needs a positive " +
+                         (k->kind == EffectKind::stribeck ? std::string("velocity scale [rad/s]")
+                                                          : std::string("number of cycles per revolution")) +
+                         " after a second ':'");
+    } else if (k->kind == EffectKind::coupling && colon2 != std::string::npos) {
+      char* end = nullptr;
+      e.shape = std::strtod(shape_text.c_str(), &end);
+      if (shape_text.empty() || *end != '\0' || !std::isfinite(e.shape) || !(e.shape > 0))
+        throw InputError(where + ": the ratio after a second ':' must be a positive number");
+    } else if (colon2 != std::string::npos) {
+      throw InputError(where + ": " + k->name + " takes no shape");
+    }
+    effects.emplace_back(e, where);
+  }
+  spec.terms = parse_model(terms_only);
+  for (const auto& [e, where] : effects) add_effect(spec, e, where);
+  return spec;
+}
+
+bool model_contains(const ModelSpec& spec, const ModelEffect& e) {
+  if (e.kind == EffectKind::rotor_inertia && (spec.terms & term::rotor_inertia)) return true;
+  if (e.kind == EffectKind::offset && (spec.terms & term::offset)) return true;
+  for (const ModelEffect& o : spec.effects)
+    if (same_effect(o, e)) return true;
+  return false;
+}
+
+void add_effect(ModelSpec& spec, const ModelEffect& e, const std::string& where) {
+  if (e.kind == EffectKind::rotor_inertia && (spec.terms & term::rotor_inertia))
+    throw InputError(where + ": the model's rotor_inertia term already gives every joint its Ia");
+  if (e.kind == EffectKind::offset && (spec.terms & term::offset))
+    throw InputError(where + ": the model's offset term already gives every joint an offset");
+  if (model_contains(spec, e)) throw InputError(where + ": the same effect twice");
+  spec.effects.push_back(e);
+}
+
+std::string model_spec_name(const ModelSpec& spec) {
+  std::string out = model_name(spec.terms);
+  for (const ModelEffect& e : spec.effects) out += "," + effect_item(e);
+  return out;
+}
+
+std::vector<ModelEffect> read_diagnosed_effects(const std::string& path, int num_joints,
+                                                std::vector<std::string>* skipped) {
+  std::ifstream in(path);
+  if (!in) throw InputError("cannot read '" + path + "'");
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(path + ": invalid JSON: " + e.what());
+  }
+  if (!j.is_object() || !j.contains("declared_model") || !j.contains("effects") || !j["effects"].is_array())
+    throw InputError(path + ": not a dyncal diagnose report (\"declared_model\" and \"effects\")");
+  std::vector<ModelEffect> out;
+  for (size_t i = 0; i < j["effects"].size(); ++i) {
+    const nlohmann::json& x = j["effects"][i];
+    const std::string where = path + ": effects[" + std::to_string(i + 1) + "]";
+    if (!x.is_object() || !x.contains("kind") || !x["kind"].is_string())
+      throw InputError(where + ": expected an object with a 'kind'");
+    const std::string name = x["kind"].get<std::string>();
+    if (!x.contains("joints") || !x["joints"].is_array() || x["joints"].empty())
+      throw InputError(where + ": 'joints' missing");
+    std::vector<int> joints;
+    for (const auto& v : x["joints"]) {
+      if (!v.is_number_integer() || v.get<int>() < 1 || v.get<int>() > num_joints)
+        throw InputError(where + ": joints must be 1.." + std::to_string(num_joints));
+      joints.push_back(v.get<int>() - 1);
+    }
+    if (name == "drift") {
+      if (skipped) skipped->push_back("drift on joint " + std::to_string(joints.front() + 1));
+      continue;
+    }
+    const KindInfo* k = find_kind(name);
+    if (!k) throw InputError(where + ": unknown kind '" + name + "' (expected one of " + kind_list() + ", drift)");
+    ModelEffect e;
+    e.kind = k->kind;
+    e.joint = joints.front();
+    if (k->kind == EffectKind::coupling) {
+      if (joints.size() != 2 || joints[0] == joints[1]) throw InputError(where + ": a coupling needs two joints");
+      e.joint2 = joints[1];
+      e.sign = x.value("sign", 1.0) < 0 ? -1 : 1;
+      e.shape =
+          x.contains("shape") && x["shape"].is_number() && x["shape"].get<double>() > 0 ? x["shape"].get<double>() : 0;
+    }
+    if (k->needs_shape) {
+      if (!x.contains("shape") || !x["shape"].is_number() || !(x["shape"].get<double>() > 0))
+        throw InputError(where + ": '" + name + "' needs a positive 'shape'");
+      e.shape = x["shape"].get<double>();
+    }
+    out.push_back(e);
+  }
+  return out;
+}
+
+}  // namespace dyncal::host
