@@ -3,6 +3,7 @@
 // than with the declared model alone.
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <sstream>
 
 #include "dyncal_host/calibration/calibrate.hpp"
@@ -30,7 +31,16 @@ TEST(CalibrateDiagnose, FlashedEffectsCutTheDrivesModelError) {
   ASSERT_TRUE(with.flashed) << with.flash_message;
   print_calibrate_report(std::cout, with);
   ASSERT_FALSE(with.effects.empty());
-  EXPECT_NE(with.effects.front().find("q5 + q6"), std::string::npos) << with.effects.front();
+  // The simulated drive's coupled motor turns with q5 + q6: found with its ratio (1, within the
+  // reported 95 % interval).
+  const std::string& first = with.effects.front();
+  EXPECT_NE(first.find("motor turning with q5 + "), std::string::npos) << first;
+  const size_t at = first.find("ratio 95 % ");
+  ASSERT_NE(at, std::string::npos) << first;
+  double lo = 0, hi = 0;
+  ASSERT_EQ(std::sscanf(first.c_str() + at, "ratio 95 %% %lf..%lf", &lo, &hi), 2) << first;
+  EXPECT_LE(lo, 1.0);
+  EXPECT_GE(hi, 1.0);
   for (int j : {4, 5}) {
     EXPECT_LE(with.drive_error_after[j], 0.5 * plain.drive_error_after[j])
         << "joint " << j + 1 << ": " << plain.drive_error_after[j] << " -> " << with.drive_error_after[j];

@@ -1,5 +1,6 @@
 #include "candidates.hpp"
 
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
@@ -7,6 +8,7 @@
 
 #include "dyncal/friction.hpp"
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/identification/signal.hpp"
 #include "harmonic_fit.hpp"
 
 namespace dyncal::host::detail {
@@ -136,15 +138,149 @@ void position_periodic(const CandidateContext& c, int i, int, std::vector<Candid
   out.back().searched = c.max_cycles;
 }
 
-void coupling(const CandidateContext& c, int i, int j, std::vector<Candidate>& out) {
-  // A motor turning with q_i +/- q_j whose friction and inertia act on both joints.
-  for (double sign : {1.0, -1.0}) {
-    const std::string tag = J(i) + (sign > 0 ? "+" : "-") + J(j);
-    out.push_back(table_candidate(c, Effect::coupling, EffectKind::coupling, {i, j},
-                                  {"Fc" + tag, "Fv" + tag, "Ia" + tag}, 0.0, sign));
-    out.back().detail = "motor turning with q" + J(i) + (sign > 0 ? " + q" : " - q") + J(j);
-    out.back().searched = 2;
+/// The model's columns local to joints i and j (non-zero only on their rows: their friction,
+/// rotor inertia, offset and effect terms), the ones a coupling's columns trade off with.
+std::vector<Index> local_columns(const CandidateContext& c, int i, int j) {
+  const MatrixXd& X = *c.model_X;
+  const int N = static_cast<int>(c.data.q.cols());
+  std::vector<Index> out;
+  for (Index k = 0; k < X.cols(); ++k) {
+    bool on_pair = false, elsewhere = false;
+    for (Index r = 0; r < X.rows() && !elsewhere; ++r) {
+      if (X(r, k) == 0.0) continue;
+      const int joint = static_cast<int>(r % N);
+      if (joint == i || joint == j)
+        on_pair = true;
+      else
+        elsewhere = true;
+    }
+    if (on_pair && !elsewhere) out.push_back(k);
   }
+  return out;
+}
+
+/// How much of the weighted residual of joints i and j a motor turning with qd_i + r qd_j explains
+/// once it is fitted jointly with the model's columns local to the pair (Frisch-Waugh: the residual
+/// is already orthogonal to them, so the gain is g^T S^-1 g with S the Schur complement of their
+/// Gram). Its columns: sgn(v), v, a (v = qd_i + r qd_j, a = qdd_i + r qdd_j) on joint i and r times
+/// them on joint j. Returns the weighted RSS it removes.
+double coupling_gain(const CandidateContext& c, int i, int j, const std::vector<Index>& local, double r) {
+  const StackedData& d = c.data;
+  const MatrixXd& X = *c.model_X;
+  const int N = static_cast<int>(d.q.cols());
+  const Index k = static_cast<Index>(local.size());
+  const double w2[2] = {c.joint_weights[i] * c.joint_weights[i], c.joint_weights[j] * c.joint_weights[j]};
+  MatrixXd LL = MatrixXd::Zero(k, k), LC = MatrixXd::Zero(k, 3);
+  Eigen::Matrix3d CC = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d g = Eigen::Vector3d::Zero();
+  VectorXd l(k);
+  for (Index s = 0; s < d.t.size(); ++s) {
+    const double v = d.qd(s, i) + r * d.qd(s, j), a = d.qdd(s, i) + r * d.qdd(s, j);
+    const Eigen::Vector3d x(v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0), v, a);
+    const int joints[2] = {i, j};
+    const double scale[2] = {1.0, r};
+    for (int p = 0; p < 2; ++p) {
+      const Index row = s * N + joints[p];
+      const Eigen::Vector3d cx = scale[p] * x;
+      for (Index q = 0; q < k; ++q) l[q] = X(row, local[static_cast<size_t>(q)]);
+      LL.noalias() += w2[p] * l * l.transpose();
+      LC.noalias() += w2[p] * l * cx.transpose();
+      CC.noalias() += w2[p] * cx * cx.transpose();
+      g += w2[p] * c.residual[row] * cx;
+    }
+  }
+  const double ridge = 1e-12 * std::max(1.0, CC.diagonal().maxCoeff());
+  Eigen::Matrix3d schur = CC;
+  if (k > 0) {
+    LL.diagonal().array() += 1e-12 * std::max(1.0, LL.diagonal().maxCoeff());
+    schur -= LC.transpose() * LL.ldlt().solve(LC);
+  }
+  schur.diagonal().array() += ridge;
+  return std::max(0.0, g.dot(schur.ldlt().solve(g)));
+}
+
+void coupling(const CandidateContext& c, int i, int j, std::vector<Candidate>& out) {
+  // A motor turning with q_i + r q_j whose friction and inertia act on joint i and, by the
+  // transmission's transpose, r times on joint j. The ratio r is searched on a log grid of
+  // kRatioGrid values per sign over [1 / kRatioSpan, kRatioSpan] (1 included), refined by golden
+  // section between the best point's neighbours, and given a 95 % profile interval: the ratios
+  // whose residual a likelihood-ratio test (chi^2_1, 3.84, with the pair's effective samples)
+  // cannot tell from the best.
+  constexpr int kRatioGrid = 33;
+  constexpr double kRatioSpan = 5.0;
+  const double step = 2.0 * std::log(kRatioSpan) / (kRatioGrid - 1);
+  const std::vector<Index> local = local_columns(c, i, j);
+  auto log_ratio = [&](int k) { return -std::log(kRatioSpan) + k * step; };
+  double gains[2][kRatioGrid];
+  double best_gain = -1, best_log = 0;
+  int best_k = 0, best_side = 0;
+  for (int side = 0; side < 2; ++side)
+    for (int k = 0; k < kRatioGrid; ++k) {
+      gains[side][k] = coupling_gain(c, i, j, local, (side == 0 ? 1.0 : -1.0) * std::exp(log_ratio(k)));
+      if (gains[side][k] > best_gain) best_gain = gains[side][k], best_k = k, best_side = side;
+    }
+  const double best_sign = best_side == 0 ? 1.0 : -1.0;
+  best_log = log_ratio(best_k);
+  // Golden section on log r between the neighbours of the best grid point.
+  auto gain_at = [&](double lr) { return coupling_gain(c, i, j, local, best_sign * std::exp(lr)); };
+  double lo = best_log - step, hi = best_log + step;
+  const double phi = 0.5 * (std::sqrt(5.0) - 1.0);
+  double x1 = hi - phi * (hi - lo), x2 = lo + phi * (hi - lo), f1 = gain_at(x1), f2 = gain_at(x2);
+  for (int it = 0; it < 20; ++it) {
+    if (f1 > f2) {
+      hi = x2, x2 = x1, f2 = f1, x1 = hi - phi * (hi - lo), f1 = gain_at(x1);
+    } else {
+      lo = x1, x1 = x2, f1 = f2, x2 = lo + phi * (hi - lo), f2 = gain_at(x2);
+    }
+  }
+  if (std::max(f1, f2) > best_gain) best_log = f1 > f2 ? x1 : x2, best_gain = std::max(f1, f2);
+  const double r = best_sign * std::exp(best_log);
+  // Profile interval: the weighted RSS of the pair after the effect against the best's, walked out
+  // on the grid and bisected at each boundary; clipped to the searched span.
+  const int N = static_cast<int>(c.data.q.cols());
+  double rss0 = 0;
+  VectorXd ri(c.data.t.size()), rj(c.data.t.size());
+  for (Index s = 0; s < c.data.t.size(); ++s) {
+    ri[s] = c.residual[s * N + i];
+    rj[s] = c.residual[s * N + j];
+    rss0 += std::pow(c.joint_weights[i] * ri[s], 2) + std::pow(c.joint_weights[j] * rj[s], 2);
+  }
+  const double n_eff = 0.5 * (effective_samples(ri) + effective_samples(rj));
+  const double rss_best = std::max(1e-300, rss0 - best_gain);
+  auto inside_gain = [&](double gain) { return n_eff * std::log(std::max(1e-300, rss0 - gain) / rss_best) <= 3.84; };
+  // Each bound: steps out from the best, doubling from step / 8, to the first ratio outside (or
+  // the searched span's end: an open bound), then bisection.
+  const double span_lo = log_ratio(0), span_hi = log_ratio(kRatioGrid - 1);
+  auto bound = [&](int dir) {
+    double in = best_log, width = step / 8;
+    for (;;) {
+      const double next = std::clamp(best_log + dir * width, span_lo, span_hi);
+      if (!inside_gain(gain_at(next))) {
+        double outside = next;
+        for (int it = 0; it < 10; ++it) {
+          const double mid = 0.5 * (in + outside);
+          (inside_gain(gain_at(mid)) ? in : outside) = mid;
+        }
+        return in;
+      }
+      in = next;
+      if (next == span_lo || next == span_hi) return next;
+      width *= 2;
+    }
+  };
+  const double lo_log = bound(-1), hi_log = bound(+1);
+  const std::string tag = J(i) + (r > 0 ? "+" : "-") + J(j);
+  Candidate cand =
+      table_candidate(c, Effect::coupling, EffectKind::coupling, {i, j}, {"Fc" + tag, "Fv" + tag, "Ia" + tag}, 0.0, r);
+  cand.sign = r > 0 ? 1.0 : -1.0;
+  cand.shape = std::abs(r);
+  cand.shape_interval = {std::exp(lo_log), std::exp(hi_log)};
+  std::ostringstream detail;
+  detail << std::setprecision(3) << "motor turning with q" << J(i) << (r > 0 ? " + " : " - ") << std::abs(r) << " q"
+         << J(j) << " (ratio 95 % " << std::exp(lo_log) << ".." << std::exp(hi_log) << ")";
+  cand.detail = detail.str();
+  cand.searched = 2 * kRatioGrid;
+  out.push_back(std::move(cand));
 }
 
 void drift(const CandidateContext& c, int i, int, std::vector<Candidate>& out) {

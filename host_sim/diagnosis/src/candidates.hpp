@@ -23,8 +23,9 @@ struct Candidate {
   Eigen::MatrixXd columns;  ///< (S N) x m
   std::string detail;       ///< e.g. "36 cycles per revolution"
   int searched = 1;         ///< alternatives the search chose among (frequencies, velocity scales, signs)
-  double shape = 0;         ///< velocity scale (stribeck) or cycles per revolution (position_periodic)
-  double sign = 1;          ///< coupling: the motor turns with q_i + sign q_j
+  double shape = 0;  ///< velocity scale (stribeck), cycles per revolution (position_periodic), ratio |r| (coupling)
+  double sign = 1;   ///< coupling: the motor turns with q_i + sign shape q_j
+  std::pair<double, double> shape_interval{0, 0};  ///< 95 % interval of shape where searched (coupling ratio)
 };
 
 /// What the library reads at one greedy step.
@@ -33,8 +34,10 @@ struct CandidateContext {
   int max_cycles = 64;  ///< position-periodic search: 1..max_cycles cycles per revolution
   /// Load torques for load friction (what it is, S N stacked torque [Nm]); the better one is taken.
   std::vector<std::pair<std::string, Eigen::VectorXd>> load_torques;
-  std::vector<std::string> model_names;  ///< parameters of the model so far (no second Ia or offset)
-  Eigen::VectorXd residual;              ///< of the model so far (S N)
+  std::vector<std::string> model_names;      ///< parameters of the model so far (no second Ia or offset)
+  Eigen::VectorXd residual;                  ///< of the model so far (S N)
+  Eigen::VectorXd joint_weights;             ///< the fit's per-joint weights (1 / sigma_j; ones for OLS)
+  const Eigen::MatrixXd* model_X = nullptr;  ///< the model so far's design (S N) x p
 };
 
 /// One effect kind.

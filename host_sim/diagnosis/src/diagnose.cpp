@@ -75,18 +75,27 @@ Evidence weigh(const CrossValidator& cv, const Candidate& c, const Model& m, con
   cv.evaluate(c.columns, val, train, &phi_c, &novelty);
   Evidence e;
   e.collinear = novelty < 1e-6;
-  double v0 = 0, v1 = 0, n_joints = 0;
-  for (int j : c.joints) {
-    n_joints += n_eff[j];
+  // BIC over every joint: the joints share the rigid-body parameters, so a candidate that helps its
+  // own joints and harms others pays for it (each joint's log-RSS ratio, weighted by its n_eff).
+  double v0 = 0, v1 = 0, n_all = 0, harm = 0;
+  std::vector<char> own(static_cast<size_t>(n_eff.size()), 0);
+  for (int j : c.joints) own[static_cast<size_t>(j)] = 1;
+  for (Index j = 0; j < n_eff.size(); ++j) {
+    n_all += n_eff[j];
     e.delta_bic += n_eff[j] * std::log(std::max(1e-300, train[j]) / std::max(1e-300, m.train[j]));
-    v0 += m.val[j] / std::max(1e-300, val_before[j]);  // joints weighted by their own scale
-    v1 += val[j] / std::max(1e-300, val_before[j]);
+    const double before = m.val[j] / std::max(1e-300, val_before[j]), after = val[j] / std::max(1e-300, val_before[j]);
+    if (own[static_cast<size_t>(j)]) {
+      v0 += before;  // joints weighted by their own scale
+      v1 += after;
+    } else {
+      harm += std::max(0.0, after - before);  // another joint's validation made worse
+    }
   }
-  e.delta_bic += static_cast<double>(c.columns.cols()) * std::log(n_joints);
+  e.delta_bic += static_cast<double>(c.columns.cols()) * std::log(n_all);
   // A candidate picked among several alternatives (the best frequency of a spectral search, ...)
   // pays for the look-elsewhere effect: 2 ln(alternatives), a Bonferroni factor in BIC units.
   e.delta_bic += 2.0 * std::log(static_cast<double>(c.searched));
-  e.gain = v0 > 0 ? (v0 - v1) / v0 : 0;
+  e.gain = v0 > 0 ? (v0 - v1 - harm) / v0 : 0;
   e.physical = detail::effect_spec(c.effect).physical(phi_c.tail(c.columns.cols()));
   return e;
 }
@@ -256,27 +265,33 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
     cv.set_base(m.X);
     cv.evaluate(none, m.val, m.train, &m.phi);
   }
-  if (io.method == "wls") {
-    // Gautier's weights, as identify: 1 / sigma_j from the declared model's OLS residual, fixed for
-    // the whole search so that every step minimises the same criterion.
-    const VectorXd sigma = residual_std_per_joint(d, m.train, m.X.cols());
-    cv.set_joint_weights(sigma.cwiseInverse());
+  // Gautier's weights (wls), as identify: 1 / sigma_j from the residual of the model so far,
+  // re-estimated after every effect added (a joint whose error an effect removes weighs more).
+  VectorXd weights = VectorXd::Ones(N);
+  auto reweigh = [&] {
+    if (io.method != "wls") return;
+    weights = residual_std_per_joint(d, m.train, m.X.cols()).cwiseInverse();
+    cv.set_joint_weights(weights);
     cv.set_base(m.X);
     cv.evaluate(none, m.val, m.train, &m.phi);
+  };
+  reweigh();
+  if (io.method == "wls") {
     std::ostringstream note;
-    note << std::setprecision(3) << "weighted least squares (Gautier): joint j's rows weighted by 1/sigma_j, sigma ="
-         << " [";
-    for (int j = 0; j < N; ++j) note << (j ? ", " : "") << sigma[j];
-    note << "] Nm from the declared model's OLS residual";
+    note << std::setprecision(3) << "weighted least squares (Gautier): joint j's rows weighted by 1/sigma_j, sigma = [";
+    for (int j = 0; j < N; ++j) note << (j ? ", " : "") << 1.0 / weights[j];
+    note << "] Nm from the declared model's OLS residual, re-estimated after each effect";
     res.notes.push_back(note.str());
   }
   const Model declared = m;
   const VectorXd oof_before = cv.predict_out_of_fold();
-  detail::CandidateContext library{d, o.max_cycles, load_torques(d, m.phi), {}, {}};
+  detail::CandidateContext library{d, o.max_cycles, load_torques(d, m.phi), {}, {}, weights, &m.X};
 
   for (int step = 0; step < o.max_effects; ++step) {
     library.model_names = m.names;
     library.residual = d.y - m.X * m.phi;
+    library.joint_weights = weights;
+    library.model_X = &m.X;
     const std::vector<Candidate> cands = detail::candidate_library(library);
     const VectorXd n_eff = effective_samples_per_joint(library.residual, N);
     if (step == 0) res.effective_samples_per_joint = n_eff.mean();
@@ -311,16 +326,26 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
     for (Index k = 0; k < c.columns.cols(); ++k) e.params.push_back(m.phi[m.X.cols() - c.columns.cols() + k]);
     e.delta_bic = ev[static_cast<size_t>(best)].delta_bic;
     e.shape = c.shape;
+    e.shape_interval = c.shape_interval;
     e.sign = c.sign;
     e.validation_gain = ev[static_cast<size_t>(best)].gain;
     e.explanation = detail::explain(c, e.params);
     res.effects.push_back(e);
+    reweigh();
   }
 
   res.declared_names = declared.names;
   res.declared_params.assign(m.phi.data(), m.phi.data() + declared.X.cols());
   res.traces = traces(d, declared.X * declared.phi, m.X * m.phi, o.max_cycles);
   res.joints = joint_metrics(d, robot, declared, m, oof_before, cv.predict_out_of_fold());
+  // The report never hides a joint the effects made worse (shared rigid-body parameters).
+  for (const DiagnoseJoint& j : res.joints) {
+    if (res.effects.empty() || !(j.rms_validation_after > j.rms_validation_before)) continue;
+    std::ostringstream note;
+    note << std::setprecision(4) << "joint " << j.joint << ": validation RMS rises " << j.rms_validation_before
+         << " -> " << j.rms_validation_after << " Nm with the effects added";
+    res.notes.push_back(note.str());
+  }
   return res;
 }
 

@@ -93,6 +93,7 @@ nlohmann::json diagnose_report_json(const DiagnoseResult& r) {
                             {"joint", e.joints.front()},
                             {"joints", e.joints},
                             {"shape", e.shape},
+                            {"shape_interval", {e.shape_interval.first, e.shape_interval.second}},
                             {"sign", e.sign},
                             {"item", item},
                             {"parameters", p},

@@ -6,6 +6,7 @@
 #include <optional>
 #include <ostream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "dyncal/effect_terms.hpp"
@@ -45,9 +46,10 @@ struct DiagnosedEffect {
   std::vector<int> joints;  ///< 1-based
   std::vector<std::string> param_names;
   std::vector<double> params;
-  double shape = 0;            ///< velocity scale [rad/s] (stribeck), cycles per revolution (periodic)
-  double sign = 1;             ///< coupling: the motor turns with q_i + sign q_j
-  double delta_bic = 0;        ///< BIC change on the affected joints (negative: evidence for)
+  double shape = 0;  ///< velocity scale [rad/s] (stribeck), cycles per revolution (periodic), ratio |r| (coupling)
+  std::pair<double, double> shape_interval{0, 0};  ///< 95 % profile interval of a searched shape (coupling ratio)
+  double sign = 1;       ///< coupling: the motor turns with q_i + sign shape q_j, its torque on j times sign shape
+  double delta_bic = 0;  ///< BIC change on the affected joints (negative: evidence for)
   double validation_gain = 0;  ///< relative drop of the affected joints' validation RSS
   std::string explanation;
 };
