@@ -165,6 +165,66 @@ TEST_P(EffectModel, DiagnoseFindsACouplingOfAnyRatio) {
   }
 }
 
+// Parsimony (issue 22): a constant offset on arm3's joint 2, which never rests, is asymmetric
+// Coulomb friction's special case (1 = 2 [qd > 0] - sgn qd wherever the joint moves): on this log
+// both remove the same validation error (98.4 %). The one-parameter offset is chosen, and the report
+// names asymmetric friction as indistinguishable. Positions are exact here: with a 20-bit encoder,
+// the samples of a reversal inside the standstill band (where the model's Coulomb torque is 0 and
+// the simulated one is not) let the asymmetric candidate explain part of that too, and it then wins
+// by BIC (-306 against -294) — a real difference on such a log, not a tie.
+TEST(EffectModelArm3, DiagnosePrefersTheSmallerOfNestedEffectsAndSaysSo) {
+  const RobotDescription robot = test_robot("arm3");
+  const double offset = 0.03 * robot.tau_max[1];
+  const ExtraTorque extra = [&](const Eigen::VectorXd&, const Eigen::VectorXd&, const Eigen::VectorXd&,
+                                Eigen::VectorXd& tau) { tau[1] += offset; };
+  const SimulatedLog s = simulate(robot, uniform_times(500.0, 40.0), MotionClock{}, 29, 3, extra, 0.0);
+  DiagnoseOptions o;
+  o.identify.terms = dyncal::kFrictionEq7;
+  o.max_effects = 1;
+  const DiagnoseResult r = diagnose(robot, s.log, o);
+  print_diagnose_report(std::cout, r);
+  ASSERT_EQ(r.effects.size(), 1u);
+  EXPECT_EQ(r.effects[0].kind, Effect::offset);
+  EXPECT_EQ(r.effects[0].joints, (std::vector<int>{2}));
+  EXPECT_NEAR(r.effects[0].params[0], offset, 0.05 * offset);
+  bool named = false;
+  for (const auto& a : r.effects[0].alternatives) named = named || a.find("asymmetric_friction") == 0;
+  EXPECT_TRUE(named) << "asymmetric friction not named as indistinguishable";
+}
+
+// Stribeck friction's velocity scale (issue 22): joint 1 given Fs - Fc = 3 % of tau_max with a
+// velocity scale of 5 % of its top speed. diagnose names a Stribeck effect on joint 1 first, with
+// Fs - Fc within 20 % of the truth, and cuts joint 1's validation RMS in excess of the noise by at
+// least half. The velocity scale is printed, not asserted: scored against the declared model's
+// residual, from which the Eq. 7 fit has taken Stribeck's broad part, it comes out about 30 % low
+// here (0.071 against 0.1 rad/s on arm3), and its interval reflects the noise only.
+TEST_P(EffectModel, DiagnoseFindsStribeckFrictionWithItsVelocityScale) {
+  const RobotDescription robot = test_robot(GetParam());
+  const double dfs = 0.03 * robot.tau_max[0], qds = 0.05 * robot.qd_max[0];
+  const ExtraTorque extra = [&](const Eigen::VectorXd&, const Eigen::VectorXd& qd, const Eigen::VectorXd&,
+                                Eigen::VectorXd& tau) {
+    const double z = qd[0] / qds;
+    tau[0] += dfs * (qd[0] > 0 ? 1.0 : (qd[0] < 0 ? -1.0 : 0.0)) * std::exp(-z * z);
+  };
+  const SimulatedLog s = simulate(robot, uniform_times(500.0, 40.0), MotionClock{}, 37, 3, extra);
+  DiagnoseOptions o;
+  o.identify.terms = dyncal::kFrictionEq7;
+  o.max_effects = 1;
+  const DiagnoseResult r = diagnose(robot, s.log, o);
+  print_diagnose_report(std::cout, r);
+  ASSERT_EQ(r.effects.size(), 1u);
+  const DiagnosedEffect& e = r.effects[0];
+  EXPECT_EQ(e.kind, Effect::stribeck);
+  EXPECT_EQ(e.joints, (std::vector<int>{1}));
+  std::printf("%s: qds %.4g, 95 %% %.4g..%.4g (true %.4g); Fs - Fc %.4g (true %.4g)\n", GetParam(), e.shape,
+              e.shape_interval.first, e.shape_interval.second, qds, e.params[0], dfs);
+  EXPECT_NEAR(e.params[0], dfs, 0.2 * dfs);
+  const DiagnoseJoint& j1 = r.joints[0];
+  const double excess_before = j1.rms_validation_before - s.sigma[0],
+               excess_after = j1.rms_validation_after - s.sigma[0];
+  EXPECT_LE(excess_after, 0.5 * excess_before) << j1.rms_validation_before << " -> " << j1.rms_validation_after;
+}
+
 INSTANTIATE_TEST_SUITE_P(TestRobots, EffectModel, ::testing::Values("arm3", "cobot7"));
 
 int run_dyncal(const std::string& args) {

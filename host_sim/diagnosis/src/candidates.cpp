@@ -10,6 +10,7 @@
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/identification/signal.hpp"
 #include "harmonic_fit.hpp"
+#include "shape_search.hpp"
 
 namespace dyncal::host::detail {
 namespace {
@@ -21,6 +22,15 @@ using Eigen::VectorXd;
 std::string J(int j) {
   return std::to_string(j + 1);
 }
+
+}  // namespace
+
+double motor_velocity(const StackedData& d, Index s, int i, int j, double r) {
+  return signed_velocity(d.qd(s, i) + r * d.qd(s, j), d.qd_raw(s, i) + r * d.qd_raw(s, j),
+                         std::hypot(d.standstill_band[i], r * d.standstill_band[j]));
+}
+
+namespace {
 
 /// A candidate whose columns are lib/'s effect_columns of `kind` on joint i (and, for a coupling,
 /// joint j with the motor's sign), with the load torque `tau_load` (S N) where the kind reads one.
@@ -38,16 +48,30 @@ Candidate table_candidate(const CandidateContext& c, Effect effect, EffectKind k
   out.shape = shape;
   out.sign = sign;
   const int i = out.joints.front(), j = out.joints.back();
+  const Index m = static_cast<Index>(out.names.size());
+  MatrixXd series(S, m);  // joint i's columns over time, filtered in time as the regressor was
   double cols[3];
   for (Index s = 0; s < S; ++s) {
     const double load = tau_load ? (*tau_load)[s * N + i] : 0.0;
-    const int m =
-        effect_columns(kind, shape, sign, d.q(s, i), d.qd(s, i), d.qdd(s, i), d.qd(s, j), d.qdd(s, j), load, cols);
-    for (int k = 0; k < m; ++k) {
-      out.columns(s * N + i, k) = cols[k];
-      if (kind == EffectKind::coupling) out.columns(s * N + j, k) = sign * cols[k];
+    // Velocities as the pipeline's friction columns take them (stacked_data.hpp: signed_velocity);
+    // a coupling's motor velocity and acceleration passed whole.
+    double v, a;
+    if (kind == EffectKind::coupling) {
+      v = motor_velocity(d, s, i, j, sign);
+      a = d.qdd(s, i) + sign * d.qdd(s, j);
+    } else {
+      v = signed_velocity(d.qd(s, i), d.qd_raw(s, i), d.standstill_band[i]);
+      a = d.qdd(s, i);
     }
+    const int w = effect_columns(kind, shape, sign, d.q(s, i), v, a, 0.0, 0.0, load, cols);
+    for (int k = 0; k < w; ++k) series(s, k) = cols[k];
   }
+  filter_in_time(c, series);
+  for (Index s = 0; s < S; ++s)
+    for (Index k = 0; k < m; ++k) {
+      out.columns(s * N + i, k) = series(s, k);
+      if (kind == EffectKind::coupling) out.columns(s * N + j, k) = sign * series(s, k);
+    }
   return out;
 }
 
@@ -76,15 +100,42 @@ bool has(const CandidateContext& c, const std::string& name) {
 // --- generators: the candidates of one kind for joint i (coupling: joints i < j)
 
 void stribeck(const CandidateContext& c, int i, int, std::vector<Candidate>& out) {
-  // Static friction: the best velocity scale of a small grid, relative to the joint's top speed.
-  const double vmax = c.data.qd.col(i).cwiseAbs().maxCoeff();
-  std::vector<Candidate> alternatives;
-  for (double frac : {0.02, 0.05, 0.1, 0.2}) {
-    const double qds = frac * vmax;
-    alternatives.push_back(table_candidate(c, Effect::stribeck, EffectKind::stribeck, {i}, {"Fs" + J(i)}, qds, 1.0));
-    alternatives.back().detail = "velocity scale " + std::to_string(qds).substr(0, 5) + " rad/s";
-  }
-  out.push_back(best_of(std::move(alternatives), c.residual));
+  // Static friction sgn(qd) exp(-(qd / qds)^2): the velocity scale qds by profile search
+  // (shape_search.hpp) over 17 log-spaced values from 1 % to 20 % of the joint's top speed in the
+  // log. Above that, sgn(qd) exp(-(qd / qds)^2) is no
+  // low-speed effect: over the log's speeds it becomes sgn(qd) (1 - qd^2 / qds^2), Coulomb friction
+  // and a polynomial in the speed.
+  constexpr int kScaleGrid = 17;
+  const StackedData& d = c.data;
+  const double vmax = d.qd.col(i).cwiseAbs().maxCoeff();
+  if (!(vmax > 0)) return;
+  // Scored by the column's own projection on the residual (no local columns: a broad Stribeck
+  // column fitted with the joint's Coulomb and viscous columns turns into a polynomial in the speed
+  // that explains any smooth friction error, not a low-speed effect).
+  const std::vector<int> joint{i};
+  const std::vector<Index> none;
+  double rss = 0, n_eff = 0;
+  residual_scale(c, joint, rss, n_eff);
+  auto gain = [&](double lq) {
+    const double qds = std::exp(lq);
+    return local_gain<1>(
+        c, joint, none,
+        [&](Index s, size_t, Eigen::Matrix<double, 1, 1>& x) {
+          const double v = signed_velocity(d.qd(s, i), d.qd_raw(s, i), d.standstill_band[i]), z = v / qds;
+          x[0] = (v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0)) * std::exp(-z * z);
+        },
+        [](const Eigen::Matrix<double, 1, 1>& beta) { return beta[0] > 0; });  // Fs > Fc
+  };
+  const ShapeFit f = profile_search(gain, std::log(0.01 * vmax), std::log(0.2 * vmax), kScaleGrid, rss, n_eff);
+  const double qds = std::exp(f.log_value);
+  Candidate cand = table_candidate(c, Effect::stribeck, EffectKind::stribeck, {i}, {"Fs" + J(i)}, qds, 1.0);
+  cand.shape_interval = {std::exp(f.lo_log), std::exp(f.hi_log)};
+  std::ostringstream detail;
+  detail << std::setprecision(3) << "velocity scale " << qds << " rad/s, 95 % " << cand.shape_interval.first << ".."
+         << cand.shape_interval.second;
+  cand.detail = detail.str();
+  cand.searched = kScaleGrid;
+  out.push_back(std::move(cand));
 }
 
 void asymmetric_friction(const CandidateContext& c, int i, int, std::vector<Candidate>& out) {
@@ -138,146 +189,48 @@ void position_periodic(const CandidateContext& c, int i, int, std::vector<Candid
   out.back().searched = c.max_cycles;
 }
 
-/// The model's columns local to joints i and j (non-zero only on their rows: their friction,
-/// rotor inertia, offset and effect terms), the ones a coupling's columns trade off with.
-std::vector<Index> local_columns(const CandidateContext& c, int i, int j) {
-  const MatrixXd& X = *c.model_X;
-  const int N = static_cast<int>(c.data.q.cols());
-  std::vector<Index> out;
-  for (Index k = 0; k < X.cols(); ++k) {
-    bool on_pair = false, elsewhere = false;
-    for (Index r = 0; r < X.rows() && !elsewhere; ++r) {
-      if (X(r, k) == 0.0) continue;
-      const int joint = static_cast<int>(r % N);
-      if (joint == i || joint == j)
-        on_pair = true;
-      else
-        elsewhere = true;
-    }
-    if (on_pair && !elsewhere) out.push_back(k);
-  }
-  return out;
-}
-
-/// How much of the weighted residual of joints i and j a motor turning with qd_i + r qd_j explains
-/// once it is fitted jointly with the model's columns local to the pair (Frisch-Waugh: the residual
-/// is already orthogonal to them, so the gain is g^T S^-1 g with S the Schur complement of their
-/// Gram). Its columns: sgn(v), v, a (v = qd_i + r qd_j, a = qdd_i + r qdd_j) on joint i and r times
-/// them on joint j. Returns the weighted RSS it removes.
-double coupling_gain(const CandidateContext& c, int i, int j, const std::vector<Index>& local, double r) {
-  const StackedData& d = c.data;
-  const MatrixXd& X = *c.model_X;
-  const int N = static_cast<int>(d.q.cols());
-  const Index k = static_cast<Index>(local.size());
-  const double w2[2] = {c.joint_weights[i] * c.joint_weights[i], c.joint_weights[j] * c.joint_weights[j]};
-  MatrixXd LL = MatrixXd::Zero(k, k), LC = MatrixXd::Zero(k, 3);
-  Eigen::Matrix3d CC = Eigen::Matrix3d::Zero();
-  Eigen::Vector3d g = Eigen::Vector3d::Zero();
-  VectorXd l(k);
-  for (Index s = 0; s < d.t.size(); ++s) {
-    const double v = d.qd(s, i) + r * d.qd(s, j), a = d.qdd(s, i) + r * d.qdd(s, j);
-    const Eigen::Vector3d x(v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0), v, a);
-    const int joints[2] = {i, j};
-    const double scale[2] = {1.0, r};
-    for (int p = 0; p < 2; ++p) {
-      const Index row = s * N + joints[p];
-      const Eigen::Vector3d cx = scale[p] * x;
-      for (Index q = 0; q < k; ++q) l[q] = X(row, local[static_cast<size_t>(q)]);
-      LL.noalias() += w2[p] * l * l.transpose();
-      LC.noalias() += w2[p] * l * cx.transpose();
-      CC.noalias() += w2[p] * cx * cx.transpose();
-      g += w2[p] * c.residual[row] * cx;
-    }
-  }
-  const double ridge = 1e-12 * std::max(1.0, CC.diagonal().maxCoeff());
-  Eigen::Matrix3d schur = CC;
-  if (k > 0) {
-    LL.diagonal().array() += 1e-12 * std::max(1.0, LL.diagonal().maxCoeff());
-    schur -= LC.transpose() * LL.ldlt().solve(LC);
-  }
-  schur.diagonal().array() += ridge;
-  return std::max(0.0, g.dot(schur.ldlt().solve(g)));
-}
-
 void coupling(const CandidateContext& c, int i, int j, std::vector<Candidate>& out) {
   // A motor turning with q_i + r q_j whose friction and inertia act on joint i and, by the
-  // transmission's transpose, r times on joint j. The ratio r is searched on a log grid of
-  // kRatioGrid values per sign over [1 / kRatioSpan, kRatioSpan] (1 included), refined by golden
-  // section between the best point's neighbours, and given a 95 % profile interval: the ratios
-  // whose residual a likelihood-ratio test (chi^2_1, 3.84, with the pair's effective samples)
-  // cannot tell from the best.
+  // transmission's transpose, r times on joint j: columns sgn(v), v, a (v = qd_i + r qd_j, a =
+  // qdd_i + r qdd_j). The ratio r: profile search (shape_search.hpp) over 33 log-spaced values per
+  // sign in [1 / 5, 5] (1 included), the better sign kept.
   constexpr int kRatioGrid = 33;
-  constexpr double kRatioSpan = 5.0;
-  const double step = 2.0 * std::log(kRatioSpan) / (kRatioGrid - 1);
-  const std::vector<Index> local = local_columns(c, i, j);
-  auto log_ratio = [&](int k) { return -std::log(kRatioSpan) + k * step; };
-  double gains[2][kRatioGrid];
-  double best_gain = -1, best_log = 0;
-  int best_k = 0, best_side = 0;
-  for (int side = 0; side < 2; ++side)
-    for (int k = 0; k < kRatioGrid; ++k) {
-      gains[side][k] = coupling_gain(c, i, j, local, (side == 0 ? 1.0 : -1.0) * std::exp(log_ratio(k)));
-      if (gains[side][k] > best_gain) best_gain = gains[side][k], best_k = k, best_side = side;
-    }
-  const double best_sign = best_side == 0 ? 1.0 : -1.0;
-  best_log = log_ratio(best_k);
-  // Golden section on log r between the neighbours of the best grid point.
-  auto gain_at = [&](double lr) { return coupling_gain(c, i, j, local, best_sign * std::exp(lr)); };
-  double lo = best_log - step, hi = best_log + step;
-  const double phi = 0.5 * (std::sqrt(5.0) - 1.0);
-  double x1 = hi - phi * (hi - lo), x2 = lo + phi * (hi - lo), f1 = gain_at(x1), f2 = gain_at(x2);
-  for (int it = 0; it < 20; ++it) {
-    if (f1 > f2) {
-      hi = x2, x2 = x1, f2 = f1, x1 = hi - phi * (hi - lo), f1 = gain_at(x1);
-    } else {
-      lo = x1, x1 = x2, f1 = f2, x2 = lo + phi * (hi - lo), f2 = gain_at(x2);
-    }
+  const double span = std::log(5.0);
+  const StackedData& d = c.data;
+  const std::vector<int> pair{i, j};
+  const std::vector<Index> local = local_columns(c, pair);
+  double rss = 0, n_eff = 0;
+  residual_scale(c, pair, rss, n_eff);
+  ShapeFit best;
+  double best_sign = 1;
+  for (double sign : {1.0, -1.0}) {
+    auto gain = [&](double lr) {
+      const double r = sign * std::exp(lr);
+      return local_gain<3>(
+          c, pair, local,
+          [&](Index s, size_t p, Eigen::Vector3d& x) {
+            const double v = motor_velocity(d, s, i, j, r), a = d.qdd(s, i) + r * d.qdd(s, j);
+            x << (v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0)), v, a;
+            if (p == 1) x *= r;
+          },
+          [](const Eigen::Vector3d& beta) { return beta[0] >= 0 && beta[1] >= 0; });  // friction opposes motion
+    };
+    const ShapeFit f = profile_search(gain, -span, span, kRatioGrid, rss, n_eff);
+    if (f.gain > best.gain) best = f, best_sign = sign;
   }
-  if (std::max(f1, f2) > best_gain) best_log = f1 > f2 ? x1 : x2, best_gain = std::max(f1, f2);
-  const double r = best_sign * std::exp(best_log);
-  // Profile interval: the weighted RSS of the pair after the effect against the best's, walked out
-  // on the grid and bisected at each boundary; clipped to the searched span.
-  const int N = static_cast<int>(c.data.q.cols());
-  double rss0 = 0;
-  VectorXd ri(c.data.t.size()), rj(c.data.t.size());
-  for (Index s = 0; s < c.data.t.size(); ++s) {
-    ri[s] = c.residual[s * N + i];
-    rj[s] = c.residual[s * N + j];
-    rss0 += std::pow(c.joint_weights[i] * ri[s], 2) + std::pow(c.joint_weights[j] * rj[s], 2);
-  }
-  const double n_eff = 0.5 * (effective_samples(ri) + effective_samples(rj));
-  const double rss_best = std::max(1e-300, rss0 - best_gain);
-  auto inside_gain = [&](double gain) { return n_eff * std::log(std::max(1e-300, rss0 - gain) / rss_best) <= 3.84; };
-  // Each bound: steps out from the best, doubling from step / 8, to the first ratio outside (or
-  // the searched span's end: an open bound), then bisection.
-  const double span_lo = log_ratio(0), span_hi = log_ratio(kRatioGrid - 1);
-  auto bound = [&](int dir) {
-    double in = best_log, width = step / 8;
-    for (;;) {
-      const double next = std::clamp(best_log + dir * width, span_lo, span_hi);
-      if (!inside_gain(gain_at(next))) {
-        double outside = next;
-        for (int it = 0; it < 10; ++it) {
-          const double mid = 0.5 * (in + outside);
-          (inside_gain(gain_at(mid)) ? in : outside) = mid;
-        }
-        return in;
-      }
-      in = next;
-      if (next == span_lo || next == span_hi) return next;
-      width *= 2;
-    }
-  };
-  const double lo_log = bound(-1), hi_log = bound(+1);
+  // A ratio the data cannot tell from the smallest searched is no coupling: joint j's share is not
+  // there, and the single-joint kinds (friction, rotor inertia of joint i) cover what is.
+  if (best.lo_log <= -span) return;
+  const double r = best_sign * std::exp(best.log_value);
   const std::string tag = J(i) + (r > 0 ? "+" : "-") + J(j);
   Candidate cand =
       table_candidate(c, Effect::coupling, EffectKind::coupling, {i, j}, {"Fc" + tag, "Fv" + tag, "Ia" + tag}, 0.0, r);
   cand.sign = r > 0 ? 1.0 : -1.0;
   cand.shape = std::abs(r);
-  cand.shape_interval = {std::exp(lo_log), std::exp(hi_log)};
+  cand.shape_interval = {std::exp(best.lo_log), std::exp(best.hi_log)};
   std::ostringstream detail;
   detail << std::setprecision(3) << "motor turning with q" << J(i) << (r > 0 ? " + " : " - ") << std::abs(r) << " q"
-         << J(j) << " (ratio 95 % " << std::exp(lo_log) << ".." << std::exp(hi_log) << ")";
+         << J(j) << " (ratio 95 % " << cand.shape_interval.first << ".." << cand.shape_interval.second << ")";
   cand.detail = detail.str();
   cand.searched = 2 * kRatioGrid;
   out.push_back(std::move(cand));
@@ -408,6 +361,11 @@ const EffectSpec& effect_spec(Effect e) {
   for (const EffectSpec& s : effect_specs())
     if (s.effect == e) return s;
   throw std::logic_error("effect without a table entry");
+}
+
+void filter_in_time(const CandidateContext& c, MatrixXd& series) {
+  if (!c.filter) return;
+  for (const auto& [a, b] : c.segments) c.filter->filtfilt(series.middleRows(a, b - a));
 }
 
 std::vector<Candidate> candidate_library(const CandidateContext& c) {

@@ -11,6 +11,7 @@
 
 #include "dyncal/effect_terms.hpp"
 #include "dyncal_host/diagnosis/diagnose.hpp"
+#include "dyncal_host/identification/butterworth.hpp"
 #include "dyncal_host/identification/stacked_data.hpp"
 
 namespace dyncal::host::detail {
@@ -38,7 +39,21 @@ struct CandidateContext {
   Eigen::VectorXd residual;                  ///< of the model so far (S N)
   Eigen::VectorXd joint_weights;             ///< the fit's per-joint weights (1 / sigma_j; ones for OLS)
   const Eigen::MatrixXd* model_X = nullptr;  ///< the model so far's design (S N) x p
+  /// The identification's zero-phase low-pass at the data's (decimated) rate, and the sample ranges
+  /// of the log's segments: candidate columns are filtered in time as the regressor's were
+  /// (parallel filtering), so that a discontinuous column (a friction sign) meets the filtered
+  /// torque as the model's own columns do. No filter: columns as computed.
+  const ButterworthLowPass* filter = nullptr;
+  std::vector<std::pair<Eigen::Index, Eigen::Index>> segments;
 };
+
+/// A motor turning with qd_i + r qd_j: its velocity with the filtered magnitude and the unfiltered
+/// sign, 0 inside the band sqrt(band_i^2 + (r band_j)^2) (as identify's coupled motors).
+double motor_velocity(const StackedData& d, Eigen::Index s, int i, int j, double r);
+
+/// Filters each column of `series` (S rows, one per kept sample) in time, segment by segment, with
+/// c.filter (nothing without one).
+void filter_in_time(const CandidateContext& c, Eigen::MatrixXd& series);
 
 /// One effect kind.
 struct EffectSpec {

@@ -4,14 +4,17 @@
 // physical parameters, and stops when none qualifies.
 #include "dyncal_host/diagnosis/diagnose.hpp"
 
+#include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
 #include <sstream>
+#include <utility>
 
 #include "candidates.hpp"
 #include "cross_validator.hpp"
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/identification/butterworth.hpp"
 #include "dyncal_host/identification/effect_model.hpp"
 #include "dyncal_host/identification/signal.hpp"
 #include "dyncal_host/identification/stacked_data.hpp"
@@ -98,6 +101,76 @@ Evidence weigh(const CrossValidator& cv, const Candidate& c, const Model& m, con
   e.gain = v0 > 0 ? (v0 - v1 - harm) / v0 : 0;
   e.physical = detail::effect_spec(c.effect).physical(phi_c.tail(c.columns.cols()));
   return e;
+}
+
+/// Whether a candidate passes every check of the selection.
+bool qualifies(const Evidence& e, const DiagnoseOptions& o) {
+  return e.physical && !e.collinear && e.delta_bic < -o.bic_threshold && e.gain >= o.min_gain;
+}
+
+/// Parsimony: among the qualifying candidates on the same joints as `best` with fewer columns, the
+/// one with the fewest (then the lowest BIC) is taken instead, unless `best` is better by BIC by
+/// more than the evidence threshold (a constant offset is asymmetric Coulomb friction's special
+/// case on a joint that never rests: the one-parameter offset wins unless the data need both).
+int most_parsimonious(const std::vector<Candidate>& cands, const std::vector<Evidence>& ev, int best,
+                      const DiagnoseOptions& o) {
+  const Candidate& b = cands[static_cast<size_t>(best)];
+  int pick = best;
+  for (size_t k = 0; k < cands.size(); ++k) {
+    const Candidate& c = cands[k];
+    if (c.joints != b.joints || !qualifies(ev[k], o) || c.columns.cols() >= b.columns.cols()) continue;
+    if (ev[static_cast<size_t>(best)].delta_bic < ev[k].delta_bic - o.bic_threshold) continue;  // the larger is needed
+    const Candidate& p = cands[static_cast<size_t>(pick)];
+    if (c.columns.cols() < p.columns.cols() ||
+        (c.columns.cols() == p.columns.cols() && ev[k].delta_bic < ev[static_cast<size_t>(pick)].delta_bic))
+      pick = static_cast<int>(k);
+  }
+  return pick;
+}
+
+/// The fraction of `small`'s columns (squared norm over its joints' rows) that `large`'s columns
+/// and the model's X together cannot represent (least squares on those rows).
+double unexplained_fraction(const Candidate& small, const Candidate& large, const MatrixXd& X, int N) {
+  const Index S = X.rows() / N, J = static_cast<Index>(small.joints.size());
+  MatrixXd A(S * J, large.columns.cols() + X.cols()), B(S * J, small.columns.cols());
+  for (Index s = 0; s < S; ++s)
+    for (Index p = 0; p < J; ++p) {
+      const Index row = s * N + small.joints[static_cast<size_t>(p)];
+      A.row(s * J + p) << large.columns.row(row), X.row(row);
+      B.row(s * J + p) = small.columns.row(row);
+    }
+  const MatrixXd fit = A.colPivHouseholderQr().solve(B);
+  return (B - A * fit).squaredNorm() / std::max(1e-300, B.squaredNorm());
+}
+
+/// Other kinds on the same joints the data cannot tell from the chosen one: physical and
+/// identifiable, and either within 2 of its BIC change (Kass and Raftery: "not worth more than a
+/// bare mention") or nesting it — larger, representing its columns up to less than one effective
+/// sample's share (1 / n_eff of their norm, so no sample of the log can tell), and removing as much
+/// validation error (within 1 %): parsimony's losers, such as asymmetric Coulomb friction for an
+/// offset on a joint that never rests.
+std::vector<std::string> indistinguishable(const std::vector<Candidate>& cands, const std::vector<Evidence>& ev,
+                                           int chosen, const MatrixXd& X, const VectorXd& n_eff) {
+  const Candidate& c = cands[static_cast<size_t>(chosen)];
+  const Evidence& e = ev[static_cast<size_t>(chosen)];
+  const int N = static_cast<int>(n_eff.size());
+  double n_min = INFINITY;
+  for (int j : c.joints) n_min = std::min(n_min, n_eff[j]);
+  std::vector<std::string> out;
+  for (size_t k = 0; k < cands.size(); ++k) {
+    const Candidate& a = cands[k];
+    if (static_cast<int>(k) == chosen || a.effect == c.effect || a.joints != c.joints) continue;
+    if (!ev[k].physical || ev[k].collinear) continue;
+    const bool close = std::abs(ev[k].delta_bic - e.delta_bic) < 2.0;
+    const bool nested = !close && a.columns.cols() > c.columns.cols() && ev[k].gain >= e.gain - 0.01 &&
+                        unexplained_fraction(c, a, X, N) < 1.0 / n_min;
+    if (!close && !nested) continue;
+    std::ostringstream s;
+    s << std::setprecision(4) << effect_name(a.effect) << " (BIC change " << ev[k].delta_bic << ", validation RSS -"
+      << std::setprecision(3) << 100 * ev[k].gain << " %)";
+    out.push_back(s.str());
+  }
+  return out;
 }
 
 /// The strongest rejected candidate of each kind (smallest BIC change) and why it was rejected.
@@ -285,7 +358,16 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
   }
   const Model declared = m;
   const VectorXd oof_before = cv.predict_out_of_fold();
-  detail::CandidateContext library{d, o.max_cycles, load_torques(d, m.phi), {}, {}, weights, &m.X};
+  detail::CandidateContext library{d, o.max_cycles, load_torques(d, m.phi), {}, {}, weights, &m.X, nullptr, {}};
+  // Candidate columns are filtered in time as the regressor was (the same zero-phase low-pass, at
+  // the decimated rate, within each segment: a step longer than 1.5 periods starts a new one).
+  const ButterworthLowPass filter(io.filter_order, io.cutoff_hz, d.rate_hz);
+  if (io.cutoff_hz < 0.5 * d.rate_hz) library.filter = &filter;
+  for (Index s = 0, a = 0; s < S; ++s)
+    if (s + 1 == S || d.t[s + 1] - d.t[s] > 1.5 / d.rate_hz) {
+      library.segments.emplace_back(a, s + 1);
+      a = s + 1;
+    }
 
   for (int step = 0; step < o.max_effects; ++step) {
     library.model_names = m.names;
@@ -303,7 +385,7 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
     for (size_t c = 0; c < cands.size(); ++c) {
       ev[c] = weigh(cv, cands[c], m, n_eff, declared.val);
       const Evidence& e = ev[c];
-      if (e.physical && !e.collinear && e.delta_bic < -o.bic_threshold && e.gain >= o.min_gain && e.gain > best_score) {
+      if (qualifies(e, o) && e.gain > best_score) {
         best_score = e.gain;
         best = static_cast<int>(c);
       }
@@ -312,7 +394,9 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
       res.rejected = strongest_rejected(cands, ev, o.bic_threshold);
       break;
     }
+    best = most_parsimonious(cands, ev, best, o);
     const Candidate& c = cands[static_cast<size_t>(best)];
+    std::vector<std::string> alternatives = indistinguishable(cands, ev, best, m.X, n_eff);
     MatrixXd A(S * N, m.X.cols() + c.columns.cols());
     A << m.X, c.columns;
     m.X = A;
@@ -330,6 +414,7 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
     e.sign = c.sign;
     e.validation_gain = ev[static_cast<size_t>(best)].gain;
     e.explanation = detail::explain(c, e.params);
+    e.alternatives = std::move(alternatives);
     res.effects.push_back(e);
     reweigh();
   }

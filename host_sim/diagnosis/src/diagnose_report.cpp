@@ -20,6 +20,11 @@ void print_diagnose_report(std::ostream& out, const DiagnoseResult& r) {
     out << "  " << std::left << std::setw(20) << effect_name(e.kind) << std::right << " dBIC " << std::setw(8)
         << std::setprecision(4) << e.delta_bic << ", validation RSS -" << std::setprecision(3)
         << 100 * e.validation_gain << " %\n    " << e.explanation << "\n";
+    if (!e.alternatives.empty()) {
+      out << "    indistinguishable on this log from:";
+      for (size_t k = 0; k < e.alternatives.size(); ++k) out << (k ? ", " : " ") << e.alternatives[k];
+      out << "\n";
+    }
   }
   out << "\nstrongest rejected candidates:\n";
   for (const auto& c : r.rejected) {
@@ -98,7 +103,8 @@ nlohmann::json diagnose_report_json(const DiagnoseResult& r) {
                             {"item", item},
                             {"parameters", p},
                             {"evidence", {{"delta_bic", e.delta_bic}, {"validation_gain", e.validation_gain}}},
-                            {"explanation", e.explanation}});
+                            {"explanation", e.explanation},
+                            {"indistinguishable_from", e.alternatives}});
   }
   j["rejected"] = nlohmann::json::array();
   for (const auto& c : r.rejected)

@@ -171,10 +171,7 @@ MatrixXd effect_columns_over_time(const std::vector<ModelEffect>& effects, const
                                   const MatrixXd& qdd, const MatrixXd& v_raw, const VectorXd& band) {
   const Index S = q.rows(), N = q.cols(), m = effect_column_count(effects);
   MatrixXd out = MatrixXd::Zero(S, N * m);
-  // A velocity with the filtered magnitude and the unfiltered sign, 0 inside the band.
-  auto velocity = [](double filtered, double raw, double b) {
-    return std::abs(raw) < b ? 0.0 : (raw > 0 ? std::abs(filtered) : -std::abs(filtered));
-  };
+  const auto velocity = signed_velocity;
   double c[3];
   Index col = 0;
   for (const ModelEffect& e : effects) {

@@ -52,6 +52,7 @@ struct DiagnosedEffect {
   double delta_bic = 0;  ///< BIC change on the affected joints (negative: evidence for)
   double validation_gain = 0;  ///< relative drop of the affected joints' validation RSS
   std::string explanation;
+  std::vector<std::string> alternatives;  ///< kinds on the same joints the data cannot tell from this one
 };
 
 struct RejectedCandidate {

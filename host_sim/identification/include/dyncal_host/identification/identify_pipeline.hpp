@@ -95,6 +95,8 @@ class IdentifyPipeline {
     out.q.resize(kept, N);
     out.qd.resize(kept, N);
     out.qdd.resize(kept, N);
+    out.qd_raw.resize(kept, N);
+    out.standstill_band = Eigen::VectorXd(band);
     Eigen::Index k = 0;
     for (size_t g = 0; g < segments.size(); ++g) {
       const auto [a, b] = segments[g];
@@ -105,6 +107,7 @@ class IdentifyPipeline {
         out.t[k] = log.t[a + s];
         out.q.row(k) = seg.q.row(s);
         out.qd.row(k) = seg.qd.row(s);
+        out.qd_raw.row(k) = seg.qd_raw.row(s);
         out.qdd.row(k) = seg.qdd.row(s);
         for (int j = 0; j < N; ++j) {
           out.W.row(k * N + j) = seg.Kt.row(s).segment(j * P, P);
@@ -273,7 +276,8 @@ class IdentifyPipeline {
   /// K(j, c) at every sample) filtered in parallel.
   struct Segment {
     Eigen::MatrixXd q, qd, qdd, tau, Kt, Kt_load;
-    Eigen::MatrixXd Et;  ///< effect columns over time (column j * m + c), filtered in parallel
+    Eigen::MatrixXd Et;      ///< effect columns over time (column j * m + c), filtered in parallel
+    Eigen::MatrixXd qd_raw;  ///< the unfiltered velocity (central differences of q, or the measured qd)
   };
 
   Segment process_segment(const JointLog& log, Eigen::Index a, Eigen::Index b, const ButterworthLowPass& filter,
@@ -299,8 +303,8 @@ class IdentifyPipeline {
     // sgn is discontinuous, and of a filtered velocity it would switch up to a cut-off period after
     // a stop; the Coulomb column is then filtered in parallel, which averages the noise. Inside the
     // noise band the joint is at rest: sign 0, and its filtered velocity 0.
-    const Eigen::MatrixXd v =
-        log.has_qd ? Eigen::MatrixXd(log.qd.middleRows(a, S)) : central_difference(log.q.middleRows(a, S), dt);
+    g.qd_raw = log.has_qd ? Eigen::MatrixXd(log.qd.middleRows(a, S)) : central_difference(log.q.middleRows(a, S), dt);
+    const Eigen::MatrixXd& v = g.qd_raw;
     Eigen::MatrixXd sign = Eigen::MatrixXd::Zero(S, N);
     for (Eigen::Index s = 0; s < S; ++s) {
       for (int j = 0; j < N; ++j) {

@@ -3,6 +3,7 @@
 // parallel filtering and decimation: what every batch method and the diagnosis work on.
 
 #include <Eigen/Core>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -12,23 +13,32 @@ namespace dyncal::host {
 
 /// Stacked, filtered and decimated identification data: row s * N + j is joint j at sample s.
 struct StackedData {
-  Eigen::MatrixXd W;               ///< (S N) x P regressor
-  Eigen::MatrixXd W_load;          ///< (S N) x P regressor at qdd = 0, filtered and stacked as W (only with
-                                   ///< IdentifyOptions::load_regressor, else empty): its rigid-body columns times
-                                   ///< phi give the load torque h(q, qd), gravity and velocity products [Nm]
-  Eigen::MatrixXd E;               ///< (S N) x m columns of IdentifyOptions::effects, computed at the log's rate
-                                   ///< and filtered in parallel as W (effect_model.hpp); load friction's are 0
-                                   ///< here (they need the fit's rigid-body torque: effect_design)
-  Eigen::VectorXd y;               ///< (S N) torques [Nm]
-  Eigen::VectorXd t;               ///< S sample times [s]
-  double rate_hz = 0;              ///< after decimation
-  std::vector<char> fit_row;       ///< (S N): 1 where row s * N + j enters the fit (see min_speed_fraction)
-  Eigen::MatrixXd q, qd, qdd;      ///< S x N filtered joint signals at the kept samples (for extra columns)
-  std::vector<std::string> names;  ///< P parameter names
-  int num_base = 0;                ///< the first num_base columns are the base parameters (rigid body)
+  Eigen::MatrixXd W;                ///< (S N) x P regressor
+  Eigen::MatrixXd W_load;           ///< (S N) x P regressor at qdd = 0, filtered and stacked as W (only with
+                                    ///< IdentifyOptions::load_regressor, else empty): its rigid-body columns times
+                                    ///< phi give the load torque h(q, qd), gravity and velocity products [Nm]
+  Eigen::MatrixXd E;                ///< (S N) x m columns of IdentifyOptions::effects, computed at the log's rate
+                                    ///< and filtered in parallel as W (effect_model.hpp); load friction's are 0
+                                    ///< here (they need the fit's rigid-body torque: effect_design)
+  Eigen::VectorXd y;                ///< (S N) torques [Nm]
+  Eigen::VectorXd t;                ///< S sample times [s]
+  double rate_hz = 0;               ///< after decimation
+  std::vector<char> fit_row;        ///< (S N): 1 where row s * N + j enters the fit (see min_speed_fraction)
+  Eigen::MatrixXd q, qd, qdd;       ///< S x N filtered joint signals at the kept samples (for extra columns)
+  Eigen::MatrixXd qd_raw;           ///< S x N unfiltered velocity at the kept samples (friction signs)
+  Eigen::VectorXd standstill_band;  ///< N: |qd_raw| below it is rest [rad/s]
+  std::vector<std::string> names;   ///< P parameter names
+  int num_base = 0;                 ///< the first num_base columns are the base parameters (rigid body)
   double cutoff_hz = 0;
   std::vector<std::string> notes;  ///< what preparation did that the user should know (standstill band, segments)
 };
+
+/// The velocity every friction-sign column is built from: the filtered magnitude with the
+/// unfiltered velocity's sign (a filtered velocity's sign switches up to a cut-off period after a
+/// stop), 0 inside the standstill band [rad/s].
+inline double signed_velocity(double filtered, double raw, double band) {
+  return std::abs(raw) < band ? 0.0 : (raw > 0 ? std::abs(filtered) : -std::abs(filtered));
+}
 
 /// The residuals of filtered, decimated data are autocorrelated, so the white-noise covariance
 /// (sigma^2 (W^T W)^-1, or a filter's P) understates the parameters' variance: the factor S / n_eff
