@@ -102,9 +102,8 @@ bool has(const CandidateContext& c, const std::string& name) {
 void stribeck(const CandidateContext& c, int i, int, std::vector<Candidate>& out) {
   // Static friction sgn(qd) exp(-(qd / qds)^2): the velocity scale qds by profile search
   // (shape_search.hpp) over 17 log-spaced values from 1 % to 20 % of the joint's top speed in the
-  // log. Above that, sgn(qd) exp(-(qd / qds)^2) is no
-  // low-speed effect: over the log's speeds it becomes sgn(qd) (1 - qd^2 / qds^2), Coulomb friction
-  // and a polynomial in the speed.
+  // log. Above that it is no low-speed effect: over the log's speeds it becomes
+  // sgn(qd) (1 - qd^2 / qds^2), Coulomb friction and a polynomial in the speed.
   constexpr int kScaleGrid = 17;
   const StackedData& d = c.data;
   const double vmax = d.qd.col(i).cwiseAbs().maxCoeff();
