@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "dyncal_host/common/json_file.hpp"
 #include "dyncal_host/common/robot_description.hpp"
 #include "dyncal_host/identification/joint_log.hpp"
 #include "dyncal_port/modbus_drive.hpp"
@@ -30,8 +31,7 @@ void add_registers_command(CLI::App& app, Action& run);
 void add_robot_command(CLI::App& app, Action& run);
 void add_predict_command(CLI::App& app, Action& run);
 
-/// Reads a JSON file. Throws InputError (unreadable, invalid JSON) naming the file.
-nlohmann::json read_json_file(const std::string& path);
+using host::read_json_file;  ///< json_file.hpp: one-line errors naming the file
 /// Writes `j` (indented) to `path`. Throws InputError when the file cannot be written.
 void write_json_file(const std::string& path, const nlohmann::json& j);
 

@@ -13,16 +13,6 @@ namespace dyncal::app {
 
 using host::InputError;
 
-nlohmann::json read_json_file(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError("cannot read '" + path + "'");
-  try {
-    return nlohmann::json::parse(in);
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(path + ": invalid JSON: " + e.what());
-  }
-}
-
 void write_json_file(const std::string& path, const nlohmann::json& j) {
   std::ofstream out(path);
   if (!out) throw InputError("cannot write '" + path + "'");

@@ -3,12 +3,12 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <utility>
 
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/common/json_file.hpp"
 #include "dyncal_host/common/model_terms.hpp"
 
 namespace dyncal::host {
@@ -214,14 +214,7 @@ std::string model_spec_name(const ModelSpec& spec) {
 
 std::vector<ModelEffect> read_diagnosed_effects(const std::string& path, int num_joints,
                                                 std::vector<std::string>* skipped) {
-  std::ifstream in(path);
-  if (!in) throw InputError("cannot read '" + path + "'");
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(path + ": invalid JSON: " + e.what());
-  }
+  const nlohmann::json j = read_json_file(path);
   if (!j.is_object() || !j.contains("declared_model") || !j.contains("effects") || !j["effects"].is_array())
     throw InputError(path + ": not a dyncal diagnose report (\"declared_model\" and \"effects\")");
   std::vector<ModelEffect> out;

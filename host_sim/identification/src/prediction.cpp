@@ -1,10 +1,10 @@
 #include "dyncal_host/identification/prediction.hpp"
 
 #include <cmath>
-#include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/common/json_file.hpp"
 #include "dyncal_host/identification/compiled_robot.hpp"
 #include "dyncal_host/identification/effect_model.hpp"
 #include "dyncal_host/identification/stacked_data.hpp"
@@ -12,14 +12,7 @@
 namespace dyncal::host {
 
 ParameterSet read_parameter_file(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError("cannot read '" + path + "'");
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::exception& e) {
-    throw InputError(path + ": invalid JSON: " + e.what());
-  }
+  const nlohmann::json j = read_json_file(path);
   if (!j.is_object() || j.value("format", "") != "dyncal-parameters")
     throw InputError(path + ": not a dyncal parameter file (\"format\": \"dyncal-parameters\")");
   if (!j.contains("robot") || !j["robot"].is_string()) throw InputError(path + ": 'robot' missing");

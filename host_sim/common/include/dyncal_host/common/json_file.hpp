@@ -1,0 +1,13 @@
+#pragma once
+// Reading a JSON file with the one-line errors every command gives.
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace dyncal::host {
+
+/// The JSON document in the file at `path`. Throws InputError: "cannot read '<path>'" when the file
+/// cannot be opened, "<path>: invalid JSON: <parser message>" when it does not parse.
+nlohmann::json read_json_file(const std::string& path);
+
+}  // namespace dyncal::host
