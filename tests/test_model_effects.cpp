@@ -4,7 +4,6 @@
 // what identify --validate-on gives; and on the real TX40 log the effects a diagnosis report lists,
 // fed back with `identify --effects`, lift the wrist as the diagnosis said they would.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -21,6 +20,7 @@
 #include "dyncal_host/identification/identify.hpp"
 #include "dyncal_host/identification/prediction.hpp"
 #include "dyncal_host/identification/stacked_data.hpp"
+#include "support/dyncal_cli.hpp"
 #include "support/simulated_log.hpp"
 
 namespace {
@@ -91,6 +91,16 @@ TrueEffects true_effects(const RobotDescription& robot) {
   return {0.03 * robot.tau_max[1], -0.02 * robot.tau_max[1], 0.02 * scale, 0.01 * scale / robot.qd_max[0]};
 }
 
+/// diagnose with the Eq. 7 model declared and at most `max_effects` steps, its report printed.
+DiagnoseResult diagnose_eq7(const RobotDescription& robot, const JointLog& log, int max_effects) {
+  DiagnoseOptions o;
+  o.identify.terms = dyncal::kFrictionEq7;
+  o.max_effects = max_effects;
+  const DiagnoseResult r = diagnose(robot, log, o);
+  print_diagnose_report(std::cout, r);
+  return r;
+}
+
 class EffectModel : public ::testing::TestWithParam<const char*> {};
 
 // identify with the effects as --model items recovers each true coefficient within 4 of its
@@ -143,10 +153,7 @@ TEST_P(EffectModel, DiagnoseFindsACouplingOfAnyRatio) {
     tau[a] += ratio * f;
   };
   const SimulatedLog s = simulate(robot, uniform_times(500.0, 40.0), MotionClock{}, 23, 3, coupled);
-  DiagnoseOptions o;
-  o.identify.terms = dyncal::kFrictionEq7;
-  const DiagnoseResult r = diagnose(robot, s.log, o);
-  print_diagnose_report(std::cout, r);
+  const DiagnoseResult r = diagnose_eq7(robot, s.log, DiagnoseOptions{}.max_effects);
   ASSERT_FALSE(r.effects.empty());
   const DiagnosedEffect& e = r.effects[0];
   EXPECT_EQ(e.kind, Effect::coupling);
@@ -178,11 +185,7 @@ TEST(EffectModelArm3, DiagnosePrefersTheSmallerOfNestedEffectsAndSaysSo) {
   const ExtraTorque extra = [&](const Eigen::VectorXd&, const Eigen::VectorXd&, const Eigen::VectorXd&,
                                 Eigen::VectorXd& tau) { tau[1] += offset; };
   const SimulatedLog s = simulate(robot, uniform_times(500.0, 40.0), MotionClock{}, 29, 3, extra, 0.0);
-  DiagnoseOptions o;
-  o.identify.terms = dyncal::kFrictionEq7;
-  o.max_effects = 1;
-  const DiagnoseResult r = diagnose(robot, s.log, o);
-  print_diagnose_report(std::cout, r);
+  const DiagnoseResult r = diagnose_eq7(robot, s.log, 1);
   ASSERT_EQ(r.effects.size(), 1u);
   EXPECT_EQ(r.effects[0].kind, Effect::offset);
   EXPECT_EQ(r.effects[0].joints, (std::vector<int>{2}));
@@ -207,11 +210,7 @@ TEST_P(EffectModel, DiagnoseFindsStribeckFrictionWithItsVelocityScale) {
     tau[0] += dfs * (qd[0] > 0 ? 1.0 : (qd[0] < 0 ? -1.0 : 0.0)) * std::exp(-z * z);
   };
   const SimulatedLog s = simulate(robot, uniform_times(500.0, 40.0), MotionClock{}, 37, 3, extra);
-  DiagnoseOptions o;
-  o.identify.terms = dyncal::kFrictionEq7;
-  o.max_effects = 1;
-  const DiagnoseResult r = diagnose(robot, s.log, o);
-  print_diagnose_report(std::cout, r);
+  const DiagnoseResult r = diagnose_eq7(robot, s.log, 1);
   ASSERT_EQ(r.effects.size(), 1u);
   const DiagnosedEffect& e = r.effects[0];
   EXPECT_EQ(e.kind, Effect::stribeck);
@@ -226,16 +225,6 @@ TEST_P(EffectModel, DiagnoseFindsStribeckFrictionWithItsVelocityScale) {
 }
 
 INSTANTIATE_TEST_SUITE_P(TestRobots, EffectModel, ::testing::Values("arm3", "cobot7"));
-
-int run_dyncal(const std::string& args) {
-  const int status = std::system((std::string(DYNCAL_BINARY) + " " + args + " >/dev/null 2>&1").c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
-nlohmann::json read_json(const std::filesystem::path& p) {
-  std::ifstream in(p);
-  return nlohmann::json::parse(in);
-}
 
 std::filesystem::path temp_dir(const std::string& name) {
   const auto dir = std::filesystem::temp_directory_path() / (name + "_" + std::to_string(::getpid()));

@@ -4,7 +4,6 @@
 // are degraded as a real logger degrades them, and identification must give what it gives on the
 // clean log, within the noise.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
 #include <Eigen/LU>
 #include <cmath>
@@ -21,6 +20,7 @@
 #include "dyncal_host/identification/signal.hpp"
 #include "dyncal_host/identification/stacked_data.hpp"
 #include "dyncal_host/identification/uniform_grid.hpp"
+#include "support/dyncal_cli.hpp"
 #include "support/simulated_log.hpp"
 #include "support/torque_share.hpp"
 
@@ -176,16 +176,6 @@ TEST_P(RealLogs, AGapSplitsTheLogIntoSegments) {
 }
 
 INSTANTIATE_TEST_SUITE_P(TestRobots, RealLogs, ::testing::Values("arm3", "cobot7"));
-
-int run_dyncal(const std::string& args) {
-  const int status = std::system((std::string(DYNCAL_BINARY) + " " + args + " >/dev/null 2>&1").c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
-nlohmann::json read_json(const std::filesystem::path& p) {
-  std::ifstream in(p);
-  return nlohmann::json::parse(in);
-}
 
 // Validation on another log: `identify --validate-on B` and `predict --params P --data B` report the
 // same prediction error of B (one computation), at the noise level (the model generalises to a

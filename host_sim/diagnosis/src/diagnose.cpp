@@ -286,17 +286,14 @@ std::vector<DiagnoseJoint> joint_metrics(const StackedData& d, const RobotDescri
   return out;
 }
 
-/// Per-joint residual standard deviation [Nm] of a fit with `p` parameters from its training RSS:
-/// sigma_j^2 = RSS_j / (n_j - p / N), n_j the joint's fitted rows (identify's WLS weights).
+/// Per-joint residual standard deviation [Nm] of a fit with `p` parameters from its training RSS
+/// and the joints' fitted rows (identify's WLS weights, stacked_data.hpp: joint_noise_std).
 VectorXd residual_std_per_joint(const StackedData& d, const VectorXd& train_rss, Index p) {
   const int N = static_cast<int>(train_rss.size());
   VectorXd n = VectorXd::Zero(N);
   for (Index r = 0; r < d.y.size(); ++r)
     if (d.fit_row[r]) n[r % N] += 1;
-  VectorXd sigma(N);
-  for (int j = 0; j < N; ++j)
-    sigma[j] = std::max(1e-12, std::sqrt(train_rss[j] / std::max(1.0, n[j] - static_cast<double>(p) / N)));
-  return sigma;
+  return joint_noise_std(train_rss, n, p);
 }
 
 }  // namespace

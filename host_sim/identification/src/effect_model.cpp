@@ -117,17 +117,12 @@ Fit solve(const Grams& a, int exclude, const std::string& method) {
   Fit ols;
   fit_with(VectorXd::Ones(N), ols);
   if (method == "ols") return ols;
-  // Gautier's weights from the OLS residual of the same rows: sigma_j^2 = RSS_j / (n_j - p / N).
+  // Gautier's weights from the OLS residual of the same rows (stacked_data.hpp: joint_noise_std).
   VectorXd n = VectorXd::Zero(N);
   for (size_t grp = 0; grp < a.n.size(); ++grp)
     if (static_cast<int>(grp) != exclude) n += a.n[grp];
-  VectorXd w2(N);
-  for (int j = 0; j < N; ++j) {
-    const double s2 = ols.rss[j] / std::max(1.0, n[j] - static_cast<double>(p) / N);
-    w2[j] = 1.0 / std::max(1e-24, s2);
-  }
   Fit wls;
-  fit_with(w2, wls);
+  fit_with(joint_noise_std(ols.rss, n, p).cwiseAbs2().cwiseInverse(), wls);
   return wls;
 }
 

@@ -183,8 +183,7 @@ class IdentifyPipeline {
         n[j] += 1;
       }
     }
-    const JointVec dof = (n.array() - static_cast<double>(P) / N).max(1.0).matrix();
-    const JointVec sigma = ss.cwiseQuotient(dof).cwiseSqrt().cwiseMax(1e-12);
+    const JointVec sigma = joint_noise_std(ss, n, P);
     const std::string& m = opt_.method;
     if (m == "ols") {
       ls_statistics(*ls, stdev, cond);

@@ -40,6 +40,14 @@ inline double signed_velocity(double filtered, double raw, double band) {
   return std::abs(raw) < band ? 0.0 : (raw > 0 ? std::abs(filtered) : -std::abs(filtered));
 }
 
+/// Gautier's per-joint residual standard deviation [Nm], the WLS weight's inverse: sigma_j^2 =
+/// RSS_j / (n_j - p / N) for a fit of p parameters with n_j rows of joint j (N joints), at least
+/// 1e-12 (a joint fitted exactly keeps a finite weight).
+inline Eigen::VectorXd joint_noise_std(const Eigen::VectorXd& rss, const Eigen::VectorXd& rows, Eigen::Index p) {
+  const double per_joint = static_cast<double>(p) / static_cast<double>(rss.size());
+  return rss.cwiseQuotient((rows.array() - per_joint).max(1.0).matrix()).cwiseSqrt().cwiseMax(1e-12);
+}
+
 /// The residuals of filtered, decimated data are autocorrelated, so the white-noise covariance
 /// (sigma^2 (W^T W)^-1, or a filter's P) understates the parameters' variance: the factor S / n_eff
 /// to inflate it by, n_eff the residual's effective samples (signal.hpp: effective_samples, Geyer
