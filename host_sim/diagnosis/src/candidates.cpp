@@ -66,7 +66,7 @@ Candidate table_candidate(const CandidateContext& c, Effect effect, EffectKind k
     const int w = effect_columns(kind, shape, sign, d.q(s, i), v, a, 0.0, 0.0, load, cols);
     for (int k = 0; k < w; ++k) series(s, k) = cols[k];
   }
-  filter_in_time(c, series);
+  filter_in_time(c, series, kind, static_cast<int>(m));
   for (Index s = 0; s < S; ++s)
     for (Index k = 0; k < m; ++k) {
       out.columns(s * N + i, k) = series(s, k);
@@ -105,6 +105,7 @@ void stribeck(const CandidateContext& c, int i, int, std::vector<Candidate>& out
   // log. Above that it is no low-speed effect: over the log's speeds it becomes
   // sgn(qd) (1 - qd^2 / qds^2), Coulomb friction and a polynomial in the speed.
   constexpr int kScaleGrid = 17;
+  if (has(c, "Fs" + J(i))) return;  // one Stribeck curve per joint; its scale was searched once
   const StackedData& d = c.data;
   const double vmax = d.qd.col(i).cwiseAbs().maxCoeff();
   if (!(vmax > 0)) return;
@@ -118,14 +119,19 @@ void stribeck(const CandidateContext& c, int i, int, std::vector<Candidate>& out
   auto gain = [&](double lq) {
     const double qds = std::exp(lq);
     return local_gain<1>(
-        c, joint, none,
+        c, EffectKind::stribeck, joint, none,
         [&](Index s, size_t, Eigen::Matrix<double, 1, 1>& x) {
           const double v = signed_velocity(d.qd(s, i), d.qd_raw(s, i), d.standstill_band[i]), z = v / qds;
           x[0] = (v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0)) * std::exp(-z * z);
         },
         [](const Eigen::Matrix<double, 1, 1>& beta) { return beta[0] > 0; });  // Fs > Fc
   };
-  const ShapeFit f = profile_search(gain, std::log(0.01 * vmax), std::log(0.2 * vmax), kScaleGrid, rss, n_eff);
+  const double lo = std::log(0.01 * vmax);
+  const ShapeFit f = profile_search(gain, lo, std::log(0.2 * vmax), kScaleGrid, rss, n_eff);
+  // A scale the data cannot tell from the narrowest searched is no Stribeck curve: what it fits
+  // lives at a few samples around the stops and reversals (a transient, a timing error of the
+  // log), not on a friction curve over the speed.
+  if (f.lo_log <= lo) return;
   const double qds = std::exp(f.log_value);
   Candidate cand = table_candidate(c, Effect::stribeck, EffectKind::stribeck, {i}, {"Fs" + J(i)}, qds, 1.0);
   cand.shape_interval = {std::exp(f.lo_log), std::exp(f.hi_log)};
@@ -143,6 +149,7 @@ void asymmetric_friction(const CandidateContext& c, int i, int, std::vector<Cand
 }
 
 void velocity_power(const CandidateContext& c, int i, int, std::vector<Candidate>& out) {
+  if (has(c, "Fp" + J(i))) return;
   out.push_back(table_candidate(c, Effect::velocity_power, EffectKind::velocity_power, {i}, {"Fp" + J(i)}, 0.0, 1.0));
 }
 
@@ -206,7 +213,7 @@ void coupling(const CandidateContext& c, int i, int j, std::vector<Candidate>& o
     auto gain = [&](double lr) {
       const double r = sign * std::exp(lr);
       return local_gain<3>(
-          c, pair, local,
+          c, EffectKind::coupling, pair, local,
           [&](Index s, size_t p, Eigen::Vector3d& x) {
             const double v = motor_velocity(d, s, i, j, r), a = d.qdd(s, i) + r * d.qdd(s, j);
             x << (v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0)), v, a;
@@ -362,9 +369,12 @@ const EffectSpec& effect_spec(Effect e) {
   throw std::logic_error("effect without a table entry");
 }
 
-void filter_in_time(const CandidateContext& c, MatrixXd& series) {
+void filter_in_time(const CandidateContext& c, MatrixXd& series, EffectKind kind, int width) {
   if (!c.filter) return;
-  for (const auto& [a, b] : c.segments) c.filter->filtfilt(series.middleRows(a, b - a));
+  for (Index k = 0; k < series.cols(); ++k) {
+    if (!effect_column_steps(kind, static_cast<int>(k % width))) continue;
+    for (const auto& [a, b] : c.segments) c.filter->filtfilt(series.col(k).segment(a, b - a));
+  }
 }
 
 std::vector<Candidate> candidate_library(const CandidateContext& c) {

@@ -12,6 +12,7 @@
 #include "dyncal/effect_terms.hpp"
 #include "dyncal_host/diagnosis/diagnose.hpp"
 #include "dyncal_host/identification/butterworth.hpp"
+#include "dyncal_host/identification/effect_model.hpp"
 #include "dyncal_host/identification/stacked_data.hpp"
 
 namespace dyncal::host::detail {
@@ -51,9 +52,12 @@ struct CandidateContext {
 /// sign, 0 inside the band sqrt(band_i^2 + (r band_j)^2) (as identify's coupled motors).
 double motor_velocity(const StackedData& d, Eigen::Index s, int i, int j, double r);
 
-/// Filters each column of `series` (S rows, one per kept sample) in time, segment by segment, with
-/// c.filter (nothing without one).
-void filter_in_time(const CandidateContext& c, Eigen::MatrixXd& series);
+/// Filters in time, segment by segment, with c.filter (nothing without one), the columns of
+/// `series` (S rows, one per kept sample; blocks of `kind`'s `width` columns) that step with the
+/// velocity's sign (effect_column_steps): they are built from the unfiltered velocity's sign and
+/// get the low-pass once, as tau did. The others are built from the filtered q, qd, qdd and have
+/// had it (filtering them again would low-pass their qdd twice against tau's once).
+void filter_in_time(const CandidateContext& c, Eigen::MatrixXd& series, EffectKind kind, int width);
 
 /// One effect kind.
 struct EffectSpec {

@@ -41,14 +41,14 @@ inline std::vector<Eigen::Index> local_columns(const CandidateContext& c, const 
 /// at sample s into x. A fit whose coefficients (S^-1 g, those of the joint fit) are not
 /// physical(coefficients) removes nothing: the search looks only among physical shapes.
 template <int M, class Columns, class Physical>
-double local_gain(const CandidateContext& c, const std::vector<int>& joints, const std::vector<Eigen::Index>& local,
-                  Columns columns, Physical physical) {
+double local_gain(const CandidateContext& c, EffectKind kind, const std::vector<int>& joints,
+                  const std::vector<Eigen::Index>& local, Columns columns, Physical physical) {
   using Vec = Eigen::Matrix<double, M, 1>;
   const StackedData& d = c.data;
   const Eigen::MatrixXd& X = *c.model_X;
   const int N = static_cast<int>(d.q.cols());
   const Eigen::Index k = static_cast<Eigen::Index>(local.size());
-  // The columns over time, filtered as the regressor was (filter_in_time).
+  // The columns over time, filtered as the regressor was (filter_in_time: kind's columns).
   const Eigen::Index S = d.t.size(), P = static_cast<Eigen::Index>(joints.size());
   Eigen::MatrixXd series(S, M * P);
   Vec x;
@@ -57,24 +57,29 @@ double local_gain(const CandidateContext& c, const std::vector<int>& joints, con
       columns(s, static_cast<size_t>(p), x);
       series.row(s).segment(p * M, M) = x.transpose();
     }
-  filter_in_time(c, series);
-  Eigen::MatrixXd LL = Eigen::MatrixXd::Zero(k, k), LC = Eigen::MatrixXd::Zero(k, M);
-  Eigen::Matrix<double, M, M> CC = Eigen::Matrix<double, M, M>::Zero();
-  Vec g = Vec::Zero();
-  Eigen::VectorXd l(k);
+  filter_in_time(c, series, kind, M);
+  // Weighted rows of the pair: local columns L, candidate columns C, residual r; the Grams by
+  // matrix products.
+  const Eigen::Index R = S * P;
+  Eigen::MatrixXd L(R, k), C(R, M);
+  Eigen::VectorXd r(R);
   for (Eigen::Index s = 0; s < S; ++s) {
     for (Eigen::Index p = 0; p < P; ++p) {
-      const Eigen::Index row = s * N + joints[static_cast<size_t>(p)];
-      const double w2 =
-          c.joint_weights[joints[static_cast<size_t>(p)]] * c.joint_weights[joints[static_cast<size_t>(p)]];
-      x = series.row(s).segment(p * M, M).transpose();
-      for (Eigen::Index q = 0; q < k; ++q) l[q] = X(row, local[static_cast<size_t>(q)]);
-      LL.noalias() += w2 * l * l.transpose();
-      LC.noalias() += w2 * l * x.transpose();
-      CC.noalias() += w2 * x * x.transpose();
-      g += w2 * c.residual[row] * x;
+      const int j = joints[static_cast<size_t>(p)];
+      const Eigen::Index row = s * N + j, out = s * P + p;
+      const double w = c.joint_weights[j];
+      for (Eigen::Index q = 0; q < k; ++q) L(out, q) = w * X(row, local[static_cast<size_t>(q)]);
+      C.row(out) = w * series.row(s).segment(p * M, M);
+      r[out] = w * c.residual[row];
     }
   }
+  Eigen::MatrixXd LL(k, k), LC(k, M);
+  if (k > 0) {
+    LL.noalias() = L.transpose() * L;
+    LC.noalias() = L.transpose() * C;
+  }
+  const Eigen::Matrix<double, M, M> CC = C.transpose() * C;
+  const Vec g = C.transpose() * r;
   Eigen::Matrix<double, M, M> schur = CC;
   if (k > 0) {
     LL.diagonal().array() += 1e-12 * std::max(1.0, LL.diagonal().maxCoeff());
@@ -120,7 +125,7 @@ ShapeFit profile_search(Gain gain, double lo_log, double hi_log, int points, dou
     if (g > f.gain) f.gain = g, f.log_value = lo_log + k * step;
   }
   const double phi = 0.5 * (std::sqrt(5.0) - 1.0);
-  double a = f.log_value - step, b = f.log_value + step;
+  double a = std::max(lo_log, f.log_value - step), b = std::min(hi_log, f.log_value + step);
   double x1 = b - phi * (b - a), x2 = a + phi * (b - a), f1 = gain(x1), f2 = gain(x2);
   for (int it = 0; it < 20; ++it) {
     if (f1 > f2) {

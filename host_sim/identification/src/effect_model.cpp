@@ -162,6 +162,29 @@ Index effect_column_count(const std::vector<ModelEffect>& effects) {
   return m;
 }
 
+bool effect_column_steps(EffectKind kind, int column) {
+  switch (kind) {
+    case EffectKind::stribeck:
+    case EffectKind::velocity_power:
+    case EffectKind::load_friction:
+      return true;
+    case EffectKind::asymmetric_friction:
+    case EffectKind::coupling:
+      return column == 0;  // [qd > 0], sgn(v); qd [qd > 0], v and a are continuous
+    default:
+      return false;
+  }
+}
+
+std::vector<bool> effect_columns_with_sign(const std::vector<ModelEffect>& effects) {
+  std::vector<bool> out;
+  for (const ModelEffect& e : effects) {
+    const int width = static_cast<int>(effect_param_names(e).size());
+    for (int c = 0; c < width; ++c) out.push_back(effect_column_steps(e.kind, c));
+  }
+  return out;
+}
+
 MatrixXd effect_columns_over_time(const std::vector<ModelEffect>& effects, const MatrixXd& q, const MatrixXd& qd,
                                   const MatrixXd& qdd, const MatrixXd& v_raw, const VectorXd& band) {
   const Index S = q.rows(), N = q.cols(), m = effect_column_count(effects);

@@ -19,6 +19,16 @@ Eigen::MatrixXd central_difference(const Eigen::MatrixXd& x, double dt) {
   return d;
 }
 
+Eigen::MatrixXd smooth_derivative(const Eigen::MatrixXd& x, double dt) {
+  const Eigen::Index n = x.rows();
+  Eigen::MatrixXd d = central_difference(x, dt);
+  if (n > 4)
+    d.middleRows(2, n - 4) =
+        (x.topRows(n - 4) - 8.0 * x.middleRows(1, n - 4) + 8.0 * x.middleRows(3, n - 4) - x.bottomRows(n - 4)) /
+        (12.0 * dt);
+  return d;
+}
+
 Eigen::VectorXd white_noise_std(const Eigen::MatrixXd& x,
                                 const std::vector<std::pair<Eigen::Index, Eigen::Index>>& segments) {
   Eigen::VectorXd out(x.cols());

@@ -15,6 +15,15 @@ namespace dyncal::host {
 /// Number of columns of the effects (effect_param_names' counts summed).
 Eigen::Index effect_column_count(const std::vector<ModelEffect>& effects);
 
+/// Whether column `column` of `kind` (lib/ effect_columns) steps with the velocity's sign: Stribeck,
+/// q_dot^(1/3), load friction, the asymmetric step [qd > 0], a coupled motor's sgn(v). Those are
+/// built from the unfiltered velocity's sign and are low-passed once in time, as tau is; the
+/// others are built from the filtered q, qd, qdd and have had the low-pass already.
+bool effect_column_steps(EffectKind kind, int column);
+
+/// effect_column_steps for every effect column (effect_column_count entries).
+std::vector<bool> effect_columns_with_sign(const std::vector<ModelEffect>& effects);
+
 /// The effects' columns over time for one segment (S samples; column j * m + c is joint j's row of
 /// effect column c, m = effect_column_count), before parallel filtering: lib/ effect_columns at the
 /// filtered q, qdd and at a velocity whose magnitude is the filtered qd's and whose sign is the

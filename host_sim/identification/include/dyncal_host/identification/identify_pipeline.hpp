@@ -290,13 +290,13 @@ class IdentifyPipeline {
       g.qd = log.qd.middleRows(a, S);
       filter.filtfilt(g.qd);
     } else {
-      g.qd = central_difference(g.q, dt);
+      g.qd = smooth_derivative(g.q, dt);
     }
     if (log.has_qdd) {
       g.qdd = log.qdd.middleRows(a, S);
       filter.filtfilt(g.qdd);
     } else {
-      g.qdd = central_difference(g.qd, dt);
+      g.qdd = smooth_derivative(g.qd, dt);
     }
     // Friction sign from the unfiltered velocity (central differences of q, or the measured qd):
     // sgn is discontinuous, and of a filtered velocity it would switch up to a cut-off period after
@@ -355,14 +355,28 @@ class IdentifyPipeline {
         }
         for (int j = 0; j < N; ++j) Kt.row(s).segment(j * P, P) = K.row(j);
       }
-      filter.filtfilt(Kt);
+      // Every column sees the low-pass once, as tau does: the columns built from the filtered q,
+      // qd, qdd have had it; the sign columns (Coulomb, also of a coupled motor) and qd^(1/3),
+      // built from the unfiltered velocity's sign, get it now. Filtering the smooth columns again
+      // would low-pass their qdd twice against tau's once: an acceleration step (a start or stop)
+      // would leave a residual at low speed that looks like Stribeck friction.
+      for (int k = 0; k < N; ++k) {
+        for (const unsigned t : {term::coulomb, term::power}) {
+          const int col = Model::column(t, k);
+          if (col < 0) continue;
+          for (int j = 0; j < N; ++j) filter.filtfilt(Kt.col(j * P + col));
+        }
+      }
       return Kt;
     };
     g.Kt = regressor_over_time(true);
     if (opt_.load_regressor) g.Kt_load = regressor_over_time(false);
     if (!opt_.effects.empty()) {
       g.Et = effect_columns_over_time(opt_.effects, g.q, g.qd, g.qdd, v, Eigen::VectorXd(band));
-      filter.filtfilt(g.Et);
+      const std::vector<bool> discontinuous = effect_columns_with_sign(opt_.effects);
+      const Eigen::Index m = static_cast<Eigen::Index>(discontinuous.size());
+      for (Eigen::Index c = 0; c < g.Et.cols(); ++c)
+        if (discontinuous[static_cast<size_t>(c % m)]) filter.filtfilt(g.Et.col(c));
     }
     return g;
   }
