@@ -301,10 +301,11 @@ def write_log(path, m, tau):
                fmt="%.10g")
 
 
-def generate(robots, out_dir, fs=250.0, seconds=30.0, seed=22):
+def generate(robots, out_dir, fs=250.0, seconds=30.0, seed=22, kappa=(3.0, 8.0)):
     """robots: list of (name, urdf path, trajectories, effects per trajectory). Writes the logs and
     cases.json into out_dir; returns the manifest."""
     os.makedirs(out_dir, exist_ok=True)
+    kappa_range = kappa
     master = np.random.default_rng(seed)
     manifest, kind_index = [], 0
     order = KINDS + ["coupling"]  # couplings twice as often: any ratio, any pair, either order
@@ -324,7 +325,7 @@ def generate(robots, out_dir, fs=250.0, seconds=30.0, seed=22):
                 rng = np.random.default_rng(int(master.integers(1 << 31)))
                 joints, shape = draw_effect(kind, arm, rng, m)
                 col = effect_columns(kind, joints, shape, dict(m, rng=rng))
-                kappa = rng.uniform(3, 8)
+                kappa = rng.uniform(*kappa_range)
                 scale = kappa / unexplained(col, m["qd"], m["sigma"])
                 log = f"{name}_t{k + 1}_{e + 1}_{kind}_{'_'.join(str(j) for j in joints)}"
                 write_log(os.path.join(out_dir, log + ".csv"), m, m["tau"] + m["noise"] + scale * col)
@@ -347,6 +348,7 @@ if __name__ == "__main__":
     ap.add_argument("--source-dir", default=os.path.join(os.path.dirname(__file__), "..", ".."))
     ap.add_argument("--out", required=True)
     ap.add_argument("--seed", type=int, default=22)
+    ap.add_argument("--kappa", type=float, nargs=2, default=(3.0, 8.0), help="effect size range [noise std]")
     a = ap.parse_args()
-    cases = generate(default_robots(a.source_dir), a.out, seed=a.seed)
+    cases = generate(default_robots(a.source_dir), a.out, seed=a.seed, kappa=tuple(a.kappa))
     print(f"{len(cases)} logs in {a.out}")

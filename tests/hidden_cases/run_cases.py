@@ -133,8 +133,11 @@ def main():
     ap.add_argument("--out", required=True)
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--seed", type=int, default=22)
+    ap.add_argument("--kappa", type=float, nargs=2, default=(3.0, 8.0),
+                    help="range of the effects' unexplained RMS [noise standard deviations]")
     a = ap.parse_args()
-    manifest = generate_logs.generate(generate_logs.default_robots(a.source_dir), a.out, seed=a.seed)
+    manifest = generate_logs.generate(generate_logs.default_robots(a.source_dir), a.out, seed=a.seed,
+                                      kappa=tuple(a.kappa))
     robots_dir = os.path.join(a.source_dir, "tests", "robots")
     with concurrent.futures.ThreadPoolExecutor(a.jobs) as pool:
         futures = {c["name"]: pool.submit(diagnose, a.dyncal, robots_dir, a.out, c) for c in manifest}
