@@ -7,9 +7,10 @@ torques are orocos-kdl's recursive Newton-Euler (PyKDL) on the URDF's own chain.
   tau = RNEA(q, qd, qdd) + Fc sgn(qd) + Fv qd + effect + noise,
 with sgn(0) = 0 at rest, q read by 20-bit encoders, torque noise of 0.5 % of each joint's torque
 range, on a random Fourier excitation (Eq. 27: 5 harmonics of 0.1 Hz inside 80 % of the URDF's
-position, velocity limits), played with or without rests. The effect's size is set by the part the
-declared model cannot explain: its columns less their projection on the joint's own Coulomb and
-viscous columns have an RMS of kappa noise standard deviations, kappa uniform in [3, 8].
+position, velocity limits), played with or without rests (starting and stopping between samples).
+The effect's size is set by the part the declared model cannot explain: its columns less their
+projection on the joint's own Coulomb and viscous columns have an RMS of kappa noise standard
+deviations, kappa uniform in [3, 8] (--kappa).
 
 Every log has a clean twin (same trajectory, friction and noise, no effect). The manifest
 (cases.json) gives the truth of every log: kind, 1-based joints, shape (Stribeck velocity scale,
@@ -175,14 +176,22 @@ def _series(a, b, w, t):
 
 def motion_clock(t, rests, move=3.0, rest=1.5, ramp=0.4):
     """Clock u(t) of the trajectory: u = t, or with rests played `move` s, held `rest` s, with ramps
-    of the clock speed w = du/dt; returns u, w, dw/dt (w piecewise linear: u exact by trapezoids)."""
+    of the clock speed w = du/dt; returns u, w, dw/dt (u by trapezoids on a 16x finer grid, u(t[0]) = 0)."""
     if not rests:
-        return t.copy(), np.ones_like(t), np.zeros_like(t)
-    x = np.mod(t, move + rest)
-    w = np.where(x < move - ramp, 1.0, np.where(x < move, (move - x) / ramp,
-                 np.where(x < move + rest - ramp, 0.0, (x - (move + rest - ramp)) / ramp)))
-    wd = np.where(x < move - ramp, 0.0, np.where(x < move, -1 / ramp, np.where(x < move + rest - ramp, 0.0, 1 / ramp)))
-    u = np.concatenate([[0.0], np.cumsum(0.5 * (w[1:] + w[:-1]) * np.diff(t))])
+        return t - t[0], np.ones_like(t), np.zeros_like(t)
+
+    def speed(x):
+        x = np.mod(x, move + rest)
+        w = np.where(x < move - ramp, 1.0, np.where(x < move, (move - x) / ramp,
+                     np.where(x < move + rest - ramp, 0.0, (x - (move + rest - ramp)) / ramp)))
+        wd = np.where(x < move - ramp, 0.0, np.where(x < move, -1 / ramp,
+                      np.where(x < move + rest - ramp, 0.0, 1 / ramp)))
+        return w, wd
+
+    fine = np.linspace(t[0], t[-1], 16 * (len(t) - 1) + 1)
+    wf, _ = speed(fine)
+    u = np.concatenate([[0.0], np.cumsum(0.5 * (wf[1:] + wf[:-1]) * np.diff(fine))])[::16]
+    w, wd = speed(t)
     return u, w, wd
 
 
@@ -278,7 +287,11 @@ def simulate(arm, traj_seed, rests, fs, seconds):
     rng = np.random.default_rng(traj_seed)
     evaluate = fourier_excitation(arm, rng)
     t = np.arange(int(round(fs * seconds))) / fs
-    u, w, wd = motion_clock(t, rests)
+    # The motion's starts and stops fall between samples (half a period off the logger's grid): a
+    # torque step on a sample instant, taking its later value there, would sit half a period before
+    # the kink q shows, a timing error at every start and stop (on arm3 with rests, 10x the
+    # residual of a clean log).
+    u, w, wd = motion_clock(t + 0.5 / fs, rests)
     q, qd_u, qdd_u = evaluate(u)
     qd = w[:, None] * qd_u
     qdd = (w ** 2)[:, None] * qdd_u + wd[:, None] * qd_u
