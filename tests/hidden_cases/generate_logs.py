@@ -116,7 +116,7 @@ class Arm:
             link = child
         self.n = self.chain.getNrOfJoints()
         self.solver = kdl.ChainIdSolver_RNE(self.chain, kdl.Vector(*GRAVITY))
-        self.fk = kdl.ChainJntToJacSolver(self.chain)
+        self.jacobian = kdl.ChainJntToJacSolver(self.chain)
 
     def torque(self, q, qd, qdd):
         """Joint torques [Nm] of the rigid body, (S, n) arrays in, (S, n) out."""
@@ -134,7 +134,7 @@ class Arm:
     def axes_at_home(self):
         """Joint axes in the base frame at q = 0 (the Jacobian's angular rows)."""
         jac = kdl.Jacobian(self.n)
-        self.fk.JntToJac(kdl.JntArray(self.n), jac)
+        self.jacobian.JntToJac(kdl.JntArray(self.n), jac)
         return np.array([[jac[r, i] for r in range(3, 6)] for i in range(self.n)])
 
 
@@ -318,7 +318,6 @@ def generate(robots, out_dir, fs=250.0, seconds=30.0, seed=22, kappa=(3.0, 8.0))
     """robots: list of (name, urdf path, trajectories, effects per trajectory). Writes the logs and
     cases.json into out_dir; returns the manifest."""
     os.makedirs(out_dir, exist_ok=True)
-    kappa_range = kappa
     master = np.random.default_rng(seed)
     manifest, kind_index = [], 0
     order = KINDS + ["coupling"]  # couplings twice as often: any ratio, any pair, either order
@@ -338,13 +337,13 @@ def generate(robots, out_dir, fs=250.0, seconds=30.0, seed=22, kappa=(3.0, 8.0))
                 rng = np.random.default_rng(int(master.integers(1 << 31)))
                 joints, shape = draw_effect(kind, arm, rng, m)
                 col = effect_columns(kind, joints, shape, dict(m, rng=rng))
-                kappa = rng.uniform(*kappa_range)
-                scale = kappa / unexplained(col, m["qd"], m["sigma"])
+                size = rng.uniform(*kappa)
+                scale = size / unexplained(col, m["qd"], m["sigma"])
                 log = f"{name}_t{k + 1}_{e + 1}_{kind}_{'_'.join(str(j) for j in joints)}"
                 write_log(os.path.join(out_dir, log + ".csv"), m, m["tau"] + m["noise"] + scale * col)
                 manifest.append(dict(name=log, robot=name, log=log + ".csv", clean_twin=clean, rests=rests,
                                      truth=dict(kind=kind, joints=joints, shape=float(shape), coefficient=float(scale),
-                                                kappa=float(kappa)),
+                                                kappa=float(size)),
                                      sigma=m["sigma"].tolist()))
     with open(os.path.join(out_dir, "cases.json"), "w") as f:
         json.dump(manifest, f, indent=1)

@@ -109,11 +109,12 @@ void stribeck(const CandidateContext& c, int i, int, std::vector<Candidate>& out
   const StackedData& d = c.data;
   const double vmax = d.qd.col(i).cwiseAbs().maxCoeff();
   if (!(vmax > 0)) return;
-  // Scored by the column's own projection on the residual (no local columns: a broad Stribeck
-  // column fitted with the joint's Coulomb and viscous columns turns into a polynomial in the speed
-  // that explains any smooth friction error, not a low-speed effect).
+  // The first search is scored by the column's own projection on the residual (no local columns:
+  // over the whole span, a broad Stribeck column fitted with the joint's Coulomb and viscous
+  // columns turns into a polynomial in the speed that explains any smooth friction error, not a
+  // low-speed effect); the refinement below refits them within a bracket.
   const std::vector<int> joint{i};
-  const std::vector<Index> none, local = local_columns(c, joint);
+  const std::vector<Index> none;
   double rss = 0, n_eff = 0;
   residual_scale(c, joint, rss, n_eff);
   auto gain_with = [&](const std::vector<Index>& with, double lq) {
@@ -137,6 +138,7 @@ void stribeck(const CandidateContext& c, int i, int, std::vector<Candidate>& out
   // part, which biased the first scale low; the bracket keeps the curve from turning into the
   // polynomial in the speed it becomes at broad scales.
   const double a = std::max(lo, first.log_value - std::log(2.0)), b = std::min(hi, first.log_value + std::log(2.0));
+  const std::vector<Index> local = local_columns(c, joint);
   ShapeFit f = profile_search([&](double lq) { return gain_with(local, lq); }, a, b, 9, rss, n_eff);
   // A refined scale whose interval reaches the bracket has no maximum of its own there: the gain
   // still grows towards the broad curve's polynomial in the speed (seen on the er20 drive's log:
