@@ -1,6 +1,7 @@
 // The survey study's host-side calculations on the default run's data size (2 000 samples, two
 // excitation periods, Table 7 noise): one evaluation of the optimisers' reduced objective (Eq. 25)
-// per friction model, and one physically consistent least-squares solve per model.
+// per friction model, one fit of the friction amplitudes (the samplers' evaluation), and one
+// physically consistent least-squares solve per model.
 #include <benchmark/benchmark.h>
 
 #include <map>
@@ -52,6 +53,25 @@ void BM_ReducedEq25(benchmark::State& state) {
   state.SetLabel(model_key(m));
 }
 BENCHMARK(BM_ReducedEq25)->DenseRange(0, 5)->Unit(benchmark::kMicrosecond);
+
+/// The genetic algorithm's and the particle filter's evaluation: the friction amplitudes fitted by
+/// separable least squares at the box's centre, with the residual moments there.
+void BM_FitAmplitudes(benchmark::State& state) {
+  const FrictionModel m = kModels[state.range(0)];
+  const survey::SurveyData& d = data(m);
+  const TorqueObjective objective(d, m, settings().sigma);
+  const SearchRanges r = search_ranges(d, m, nearest_consistent(settings().prior.mean), 0.4);
+  const Eigen::VectorXd x0 = 0.5 * (r.lo + r.hi);
+  Eigen::VectorXd x = x0;
+  std::array<double, 6> mean{}, var{};
+  for (auto _ : state) {
+    x = x0;
+    objective.fit_amplitudes(x.data(), r.lo.data(), r.hi.data(), &mean, &var);
+    benchmark::DoNotOptimize(x.data());
+  }
+  state.SetLabel(model_key(m));
+}
+BENCHMARK(BM_FitAmplitudes)->DenseRange(0, 5)->Unit(benchmark::kMicrosecond);
 
 void BM_PhysicallyConsistentLs(benchmark::State& state) {
   const FrictionModel m = kModels[state.range(0)];

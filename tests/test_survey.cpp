@@ -17,7 +17,9 @@
 #include "dyncal_host/identification/physically_consistent.hpp"
 #include "dyncal_host/identification/standard_parameters.hpp"
 #include "dyncal_host/survey/indices.hpp"
+#include "dyncal_host/survey/parallel_runs.hpp"
 #include "dyncal_host/survey/survey_data.hpp"
+#include "dyncal_host/survey/survey_plots.hpp"
 #include "dyncal_host/survey/tracking.hpp"
 #include "support/survey_fixture.hpp"
 
@@ -404,3 +406,50 @@ TEST(SurveyClosedLoop, SimulationWithTheSetParametersRetracesTheRecordedStates) 
 }
 
 }  // namespace
+
+// The study's runs on several threads give what one thread gives, and a task's error is not lost.
+TEST(SurveyParallelRuns, ResultsDoNotDependOnTheThreadCountAndErrorsReachTheCaller) {
+  auto squares = [](int jobs) {
+    std::vector<double> out(40);
+    std::vector<dyncal::host::survey::Task> tasks;
+    for (size_t i = 0; i < out.size(); ++i)
+      tasks.push_back({static_cast<double>(i % 7), [&out, i] { out[i] = std::sqrt(static_cast<double>(i)) * 3.0; }});
+    dyncal::host::survey::run_parallel(std::move(tasks), jobs);
+    return out;
+  };
+  const std::vector<double> one = squares(1);
+  EXPECT_EQ(one, squares(3));
+  EXPECT_DOUBLE_EQ(one[25], 15.0);
+  std::vector<dyncal::host::survey::Task> failing{{1, [] {}},
+                                                  {2, [] { throw dyncal::host::InputError("task 2 failed"); }}};
+  EXPECT_THROW(dyncal::host::survey::run_parallel(std::move(failing), 2), dyncal::host::InputError);
+}
+
+// --plots writes every figure from a result and its series (gnuplot from scripts/setup).
+TEST(SurveyPlots, WritesFig2Fig4AndTheResidualsAsSvg) {
+  nlohmann::json result;
+  for (const char* model : {"eq7", "eq4"}) {
+    for (const char* method : {"pseudo-inverse", "particle filter"}) {
+      for (const char* noise : {"without_noise", "with_noise"})
+        result["models"][model]["methods"][method][noise]["residual_rms"] = {1e-9, 0.1, 0.2, 0.3, 0.4, 1.5};
+    }
+  }
+  dyncal::host::survey::SurveySeries series;
+  Eigen::VectorXd t = Eigen::VectorXd::LinSpaced(50, 0, 0.49);
+  series.trajectories.push_back({"eq7", t, Eigen::MatrixXd::Random(50, 6)});
+  dyncal::host::survey::TrackingResult r;
+  r.method = "exponential forgetting";
+  r.profile = dyncal::host::survey::ChangeProfile::ramp;
+  r.beta.assign(50, 40.0);
+  r.beta_hat.assign(50, 41.0);
+  series.tracking.push_back({"eq7", {r}});
+  const std::string dir = ::testing::TempDir() + "/survey_plots";
+  const std::vector<std::string> files = dyncal::host::survey::write_survey_plots(result, series, dir);
+  ASSERT_EQ(files.size(), 4u);  // fig2 eq7, residual eq7, residual eq4, fig4 eq7
+  for (const std::string& f : files) {
+    std::ifstream in(f);
+    const std::string svg((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_NE(svg.find("</svg>"), std::string::npos) << f;
+    EXPECT_GT(svg.size(), 2000u) << f;
+  }
+}

@@ -5,6 +5,7 @@
 
 #include "commands.hpp"
 #include "dyncal_host/survey/survey.hpp"
+#include "dyncal_host/survey/survey_plots.hpp"
 
 namespace dyncal::app {
 namespace {
@@ -12,7 +13,7 @@ namespace {
 namespace survey = host::survey;
 
 struct SurveySettings {
-  std::string robots_dir, json, check;
+  std::string robots_dir, json, check, plots;
   survey::SurveyOptions options;
   double tolerance = 1e-3;
 };
@@ -20,9 +21,14 @@ struct SurveySettings {
 int run_survey(const SurveySettings& s) {
   const auto robot = host::load_robot(s.robots_dir, "er20");
   const nlohmann::json published = read_json_file(s.robots_dir + "/er20/survey_published.json");
-  const nlohmann::json result = survey::run_survey(robot, s.options);
+  survey::SurveySeries series;
+  const nlohmann::json result = survey::run_survey(robot, s.options, s.plots.empty() ? nullptr : &series);
   if (!s.json.empty()) write_json_file(s.json, result);
   survey::print_survey(std::cout, result, published);
+  if (!s.plots.empty()) {
+    const std::vector<std::string> files = survey::write_survey_plots(result, series, s.plots);
+    std::cout << "\nplots (" << files.size() << " SVG files) in " << s.plots << "\n";
+  }
   if (s.check.empty()) return 0;
   const std::string diff = survey::compare_survey(result, read_json_file(s.check), s.tolerance);
   if (!diff.empty()) {
@@ -53,7 +59,15 @@ void add_survey_command(CLI::App& app, Action& run) {
       ->capture_default_str();
   cmd->add_option("--prior-error", s->options.prior_error, "CAD prior: relative error of every set value (uniform)")
       ->capture_default_str();
+  cmd->add_option("--jobs", s->options.jobs,
+                  "threads for the study's independent runs (0: one per hardware thread; the results do not depend "
+                  "on it, the solution times may)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   cmd->add_option("--json", s->json, "write the results as JSON");
+  cmd->add_option("--plots", s->plots,
+                  "write Fig. 2 (the designed excitation), Fig. 4 (following beta) and the residual per joint and "
+                  "method as SVG into this directory (gnuplot)");
   cmd->add_option("--check", s->check, "compare with a committed result JSON; exit 1 on any difference");
   cmd->add_option("--tolerance", s->tolerance, "relative tolerance of --check")->capture_default_str();
   cmd->callback([&run, s] { run = [s] { return run_survey(*s); }; });

@@ -22,6 +22,21 @@ double sgn(double v) {
   return v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0);
 }
 
+/// Whether friction parameter k of `model` is an amplitude of the nonlinear part (its column there
+/// depends on the scale parameters): Fc, Fs of Eq. 4 (through Fs - Fc), f2, f4 of Eq. 5, f1, f2 of Eq. 6.
+bool has_nonlinear_column(FrictionModel model, int k) {
+  switch (model) {
+    case FrictionModel::eq4:
+      return k == 0 || k == 1;
+    case FrictionModel::eq5:
+      return k == 1 || k == 3;
+    case FrictionModel::eq6:
+      return k == 0 || k == 1;
+    default:
+      return false;
+  }
+}
+
 /// Standard regressor rows of every sample: Ys[s] is 6 x 60.
 std::vector<Eigen::Matrix<double, 6, kStandard>> standard_rows(const RunData& d) {
   std::vector<Eigen::Matrix<double, 6, kStandard>> Y(static_cast<size_t>(d.q.rows()));
@@ -48,6 +63,7 @@ TorqueObjective::TorqueObjective(const RunData& d, FrictionModel model, const st
     amplitudes_.push_back(k);
     const auto it = std::find(linear_.begin(), linear_.end(), k);
     amplitude_column_.push_back(it == linear_.end() ? -1 : kStandard + static_cast<int>(it - linear_.begin()));
+    if (has_nonlinear_column(model, k)) nonlinear_amplitudes_.push_back(static_cast<int>(amplitudes_.size()) - 1);
   }
   const int L = kStandard + static_cast<int>(linear_.size());
   const auto Y = standard_rows(d);
@@ -235,6 +251,35 @@ double TorqueObjective::least_squares(const double* x, double* grad) const {
   return least_squares_of(mean, var);
 }
 
+void TorqueObjective::amplitude_columns(const Joint& J, const double* th, Eigen::Index k, Eigen::ArrayXXd& D) const {
+  const auto aq = J.aq_sorted.head(k), sg = J.sg_sorted.head(k);
+  const double w = J.w;
+  D.resize(k, kf_);
+  switch (model_) {
+    case FrictionModel::eq4: {  // (Fs - Fc) sgn exp(-(qd / qds)^2)
+      const double qds = std::max(th[2], 1e-3);
+      D.col(1) = w * sg * (-(aq / qds).square()).exp();
+      D.col(0) = -D.col(1);
+      break;
+    }
+    case FrictionModel::eq5: {  // -f2 sgn exp(-|qd| / f3) - f4 sgn exp(-1 / (f5 |qd|))
+      const double f3 = std::max(th[2], 1e-3), f5 = std::max(th[4], 1e-3);
+      D.col(1) = -(w * sg * (-aq / f3).exp());
+      D.col(3) = -(w * sg * (-J.inv_aq_sorted.head(k) / f5).exp());
+      break;
+    }
+    case FrictionModel::eq6: {  // (f1 + f2 sech(f3 qd)) tanh(f4 qd), by exponentials of -|x|
+      const double f3 = std::max(th[2], 1e-3), f4 = std::max(th[3], 1e-3);
+      const Eigen::ArrayXd E3 = (-f3 * aq).exp(), E4 = (-2 * f4 * aq).exp();
+      D.col(0) = w * sg * (1 - E4) / (1 + E4);
+      D.col(1) = D.col(0) * 2 * E3 / (1 + E3.square());
+      break;
+    }
+    default:
+      break;
+  }
+}
+
 void TorqueObjective::fit_amplitudes(double* x, const double* lo, const double* hi, std::array<double, 6>* mean,
                                      std::array<double, 6>* var) const {
   const Eigen::Map<const Eigen::Matrix<double, kStandard, 1>> phi(x);
@@ -242,17 +287,16 @@ void TorqueObjective::fit_amplitudes(double* x, const double* lo, const double* 
   const std::vector<int>& amp = amplitudes_;
   const std::vector<int>& col = amplitude_column_;
   const int na = static_cast<int>(amp.size());
-  Eigen::ArrayXd n;
-  Eigen::ArrayXXd dn;
-  struct {
-    Eigen::VectorXd r;     // rigid-body residual on the rows the nonlinear part reaches
-    Eigen::MatrixXd D, L;  // there: the amplitudes' nonlinear and linear columns
-  } nonlinear;
+  // At most 5 amplitudes per joint (friction_count): small fixed-capacity solves, no heap.
+  using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6>;
+  using SmallVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 6, 1>;
+  Eigen::ArrayXXd D;  // the amplitudes' nonlinear columns on the rows the nonlinear part reaches
+  Eigen::VectorXd r;  // there: the rigid-body residual
   for (int j = 0; j < 6; ++j) {
     const Joint& J = joints_[j];
     double* f = x + kStandard + kf_ * j;
-    Eigen::MatrixXd M = Eigen::MatrixXd::Zero(na, na);
-    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(na);
+    Small M = Small::Zero(na, na);
+    SmallVector rhs = SmallVector::Zero(na);
     for (int a = 0; a < na; ++a) {
       const int ca = col[static_cast<size_t>(a)];
       if (ca < 0) continue;
@@ -261,27 +305,33 @@ void TorqueObjective::fit_amplitudes(double* x, const double* lo, const double* 
         if (col[static_cast<size_t>(b)] >= 0) M(a, b) = J.G(ca, col[static_cast<size_t>(b)]);
       }
     }
+    Eigen::Index k = 0;
     if (!is_linear(model_)) {
-      // The nonlinear part's columns on the rows it reaches: dn / d amplitude (independent of the
-      // amplitudes), plus their products with the linear columns and the rigid-body residual.
-      const Eigen::Index k = reach(J, f);
-      nonlinear_part(J, f, k, n, &dn);
+      // The nonlinear columns d_a (independent of the amplitudes) add d_a . r to the right-hand side
+      // and l_b . d_a + l_a . d_b + d_a . d_b to the normal matrix (l: the linear columns).
+      k = reach(J, f);
+      amplitude_columns(J, f, k, D);
       const auto Ak = J.A_sorted.topRows(k);
-      const Eigen::VectorXd r =
-          J.tau_sorted.head(k).matrix() - Ak.leftCols(kStandard - J.first) * phi.tail(kStandard - J.first);
-      Eigen::MatrixXd Dk(k, na), Lk = Eigen::MatrixXd::Zero(k, na);
-      for (int a = 0; a < na; ++a) {
-        Dk.col(a) = dn.col(amp[static_cast<size_t>(a)]).matrix();
-        const int ca = col[static_cast<size_t>(a)];
-        if (ca >= 0) Lk.col(a) = Ak.col(ca - J.first);
+      r = J.tau_sorted.head(k).matrix() - Ak.leftCols(kStandard - J.first) * phi.tail(kStandard - J.first);
+      for (const int a : nonlinear_amplitudes_) {
+        const auto da = D.col(amp[static_cast<size_t>(a)]).matrix();
+        rhs[a] += da.dot(r);
+        for (int b = 0; b < na; ++b) {
+          const int cb = col[static_cast<size_t>(b)];
+          if (cb < 0) continue;
+          const double lb_da = Ak.col(cb - J.first).dot(da);
+          M(a, b) += lb_da;
+          M(b, a) += lb_da;
+        }
+        for (const int b : nonlinear_amplitudes_) {
+          if (b < a) continue;
+          const double da_db = da.dot(D.col(amp[static_cast<size_t>(b)]).matrix());
+          M(a, b) += da_db;
+          if (b != a) M(b, a) += da_db;
+        }
       }
-      // na x na Gram blocks of k-row columns: dot products (lazyProduct), not a packed GEMM.
-      const Eigen::MatrixXd LtD = Lk.transpose().lazyProduct(Dk);
-      M += LtD + LtD.transpose() + Dk.transpose().lazyProduct(Dk);
-      rhs += Dk.transpose() * r;
-      nonlinear = {r, Dk, Lk};
     }
-    Eigen::VectorXd sol = M.completeOrthogonalDecomposition().solve(rhs);
+    SmallVector sol = M.completeOrthogonalDecomposition().solve(rhs);
     for (int a = 0; a < na; ++a) {
       const int i = kStandard + kf_ * j + amp[static_cast<size_t>(a)];
       if (lo) sol[a] = std::max(sol[a], lo[i]);
@@ -290,14 +340,20 @@ void TorqueObjective::fit_amplitudes(double* x, const double* lo, const double* 
     }
     if (!mean || !var) continue;
     // The residual moments at the new amplitudes without another pass over the samples: the linear
-    // columns from the reduced sums, the nonlinear part n = D a (linear in the amplitudes).
+    // columns from the reduced sums, the nonlinear part n = sum_a sol_a d_a (linear in the amplitudes).
     Eigen::VectorXd z(kStandard + nl);
     z.head<kStandard>() = phi;
     for (int i = 0; i < nl; ++i) z[kStandard + i] = f[linear_[static_cast<size_t>(i)]];
     double sse = z.dot(J.G * z) - 2 * J.h.dot(z) + J.tt, sum = J.ts - J.a.dot(z);
     if (!is_linear(model_)) {
-      const Eigen::VectorXd nk = nonlinear.D * sol;
-      sse += -2 * nk.dot(nonlinear.r - nonlinear.L * sol) + nk.squaredNorm();
+      const auto Ak = J.A_sorted.topRows(k);
+      Eigen::VectorXd nk = Eigen::VectorXd::Zero(k), r_left = r;  // r less the linear columns' part
+      for (const int a : nonlinear_amplitudes_) nk += sol[a] * D.col(amp[static_cast<size_t>(a)]).matrix();
+      for (int b = 0; b < na; ++b) {
+        const int cb = col[static_cast<size_t>(b)];
+        if (cb >= 0) r_left -= sol[b] * Ak.col(cb - J.first);
+      }
+      sse += -2 * nk.dot(r_left) + nk.squaredNorm();
       sum -= nk.sum();
     }
     (*mean)[j] = sum / n_;

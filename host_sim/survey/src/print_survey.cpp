@@ -225,15 +225,15 @@ void print_table11(std::ostream& out, const json& r, const json& pub) {
       << "averaged before marking, as the survey)\n";
   out << std::left << std::setw(kName) << "method" << std::right << std::setw(8) << "e_d" << std::setw(8) << "e_f"
       << std::setw(8) << "e_T" << std::setw(10) << "J_e" << std::setw(14) << "follow" << std::setw(12) << "time"
-      << std::setw(8) << "dJ_e"
+      << std::setw(18) << "models" << std::setw(8) << "dJ_e"
       << "\n";
   for (auto& [m, levels] : pub["table11_levels"].items()) {
     if (m == "rows") continue;
     out << std::left << std::setw(kName) << (m + " (published)") << std::right << std::setw(8)
         << levels[0].get<std::string>() << std::setw(8) << levels[1].get<std::string>() << std::setw(8)
         << levels[2].get<std::string>() << std::setw(10) << levels[3].get<std::string>() << std::setw(14)
-        << levels[4].get<std::string>() << std::setw(12) << levels[5].get<std::string>() << std::setw(8)
-        << levels[6].get<std::string>() << "\n";
+        << levels[4].get<std::string>() << std::setw(12) << levels[5].get<std::string>() << std::setw(18)
+        << levels[6].get<std::string>() << std::setw(8) << levels[7].get<std::string>() << "\n";
   }
   std::map<std::string, std::vector<const json*>> by_method;
   for (const char* model : {"eq7", "eq4"}) {
@@ -242,8 +242,17 @@ void print_table11(std::ostream& out, const json& r, const json& pub) {
       by_method[name].push_back(&v);
     }
   }
+  // Which family of friction models (linear: Eq. 7, 8, 9; nonlinear: Eq. 4, 5, 6) each method ran on.
+  auto families = [&](const std::string& method) {
+    bool lin = false, nonlin = false;
+    for (auto& [model, c] : r["models"].items()) {
+      if (!c["methods"].contains(method)) continue;
+      (model == "eq7" || model == "eq8" || model == "eq9" ? lin : nonlin) = true;
+    }
+    return std::string(lin && nonlin ? "linear/nonlinear" : (lin ? "linear" : "nonlinear"));
+  };
   auto print_row = [&](const std::string& name, const std::vector<const json*>& list, const std::string& follow,
-                       const std::string& time) {
+                       const std::string& time, const std::string& models) {
     auto avg = [&](const char* noise, const char* key) {
       double sum = 0;
       for (const json* v : list) sum += (*v)[noise][key].get<double>();
@@ -255,7 +264,8 @@ void print_table11(std::ostream& out, const json& r, const json& pub) {
         << level(avg("without_noise", "e_d"), 0.2, 1) << " (" << level(avg("without_noise", "e_d_prior"), 0.2, 1) << ")"
         << std::setw(8) << level(avg("without_noise", "e_f"), 0.2, 1) << std::setw(8)
         << level(avg("without_noise", "e_T"), 0.01, 0.1) << std::setw(10) << level(avg("without_noise", "J_e"), 1, 10)
-        << std::setw(14) << follow << std::setw(12) << time << std::setw(8) << level(dje, 0.1, 1) << "\n";
+        << std::setw(14) << follow << std::setw(12) << time << std::setw(18) << models << std::setw(8)
+        << level(dje, 0.1, 1) << "\n";
   };
   auto offline_time = [](const std::vector<const json*>& list) {
     double secs = 0;
@@ -269,7 +279,7 @@ void print_table11(std::ostream& out, const json& r, const json& pub) {
       const json& t = r["tracking"]["methods"][m];
       follow = std::string(1, follow_level(t["ramp"]["lag"].get<double>(), t["step"]["lag"].get<double>()));
     }
-    print_row(m, list, follow, online ? "online" : offline_time(list));
+    print_row(m, list, follow, online ? "online" : offline_time(list), families(m));
   }
   // dyncal's hybrid: physically consistent LS offline (its indices on the study's runs are that
   // method's), then its friction tracked online; follows if it does on both the Eq. 7 and Eq. 4 run.
@@ -285,7 +295,7 @@ void print_table11(std::ostream& out, const json& r, const json& pub) {
     }
     if (runs == 2) {
       print_row(kConsistentForgetting, by_method[pcls], std::string(1, follow_level(ramp, step)),
-                offline_time(by_method[pcls]));
+                offline_time(by_method[pcls]), families(pcls));
       out << "(" << kConsistentForgetting << ": " << pcls << " offline, its indices above are that\n"
           << "method's; then the friction amplitudes tracked online (Fig. 4); follows: on the Eq. 7 and Eq. 4 runs)\n";
     }

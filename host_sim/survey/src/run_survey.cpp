@@ -12,8 +12,10 @@
 #include "dyncal_host/identification/physically_consistent.hpp"
 #include "dyncal_host/identification/standard_parameters.hpp"
 #include "dyncal_host/survey/indices.hpp"
+#include "dyncal_host/survey/parallel_runs.hpp"
 #include "dyncal_host/survey/survey.hpp"
 #include "dyncal_host/survey/survey_data.hpp"
+#include "dyncal_host/survey/survey_plots.hpp"
 #include "dyncal_host/survey/tracking.hpp"
 
 namespace dyncal::host::survey {
@@ -25,6 +27,14 @@ json indices_json(const Indices& x, double seconds) {
   return json{{"e_d", x.e_d},         {"e_d_prior", x.e_d_prior}, {"e_f", x.e_f}, {"e_T", x.e_T},
               {"e_T_std", x.e_T_std}, {"e_T_abs", x.e_T_abs},     {"J_e", x.J_e}, {"J_e_prior", x.J_e_prior},
               {"e_b", x.e_b},         {"seconds", seconds}};
+}
+
+/// RMS of tau - tau_hat of every joint [Nm] (6).
+json residual_rms(const Eigen::MatrixXd& tau, const Eigen::MatrixXd& tau_hat) {
+  json r = json::array();
+  for (Eigen::Index j = 0; j < tau.cols(); ++j)
+    r.push_back(std::sqrt((tau.col(j) - tau_hat.col(j)).squaredNorm() / static_cast<double>(tau.rows())));
+  return r;
 }
 
 /// Joint 3's row of Tables 5 / 6: link 3's m, X Y Z, I11..I33, joint 3's friction, and the mean
@@ -157,73 +167,142 @@ json undetermined_scale_parameters(const SurveyData& d, FrictionModel model, con
   return u;
 }
 
+/// One method's entries for one run of a model: its indices (under `noise`), which scale parameters
+/// the run leaves open (physically consistent LS on a nonlinear model), and, without noise, joint
+/// 3's row of Tables 5 / 6.
+json method_run(const Study& st, const Method& m, const SurveyData& d, FrictionModel model, bool noisy) {
+  const Estimate e = m.run(d, st.ms, model);
+  const char* noise = noisy ? "with_noise" : "without_noise";
+  json mj;
+  mj["online"] = m.online;
+  mj[noise] = indices_json(evaluate(e, d.scenario, d.tau, st.tau_max), e.seconds);
+  mj[noise]["residual_rms"] = residual_rms(d.tau, e.tau_hat);
+  const bool is_pcls = m.name == std::string("physically consistent LS");
+  if (is_pcls && !is_linear(model)) mj["undetermined"] = undetermined_scale_parameters(d, model, e);
+  if (!noisy) {
+    mj["joint3"] = joint3_json(e, d.tau);
+    if (is_pcls) mj["pseudo_inertia_min_eigenvalue"] = e.pseudo_inertia_min_eigenvalue;
+  }
+  return mj;
+}
+
+/// Relative cost of a method's run, to start the long ones first (run_parallel): the genetic
+/// algorithm and the particle filter on a nonlinear model take most of the study.
+double method_cost(const Method& m, FrictionModel model) {
+  const bool sampler = m.name == std::string("genetic algorithm") || m.name == std::string("particle filter");
+  return sampler ? (is_linear(model) ? 5.0 : 100.0) : 1.0;
+}
+
 /// Tables 5, 6, 8, 9 for one friction model: every method of its family and the optimisers, on a
-/// run without and one with Table 7 noise.
-json run_model(const Study& st, const Methods& all, FrictionModel model) {
-  json c;
+/// run without and one with Table 7 noise. The runs' data are simulated first (one task each), then
+/// every (run, method) pair is a task; the JSON is assembled afterwards, as a sequential run's.
+struct ModelStudy {
+  FrictionModel model = FrictionModel::eq7;
+  std::array<SurveyData, 2> data;  // without, with noise
   std::vector<const Method*> methods;
-  for (const Method& m : is_linear(model) ? all.linear : all.nonlinear) methods.push_back(&m);
-  for (const Method& m : all.optimisers) methods.push_back(&m);
-  const char* pcls = "physically consistent LS";
-  for (int noisy = 0; noisy < 2; ++noisy) {
-    const char* noise = noisy ? "with_noise" : "without_noise";
-    const SurveyData d = simulate_survey_data(st.robot, run_options(st, model, noisy != 0, st.options.quick ? 1 : 2));
-    c["samples"] = d.t.size();
-    c["trajectory_cond"] = d.trajectory_cond;
-    c["parameters"] = friction_parameter_names(model);
-    c["set_joint3"] = json::array();
-    const std::vector<double> set = set_friction(d.scenario, model);
-    for (int k = 0; k < friction_count(model); ++k)
-      c["set_joint3"].push_back(set[static_cast<size_t>(2 * friction_count(model) + k)]);
-    for (const Method* m : methods) {
-      const Estimate e = m->run(d, st.ms, model);
-      json& mj = c["methods"][m->name];
-      mj["online"] = m->online;
-      mj[noise] = indices_json(evaluate(e, d.scenario, d.tau, st.tau_max), e.seconds);
-      const bool is_pcls = m->name == std::string(pcls);
-      if (is_pcls && !is_linear(model))
-        c["undetermined_scale_parameters"][noise] = undetermined_scale_parameters(d, model, e);
-      if (!noisy) {
-        mj["joint3"] = joint3_json(e, d.tau);
-        if (is_pcls) mj["pseudo_inertia_min_eigenvalue"] = e.pseudo_inertia_min_eigenvalue;
+  std::array<std::vector<json>, 2> results;  // per run, per method
+
+  ModelStudy(const Methods& all, FrictionModel f) : model(f) {
+    for (const Method& m : is_linear(f) ? all.linear : all.nonlinear) methods.push_back(&m);
+    for (const Method& m : all.optimisers) methods.push_back(&m);
+    for (auto& r : results) r.resize(methods.size());
+  }
+
+  void add_simulations(const Study& st, std::vector<Task>& tasks) {
+    for (int noisy = 0; noisy < 2; ++noisy) {
+      tasks.push_back({1, [this, &st, noisy] {
+                         data[static_cast<size_t>(noisy)] = simulate_survey_data(
+                             st.robot, run_options(st, model, noisy != 0, st.options.quick ? 1 : 2));
+                       }});
+    }
+  }
+
+  void add_methods(const Study& st, std::vector<Task>& tasks) {
+    for (size_t noisy = 0; noisy < 2; ++noisy) {
+      for (size_t i = 0; i < methods.size(); ++i) {
+        tasks.push_back({method_cost(*methods[i], model), [this, &st, noisy, i] {
+                           results[noisy][i] = method_run(st, *methods[i], data[noisy], model, noisy != 0);
+                         }});
       }
     }
   }
-  for (auto& [name, mj] : c["methods"].items()) {
-    const double j1 = mj["without_noise"]["J_e"], j2 = mj["with_noise"]["J_e"];
-    mj["delta_J_e"] = (j2 - j1) / j1;
-    const double p1 = mj["without_noise"]["J_e_prior"], p2 = mj["with_noise"]["J_e_prior"];
-    mj["delta_J_e_prior"] = (p2 - p1) / p1;
+
+  json assemble() const {
+    json c;
+    for (int noisy = 0; noisy < 2; ++noisy) {
+      const char* noise = noisy ? "with_noise" : "without_noise";
+      const SurveyData& d = data[static_cast<size_t>(noisy)];
+      c["samples"] = d.t.size();
+      c["trajectory_cond"] = d.trajectory_cond;
+      c["parameters"] = friction_parameter_names(model);
+      c["set_joint3"] = json::array();
+      const std::vector<double> set = set_friction(d.scenario, model);
+      for (int k = 0; k < friction_count(model); ++k)
+        c["set_joint3"].push_back(set[static_cast<size_t>(2 * friction_count(model) + k)]);
+      for (size_t i = 0; i < methods.size(); ++i) {
+        json r = results[static_cast<size_t>(noisy)][i];
+        if (r.contains("undetermined")) {
+          c["undetermined_scale_parameters"][noise] = r["undetermined"];
+          r.erase("undetermined");
+        }
+        c["methods"][methods[i]->name].update(r);
+      }
+    }
+    for (auto& [name, mj] : c["methods"].items()) {
+      const double j1 = mj["without_noise"]["J_e"], j2 = mj["with_noise"]["J_e"];
+      mj["delta_J_e"] = (j2 - j1) / j1;
+      const double p1 = mj["without_noise"]["J_e_prior"], p2 = mj["with_noise"]["J_e_prior"];
+      mj["delta_J_e_prior"] = (p2 - p1) / p1;
+    }
+    return c;
   }
-  return c;
-}
+};
 
 /// Table 10: pseudo-inverse and IDIM-IV on measured (noisy) positions, with and without the filter.
-json run_table10(const Study& st) {
-  SurveyDataOptions qopt = run_options(st, FrictionModel::eq7, true, st.options.quick ? 1 : 2);
-  qopt.position_noise_std = kPositionNoise;
-  const SurveyData qd = simulate_survey_data(st.robot, qopt);
-  json t10;
-  t10["position_noise_std"] = kPositionNoise;
-  for (const char* method : {"pseudo-inverse", "IDIM-IV"}) {
-    for (bool filter : {true, false}) {
-      IdimIvOptions io;
-      io.filter = filter;
-      const Estimate e = std::string(method) == "IDIM-IV" ? idim_iv(qd, st.ms, io, closed_loop_of(st.robot, qd))
-                                                          : pseudo_inverse_measured(qd, st.ms, io);
-      json j = indices_json(evaluate(e, qd.scenario, qd.tau, st.tau_max), e.seconds);
-      j["iterations"] = e.iterations;
-      if (!e.note.empty()) j["note"] = e.note;
-      t10["methods"][method][filter ? "with_filter" : "without_filter"] = j;
-    }
-    json& m = t10["methods"][method];
-    for (const char* key : {"J_e", "J_e_prior"}) {
-      const double a = m["with_filter"][key], b = m["without_filter"][key];
-      m[std::string("delta_") + key] = (b - a) / a;
+struct Table10Study {
+  SurveyData data;
+  std::array<json, 4> results;  // method-major, filter then no filter
+  static constexpr std::array<const char*, 2> kMethods{"pseudo-inverse", "IDIM-IV"};
+
+  void add_simulations(const Study& st, std::vector<Task>& tasks) {
+    tasks.push_back({1, [this, &st] {
+                       SurveyDataOptions qopt = run_options(st, FrictionModel::eq7, true, st.options.quick ? 1 : 2);
+                       qopt.position_noise_std = kPositionNoise;
+                       data = simulate_survey_data(st.robot, qopt);
+                     }});
+  }
+
+  void add_methods(const Study& st, std::vector<Task>& tasks) {
+    for (size_t k = 0; k < 4; ++k) {
+      const bool iv = k / 2 == 1, filter = k % 2 == 0;
+      tasks.push_back({iv ? 10.0 : 1.0, [this, &st, k, iv, filter] {
+                         IdimIvOptions io;
+                         io.filter = filter;
+                         const Estimate e = iv ? idim_iv(data, st.ms, io, closed_loop_of(st.robot, data))
+                                               : pseudo_inverse_measured(data, st.ms, io);
+                         json j = indices_json(evaluate(e, data.scenario, data.tau, st.tau_max), e.seconds);
+                         j["iterations"] = e.iterations;
+                         if (!e.note.empty()) j["note"] = e.note;
+                         results[k] = j;
+                       }});
     }
   }
-  return t10;
-}
+
+  json assemble() const {
+    json t10;
+    t10["position_noise_std"] = kPositionNoise;
+    for (size_t mi = 0; mi < 2; ++mi) {
+      json& m = t10["methods"][kMethods[mi]];
+      m["with_filter"] = results[2 * mi];
+      m["without_filter"] = results[2 * mi + 1];
+      for (const char* key : {"J_e", "J_e_prior"}) {
+        const double a = m["with_filter"][key], b = m["without_filter"][key];
+        m[std::string("delta_") + key] = (b - a) / a;
+      }
+    }
+    return t10;
+  }
+};
 
 /// Mean and standard deviation of tau - tau_hat over all joints and samples [Nm].
 std::pair<double, double> error_moments(const Eigen::MatrixXd& tau, const Eigen::MatrixXd& tau_hat) {
@@ -240,52 +319,103 @@ std::pair<double, double> error_moments(const Eigen::MatrixXd& tau, const Eigen:
 /// consistent LS fit each of the six models on the first excitation period, judged on the torque
 /// error alone: on that period (as the survey) and on the second, which the fit did not see (a
 /// model with more parameters always fits its own data at least as well).
-json run_table12(const Study& st, const Methods& all) {
-  SurveyDataOptions eopt = run_options(st, FrictionModel::eq4, true, 2);
-  eopt.position_noise_std = kPositionNoise;
-  const SurveyData ed = experiment_stand_in(st.robot, eopt);
-  const Eigen::Index half = ed.q.rows() / 2;
-  const SurveyData fit = sample_rows(ed, 0, half), validation = sample_rows(ed, half, ed.q.rows() - half);
-  json t12;
-  t12["plant"] = "eq4";
-  for (M model : {M::eq7, M::eq8, M::eq9, M::eq4, M::eq5, M::eq6}) {
-    for (const Method* m : {&all.optimisers[3], &all.optimisers[0]}) {  // particle filter, consistent LS
-      const Estimate e = m->run(fit, st.ms, model);
-      Estimate v = e;
-      complete_estimate(v, validation, st.ms);
-      const auto [mean, sd] = error_moments(fit.tau, e.tau_hat);
-      const auto [v_mean, v_sd] = error_moments(validation.tau, v.tau_hat);
-      t12["methods"][m->name][model_key(model)] = {
-          {"mean", mean}, {"std", sd}, {"validation_mean", v_mean}, {"validation_std", v_sd}, {"seconds", e.seconds}};
-    }
-  }
-  return t12;
-}
+struct Table12Study {
+  static constexpr std::array<FrictionModel, 6> kModels{M::eq7, M::eq8, M::eq9, M::eq4, M::eq5, M::eq6};
+  SurveyData fit, validation;
+  std::array<std::array<json, 2>, 6> results;  // per model: particle filter, consistent LS
 
-/// Fig. 4: beta of joint 3 changing over the samples of noisy Eq. 7 and Eq. 4 runs.
-json run_tracking(const Study& st) {
-  json tracking;
-  tracking["mu"] = kTrackingMu;
-  for (FrictionModel model : {FrictionModel::eq7, FrictionModel::eq4}) {
-    const SurveyData td = simulate_survey_data(st.robot, run_options(st, model, true, kTrackingPeriods));
-    // dyncal's hybrid calibrates offline on the samples before the change starts (N < S / 2).
-    const Estimate calibration = physically_consistent_ls(sample_rows(td, 0, td.q.rows() / 2), model, st.ms);
-    for (ChangeProfile p : {ChangeProfile::step, ChangeProfile::ramp, ChangeProfile::second_order}) {
-      std::vector<TrackingResult> runs = track_viscous_friction(td, st.ms, p, 3, kTrackingMu);
-      runs.push_back(track_friction_after_calibration(td, calibration, st.ms, p, 3, kTrackingMu));
-      for (const TrackingResult& t : runs) {
-        tracking["methods"][t.method][to_string(p)] = {
-            {"lag", t.relative_lag}, {"scatter", t.relative_scatter}, {"mean_abs", t.relative_error}};
+  void add_simulations(const Study& st, std::vector<Task>& tasks) {
+    tasks.push_back({1, [this, &st] {
+                       SurveyDataOptions eopt = run_options(st, FrictionModel::eq4, true, 2);
+                       eopt.position_noise_std = kPositionNoise;
+                       const SurveyData ed = experiment_stand_in(st.robot, eopt);
+                       const Eigen::Index half = ed.q.rows() / 2;
+                       fit = sample_rows(ed, 0, half);
+                       validation = sample_rows(ed, half, ed.q.rows() - half);
+                     }});
+  }
+
+  void add_methods(const Study& st, const Methods& all, std::vector<Task>& tasks) {
+    for (size_t mi = 0; mi < kModels.size(); ++mi) {
+      for (size_t k = 0; k < 2; ++k) {
+        const Method* m = k == 0 ? &all.optimisers[3] : &all.optimisers[0];  // particle filter, consistent LS
+        tasks.push_back({method_cost(*m, kModels[mi]) / 2, [this, &st, m, mi, k] {
+                           const Estimate e = m->run(fit, st.ms, kModels[mi]);
+                           Estimate v = e;
+                           complete_estimate(v, validation, st.ms);
+                           const auto [mean, sd] = error_moments(fit.tau, e.tau_hat);
+                           const auto [v_mean, v_sd] = error_moments(validation.tau, v.tau_hat);
+                           results[mi][k] = {{"mean", mean},
+                                             {"std", sd},
+                                             {"validation_mean", v_mean},
+                                             {"validation_std", v_sd},
+                                             {"seconds", e.seconds}};
+                         }});
       }
     }
   }
-  return tracking;
-}
+
+  json assemble(const Methods& all) const {
+    json t12;
+    t12["plant"] = "eq4";
+    for (size_t mi = 0; mi < kModels.size(); ++mi) {
+      t12["methods"][all.optimisers[3].name][model_key(kModels[mi])] = results[mi][0];
+      t12["methods"][all.optimisers[0].name][model_key(kModels[mi])] = results[mi][1];
+    }
+    return t12;
+  }
+};
+
+/// Fig. 4: beta of joint 3 changing over the samples of noisy Eq. 7 and Eq. 4 runs.
+struct TrackingStudy {
+  static constexpr std::array<FrictionModel, 2> kModels{FrictionModel::eq7, FrictionModel::eq4};
+  std::array<SurveyData, 2> data;
+  std::array<std::vector<TrackingResult>, 2> runs;  // per model: every profile's results in order
+
+  void add_simulations(const Study& st, std::vector<Task>& tasks) {
+    for (size_t mi = 0; mi < 2; ++mi) {
+      tasks.push_back({1, [this, &st, mi] {
+                         data[mi] =
+                             simulate_survey_data(st.robot, run_options(st, kModels[mi], true, kTrackingPeriods));
+                       }});
+    }
+  }
+
+  void add_methods(const Study& st, std::vector<Task>& tasks) {
+    for (size_t mi = 0; mi < 2; ++mi) {
+      tasks.push_back(
+          {5, [this, &st, mi] {
+             const SurveyData& td = data[mi];
+             // dyncal's hybrid calibrates offline on the samples before the change starts (N < S / 2).
+             const Estimate calibration =
+                 physically_consistent_ls(sample_rows(td, 0, td.q.rows() / 2), kModels[mi], st.ms);
+             for (ChangeProfile p : {ChangeProfile::step, ChangeProfile::ramp, ChangeProfile::second_order}) {
+               std::vector<TrackingResult> r = track_viscous_friction(td, st.ms, p, 3, kTrackingMu);
+               r.push_back(track_friction_after_calibration(td, calibration, st.ms, p, 3, kTrackingMu));
+               runs[mi].insert(runs[mi].end(), r.begin(), r.end());
+             }
+           }});
+    }
+  }
+
+  json assemble() const {
+    json tracking;
+    tracking["mu"] = kTrackingMu;
+    for (const auto& model_runs : runs) {
+      for (const TrackingResult& t : model_runs) {
+        tracking["methods"][t.method][to_string(t.profile)] = {
+            {"lag", t.relative_lag}, {"scatter", t.relative_scatter}, {"mean_abs", t.relative_error}};
+      }
+    }
+    return tracking;
+  }
+};
 
 }  // namespace
 
-json run_survey(const RobotDescription& robot, const SurveyOptions& o) {
+json run_survey(const RobotDescription& robot, const SurveyOptions& o, SurveySeries* series) {
   Study st{robot, o, {}, {}, {}};
+  const int jobs = o.jobs > 0 ? o.jobs : default_jobs();
   st.oo.seed = o.seed;
   if (o.quick) {  // a sixth of the genetic algorithm's and the particle filter's evaluations
     st.oo.population = 60;
@@ -294,13 +424,37 @@ json run_survey(const RobotDescription& robot, const SurveyOptions& o) {
   st.ms.prior = cad_prior(o.prior_error, o.seed, o.prior_on);
   for (int j = 0; j < 6; ++j) st.tau_max[j] = robot.tau_max[j];
   const Methods methods = study_methods(st.oo);
+  std::vector<ModelStudy> models;
+  for (M model : {M::eq7, M::eq8, M::eq9, M::eq4, M::eq5, M::eq6}) models.emplace_back(methods, model);
+  Table10Study t10;
+  Table12Study t12;
+  TrackingStudy tracking;
+  // Two rounds: every run's data, then every method on them.
+  std::vector<Task> simulations, fits;
+  for (ModelStudy& m : models) m.add_simulations(st, simulations);
+  t10.add_simulations(st, simulations);
+  t12.add_simulations(st, simulations);
+  tracking.add_simulations(st, simulations);
+  run_parallel(std::move(simulations), jobs);
+  for (ModelStudy& m : models) m.add_methods(st, fits);
+  t10.add_methods(st, fits);
+  t12.add_methods(st, methods, fits);
+  tracking.add_methods(st, fits);
+  run_parallel(std::move(fits), jobs);
   json result;
   result["settings"] = settings_json(st);
-  for (M model : {M::eq7, M::eq8, M::eq9, M::eq4, M::eq5, M::eq6})
-    result["models"][model_key(model)] = run_model(st, methods, model);
-  result["table10"] = run_table10(st);
-  result["table12"] = run_table12(st, methods);
-  result["tracking"] = run_tracking(st);
+  for (const ModelStudy& m : models) result["models"][model_key(m.model)] = m.assemble();
+  result["table10"] = t10.assemble();
+  result["table12"] = t12.assemble(methods);
+  result["tracking"] = tracking.assemble();
+  if (series) {
+    for (const ModelStudy& m : models) {
+      if (m.model == M::eq7 || m.model == M::eq4)
+        series->trajectories.push_back({model_key(m.model), m.data[0].t, m.data[0].q});
+    }
+    for (size_t mi = 0; mi < tracking.kModels.size(); ++mi)
+      series->tracking.push_back({model_key(tracking.kModels[mi]), tracking.runs[mi]});
+  }
   return result;
 }
 

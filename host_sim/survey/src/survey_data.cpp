@@ -4,6 +4,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <filesystem>
 #include <random>
@@ -24,7 +25,7 @@ using Robot = dyncal::generated::er20::Robot;
 
 /// A scratch file for the drive's simulated flash (removed again by the caller).
 std::string scratch_table_path(std::uint64_t seed) {
-  static int counter = 0;
+  static std::atomic<int> counter{0};  // runs may be simulated on several threads
   return (std::filesystem::temp_directory_path() / ("dyncal_survey_" + std::to_string(::getpid()) + "_" +
                                                     std::to_string(seed) + "_" + std::to_string(counter++) + ".bin"))
       .string();

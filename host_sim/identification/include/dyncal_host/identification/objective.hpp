@@ -67,12 +67,16 @@ class TorqueObjective {
   void nonlinear_part(const Joint& J, const double* theta, Eigen::Index k, Eigen::ArrayXd& n,
                       Eigen::ArrayXXd* dn) const;
   Eigen::Index reach(const Joint& J, const double* theta) const;
+  /// The nonlinear part's columns d n / d amplitude on rows [0, k) of joint J into D (k x kf; only the
+  /// columns of nonlinear_amplitudes_ are set): what separable least squares needs of it.
+  void amplitude_columns(const Joint& J, const double* theta, Eigen::Index k, Eigen::ArrayXXd& D) const;
 
   FrictionModel model_;
   int kf_ = 2;
-  std::vector<int> linear_;            // friction parameters (per joint) with a fixed column, in column order
-  std::vector<int> amplitudes_;        // friction parameters that are not scale parameters
-  std::vector<int> amplitude_column_;  // each amplitude's column in A (kStandard + its linear_ index), -1: none
+  std::vector<int> linear_;                // friction parameters (per joint) with a fixed column, in column order
+  std::vector<int> amplitudes_;            // friction parameters that are not scale parameters
+  std::vector<int> amplitude_column_;      // each amplitude's column in A (kStandard + its linear_ index), -1: none
+  std::vector<int> nonlinear_amplitudes_;  // indices into amplitudes_ of those with a nonlinear column
   double n_ = 0;
   std::array<Joint, 6> joints_;
 };

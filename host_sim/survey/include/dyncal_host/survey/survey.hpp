@@ -18,11 +18,16 @@ struct SurveyOptions {
   std::uint64_t seed = 1;                      ///< excitation, noise and CAD-prior seed
   double prior_error = 0.2;                    ///< CAD prior: set values times (1 + u), u uniform in +-prior_error
   PriorErrors prior_on = PriorErrors::table5;  ///< which set values the CAD prior's errors are on
+  int jobs = 0;  ///< threads for the independent runs (0: one per hardware thread); results do not depend on it
 };
 
+struct SurveySeries;
+
 /// Runs the study. The result (JSON) holds, per model and method, the Sec. 5 indices without and
-/// with noise, the solution times, and joint 3's parameters (Tables 5, 6). Throws InputError.
-nlohmann::json run_survey(const RobotDescription& robot, const SurveyOptions& options);
+/// with noise, each joint's RMS torque residual [Nm], the solution times, and joint 3's parameters
+/// (Tables 5, 6). With `series`, also the time series the figures need (survey_plots.hpp). Throws
+/// InputError.
+nlohmann::json run_survey(const RobotDescription& robot, const SurveyOptions& options, SurveySeries* series = nullptr);
 
 /// Prints our Tables 5, 6, 8, 9 and 11 next to the published ones (`published`: the data file
 /// robots/er20/survey_published.json).

@@ -33,14 +33,14 @@ struct SurveyDataOptions {
 inline constexpr int kSurveyJoints = 6;
 
 struct SurveyData : RunData {
-  Eigen::MatrixXd tau_cmd;                      ///< commanded torque tau_jc [Nm] (noise-free)
-  Scenario scenario;                            ///< friction, noise and seed the drive ran
-  DriveTrajectory trajectory;                   ///< the excitation
-  double trajectory_cond = 0;                   ///< cond(K) of the designed excitation for the run's
-                                                ///< friction model (Eq. 26, unit-scaled columns)
-  JointArray kp{}, kd{};  ///< the drive's PD gains (its known control law), set
-                                                ///< from the lightest inertia along the trajectory
-  std::vector<std::uint8_t> table;              ///< the drive's active table (feed-forward: set parameters)
+  Eigen::MatrixXd tau_cmd;          ///< commanded torque tau_jc [Nm] (noise-free)
+  Scenario scenario;                ///< friction, noise and seed the drive ran
+  DriveTrajectory trajectory;       ///< the excitation
+  double trajectory_cond = 0;       ///< cond(K) of the designed excitation for the run's
+                                    ///< friction model (Eq. 26, unit-scaled columns)
+  JointArray kp{}, kd{};            ///< the drive's PD gains (its known control law), set
+                                    ///< from the lightest inertia along the trajectory
+  std::vector<std::uint8_t> table;  ///< the drive's active table (feed-forward: set parameters)
 };
 
 /// Simulates the survey's platform for `robot` (er20). Throws InputError.
@@ -56,8 +56,7 @@ SurveyData sample_rows(const SurveyData& d, Eigen::Index from, Eigen::Index n);
 /// instruments from (Gautier et al. 2013).
 std::vector<SimulatedDrive::PlantSample> simulate_closed_loop(const RobotDescription& robot, const SurveyData& data,
                                                               const std::vector<double>& phi_standard,
-                                                              const JointArray& Fc,
-                                                              const JointArray& beta);
+                                                              const JointArray& Fc, const JointArray& beta);
 
 /// simulate_closed_loop as IDIM-IV takes it: the plant's positions at the run's samples (S x 6).
 ClosedLoopSimulation closed_loop_of(const RobotDescription& robot, const SurveyData& data);

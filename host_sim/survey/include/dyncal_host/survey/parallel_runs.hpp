@@ -1,0 +1,25 @@
+#pragma once
+// The study's independent runs on several threads: each task writes only its own result slot, so
+// the results are those of a sequential run, bit for bit, whatever the thread count.
+
+#include <functional>
+#include <vector>
+
+namespace dyncal::host::survey {
+
+/// A unit of work and a relative cost hint (larger: started earlier, so that the longest runs do
+/// not end up last on one thread).
+struct Task {
+  double cost = 1;
+  std::function<void()> run;
+};
+
+/// Runs every task on up to `jobs` threads (jobs <= 1: in the calling thread, in order), the costly
+/// ones first. Rethrows the first exception a task threw (by its position in `tasks`) after every
+/// task has finished.
+void run_parallel(std::vector<Task> tasks, int jobs);
+
+/// Threads to use by default: std::thread::hardware_concurrency(), at least 1.
+int default_jobs();
+
+}  // namespace dyncal::host::survey
