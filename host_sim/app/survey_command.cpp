@@ -4,6 +4,7 @@
 #include <memory>
 
 #include "commands.hpp"
+#include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/survey/survey.hpp"
 #include "dyncal_host/survey/survey_plots.hpp"
 
@@ -13,7 +14,7 @@ namespace {
 namespace survey = host::survey;
 
 struct SurveySettings {
-  std::string robots_dir, json, check, plots;
+  std::string robots_dir, json, check, plots, from_json;
   survey::SurveyOptions options;
   double tolerance = 1e-3;
 };
@@ -22,7 +23,11 @@ int run_survey(const SurveySettings& s) {
   const auto robot = host::load_robot(s.robots_dir, "er20");
   const nlohmann::json published = read_json_file(s.robots_dir + "/er20/survey_published.json");
   survey::SurveySeries series;
-  const nlohmann::json result = survey::run_survey(robot, s.options, s.plots.empty() ? nullptr : &series);
+  if (!s.from_json.empty() && !s.plots.empty())
+    throw host::InputError("survey: --plots needs the run's time series; it cannot take --from-json");
+  const nlohmann::json result = s.from_json.empty()
+                                    ? survey::run_survey(robot, s.options, s.plots.empty() ? nullptr : &series)
+                                    : read_json_file(s.from_json);
   if (!s.json.empty()) write_json_file(s.json, result);
   survey::print_survey(std::cout, result, published);
   if (!s.plots.empty()) {
@@ -65,6 +70,8 @@ void add_survey_command(CLI::App& app, Action& run) {
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cmd->add_option("--json", s->json, "write the results as JSON");
+  cmd->add_option("--from-json", s->from_json,
+                  "print the tables of a result written by --json instead of running the study");
   cmd->add_option("--plots", s->plots,
                   "write Fig. 2 (the designed excitation), Fig. 4 (following beta) and the residual per joint and "
                   "method as SVG into this directory (gnuplot)");

@@ -66,8 +66,11 @@ Estimate BoundedProblem::estimate(const Eigen::VectorXd& x, const char* method,
   e.method = method;
   e.model = model_;
   e.standard = x.head(kStandard);
-  e.standard_prior = e.standard;
   e.base = base_map() * e.standard;
+  // The optimisers have no prior (the survey's), so the directions the data do not determine stay
+  // where the search left them; standard_prior (e_d prior) fills those from the CAD prior, as for
+  // the base-parameter methods: same base parameters, same torques.
+  e.standard_prior = standard_from_base(e.base, settings_.prior);
   e.friction.assign(x.data() + kStandard, x.data() + x.size());
   e.iterations = iterations;
   for (int l = 0; l < kLinks; ++l) {

@@ -47,6 +47,33 @@ void weight_rows(Eigen::MatrixXd& W, Eigen::VectorXd& y, const std::array<double
   }
 }
 
+/// Parallel decimation (Gautier's; survey Sec. 3.1): the torque and every regressor column
+/// low-passed by the same zero-phase filter (fourth-order Butterworth at 0.8 times the Nyquist
+/// frequency after decimation), then every `factor`-th sample kept. The same linear filter on both
+/// sides keeps tau = W phi; it removes the noise above the band the excitation lives in. Stacked
+/// rows (6 per sample, joint-minor) of W and y in place; y may be null (instruments).
+void parallel_decimation(Eigen::MatrixXd& W, Eigen::VectorXd* y, double sample_rate_hz, int factor) {
+  if (factor <= 1) return;
+  const Eigen::Index S = W.rows() / 6, kept = (S + factor - 1) / factor, P = W.cols();
+  const ButterworthLowPass filter(4, 0.8 * 0.5 * sample_rate_hz / factor, sample_rate_hz);
+  Eigen::MatrixXd Wd(6 * kept, P);
+  Eigen::VectorXd yd(6 * kept);
+  for (Eigen::Index j = 0; j < 6; ++j) {
+    Eigen::MatrixXd block(S, P + 1);  // joint j's rows: its regressor columns and its torque
+    for (Eigen::Index s = 0; s < S; ++s) {
+      block.row(s).head(P) = W.row(6 * s + j);
+      block(s, P) = y ? (*y)[6 * s + j] : 0.0;
+    }
+    filter.filtfilt(block);
+    for (Eigen::Index k = 0; k < kept; ++k) {
+      Wd.row(6 * k + j) = block.row(k * factor).head(P);
+      yd[6 * k + j] = block(k * factor, P);
+    }
+  }
+  W = Wd;
+  if (y) *y = yd;
+}
+
 /// The weighted least-squares system of the measured states: K (6 S x 48) and tau (6 S).
 void measured_system(const RunData& d, const IdimIvOptions& o, const MethodSettings& settings, Eigen::MatrixXd& K,
                      Eigen::VectorXd& y) {
@@ -54,6 +81,7 @@ void measured_system(const RunData& d, const IdimIvOptions& o, const MethodSetti
   measured_states(d, o, q, qd, qdd);
   K = stacked(q, qd, qdd);
   y = stacked_torque(d.tau);
+  parallel_decimation(K, &y, d.sample_rate_hz, o.decimation);
   weight_rows(K, y, settings.sigma);
 }
 
@@ -128,6 +156,7 @@ Estimate idim_iv(const RunData& d, const MethodSettings& settings, const IdimIvO
     Eigen::MatrixXd qs, qds, qdds;
     measured_states(simulated, o, qs, qds, qdds);
     Eigen::MatrixXd Z = stacked(qs, qds, qdds);
+    parallel_decimation(Z, nullptr, d.sample_rate_hz, o.decimation);
     Eigen::VectorXd unused = Eigen::VectorXd::Zero(Z.rows());
     weight_rows(Z, unused, settings.sigma);
     const PV next = (Z.transpose() * K).colPivHouseholderQr().solve(Z.transpose() * y);

@@ -189,6 +189,15 @@ void print_table10(std::ostream& out, const json& r, const json& pub) {
           << fmt(v["delta_J_e_prior"].get<double>()) << std::setw(10) << fmt(v["with_filter"]["e_b"].get<double>())
           << std::setw(11) << fmt(v["without_filter"]["e_b"].get<double>()) << "\n";
     }
+    if (t.contains("parallel_decimation")) {
+      out << "Without the filter but with parallel decimation (torque and regressor low-passed alike, every "
+          << t["parallel_decimation"].get<int>() << "th sample kept; Sec. 3.1):\n";
+      for (const char* m : {"pseudo-inverse", "IDIM-IV"}) {
+        const json& v = t["methods"][m]["without_filter_parallel_decimation"];
+        out << "  " << std::left << std::setw(kName - 2) << m << std::right << "J_e " << fmt(v["J_e"].get<double>())
+            << "   J_e prior " << fmt(v["J_e_prior"].get<double>()) << "   e_b " << fmt(v["e_b"].get<double>()) << "\n";
+      }
+    }
     const json& iv = t["methods"]["IDIM-IV"];
     out << "IDIM-IV: " << iv["with_filter"]["iterations"].get<int>() << " / "
         << iv["without_filter"]["iterations"].get<int>() << " closed-loop simulations ("

@@ -25,6 +25,10 @@ struct IdimIvOptions {
   double cutoff_hz = 20;    ///< survey Sec. 6.4: 20 Hz
   int filter_order = 4;     ///< fourth-order Butterworth (zero phase)
   int max_iterations = 20;  ///< closed-loop simulations at most
+  /// Parallel decimation of the torque and the regressor (Gautier; survey Sec. 3.1): both low-passed
+  /// by the same filter, then every decimation-th sample kept; 1: none (the study's default: at
+  /// 100 Hz it changes nothing measurable, docs/survey.md Table 10).
+  int decimation = 1;
   /// Stop when an iteration moves the estimate by at most this many of its standard errors (RMS
   /// over the parameters, in the estimate's covariance): the iterate then adds about tolerance^2
   /// (1 %) to the estimate's variance. A relative tolerance on |phi| was blind to the small
