@@ -344,16 +344,21 @@ TEST(SurveyTracking, ConsistentCalibrationPlusForgettingFollowsASlopeChangeWithL
       InputError);
 }
 
-// Table 10's direction: on noisy measured positions differentiated without a filter, least squares
-// is biased (errors in variables) and IDIM-IV, whose instruments come from the closed-loop
-// simulation, is not; with the filter both are close.
-TEST(SurveyIdimIv, BeatsLeastSquaresOnNoisyPositions) {
+/// Table 10's data: one period of the Eq. 7 platform, Table 7 torque noise, 1e-4 rad on the positions.
+SurveyData noisy_positions_run(const RobotDescription& robot) {
   SurveyDataOptions o;
   o.periods = 1;
   o.torque_noise = true;
   o.position_noise_std = 1e-4;
+  return simulate_survey_data(robot, o);
+}
+
+// Table 10's direction: on noisy measured positions differentiated without a filter, least squares
+// is biased (errors in variables) and IDIM-IV, whose instruments come from the closed-loop
+// simulation, is not; with the filter both are close.
+TEST(SurveyIdimIv, BeatsLeastSquaresOnNoisyPositions) {
   const RobotDescription robot = load_robot(default_robots_dir(), "er20");
-  const SurveyData d = simulate_survey_data(robot, o);
+  const SurveyData d = noisy_positions_run(robot);
   IdimIvOptions raw;
   raw.filter = false;
   const Estimate ols = pseudo_inverse_measured(d, settings(), raw),
@@ -374,6 +379,24 @@ TEST(SurveyIdimIv, BeatsLeastSquaresOnNoisyPositions) {
   EXPECT_LT(d_iv, 0.5 * d_ols);
   // The measured positions differ from the plant's by the noise set.
   EXPECT_NEAR(std::sqrt((d.q_meas - d.q).array().square().mean()), 1e-4, 1e-5);
+}
+
+// Parallel decimation (survey Sec. 3.1; Gautier): the torque and the regressor low-passed by the
+// same filter, then decimated. It filters the differentiated positions inside the regressor, so
+// least squares on unfiltered noisy positions recovers (measured e_b 2.46 -> 0.56 on one period),
+// and IDIM-IV still converges.
+TEST(SurveyIdimIv, ParallelDecimationFiltersTheRegressorOfUnfilteredPositions) {
+  const RobotDescription robot = load_robot(default_robots_dir(), "er20");
+  const SurveyData d = noisy_positions_run(robot);
+  IdimIvOptions raw, decimated;
+  raw.filter = decimated.filter = false;
+  decimated.decimation = 5;
+  const auto e_b = [&](const Estimate& e) { return evaluate(e, d.scenario, d.tau, kTauMax).e_b; };
+  const MethodSettings ms = settings();
+  EXPECT_LT(e_b(pseudo_inverse_measured(d, ms, decimated)), 0.5 * e_b(pseudo_inverse_measured(d, ms, raw)));
+  const Estimate iv = idim_iv(d, ms, decimated, closed_loop_of(robot, d));
+  EXPECT_EQ(iv.note.rfind("converged", 0), 0u) << iv.note;
+  EXPECT_LT(e_b(iv), 1.0);  // measured 0.72 (0.47 without decimation)
 }
 
 // The closed loop IDIM-IV builds its instruments from (issue 5): the drive's known control law on
@@ -453,29 +476,3 @@ TEST(SurveyPlots, WritesFig2Fig4AndTheResidualsAsSvg) {
     EXPECT_GT(svg.size(), 2000u) << f;
   }
 }
-
-namespace {
-// Parallel decimation (survey Sec. 3.1; Gautier): the torque and the regressor low-passed by the
-// same filter, then decimated. It filters the differentiated positions inside the regressor, so
-// least squares on unfiltered noisy positions recovers (measured e_b 2.46 -> 0.56 on one period),
-// and IDIM-IV still converges.
-TEST(SurveyIdimIv, ParallelDecimationFiltersTheRegressorOfUnfilteredPositions) {
-  using namespace dyncal::host;
-  using namespace dyncal::host::survey;
-  SurveyDataOptions o;
-  o.periods = 1;
-  o.torque_noise = true;
-  o.position_noise_std = 1e-4;
-  const RobotDescription robot = load_robot(default_robots_dir(), "er20");
-  const SurveyData d = simulate_survey_data(robot, o);
-  IdimIvOptions raw, decimated;
-  raw.filter = decimated.filter = false;
-  decimated.decimation = 5;
-  const auto e_b = [&](const Estimate& e) { return evaluate(e, d.scenario, d.tau, dyncal::test::kEr20TauMax).e_b; };
-  const MethodSettings ms = dyncal::test::survey_settings();
-  EXPECT_LT(e_b(pseudo_inverse_measured(d, ms, decimated)), 0.5 * e_b(pseudo_inverse_measured(d, ms, raw)));
-  const Estimate iv = idim_iv(d, ms, decimated, closed_loop_of(robot, d));
-  EXPECT_EQ(iv.note.rfind("converged", 0), 0u) << iv.note;
-  EXPECT_LT(e_b(iv), 1.0);  // measured 0.72 (0.47 without decimation)
-}
-}  // namespace

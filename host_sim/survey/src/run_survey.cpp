@@ -37,10 +37,10 @@ json residual_rms(const Eigen::MatrixXd& tau, const Eigen::MatrixXd& tau_hat) {
   return r;
 }
 
-/// Joint 3's row of Tables 5 / 6: link 3's m, X Y Z, I11..I33, joint 3's friction, and the mean
-/// and standard deviation of its torque error [Nm].
-json joint3_json(const Estimate& e, const Eigen::MatrixXd& tau) {
-  const auto phys = physical_parameters(e.standard.data() + 20);
+/// Joint 3's row of Tables 5 / 6: link 3's m, X Y Z, I11..I33 from `standard`, joint 3's friction,
+/// and the mean and standard deviation of its torque error [Nm].
+json joint3_json(const Eigen::VectorXd& standard, const Estimate& e, const Eigen::MatrixXd& tau) {
+  const auto phys = physical_parameters(standard.data() + 20);
   json row = json::array();
   for (double v : phys) row.push_back(v);
   const size_t k = friction_parameter_names(e.model).size();
@@ -180,7 +180,9 @@ json method_run(const Study& st, const Method& m, const SurveyData& d, FrictionM
   const bool is_pcls = m.name == std::string("physically consistent LS");
   if (is_pcls && !is_linear(model)) mj["undetermined"] = undetermined_scale_parameters(d, model, e);
   if (!noisy) {
-    mj["joint3"] = joint3_json(e, d.tau);
+    mj["joint3"] = joint3_json(e.standard, e, d.tau);
+    // The same with the CAD prior in the directions no torque determines (e_d prior's parameters).
+    mj["joint3_prior"] = joint3_json(e.standard_prior, e, d.tau);
     if (is_pcls) mj["pseudo_inertia_min_eigenvalue"] = e.pseudo_inertia_min_eigenvalue;
   }
   return mj;
