@@ -43,13 +43,21 @@ MethodSettings settings() {
 constexpr FrictionModel kModels[] = {FrictionModel::eq7, FrictionModel::eq8, FrictionModel::eq9,
                                      FrictionModel::eq4, FrictionModel::eq5, FrictionModel::eq6};
 
+/// The optimisers' reduced objective on model m's run, its search ranges and their centre.
+struct AtRangeCentre {
+  explicit AtRangeCentre(FrictionModel m)
+      : objective(data(m), m, settings().sigma),
+        ranges(search_ranges(data(m), m, nearest_consistent(settings().prior.mean), 0.4)),
+        x(0.5 * (ranges.lo + ranges.hi)) {}
+  TorqueObjective objective;
+  SearchRanges ranges;
+  Eigen::VectorXd x;
+};
+
 void BM_ReducedEq25(benchmark::State& state) {
   const FrictionModel m = kModels[state.range(0)];
-  const survey::SurveyData& d = data(m);
-  const TorqueObjective objective(d, m, settings().sigma);
-  const SearchRanges r = search_ranges(d, m, nearest_consistent(settings().prior.mean), 0.4);
-  const Eigen::VectorXd x = 0.5 * (r.lo + r.hi);
-  for (auto _ : state) benchmark::DoNotOptimize(objective.eq25(x.data(), 1.0));
+  const AtRangeCentre c(m);
+  for (auto _ : state) benchmark::DoNotOptimize(c.objective.eq25(c.x.data(), 1.0));
   state.SetLabel(model_key(m));
 }
 BENCHMARK(BM_ReducedEq25)->DenseRange(0, 5)->Unit(benchmark::kMicrosecond);
@@ -58,15 +66,12 @@ BENCHMARK(BM_ReducedEq25)->DenseRange(0, 5)->Unit(benchmark::kMicrosecond);
 /// separable least squares at the box's centre, with the residual moments there.
 void BM_FitAmplitudes(benchmark::State& state) {
   const FrictionModel m = kModels[state.range(0)];
-  const survey::SurveyData& d = data(m);
-  const TorqueObjective objective(d, m, settings().sigma);
-  const SearchRanges r = search_ranges(d, m, nearest_consistent(settings().prior.mean), 0.4);
-  const Eigen::VectorXd x0 = 0.5 * (r.lo + r.hi);
-  Eigen::VectorXd x = x0;
+  const AtRangeCentre c(m);
+  Eigen::VectorXd x = c.x;
   std::array<double, 6> mean{}, var{};
   for (auto _ : state) {
-    x = x0;
-    objective.fit_amplitudes(x.data(), r.lo.data(), r.hi.data(), &mean, &var);
+    x = c.x;
+    c.objective.fit_amplitudes(x.data(), c.ranges.lo.data(), c.ranges.hi.data(), &mean, &var);
     benchmark::DoNotOptimize(x.data());
   }
   state.SetLabel(model_key(m));

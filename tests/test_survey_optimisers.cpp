@@ -258,20 +258,6 @@ TEST(SurveyOptimisers, GradientDescentRecoversFrictionAndFitsNoiseFreeData) {
   }
 }
 
-/// Link 3's mean relative error over Table 5's parameters (m, X Y Z, I about the centre of mass)
-/// with nonzero set values: the Tables 5 / 6 row the survey compares.
-double link3_error(const Eigen::VectorXd& phi) {
-  const auto set = physical_parameters(set_standard().data() + 20), est = physical_parameters(phi.data() + 20);
-  double sum = 0;
-  int k = 0;
-  for (size_t i = 0; i < set.size(); ++i) {
-    if (set[i] == 0.0) continue;
-    sum += std::fabs((set[i] - est[i]) / set[i]);
-    ++k;
-  }
-  return sum / k;
-}
-
 // Why the optimisers' link 3 (Tables 5, 6) is further from the set values than the survey's: the
 // error lies in the directions of the standard parameters that no torque can show (the null space
 // of Gautier's base map). Split the error phi - phi_set into its part in the row space of the base
@@ -284,10 +270,10 @@ TEST(SurveyOptimisers, Link3ErrorLiesInTheDirectionsNoTorqueDetermines) {
   const Eigen::MatrixXd& G = base_map();
   const Eigen::MatrixXd row_space = G.completeOrthogonalDecomposition().pseudoInverse() * G;
   const Eigen::VectorXd set = set_standard(), err = e.standard - set;
-  const double full = link3_error(e.standard), determined = link3_error(set + row_space * err);
-  EXPECT_GT(full, 0.3);                                   // measured 0.77 (survey: 0.26)
-  EXPECT_LT(determined, 0.25 * full);                     // measured 0.04
-  EXPECT_LT(link3_error(e.standard_prior), 0.25 * full);  // measured 0.07
+  const double full = link_inertial_error(e.standard, 2), determined = link_inertial_error(set + row_space * err, 2);
+  EXPECT_GT(full, 0.3);                                              // measured 0.77 (survey: 0.26)
+  EXPECT_LT(determined, 0.25 * full);                                // measured 0.04
+  EXPECT_LT(link_inertial_error(e.standard_prior, 2), 0.25 * full);  // measured 0.07
   // Same base parameters: the prior-anchored point predicts the same torques.
   EXPECT_LT((G * (e.standard_prior - e.standard)).norm(), 1e-9 * (G * e.standard).norm());
 }

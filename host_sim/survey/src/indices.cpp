@@ -7,9 +7,7 @@
 #include "dyncal_host/survey/survey_data.hpp"
 
 namespace dyncal::host::survey {
-namespace {
-
-double mean_relative_error(const double* set, const double* est, int n, int* counted) {
+double mean_relative_error(const double* set, const double* est, int n) {
   double sum = 0;
   int k = 0;
   for (int i = 0; i < n; ++i) {
@@ -17,20 +15,18 @@ double mean_relative_error(const double* set, const double* est, int n, int* cou
     sum += std::fabs((set[i] - est[i]) / set[i]);
     ++k;
   }
-  if (counted) *counted = k;
   return k ? sum / k : 0.0;
 }
 
-}  // namespace
+double link_inertial_error(const Eigen::VectorXd& phi_standard, int link) {
+  const auto s = physical_parameters(set_standard().data() + 10 * link);
+  const auto e = physical_parameters(phi_standard.data() + 10 * link);
+  return mean_relative_error(s.data(), e.data(), 10);
+}
 
 double inertial_parameter_error(const Eigen::VectorXd& phi_standard) {
-  const Eigen::VectorXd set = set_standard();
   double sum = 0;
-  for (int l = 0; l < kLinks; ++l) {
-    const auto s = physical_parameters(set.data() + 10 * l);
-    const auto e = physical_parameters(phi_standard.data() + 10 * l);
-    sum += mean_relative_error(s.data(), e.data(), 10, nullptr);
-  }
+  for (int l = 0; l < kLinks; ++l) sum += link_inertial_error(phi_standard, l);
   return sum / kLinks;
 }
 
@@ -41,9 +37,9 @@ Indices evaluate(const Estimate& est, const Scenario& scenario, const Eigen::Mat
   x.e_d_prior = inertial_parameter_error(est.standard_prior);
   const std::vector<double> f = set_friction(scenario, est.model);
   if (f.size() != est.friction.size()) throw InputError("estimate has the wrong number of friction parameters");
-  x.e_f = mean_relative_error(f.data(), est.friction.data(), static_cast<int>(f.size()), nullptr);
+  x.e_f = mean_relative_error(f.data(), est.friction.data(), static_cast<int>(f.size()));
   const Eigen::VectorXd set_b = base_map() * set_standard();
-  x.e_b = mean_relative_error(set_b.data(), est.base.data(), kBase, nullptr);
+  x.e_b = mean_relative_error(set_b.data(), est.base.data(), kBase);
   // Torque error normalised per joint by its maximum driving torque, pooled over joints and samples.
   const double n = static_cast<double>(tau.size());
   double sum = 0, sum_abs = 0, sum_sq = 0;

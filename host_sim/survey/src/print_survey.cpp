@@ -1,5 +1,6 @@
 // print_survey: the study's tables next to the published ones, one function per table.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <iomanip>
 #include <map>
@@ -59,16 +60,12 @@ void joint3_table(std::ostream& out, const char* title, const json& ours, const 
   // Link 3's mean relative error over its inertial parameters (m, X Y Z, I11..I33 with nonzero set
   // values): the figure e_d averages over the links. "prior": with the CAD prior in the directions
   // no torque determines (the parameters e_d prior scores).
+  std::array<double, 10> set{};
+  for (size_t i = 0; i < set.size(); ++i) set[i] = published["set"][i].get<double>();
   auto link3_error = [&](const json& row) {
-    double sum = 0;
-    int n = 0;
-    for (size_t i = 0; i < 10; ++i) {
-      const double set = published["set"][i].get<double>();
-      if (set == 0.0) continue;
-      sum += std::fabs((row[i].get<double>() - set) / set);
-      ++n;
-    }
-    return n ? sum / n : 0.0;
+    std::array<double, 10> est{};
+    for (size_t i = 0; i < est.size(); ++i) est[i] = row[i].get<double>();
+    return mean_relative_error(set.data(), est.data(), 10);
   };
   out << std::left << std::setw(28) << "link 3 error" << std::right;
   for (const auto& m : pub_methods) out << std::setw(12) << fmt(link3_error(published[m]));

@@ -24,8 +24,14 @@ struct Indices {
   double e_b = 0;        ///< base parameter error: mean |(set - est) / set| over nonzero set base parameters
 };
 
-/// e_d of survey Sec. 5 for 60 standard parameters: over the links, the mean |(set - est) / set| of
-/// Table 5's parameters (m, X Y Z, I11..I33 about the centre of mass) with nonzero set values.
+/// Mean |(set[i] - est[i]) / set[i]| over the i < n with set[i] != 0 (0 if there is none).
+double mean_relative_error(const double* set, const double* est, int n);
+
+/// One link's term of e_d (`link` 0-based): the mean |(set - est) / set| of its Table 5 parameters
+/// (m, X Y Z, I11..I33 about the centre of mass) with nonzero set values, from 60 standard parameters.
+double link_inertial_error(const Eigen::VectorXd& phi_standard, int link);
+
+/// e_d of survey Sec. 5 for 60 standard parameters: link_inertial_error averaged over the links.
 double inertial_parameter_error(const Eigen::VectorXd& phi_standard);
 
 /// tau: the measured torque the method was given (S x 6); tau_max per joint [Nm].
