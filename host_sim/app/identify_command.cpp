@@ -1,6 +1,7 @@
 // dyncal identify: base parameters and friction from a measured log, cross-validated.
 #include <iostream>
 #include <memory>
+#include <utility>
 
 #include "commands.hpp"
 #include "dyncal_host/identification/friction_comparison.hpp"
@@ -37,7 +38,7 @@ int run_identify(IdentifySettings& s) {
   }
   s.options.terms = spec.terms;
   s.options.effects = spec.effects;
-  const auto log = s.log.load_log(robot, &dropped);
+  auto log = s.log.load_log(robot, &dropped);
   if (s.compare_friction) {
     if (!s.options.effects.empty())
       throw host::InputError("--compare-friction compares the friction models of the declared terms, without effects");
@@ -51,7 +52,7 @@ int run_identify(IdentifySettings& s) {
   // Other logs read (and refused) before any work on the fit.
   std::vector<host::JointLog> others;
   for (const auto& path : s.validate_on) others.push_back(s.log.load_logs(robot, {path}, &dropped));
-  auto result = host::identify(robot, log, s.options);
+  auto result = host::identify(robot, std::move(log), s.options);
   result.notes.insert(result.notes.begin(), dropped.begin(), dropped.end());
   const host::ParameterSet fitted = host::parameter_set(result);
   for (const auto& other : others) result.other_logs.push_back(host::predict(robot, other, s.options, fitted));

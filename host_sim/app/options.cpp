@@ -88,7 +88,7 @@ host::JointLog LogOption::load_logs(const host::RobotDescription& r, const std::
     if (dropped) dropped->insert(dropped->end(), lines.begin(), lines.end());
     logs.push_back(std::move(log));
   }
-  return host::stack_logs(logs);
+  return host::stack_logs(std::move(logs));
 }
 
 }  // namespace dyncal::app

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <utility>
 
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/number_text.hpp"
@@ -61,8 +62,8 @@ void check_options(const IdentifyOptions& o, const JointLog& log) {
 
 /// The log on a uniform grid (uniform_grid.hpp: gaps longer than bridgeable_gap(cutoff) split it),
 /// checked against the robot and the options; the sampling summary into *note.
-const CompiledRobot& checked(const RobotDescription& robot, const JointLog& raw, const IdentifyOptions& options,
-                             JointLog& log, std::string& note) {
+const CompiledRobot& checked(const RobotDescription& robot, JointLog raw, const IdentifyOptions& options, JointLog& log,
+                             std::string& note) {
   const CompiledRobot& c = compiled_robot_for(robot);
   if (raw.joints() != c.num_joints) {
     throw InputError("the log has " + std::to_string(raw.joints()) + " joints, robot '" + robot.name + "' " +
@@ -72,7 +73,7 @@ const CompiledRobot& checked(const RobotDescription& robot, const JointLog& raw,
   // A cut-off that is no frequency splits nothing here; check_options then names it.
   const bool valid_cutoff = options.cutoff_hz > 0.0 && std::isfinite(options.cutoff_hz);
   const double max_gap = valid_cutoff ? bridgeable_gap(options.cutoff_hz) : INFINITY;
-  log = to_uniform_grid(raw, max_gap, report);
+  log = to_uniform_grid(std::move(raw), max_gap, report);
   note = describe(report, max_gap);
   check_options(options, log);
   return c;
@@ -80,11 +81,12 @@ const CompiledRobot& checked(const RobotDescription& robot, const JointLog& raw,
 
 }  // namespace
 
-IdentifyResult identify(const RobotDescription& robot, const JointLog& raw, const IdentifyOptions& options) {
+IdentifyResult identify(const RobotDescription& robot, JointLog raw, const IdentifyOptions& options) {
   JointLog log;
   std::string note;
-  const CompiledRobot& c = checked(robot, raw, options, log, note);
-  IdentifyResult r = c.identify[static_cast<size_t>(built_term_set_index(options.terms))](robot, log, options);
+  const CompiledRobot& c = checked(robot, std::move(raw), options, log, note);
+  IdentifyResult r =
+      c.identify[static_cast<size_t>(built_term_set_index(options.terms))](robot, std::move(log), options);
   r.notes.insert(r.notes.begin(), note);
   return r;
 }
@@ -112,7 +114,7 @@ double autocorrelation_inflation(const StackedData& d, const std::vector<char>& 
 StackedData prepare_stacked(const RobotDescription& robot, const JointLog& raw, const IdentifyOptions& options) {
   JointLog log;
   std::string note;
-  const CompiledRobot& c = checked(robot, raw, options, log, note);
+  const CompiledRobot& c = checked(robot, raw, options, log, note);  // a copy: the caller keeps raw
   StackedData d = c.prepare[static_cast<size_t>(built_term_set_index(options.terms))](robot, log, options);
   d.notes.insert(d.notes.begin(), note);
   return d;

@@ -48,7 +48,11 @@ NumericCsv parse_numeric_csv(std::istream& in, const std::string& path) {
   if (line.compare(0, 3, "\xEF\xBB\xBF") == 0) line.erase(0, 3);
   csv.header = split(line);
   const size_t cols = csv.header.size();
-  std::vector<double> data;
+  // Rows are read into blocks of kBlockRows and copied into the matrix block by block, each freed
+  // once copied: the peak is the table twice, not a growing vector's reallocations (issue 23).
+  constexpr size_t kBlockRows = 8192;
+  std::vector<std::vector<double>> blocks;
+  size_t rows = 0;
   long line_no = 1;
   while (std::getline(in, line)) {
     ++line_no;
@@ -58,6 +62,11 @@ NumericCsv parse_numeric_csv(std::istream& in, const std::string& path) {
       throw InputError(path + ":" + std::to_string(line_no) + ": " + std::to_string(fields.size()) +
                        " fields, header has " + std::to_string(cols));
     }
+    if (rows % kBlockRows == 0) {
+      blocks.emplace_back();
+      blocks.back().reserve(kBlockRows * cols);
+    }
+    ++rows;
     for (size_t c = 0; c < cols; ++c) {
       const std::string& f = fields[c];
       char* end = nullptr;
@@ -77,12 +86,18 @@ NumericCsv parse_numeric_csv(std::istream& in, const std::string& path) {
         throw InputError(path + ":" + std::to_string(line_no) + ": column '" + csv.header[c] + "': non-finite value '" +
                          f + "'");
       }
-      data.push_back(v);
+      blocks.back().push_back(v);
     }
   }
-  const Eigen::Index rows = static_cast<Eigen::Index>(data.size() / cols);
-  csv.values = Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
-      data.data(), rows, static_cast<Eigen::Index>(cols));
+  using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  csv.values.resize(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(cols));
+  Eigen::Index row = 0;
+  for (std::vector<double>& block : blocks) {
+    const Eigen::Index n = static_cast<Eigen::Index>(block.size() / cols);
+    csv.values.middleRows(row, n) = Eigen::Map<const RowMajor>(block.data(), n, static_cast<Eigen::Index>(cols));
+    row += n;
+    std::vector<double>().swap(block);
+  }
   return csv;
 }
 

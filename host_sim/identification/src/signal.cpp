@@ -6,7 +6,7 @@
 
 namespace dyncal::host {
 
-Eigen::MatrixXd central_difference(const Eigen::MatrixXd& x, double dt) {
+Eigen::MatrixXd central_difference(const Eigen::Ref<const Eigen::MatrixXd>& x, double dt) {
   const Eigen::Index n = x.rows();
   Eigen::MatrixXd d(n, x.cols());
   if (n < 2) {
@@ -19,7 +19,7 @@ Eigen::MatrixXd central_difference(const Eigen::MatrixXd& x, double dt) {
   return d;
 }
 
-Eigen::MatrixXd smooth_derivative(const Eigen::MatrixXd& x, double dt) {
+Eigen::MatrixXd smooth_derivative(const Eigen::Ref<const Eigen::MatrixXd>& x, double dt) {
   const Eigen::Index n = x.rows();
   Eigen::MatrixXd d = central_difference(x, dt);
   if (n > 4)

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <utility>
 
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/number_text.hpp"
@@ -85,7 +86,7 @@ Eigen::MatrixXd columns_of(const JointLog& log, Index a, Index b) {
 
 }  // namespace
 
-JointLog to_uniform_grid(const JointLog& raw, double max_gap, SamplingReport& report) {
+JointLog to_uniform_grid(JointLog raw, double max_gap, SamplingReport& report) {
   report = SamplingReport{};
   const Index S = raw.samples();
   report.raw_samples = static_cast<long>(S);
@@ -166,9 +167,8 @@ JointLog to_uniform_grid(const JointLog& raw, double max_gap, SamplingReport& re
   if (uniform) {
     report.grid_samples = report.raw_samples;
     report.segments = static_cast<int>(input_segments.size());
-    JointLog out = raw;
-    out.period = T;
-    return out;
+    raw.period = T;
+    return raw;  // moved: a uniform log is not copied
   }
   report.resampled = true;
   // Grid of each piece; pieces shorter than 3 grid samples are dropped.
@@ -239,9 +239,9 @@ std::string describe(const SamplingReport& r, double max_gap) {
   return line;
 }
 
-JointLog stack_logs(const std::vector<JointLog>& logs) {
+JointLog stack_logs(std::vector<JointLog> logs) {
   if (logs.empty()) throw InputError("no log given");
-  if (logs.size() == 1) return logs.front();
+  if (logs.size() == 1) return std::move(logs.front());
   JointLog out;
   const JointLog& first = logs.front();
   out.has_qd = first.has_qd;

@@ -27,7 +27,7 @@ struct CompiledRobot {
   int num_joints = 0, num_standard = 0, num_base = 0;
   std::vector<double> nominal_standard;  ///< kNominalStandard: the description's inertials
 
-  using IdentifyFn = IdentifyResult (*)(const RobotDescription&, const JointLog&, const IdentifyOptions&);
+  using IdentifyFn = IdentifyResult (*)(const RobotDescription&, JointLog&&, const IdentifyOptions&);
   using PrepareFn = StackedData (*)(const RobotDescription&, const JointLog&, const IdentifyOptions&);
   /// Stacked, column-normalised regressor of one period of `t` on `grid` points (rows N x grid):
   /// Eq. 7 (base parameters, Fc and beta per joint), or Eq. 4 (base parameters and d tau_f /

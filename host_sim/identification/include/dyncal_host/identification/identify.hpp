@@ -87,7 +87,8 @@ struct IdentifyResult {
 /// Throws InputError on bad options (see check in identify.cpp: filter order, cut-off below Nyquist
 /// and above 2 / duration, folds >= 2 with blocks of at least one cut-off period, validate_last in
 /// (0, 0.9] covering at least one cut-off period, mu in (0, 1], p0 > 0), too little data, a robot not compiled into
-/// this build (compiled_robot.hpp) or a model not built (model_terms.hpp).
-IdentifyResult identify(const RobotDescription& robot, const JointLog& log, const IdentifyOptions& options);
+/// this build (compiled_robot.hpp) or a model not built (model_terms.hpp). Pass the log with
+/// std::move when it is not needed afterwards: a uniform log is then processed without a copy.
+IdentifyResult identify(const RobotDescription& robot, JointLog log, const IdentifyOptions& options);
 
 }  // namespace dyncal::host

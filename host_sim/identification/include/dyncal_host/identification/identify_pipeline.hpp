@@ -2,6 +2,7 @@
 // The identification pipeline for one generated robot and one term set (host side).
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -48,13 +49,24 @@ class IdentifyPipeline {
         }
       }
     }
+    for (int m = 0; m < N; ++m) {
+      const bool coupled = std::find(coupled_.begin(), coupled_.end(), m) != coupled_.end();
+      for (const unsigned t : {term::coulomb, term::power}) {
+        const int col = Model::column(t, m);
+        if (col >= 0) filtered_.push_back({t, m, col, coupled});
+      }
+    }
   }
 
   /// Filtering, differentiation, regressor, parallel filtering and decimation (Gautier 1997), each
   /// segment of `log` (on a uniform grid, uniform_grid.hpp) on its own: nothing is filtered or
   /// differentiated across a segment boundary, and one cut-off period is dropped at both ends of
   /// every segment, where differentiation and filtering are one-sided.
-  StackedData prepare(const JointLog& log) const {
+  ///
+  /// Memory: the log's rate is processed one joint at a time (a few of its columns at once), and
+  /// only what the regressor is computed from is kept at the decimated samples; dense: also fill
+  /// W (and W_load) for the consumers that need the matrix (StackedData).
+  StackedData prepare(const JointLog& log, bool dense) const {
     const double fs = 1.0 / log.sample_period();
     const ButterworthLowPass filter(opt_.filter_order, opt_.cutoff_hz, fs);
     int d = opt_.decimate > 0 ? opt_.decimate : static_cast<int>(std::floor(fs / (25.0 * opt_.cutoff_hz)));
@@ -68,17 +80,16 @@ class IdentifyPipeline {
     out.num_base = Robot::kNumBase;
     for (int i = 0; i < P; ++i) out.names.push_back(param_name(i));
     // Samples kept: every d-th of each segment's interior.
-    std::vector<std::pair<size_t, Eigen::Index>> kept_rows;  // (segment, row in it)
+    Eigen::Index kept = 0;
     long short_segments = 0;
-    for (size_t g = 0; g < segments.size(); ++g) {
-      const Eigen::Index len = segments[g].second - segments[g].first;
+    for (const auto& [a, b] : segments) {
+      const Eigen::Index len = b - a;
       if (len <= 2 * edge) {
         ++short_segments;
         continue;
       }
-      for (Eigen::Index s = edge; s < len - edge; s += d) kept_rows.emplace_back(g, s);
+      kept += (len - 2 * edge + d - 1) / d;
     }
-    const Eigen::Index kept = static_cast<Eigen::Index>(kept_rows.size());
     if (kept * N <= 2 * P) {
       throw InputError("too few samples (" + std::to_string(log.samples()) + ", " + std::to_string(kept) +
                        " after filtering and decimation) for " + std::to_string(P) + " parameters");
@@ -86,8 +97,6 @@ class IdentifyPipeline {
     if (short_segments > 0)
       out.notes.push_back(std::to_string(short_segments) + " segment(s) not longer than two cut-off periods (" +
                           std::to_string(2 * edge) + " samples) left out: filtering would only see their ends");
-    out.W.resize(kept * N, P);
-    if (opt_.load_regressor) out.W_load.resize(kept * N, P);
     const Eigen::Index num_effect_cols = effect_column_count(opt_.effects);
     out.E.resize(kept * N, num_effect_cols);
     out.y.resize(kept * N);
@@ -95,26 +104,35 @@ class IdentifyPipeline {
     out.q.resize(kept, N);
     out.qd.resize(kept, N);
     out.qdd.resize(kept, N);
-    out.qd_raw.resize(kept, N);
+    // The unfiltered velocity is read by a coupled motor's regressor columns and by the consumers of
+    // dense data (the diagnosis' friction candidates); otherwise it is not kept.
+    out.qd_raw.resize(dense || !coupled_.empty() ? kept : 0, N);
+    out.filtered_terms.resize(kept, static_cast<Eigen::Index>(filtered_.size()));
     out.standstill_band = Eigen::VectorXd(band);
     Eigen::Index k = 0;
-    for (size_t g = 0; g < segments.size(); ++g) {
-      const auto [a, b] = segments[g];
+    std::vector<Eigen::Index> rows;
+    for (const auto& [a, b] : segments) {
       if (b - a <= 2 * edge) continue;
-      Segment seg = process_segment(log, a, b, filter, band);
-      for (; k < kept && kept_rows[static_cast<size_t>(k)].first == g; ++k) {
-        const Eigen::Index s = kept_rows[static_cast<size_t>(k)].second;
-        out.t[k] = log.t[a + s];
-        out.q.row(k) = seg.q.row(s);
-        out.qd.row(k) = seg.qd.row(s);
-        out.qd_raw.row(k) = seg.qd_raw.row(s);
-        out.qdd.row(k) = seg.qdd.row(s);
-        for (int j = 0; j < N; ++j) {
-          out.W.row(k * N + j) = seg.Kt.row(s).segment(j * P, P);
-          if (opt_.load_regressor) out.W_load.row(k * N + j) = seg.Kt_load.row(s).segment(j * P, P);
-          if (num_effect_cols > 0) out.E.row(k * N + j) = seg.Et.row(s).segment(j * num_effect_cols, num_effect_cols);
-          out.y[k * N + j] = seg.tau(s, j);
-        }
+      rows.clear();
+      for (Eigen::Index s = edge; s < b - a - edge; s += d) rows.push_back(s);
+      for (size_t i = 0; i < rows.size(); ++i) out.t[k + static_cast<Eigen::Index>(i)] = log.t[a + rows[i]];
+      process_segment(log, a, b, filter, band, rows, k, out);
+      k += static_cast<Eigen::Index>(rows.size());
+    }
+    out.regressor_rows = [motor = motor_, coupled = coupled_, filtered = filtered_](
+                             const StackedData& data, Eigen::Index s, bool load, Eigen::MatrixXd& K) {
+      regressor_at(data, s, load, motor, coupled, filtered, K);
+    };
+    if (dense) {
+      Eigen::MatrixXd K;
+      out.W.resize(kept * N, P);
+      if (opt_.load_regressor) out.W_load.resize(kept * N, P);
+      for (Eigen::Index s = 0; s < kept; ++s) {
+        out.regressor(s, K);
+        out.W.middleRows(s * N, N) = K;
+        if (!opt_.load_regressor) continue;
+        out.regressor(s, K, true);
+        out.W_load.middleRows(s * N, N) = K;
       }
     }
     // Rows of a joint moving slower than min_speed_fraction of its top speed stay out of the fit:
@@ -162,12 +180,18 @@ class IdentifyPipeline {
            double* cond = nullptr, ConsistentSolution* consistent = nullptr) const {
     const Eigen::Index S = data.t.size();
     auto ls = std::make_unique<StreamingLeastSquares<double, P>>();
-    for (Eigen::Index s = 0; s < S; ++s) {
-      if (!train[s]) continue;
-      for (int j = 0; j < N; ++j) {
-        if (data.fit_row[s * N + j]) check(ls->add_row(data.W.row(s * N + j).transpose(), data.y[s * N + j]));
+    Eigen::MatrixXd K;
+    // Every fitted row of the training samples, its weight from `weight` (joint).
+    auto add_rows = [&](auto weight) {
+      for (Eigen::Index s = 0; s < S; ++s) {
+        if (!train[s]) continue;
+        data.regressor(s, K);
+        for (int j = 0; j < N; ++j) {
+          if (data.fit_row[s * N + j]) check(ls->add_row(K.row(j).transpose(), data.y[s * N + j], weight(j)));
+        }
       }
-    }
+    };
+    add_rows([](int) { return 1.0; });
     if (ls->solve(phi) != UpdateStatus::ok) {
       throw InputError("the data do not excite every parameter of the model (regressor rank deficient): " +
                        std::string("use richer excitation or a smaller model"));
@@ -176,9 +200,10 @@ class IdentifyPipeline {
     JointVec ss = JointVec::Zero(), n = JointVec::Zero();
     for (Eigen::Index s = 0; s < S; ++s) {
       if (!train[s]) continue;
+      data.regressor(s, K);
       for (int j = 0; j < N; ++j) {
         if (!data.fit_row[s * N + j]) continue;
-        const double e = data.y[s * N + j] - data.W.row(s * N + j).dot(phi);
+        const double e = data.y[s * N + j] - K.row(j).dot(phi);
         ss[j] += e * e;
         n[j] += 1;
       }
@@ -189,13 +214,7 @@ class IdentifyPipeline {
       ls_statistics(*ls, stdev, cond);
     } else if (m == "wls" || m == "pcls") {
       ls->reset();
-      for (Eigen::Index s = 0; s < S; ++s) {
-        if (!train[s]) continue;
-        for (int j = 0; j < N; ++j) {
-          if (data.fit_row[s * N + j])
-            check(ls->add_row(data.W.row(s * N + j).transpose(), data.y[s * N + j], 1.0 / sigma[j]));
-        }
-      }
+      add_rows([&](int j) { return 1.0 / sigma[j]; });
       if (ls->solve(phi) != UpdateStatus::ok) throw InputError("weighted regressor rank deficient");
       if (m == "wls") {
         ls_statistics(*ls, stdev, cond);
@@ -219,18 +238,18 @@ class IdentifyPipeline {
       auto kf = std::make_unique<KalmanFilter<double, P, N>>();
       check(kf->reset(ParamVec::Zero(), ParamVec::Constant(opt_.p0)));
       const JointVec r = sigma.cwiseAbs2();
-      run_recursive(*kf, data, train, [&](auto& f, const auto& K, const auto& tau) { return f.update(K, tau, r); });
+      run_recursive(*kf, data, train, [&](auto& f, const auto& Ks, const auto& tau) { return f.update(Ks, tau, r); });
       recursive_result(*kf, *ls, phi, stdev, cond);
     } else if (m == "rls") {
       auto rls = std::make_unique<RlsForgetting<double, P, N>>();
       check(rls->reset(ParamVec::Zero(), ParamVec::Constant(opt_.p0), opt_.rls_mu));
       const JointVec w = sigma.cwiseInverse();
-      run_recursive(*rls, data, train, [&](auto& f, const auto& K, const auto& tau) { return f.update(K, tau, w); });
+      run_recursive(*rls, data, train, [&](auto& f, const auto& Ks, const auto& tau) { return f.update(Ks, tau, w); });
       recursive_result(*rls, *ls, phi, stdev, cond);
     } else {
       throw InputError("unknown method '" + m + "' (expected wls, ols, kf, rls or pcls)");
     }
-    stdev *= std::sqrt(autocorrelation_inflation(data, train, data.y - data.W * phi));
+    stdev *= std::sqrt(autocorrelation_inflation(data, train, data.y - data.predict(phi)));
   }
 
   static std::string param_name(int i) {
@@ -271,114 +290,159 @@ class IdentifyPipeline {
     return K;
   }
 
-  /// One segment filtered and differentiated, its regressor over time (column j * P + c holds
-  /// K(j, c) at every sample) filtered in parallel.
-  struct Segment {
-    Eigen::MatrixXd q, qd, qdd, tau, Kt, Kt_load;
-    Eigen::MatrixXd Et;      ///< effect columns over time (column j * m + c), filtered in parallel
-    Eigen::MatrixXd qd_raw;  ///< the unfiltered velocity (central differences of q, or the measured qd)
+  /// A regressor column built from an unfiltered velocity's sign, and therefore low-passed in
+  /// parallel at the log's rate (StackedData::filtered_terms): term t (Coulomb or power) of joint
+  /// or motor m (0-based) in column col, on joint m's row, or, for a coupled motor, on every row j
+  /// times its transmission entry.
+  struct FilteredTerm {
+    unsigned t;
+    int m;
+    int col;
+    bool coupled;
   };
 
-  Segment process_segment(const JointLog& log, Eigen::Index a, Eigen::Index b, const ButterworthLowPass& filter,
-                          const JointVec& band) const {
-    const Eigen::Index S = b - a;
-    const double dt = log.sample_period();
-    Segment g;
-    g.q = log.q.middleRows(a, S);
-    filter.filtfilt(g.q);
-    if (log.has_qd) {
-      g.qd = log.qd.middleRows(a, S);
-      filter.filtfilt(g.qd);
-    } else {
-      g.qd = smooth_derivative(g.q, dt);
-    }
-    if (log.has_qdd) {
-      g.qdd = log.qdd.middleRows(a, S);
-      filter.filtfilt(g.qdd);
-    } else {
-      g.qdd = smooth_derivative(g.qd, dt);
-    }
-    // Friction sign from the unfiltered velocity (central differences of q, or the measured qd):
-    // sgn is discontinuous, and of a filtered velocity it would switch up to a cut-off period after
-    // a stop; the Coulomb column is then filtered in parallel, which averages the noise. Inside the
-    // noise band the joint is at rest: sign 0, and its filtered velocity 0.
-    g.qd_raw = log.has_qd ? Eigen::MatrixXd(log.qd.middleRows(a, S)) : central_difference(log.q.middleRows(a, S), dt);
-    const Eigen::MatrixXd& v = g.qd_raw;
-    Eigen::MatrixXd sign = Eigen::MatrixXd::Zero(S, N);
-    for (Eigen::Index s = 0; s < S; ++s) {
-      for (int j = 0; j < N; ++j) {
-        if (std::abs(v(s, j)) < band[j]) {
-          g.qd(s, j) = 0.0;
-        } else {
-          sign(s, j) = v(s, j) > 0 ? 1.0 : -1.0;
-        }
+  /// Sample s's regressor rows from the kept signals: the generated regressor at the filtered q,
+  /// qd, qdd (qdd = 0 with load), the filtered sign columns, and a coupled motor's terms at its
+  /// velocity v_m = T.row(m) qd through the transmission's transpose (its sign from the unfiltered
+  /// motor velocity with the band of its noise).
+  static void regressor_at(const StackedData& d, Eigen::Index s, bool load, const Eigen::Matrix<double, N, N>& motor,
+                           const std::vector<int>& coupled, const std::vector<FilteredTerm>& filtered,
+                           Eigen::MatrixXd& out) {
+    typename Model::template Regressor<double> K;
+    const JointVec q = d.q.row(s).transpose(), qd = d.qd.row(s).transpose();
+    const JointVec qdd = load ? JointVec::Zero().eval() : JointVec(d.qdd.row(s).transpose());
+    Model::regressor(q, qd, qdd, JointVec(JointVec::Zero()), K);
+    for (size_t i = 0; i < filtered.size(); ++i) {
+      const FilteredTerm& f = filtered[i];
+      const double value = d.filtered_terms(s, static_cast<Eigen::Index>(i));
+      if (!f.coupled) {
+        K(f.m, f.col) = value;
+      } else {
+        for (int j = 0; j < N; ++j) K(j, f.col) = motor(f.m, j) * value;
       }
     }
-    // Coupled motors (robot.json's transmission): their friction and rotor inertia act on every
-    // joint that turns them, through the transmission's transpose: the column of motor m's term
-    // in joint j's row is T(m, j) times the term at the motor's velocity v_m = T.row(m) qd (in
-    // joint units), its sign from the unfiltered motor velocity with the band of its noise.
+    for (const int m : coupled) {
+      const double band_m = std::sqrt((motor.row(m).transpose().cwiseProduct(d.standstill_band)).squaredNorm());
+      const double raw = motor.row(m).dot(d.qd_raw.row(s));
+      const double vm = std::abs(raw) < band_m ? 0.0 : motor.row(m).dot(qd), am = motor.row(m).dot(qdd);
+      for (const unsigned t : {term::viscous, term::rotor_inertia}) {
+        const int col = Model::column(t, m);
+        if (col < 0) continue;
+        const double value = term_column(t, vm, am, 0.0);
+        for (int j = 0; j < N; ++j) K(j, col) = motor(m, j) * value;
+      }
+    }
+    out = K;
+  }
+
+  /// One segment [a, b) of the log filtered and differentiated joint by joint; what the regressor
+  /// is computed from written to `out` at the segment's kept rows (`rows`, relative to a) from
+  /// sample k0 on. The sign columns (Coulomb, also of a coupled motor) and qd^(1/3), built from the
+  /// unfiltered velocity's sign, are low-passed here at the log's rate, as tau is: the columns
+  /// built from the filtered q, qd, qdd have had the low-pass already (filtering them again would
+  /// low-pass their qdd twice against tau's once: an acceleration step, a start or stop, would
+  /// leave a residual at low speed that looks like Stribeck friction).
+  void process_segment(const JointLog& log, Eigen::Index a, Eigen::Index b, const ButterworthLowPass& filter,
+                       const JointVec& band, const std::vector<Eigen::Index>& rows, Eigen::Index k0,
+                       StackedData& out) const {
+    const Eigen::Index S = b - a;
+    const double dt = log.sample_period();
+    const bool effects = !opt_.effects.empty();
+    auto keep = [&](const Eigen::VectorXd& x, Eigen::MatrixXd& to, Eigen::Index col) {
+      for (size_t i = 0; i < rows.size(); ++i) to(k0 + static_cast<Eigen::Index>(i), col) = x[rows[i]];
+    };
+    // Effect columns are computed from every joint's signals at the log's rate.
+    Eigen::MatrixXd all_q, all_qd, all_qdd, all_v;
+    if (effects) {
+      all_q.resize(S, N), all_qd.resize(S, N), all_qdd.resize(S, N), all_v.resize(S, N);
+    }
     const Eigen::Index C = static_cast<Eigen::Index>(coupled_.size());
-    Eigen::MatrixXd motor_sign(S, C), motor_v(S, C), motor_a(S, C);
+    Eigen::MatrixXd motor_raw = Eigen::MatrixXd::Zero(S, C), motor_qd = Eigen::MatrixXd::Zero(S, C);
+    // One joint at a time; v, once kept, holds each sign column in turn (filtered in place).
+    Eigen::VectorXd x(S), xd(S), xdd(S), v(S);
+    Eigen::VectorXd& series = v;
+    auto filter_and_keep = [&](size_t i) {
+      filter.filtfilt(series);
+      keep(series, out.filtered_terms, static_cast<Eigen::Index>(i));
+    };
+    for (int j = 0; j < N; ++j) {
+      x = log.q.col(j).segment(a, S);
+      filter.filtfilt(x);
+      if (log.has_qd) {
+        xd = log.qd.col(j).segment(a, S);
+        filter.filtfilt(xd);
+      } else {
+        xd = smooth_derivative(x, dt);
+      }
+      if (log.has_qdd) {
+        xdd = log.qdd.col(j).segment(a, S);
+        filter.filtfilt(xdd);
+      } else {
+        xdd = smooth_derivative(xd, dt);
+      }
+      // Friction sign from the unfiltered velocity (central differences of q, or the measured qd):
+      // sgn is discontinuous, and of a filtered velocity it would switch up to a cut-off period
+      // after a stop; filtering the sign column in parallel averages the noise. Inside the noise
+      // band the joint is at rest: sign 0, and its filtered velocity 0.
+      if (log.has_qd) {
+        v = log.qd.col(j).segment(a, S);
+      } else {
+        v = central_difference(log.q.col(j).segment(a, S), dt);
+      }
+      for (Eigen::Index s = 0; s < S; ++s) {
+        if (std::abs(v[s]) < band[j]) xd[s] = 0.0;
+      }
+      for (Eigen::Index c = 0; c < C; ++c) {
+        const double r = motor_(coupled_[static_cast<size_t>(c)], j);
+        if (r == 0.0) continue;
+        motor_raw.col(c) += r * v;
+        motor_qd.col(c) += r * xd;
+      }
+      keep(x, out.q, j);
+      keep(xd, out.qd, j);
+      keep(xdd, out.qdd, j);
+      if (out.qd_raw.rows() > 0) keep(v, out.qd_raw, j);
+      if (effects) all_q.col(j) = x, all_qd.col(j) = xd, all_qdd.col(j) = xdd, all_v.col(j) = v;
+      for (size_t i = 0; i < filtered_.size(); ++i) {
+        const FilteredTerm& f = filtered_[i];
+        if (f.m != j || f.coupled) continue;
+        for (Eigen::Index s = 0; s < S; ++s) {  // series is v: the Coulomb column (first) reads v in place
+          series[s] = f.t == term::coulomb ? (std::abs(v[s]) < band[j] ? 0.0 : (v[s] > 0 ? 1.0 : -1.0))
+                                           : term_column(f.t, xd[s], 0.0, 0.0);
+        }
+        filter_and_keep(i);
+      }
+      x = log.tau.col(j).segment(a, S);
+      filter.filtfilt(x);
+      for (size_t i = 0; i < rows.size(); ++i) out.y[(k0 + static_cast<Eigen::Index>(i)) * N + j] = x[rows[i]];
+    }
+    // Coupled motors: sign and velocity v_m = T.row(m) qd of the motor, its noise band from the
+    // joints' bands.
     for (Eigen::Index c = 0; c < C; ++c) {
       const int m = coupled_[static_cast<size_t>(c)];
       const double band_m = std::sqrt((motor_.row(m).transpose().cwiseProduct(band)).squaredNorm());
-      for (Eigen::Index s = 0; s < S; ++s) {
-        const double raw = motor_.row(m).dot(v.row(s)), vm = motor_.row(m).dot(g.qd.row(s));
-        motor_sign(s, c) = std::abs(raw) < band_m ? 0.0 : (raw > 0 ? 1.0 : -1.0);
-        motor_v(s, c) = motor_sign(s, c) == 0.0 ? 0.0 : vm;
-        motor_a(s, c) = motor_.row(m).dot(g.qdd.row(s));
+      for (size_t i = 0; i < filtered_.size(); ++i) {
+        const FilteredTerm& f = filtered_[i];
+        if (f.m != m) continue;
+        for (Eigen::Index s = 0; s < S; ++s) {
+          const double raw = motor_raw(s, c);
+          const double sign = std::abs(raw) < band_m ? 0.0 : (raw > 0 ? 1.0 : -1.0);
+          series[s] = f.t == term::coulomb ? sign : term_column(f.t, sign == 0.0 ? 0.0 : motor_qd(s, c), 0.0, 0.0);
+        }
+        filter_and_keep(i);
       }
     }
-    g.tau = log.tau.middleRows(a, S);
-    filter.filtfilt(g.tau);
-    const JointVec zero = JointVec::Zero();
-    auto regressor_over_time = [&](bool with_qdd) {
-      Eigen::MatrixXd Kt(S, N * P);
-      typename Model::template Regressor<double> K;
-      for (Eigen::Index s = 0; s < S; ++s) {
-        Model::regressor(JointVec(g.q.row(s).transpose()), JointVec(g.qd.row(s).transpose()),
-                         with_qdd ? JointVec(g.qdd.row(s).transpose()) : zero, zero, K);
-        for (int j = 0; j < N; ++j) {
-          if (Model::column(term::coulomb, j) >= 0) K(j, Model::column(term::coulomb, j)) = sign(s, j);
-        }
-        for (Eigen::Index c = 0; c < C; ++c) {
-          const int m = coupled_[static_cast<size_t>(c)];
-          for (const unsigned t : {term::coulomb, term::viscous, term::power, term::rotor_inertia}) {
-            const int col = Model::column(t, m);
-            if (col < 0) continue;
-            const double value = t == term::coulomb
-                                     ? motor_sign(s, c)
-                                     : term_column(t, motor_v(s, c), with_qdd ? motor_a(s, c) : 0.0, 0.0);
-            for (int j = 0; j < N; ++j) K(j, col) = motor_(m, j) * value;
-          }
-        }
-        for (int j = 0; j < N; ++j) Kt.row(s).segment(j * P, P) = K.row(j);
-      }
-      // Every column sees the low-pass once, as tau does: the columns built from the filtered q,
-      // qd, qdd have had it; the sign columns (Coulomb, also of a coupled motor) and qd^(1/3),
-      // built from the unfiltered velocity's sign, get it now. Filtering the smooth columns again
-      // would low-pass their qdd twice against tau's once: an acceleration step (a start or stop)
-      // would leave a residual at low speed that looks like Stribeck friction.
-      for (int k = 0; k < N; ++k) {
-        for (const unsigned t : {term::coulomb, term::power}) {
-          const int col = Model::column(t, k);
-          if (col < 0) continue;
-          for (int j = 0; j < N; ++j) filter.filtfilt(Kt.col(j * P + col));
-        }
-      }
-      return Kt;
-    };
-    g.Kt = regressor_over_time(true);
-    if (opt_.load_regressor) g.Kt_load = regressor_over_time(false);
-    if (!opt_.effects.empty()) {
-      g.Et = effect_columns_over_time(opt_.effects, g.q, g.qd, g.qdd, v, Eigen::VectorXd(band));
+    if (effects) {
+      Eigen::MatrixXd Et = effect_columns_over_time(opt_.effects, all_q, all_qd, all_qdd, all_v, Eigen::VectorXd(band));
       const std::vector<bool> discontinuous = effect_columns_with_sign(opt_.effects);
       const Eigen::Index m = static_cast<Eigen::Index>(discontinuous.size());
-      for (Eigen::Index c = 0; c < g.Et.cols(); ++c)
-        if (discontinuous[static_cast<size_t>(c % m)]) filter.filtfilt(g.Et.col(c));
+      for (Eigen::Index c = 0; c < Et.cols(); ++c)
+        if (discontinuous[static_cast<size_t>(c % m)]) filter.filtfilt(Et.col(c));
+      for (size_t i = 0; i < rows.size(); ++i) {
+        for (int j = 0; j < N; ++j)
+          out.E.row((k0 + static_cast<Eigen::Index>(i)) * N + j) = Et.row(rows[i]).segment(j * m, m);
+      }
     }
-    return g;
   }
 
   /// Per joint, kStandstillQuantile x the standard deviation of the unfiltered velocity's noise:
@@ -398,10 +462,12 @@ class IdentifyPipeline {
   template <class Filter, class Update>
   static void run_recursive(Filter& f, const StackedData& data, const std::vector<char>& train, Update update) {
     Eigen::Matrix<double, N, P> K;
+    Eigen::MatrixXd rows;
     JointVec tau;
     for (Eigen::Index s = 0; s < data.t.size(); ++s) {
       if (!train[s]) continue;
-      K = data.W.block(s * N, 0, N, P);
+      data.regressor(s, rows);
+      K = rows;
       tau = data.y.segment(s * N, N);
       for (int j = 0; j < N; ++j) {  // an excluded row carries no information: zero it
         if (data.fit_row[s * N + j]) continue;
@@ -440,13 +506,14 @@ class IdentifyPipeline {
 
   const RobotDescription& robot_;
   const IdentifyOptions& opt_;
-  Eigen::Matrix<double, N, N> motor_;  ///< motor_map(robot_)
-  std::vector<int> coupled_;           ///< motors turning with more than their own joint (0-based)
+  Eigen::Matrix<double, N, N> motor_;   ///< motor_map(robot_)
+  std::vector<int> coupled_;            ///< motors turning with more than their own joint (0-based)
+  std::vector<FilteredTerm> filtered_;  ///< StackedData::filtered_terms' columns
 };
 
-/// Runs the whole `identify` job for one robot and term set.
+/// Runs the whole `identify` job for one robot and term set; the log is released once prepared.
 template <class Robot, unsigned Terms>
-IdentifyResult run_identify(const RobotDescription& robot, const JointLog& log, const IdentifyOptions& opt) {
+IdentifyResult run_identify(const RobotDescription& robot, JointLog&& log, const IdentifyOptions& opt) {
   using Pipe = IdentifyPipeline<Robot, Terms>;
   constexpr int N = Pipe::N;
   constexpr int P = Pipe::P;
@@ -454,7 +521,8 @@ IdentifyResult run_identify(const RobotDescription& robot, const JointLog& log, 
     throw InputError("log has " + std::to_string(log.joints()) + " joints, robot " + robot.name + " has " +
                      std::to_string(N));
   Pipe pipe(robot, opt);
-  const StackedData data = pipe.prepare(log);
+  // Effect terms are fitted on the dense [W E]; the declared model streams the regressor's rows.
+  const StackedData data = pipe.prepare(log, !opt.effects.empty());
   IdentifyResult res;
   res.notes = data.notes;
   const Eigen::Index S = data.t.size();
@@ -464,6 +532,7 @@ IdentifyResult run_identify(const RobotDescription& robot, const JointLog& log, 
   res.friction_per_motor = pipe.models_coupled_motors();
   res.data_source = log.source;
   res.sample_rate_hz = 1.0 / log.sample_period();
+  log = JointLog();  // the fit works on the prepared data only
   res.decimated_rate_hz = data.rate_hz;
   res.cutoff_hz = opt.cutoff_hz;
   res.samples_used = static_cast<long>(S);
@@ -496,13 +565,15 @@ IdentifyResult run_identify(const RobotDescription& robot, const JointLog& log, 
   } else {
     Eigen::VectorXd pred = Eigen::VectorXd::Constant(S * N, std::nan(""));
     typename Pipe::ParamVec phi, stdev;
+    Eigen::MatrixXd K;
     for (int f = 0; f < folds; ++f) {
       std::vector<char> train(static_cast<size_t>(S));
       for (Eigen::Index s = 0; s < S; ++s) train[s] = fold[s] != f;
       pipe.fit(data, train, phi, stdev);
       for (Eigen::Index s = 0; s < S; ++s) {
         if (fold[s] != f) continue;
-        pred.segment(s * N, N) = data.W.block(s * N, 0, N, P) * phi;
+        data.regressor(s, K);
+        pred.segment(s * N, N) = K * phi;
       }
     }
     // Metrics from the pooled out-of-fold residuals.
@@ -518,7 +589,7 @@ IdentifyResult run_identify(const RobotDescription& robot, const JointLog& log, 
       char line[200];
       std::snprintf(line, sizeof line,
                     "parameter std: the white-noise figures times %.3g for the residual's autocorrelation (S / n_eff)",
-                    std::sqrt(autocorrelation_inflation(data, all, data.y - data.W * phi)));
+                    std::sqrt(autocorrelation_inflation(data, all, data.y - data.predict(phi))));
       res.notes.push_back(line);
     }
     for (size_t l = 0; l < consistent.min_eigenvalue.size(); ++l) {

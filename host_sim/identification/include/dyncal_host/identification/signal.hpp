@@ -8,7 +8,7 @@ namespace dyncal::host {
 
 /// Central differences of each column of x (rows = samples, uniform period dt [s]):
 /// (x[i+1] - x[i-1]) / (2 dt) inside, one-sided first differences at both ends.
-Eigen::MatrixXd central_difference(const Eigen::MatrixXd& x, double dt);
+Eigen::MatrixXd central_difference(const Eigen::Ref<const Eigen::MatrixXd>& x, double dt);
 
 /// Derivative of a low-passed signal (rows = samples, period dt [s]): the five-point central
 /// difference (x[i-2] - 8 x[i-1] + 8 x[i+1] - x[i+2]) / (12 dt) inside, central_difference's
@@ -16,7 +16,7 @@ Eigen::MatrixXd central_difference(const Eigen::MatrixXd& x, double dt);
 /// (8 sin w - sin 2w) / (6 w), w = 2 pi f dt: 0.998 at a 20 Hz cut-off sampled at 250 Hz, where the
 /// three-point difference has 0.959 (0.92 for qdd, twice), which would leave the regressor's
 /// inertial columns short of tau's at every start and stop of a logged motion.
-Eigen::MatrixXd smooth_derivative(const Eigen::MatrixXd& x, double dt);
+Eigen::MatrixXd smooth_derivative(const Eigen::Ref<const Eigen::MatrixXd>& x, double dt);
 
 /// Standard deviation of the white noise on a sampled signal x (rows = samples of one segment each
 /// in `segments`, [first, end) rows): the median absolute fourth difference over all segments,

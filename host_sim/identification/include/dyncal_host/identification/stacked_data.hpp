@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 #include <cmath>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -12,11 +13,22 @@
 namespace dyncal::host {
 
 /// Stacked, filtered and decimated identification data: row s * N + j is joint j at sample s.
+///
+/// The regressor is kept as what it is computed from at the kept samples (q, qd, qdd, qd_raw and
+/// the parallel-filtered friction-sign columns), about 6 N numbers per sample instead of its N P:
+/// regressor(s, K) gives sample s's N rows. W and W_load hold it as one dense matrix when the
+/// data were prepared for a consumer that needs it (prepare_stacked; identify without effect
+/// terms streams the rows and leaves them empty).
 struct StackedData {
-  Eigen::MatrixXd W;                ///< (S N) x P regressor
-  Eigen::MatrixXd W_load;           ///< (S N) x P regressor at qdd = 0, filtered and stacked as W (only with
-                                    ///< IdentifyOptions::load_regressor, else empty): its rigid-body columns times
-                                    ///< phi give the load torque h(q, qd), gravity and velocity products [Nm]
+  Eigen::MatrixXd W;               ///< (S N) x P regressor, dense (empty when only streamed, see above)
+  Eigen::MatrixXd W_load;          ///< (S N) x P regressor at qdd = 0, filtered and stacked as W (only with
+                                   ///< IdentifyOptions::load_regressor, else empty): its rigid-body columns times
+                                   ///< phi give the load torque h(q, qd), gravity and velocity products [Nm]
+  Eigen::MatrixXd filtered_terms;  ///< S x F: the friction-sign columns (Coulomb, power; per joint or coupled
+                                   ///< motor) built at the log's rate and filtered in parallel, at the kept samples
+  /// Writes sample s's N x P regressor rows into K (resized), as W's rows s N .. s N + N - 1;
+  /// load: at qdd = 0, as W_load's. Set by the pipeline that prepared the data.
+  std::function<void(const StackedData&, Eigen::Index s, bool load, Eigen::MatrixXd& K)> regressor_rows;
   Eigen::MatrixXd E;                ///< (S N) x m columns of IdentifyOptions::effects, computed at the log's rate
                                     ///< and filtered in parallel as W (effect_model.hpp); load friction's are 0
                                     ///< here (they need the fit's rigid-body torque: effect_design)
@@ -25,12 +37,27 @@ struct StackedData {
   double rate_hz = 0;               ///< after decimation
   std::vector<char> fit_row;        ///< (S N): 1 where row s * N + j enters the fit (see min_speed_fraction)
   Eigen::MatrixXd q, qd, qdd;       ///< S x N filtered joint signals at the kept samples (for extra columns)
-  Eigen::MatrixXd qd_raw;           ///< S x N unfiltered velocity at the kept samples (friction signs)
+  Eigen::MatrixXd qd_raw;           ///< S x N unfiltered velocity at the kept samples (friction signs); kept
+                                    ///< with dense data or coupled motors, else 0 x N
   Eigen::VectorXd standstill_band;  ///< N: |qd_raw| below it is rest [rad/s]
   std::vector<std::string> names;   ///< P parameter names
   int num_base = 0;                 ///< the first num_base columns are the base parameters (rigid body)
   double cutoff_hz = 0;
   std::vector<std::string> notes;  ///< what preparation did that the user should know (standstill band, segments)
+
+  /// Sample s's regressor rows (N x P, rows s N .. s N + N - 1 of W) into K; load: W_load's.
+  void regressor(Eigen::Index s, Eigen::MatrixXd& K, bool load = false) const { regressor_rows(*this, s, load, K); }
+  /// W phi over all samples, (S N) [Nm], streamed row block by row block (phi: P).
+  Eigen::VectorXd predict(const Eigen::VectorXd& phi) const {
+    const Eigen::Index n = q.cols();
+    Eigen::VectorXd out(y.size());
+    Eigen::MatrixXd K;
+    for (Eigen::Index s = 0; s < t.size(); ++s) {
+      regressor(s, K);
+      out.segment(s * n, n).noalias() = K * phi;
+    }
+    return out;
+  }
 };
 
 /// The velocity every friction-sign column is built from: the filtered magnitude with the

@@ -47,7 +47,7 @@ inline double bridgeable_gap(double cutoff_hz) {
 /// step within kUniformStepTolerance T of T, no gap) is returned unchanged (report.resampled false). Throws InputError:
 /// fewer than 3 samples, time not increasing (with the row), input segments of different rates (median steps more than
 /// 1 % apart), nothing left.
-JointLog to_uniform_grid(const JointLog& raw, double max_gap, SamplingReport& report);
+JointLog to_uniform_grid(JointLog raw, double max_gap, SamplingReport& report);
 
 /// One line for the identify report: raw rate, jitter, missing samples, gaps and segments.
 std::string describe(const SamplingReport& report, double max_gap);
@@ -55,6 +55,6 @@ std::string describe(const SamplingReport& report, double max_gap);
 /// Several logs of one robot as one log of several segments (each log its own segment, never filtered
 /// across): times of each later log shifted to follow the previous one. Every log must have the same
 /// columns (measured qd, qdd) and joint count. Throws InputError naming the log that differs.
-JointLog stack_logs(const std::vector<JointLog>& logs);
+JointLog stack_logs(std::vector<JointLog> logs);
 
 }  // namespace dyncal::host
