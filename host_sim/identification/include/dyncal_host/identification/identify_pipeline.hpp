@@ -301,6 +301,13 @@ class IdentifyPipeline {
     bool coupled;
   };
 
+  /// The standstill band of motor m's velocity T.row(m) qd [rad/s]: the joints' bands `band`
+  /// combined as independent noise through the row.
+  static double motor_band(const Eigen::Matrix<double, N, N>& motor, int m,
+                           const Eigen::Ref<const Eigen::VectorXd>& band) {
+    return std::sqrt((motor.row(m).transpose().cwiseProduct(band)).squaredNorm());
+  }
+
   /// Sample s's regressor rows from the kept signals: the generated regressor at the filtered q,
   /// qd, qdd (qdd = 0 with load), the filtered sign columns, and a coupled motor's terms at its
   /// velocity v_m = T.row(m) qd through the transmission's transpose (its sign from the unfiltered
@@ -322,9 +329,8 @@ class IdentifyPipeline {
       }
     }
     for (const int m : coupled) {
-      const double band_m = std::sqrt((motor.row(m).transpose().cwiseProduct(d.standstill_band)).squaredNorm());
-      const double raw = motor.row(m).dot(d.qd_raw.row(s));
-      const double vm = std::abs(raw) < band_m ? 0.0 : motor.row(m).dot(qd), am = motor.row(m).dot(qdd);
+      const double sign = friction_sign(motor.row(m).dot(d.qd_raw.row(s)), motor_band(motor, m, d.standstill_band));
+      const double vm = sign == 0.0 ? 0.0 : motor.row(m).dot(qd), am = motor.row(m).dot(qdd);
       for (const unsigned t : {term::viscous, term::rotor_inertia}) {
         const int col = Model::column(t, m);
         if (col < 0) continue;
@@ -407,8 +413,7 @@ class IdentifyPipeline {
         const FilteredTerm& f = filtered_[i];
         if (f.m != j || f.coupled) continue;
         for (Eigen::Index s = 0; s < S; ++s) {  // series is v: the Coulomb column (first) reads v in place
-          series[s] = f.t == term::coulomb ? (std::abs(v[s]) < band[j] ? 0.0 : (v[s] > 0 ? 1.0 : -1.0))
-                                           : term_column(f.t, xd[s], 0.0, 0.0);
+          series[s] = f.t == term::coulomb ? friction_sign(v[s], band[j]) : term_column(f.t, xd[s], 0.0, 0.0);
         }
         filter_and_keep(i);
       }
@@ -420,13 +425,12 @@ class IdentifyPipeline {
     // joints' bands.
     for (Eigen::Index c = 0; c < C; ++c) {
       const int m = coupled_[static_cast<size_t>(c)];
-      const double band_m = std::sqrt((motor_.row(m).transpose().cwiseProduct(band)).squaredNorm());
+      const double band_m = motor_band(motor_, m, band);
       for (size_t i = 0; i < filtered_.size(); ++i) {
         const FilteredTerm& f = filtered_[i];
         if (f.m != m) continue;
         for (Eigen::Index s = 0; s < S; ++s) {
-          const double raw = motor_raw(s, c);
-          const double sign = std::abs(raw) < band_m ? 0.0 : (raw > 0 ? 1.0 : -1.0);
+          const double sign = friction_sign(motor_raw(s, c), band_m);
           series[s] = f.t == term::coulomb ? sign : term_column(f.t, sign == 0.0 ? 0.0 : motor_qd(s, c), 0.0, 0.0);
         }
         filter_and_keep(i);

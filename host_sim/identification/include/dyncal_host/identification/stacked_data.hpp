@@ -60,11 +60,17 @@ struct StackedData {
   }
 };
 
+/// The friction sign of an unfiltered velocity `raw`: 0 inside the standstill band [rad/s] (at
+/// rest), else +-1.
+inline double friction_sign(double raw, double band) {
+  return std::abs(raw) < band ? 0.0 : (raw > 0 ? 1.0 : -1.0);
+}
+
 /// The velocity every friction-sign column is built from: the filtered magnitude with the
 /// unfiltered velocity's sign (a filtered velocity's sign switches up to a cut-off period after a
 /// stop), 0 inside the standstill band [rad/s].
 inline double signed_velocity(double filtered, double raw, double band) {
-  return std::abs(raw) < band ? 0.0 : (raw > 0 ? std::abs(filtered) : -std::abs(filtered));
+  return friction_sign(raw, band) * std::abs(filtered);
 }
 
 /// Gautier's per-joint residual standard deviation [Nm], the WLS weight's inverse: sigma_j^2 =
