@@ -260,6 +260,53 @@ TEST(DriveHostileClients, MbapHeaderAndPduLengthAreValidated) {
   ::close(fd);
 }
 
+// Found by fuzz_modbus_request: a quantity out of range (read 0 or 126 registers, write 0 registers,
+// read 2001 coils) made libmodbus sleep its response time-out (0.5 s) before answering, stalling the
+// drive's single thread per request, and a function code 0x80-0xFF was answered as another
+// function's exception (0xFF + 0x80 wrapped to 0x7F). Each now gets its exception at once.
+TEST(DriveHostileClients, BadQuantitiesAndReservedFunctionsGetTheirExceptionAtOnce) {
+  const int fd = raw_connect();
+  ASSERT_GE(fd, 0);
+  struct Case {
+    std::vector<std::uint8_t> pdu;
+    std::uint8_t function, code;
+  };
+  const std::vector<Case> cases = {
+      {{4, 0, 0, 0, 0}, 0x84, 3},        // read 0 input registers
+      {{3, 0, 0, 0, 126}, 0x83, 3},      // read 126 holding registers
+      {{16, 0, 2, 0, 0, 0}, 0x90, 3},    // write 0 registers
+      {{1, 0, 0, 0x07, 0xD1}, 0x81, 3},  // read 2001 coils
+      {{15, 0, 0, 0, 0, 0}, 0x8F, 3},    // write 0 coils
+      {{0x2B, 0x0E, 1, 0}, 0xAB, 1},     // an unserved function: illegal function
+      {{0xFF, 0, 0, 0, 1}, 0xFF, 1},     // a reserved (exception) code: illegal function
+  };
+  std::uint16_t tid = 100;
+  for (int round = 0; round < 3; ++round) {
+    for (const Case& c : cases) {
+      ++tid;
+      std::vector<std::uint8_t> f = {static_cast<std::uint8_t>(tid >> 8),
+                                     static_cast<std::uint8_t>(tid),
+                                     0,
+                                     0,
+                                     0,
+                                     static_cast<std::uint8_t>(c.pdu.size() + 1),
+                                     0xFF};
+      f.insert(f.end(), c.pdu.begin(), c.pdu.end());
+      ASSERT_EQ(::send(fd, f.data(), f.size(), MSG_NOSIGNAL), static_cast<ssize_t>(f.size()));
+      // Well within the 0.5 s libmodbus slept before (a loaded CI machine still answers in 0.3 s).
+      const auto r = reply(fd, 0.3);
+      ASSERT_EQ(r.size(), 9U) << "function " << int{c.pdu[0]} << ": no exception reply within 0.3 s";
+      EXPECT_EQ((r[0] << 8) | r[1], tid);
+      EXPECT_EQ(r[7], c.function);
+      EXPECT_EQ(r[8], c.code);
+    }
+  }
+  const auto version = read_request(1, 0, 0xFF, mm::kMapVersionReg, 1);  // the connection is still served
+  ASSERT_EQ(::send(fd, version.data(), version.size(), MSG_NOSIGNAL), static_cast<ssize_t>(version.size()));
+  EXPECT_EQ(reply(fd, 0.3).size(), 11U);
+  ::close(fd);
+}
+
 // fault 5: a host that died after `start` left the drive playing with no one listening. The
 // watchdog (2 s by default) stops it with fault communication_lost; the samples recorded before
 // it are still delivered, then the fault.

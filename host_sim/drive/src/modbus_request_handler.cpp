@@ -1,0 +1,389 @@
+#include "modbus_request_handler.hpp"
+
+#include <sys/socket.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <stdexcept>
+#include <vector>
+
+#include "mbap_frame.hpp"
+
+namespace dyncal::host {
+namespace {
+
+namespace mm = dyncal::modbus_map;
+using Clock = ModbusRequestHandler::Clock;
+
+std::uint16_t be16(const std::uint8_t* p) {
+  return static_cast<std::uint16_t>((p[0] << 8) | p[1]);
+}
+
+/// Copies the drive's state into the input registers (the ring window starts at the ack).
+/// `table_generation`: the drive's table generation last copied into the registers (-1: none yet).
+void refresh_inputs(const SimulatedDrive& d, std::uint16_t* in, long& table_generation) {
+  in[mm::kMapVersionReg] = mm::kMapVersion;
+  const int n_joints = d.num_joints();
+  in[mm::kNumJointsReg] = static_cast<std::uint16_t>(n_joints);
+  mm::set_u32(in + mm::kRobotIdReg, d.robot_id());
+  mm::set_u32(in + mm::kActiveModelIdReg, d.active_table().model_id);
+  in[mm::kActiveCountReg] = d.active_table().count;
+  in[mm::kStateReg] = static_cast<std::uint16_t>(d.state());
+  mm::set_f32(in + mm::kSimTimeReg, static_cast<float>(d.time()));
+  mm::set_u32(in + mm::kProducedReg, d.produced());
+  mm::set_u32(in + mm::kOverrunReg, d.overruns());
+  const auto err = d.model_error_rms();
+  for (int j = 0; j < n_joints; ++j) mm::set_f32(in + mm::kModelErrorReg + 2 * j, static_cast<float>(err[j]));
+  in[mm::kFaultReg] = static_cast<std::uint16_t>(d.fault());
+  in[mm::kFaultJointReg] = static_cast<std::uint16_t>(d.fault_joint());
+  mm::set_f32(in + mm::kFaultValueReg, static_cast<float>(d.fault_value()));
+  // The table registers change only with the table: copy them when it changed.
+  if (table_generation != static_cast<long>(d.table_generation())) {
+    const auto& bytes = d.active_table_bytes();
+    mm::set_u32(in + mm::kActiveCrcReg, dyncal::detail::get_u32(bytes.data() + bytes.size() - 4));
+    in[mm::kActiveTableSizeReg] = static_cast<std::uint16_t>(bytes.size());
+    std::memset(in + mm::kActiveTableReg, 0, 2 * mm::kTableWords);
+    mm::bytes_to_regs(bytes.data(), static_cast<int>(bytes.size()), in + mm::kActiveTableReg);
+    table_generation = static_cast<long>(d.table_generation());
+  }
+  // Ring window: the oldest unacknowledged samples.
+  std::uint16_t* w = in + mm::kRingReg;
+  const auto& ring = d.ring();
+  const int n = std::min<int>(mm::samples_per_block(n_joints), static_cast<int>(ring.size()));
+  mm::set_u32(w, ring.empty() ? d.produced() : ring.front().seq);
+  w[2] = static_cast<std::uint16_t>(n);
+  std::uint16_t* p = w + 3;
+  for (int k = 0; k < n; ++k) {
+    const port::DriveSample& s = ring[static_cast<size_t>(k)];
+    mm::set_u32(p, s.seq);
+    for (int j = 0; j < n_joints; ++j) {
+      mm::set_f32(p + 2 + 2 * j, s.q[j]);
+      mm::set_f32(p + 2 + 2 * (n_joints + j), s.qd[j]);
+      mm::set_f32(p + 2 + 2 * (2 * n_joints + j), s.tau[j]);
+    }
+    p += mm::sample_words(n_joints);
+  }
+}
+
+/// Every register of [address, address + count) lies in a field of `bank`.
+bool addresses_defined(mm::Bank bank, int address, int count) {
+  for (int a = address; a < address + count; ++a) {
+    if (!mm::find_field(bank, a)) return false;
+  }
+  return true;
+}
+
+/// A write may not split a u32/f32 element.
+bool splits_element(int address, int count) {
+  for (int edge : {address, address + count}) {
+    const mm::Field* f = mm::find_field(mm::Bank::holding, edge);
+    if (f && edge != f->address && (f->type == mm::Type::u32 || f->type == mm::Type::f32) &&
+        (edge - f->address) % 2 != 0) {
+      return true;
+    }
+  }
+  return false;
+}
+
+bool overlaps(int address, int count, std::uint16_t reg, int words) {
+  return address < reg + words && reg < address + count;
+}
+
+/// Checks the holding registers after a write (applied to a scratch copy) against the access and
+/// state rules (docs/modbus.md "Access and states"). `session`: the writing connection holds an
+/// open staging session. Returns a Modbus exception code or 0.
+int check_holding(const SimulatedDrive& d, const std::uint16_t* h, int address, int count, double control_rate,
+                  bool session) {
+  const bool playing = d.state() == mm::DriveState::playing;
+  const bool fault = d.state() == mm::DriveState::fault;
+  // Staging and committing: only in a session, only while no trajectory plays and no fault stands.
+  auto staging_rule = [&]() -> int {
+    if (!session) return MODBUS_EXCEPTION_ILLEGAL_FUNCTION;  // locked: the server is in the wrong state for it
+    if (playing) return MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY;
+    if (fault) return MODBUS_EXCEPTION_SLAVE_OR_SERVER_FAILURE;
+    return 0;
+  };
+  if (overlaps(address, count, mm::kCommandReg, 1)) {
+    const std::uint16_t c = h[mm::kCommandReg];
+    if (c > static_cast<std::uint16_t>(mm::Command::reset)) return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+    if (c == static_cast<std::uint16_t>(mm::Command::commit_table)) {
+      if (const int e = staging_rule()) return e;
+    }
+    if (c == static_cast<std::uint16_t>(mm::Command::start)) {
+      if (playing) return MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY;   // would jump the arm back to the start pose
+      if (fault) return MODBUS_EXCEPTION_SLAVE_OR_SERVER_FAILURE;  // only reset clears a fault
+      if (!(mm::run_samples(h[mm::kPeriodsReg], mm::get_f32(h + mm::kOmegaFReg), mm::get_f32(h + mm::kSampleRateReg)) <=
+            mm::kMaxRunSamples))
+        return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;  // the run would outlast the sample counter's resolution
+    }
+  }
+  if (overlaps(address, count, mm::kUnlockReg, 1) && h[mm::kUnlockReg] != mm::kUnlockKey)
+    return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+  if (overlaps(address, count, mm::kStagingSizeReg, mm::kHoldingWords - mm::kStagingSizeReg)) {
+    if (const int e = staging_rule()) return e;
+  }
+  if (overlaps(address, count, mm::kAckReg, 2)) {
+    const std::uint32_t a = mm::get_u32(h + mm::kAckReg);
+    if (a < d.acked() || a > d.produced()) return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+  }
+  const bool settings =
+      overlaps(address, count, mm::kSampleRateReg, mm::kCoefficientsReg + mm::kCoefficientWords - mm::kSampleRateReg);
+  if (settings && playing) return MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY;
+  if (overlaps(address, count, mm::kSampleRateReg, 2)) {
+    const double fs = mm::get_f32(h + mm::kSampleRateReg);
+    const double ratio = control_rate / fs;
+    if (!(fs >= mm::kMinSampleRateHz && fs <= mm::kMaxSampleRateHz) || std::fabs(ratio - std::round(ratio)) > 1e-6)
+      return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+  }
+  if (overlaps(address, count, mm::kOmegaFReg, 2)) {
+    const double f = mm::get_f32(h + mm::kOmegaFReg);
+    if (!(f > 0 && f <= mm::kMaxFundamentalHz)) return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+  }
+  if (overlaps(address, count, mm::kHarmonicsReg, 1)) {
+    if (h[mm::kHarmonicsReg] < 1 || h[mm::kHarmonicsReg] > mm::kMaxHarmonics)
+      return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+  }
+  if (overlaps(address, count, mm::kPeriodsReg, 1)) {
+    if (h[mm::kPeriodsReg] < 1 || h[mm::kPeriodsReg] > mm::kMaxPeriods) return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+  }
+  for (int k = 0; k < mm::kCoefficientWords; k += 2) {
+    if (overlaps(address, count, static_cast<std::uint16_t>(mm::kCoefficientsReg + k), 2) &&
+        !std::isfinite(mm::get_f32(h + mm::kCoefficientsReg + k))) {
+      return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+    }
+  }
+  if (overlaps(address, count, mm::kStagingSizeReg, 1) && h[mm::kStagingSizeReg] > kTableMaxBytes) {
+    return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+  }
+  return 0;
+}
+
+void load_trajectory(SimulatedDrive& d, const std::uint16_t* h) {
+  d.sample_rate_hz = mm::get_f32(h + mm::kSampleRateReg);
+  d.trajectory.f_f = mm::get_f32(h + mm::kOmegaFReg);
+  d.trajectory.harmonics = h[mm::kHarmonicsReg];
+  d.periods = h[mm::kPeriodsReg];
+  for (int j = 0; j < mm::kMaxJoints; ++j) {  // every slot; the drive plays its robot's joints
+    const std::uint16_t* c = h + mm::kCoefficientsReg + 2 * mm::kCoefficientsPerJoint * j;
+    d.trajectory.q0[j] = mm::get_f32(c);
+    for (int l = 0; l < mm::kMaxHarmonics; ++l) {
+      d.trajectory.a(j, l) = mm::get_f32(c + 2 + 2 * l);
+      d.trajectory.b(j, l) = mm::get_f32(c + 2 + 2 * mm::kMaxHarmonics + 2 * l);
+    }
+  }
+}
+
+Clock::duration seconds(double s) {
+  return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
+}
+
+}  // namespace
+
+ModbusRequestHandler::ModbusRequestHandler(SimulatedDrive& drive, modbus_t* ctx, int unit_id, std::FILE* log)
+    : drive_(drive), ctx_(ctx), unit_id_(unit_id), log_(log) {
+  map_ = modbus_mapping_new_start_address(0, 0, 0, 0, 0, mm::kHoldingWords, 0, mm::kInputWords);
+  if (!map_) throw std::runtime_error("cannot allocate the Modbus register map");
+  // Defaults: the survey's excitation settings (Eq. 27: L = 5, f_f = 0.1 Hz), 2 periods.
+  mm::set_f32(map_->tab_registers + mm::kSampleRateReg, static_cast<float>(drive.sample_rate_hz));
+  mm::set_f32(map_->tab_registers + mm::kOmegaFReg, 0.1f);
+  map_->tab_registers[mm::kHarmonicsReg] = 5;
+  map_->tab_registers[mm::kPeriodsReg] = 2;
+}
+
+ModbusRequestHandler::~ModbusRequestHandler() {
+  modbus_mapping_free(map_);
+}
+
+ModbusRequestHandler::TcpResult ModbusRequestHandler::serve_tcp(const std::uint8_t* bytes, std::size_t size,
+                                                                int client) {
+  TcpResult r;
+  for (;;) {
+    const MbapFrame f = next_mbap_frame(bytes + r.used, size - r.used);
+    if (f.status == MbapFrame::Status::invalid) {
+      r.keep = false;
+      return r;
+    }
+    if (f.status == MbapFrame::Status::incomplete) return r;
+    std::uint8_t frame[kMaxTcpAduBytes + 8] = {};  // zero beyond the frame: a short PDU reads zeros
+    std::memcpy(frame, bytes + r.used, f.bytes);
+    r.used += f.bytes;
+    ++r.frames;
+    // Protocol id 0 is Modbus; the unit id is 0xFF (the spec's value for a server addressed by its
+    // IP address) or the drive's unit id. Other frames are not for this drive: ignored.
+    if (f.protocol != 0 || (f.unit != 0xFF && f.unit != unit_id_)) continue;
+    modbus_set_socket(ctx_, client);
+    if (!request_pdu_consistent(frame + kMbapHeaderBytes, f.bytes - kMbapHeaderBytes)) {
+      last_request_ = Clock::now();
+      if (modbus_reply_exception(ctx_, frame, MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE) < 0) {
+        r.keep = false;
+        return r;
+      }
+      continue;
+    }
+    if (!answer(frame, static_cast<int>(f.bytes), client)) {
+      r.keep = false;
+      return r;
+    }
+  }
+}
+
+// Function codes 0x80-0xFF are reserved for exception responses (Modbus Application Protocol
+// v1.1b3, sec. 5 and 7): libmodbus would answer function + 0x80 truncated to a byte, another
+// function's exception. The drive answers exception 1 (illegal function) under the request's code.
+bool ModbusRequestHandler::reply_reserved_function(const std::uint8_t* query, int header_length, int client) {
+  if (client == kRtuClient) {  // slave id, function, exception code; libmodbus adds the CRC
+    const std::uint8_t raw[3] = {query[0], query[1], MODBUS_EXCEPTION_ILLEGAL_FUNCTION};
+    return modbus_send_raw_request(ctx_, raw, 3) >= 0;
+  }
+  // MBAP: the request's transaction id, protocol 0, length 3 (unit, function, code), its unit id.
+  const std::uint8_t reply[9] = {query[0],
+                                 query[1],
+                                 0,
+                                 0,
+                                 0,
+                                 3,
+                                 query[header_length - 1],
+                                 query[header_length],
+                                 MODBUS_EXCEPTION_ILLEGAL_FUNCTION};
+  return ::send(client, reply, sizeof reply, MSG_NOSIGNAL) == static_cast<ssize_t>(sizeof reply);
+}
+
+void ModbusRequestHandler::client_closed(int client) {
+  if (session_client_ == client) session_client_ = kNoClient;
+}
+
+bool ModbusRequestHandler::session_open() const {
+  return session_client_ != kNoClient && session_client_ == current_client_ && Clock::now() < session_until_;
+}
+
+bool ModbusRequestHandler::answer(const std::uint8_t* query, int rc, int client) {
+  last_request_ = Clock::now();
+  current_client_ = client;
+  const int off = modbus_get_header_length(ctx_);
+  const int function = query[off];
+  if (function >= 0x80) return reply_reserved_function(query, off, client);
+  const int address = be16(query + off + 1);
+  refresh_inputs(drive_, map_->tab_input_registers, table_generation_);
+  map_->tab_registers[mm::kCommandReg] = 0;
+  int exception = 0;
+  int write_address = -1, write_count = 0;
+  std::vector<std::uint16_t> scratch(map_->tab_registers, map_->tab_registers + mm::kHoldingWords);
+  // A quantity outside what its function allows is exception 3 (illegal data value), answered here:
+  // libmodbus 3.1 would answer it only after sleeping its response time-out and flushing the
+  // client's socket, which would stall the drive.
+  const int count = be16(query + off + 3);
+  auto quantity_outside = [&](int max) { return count < 1 || count > max; };
+  switch (function) {
+    case MODBUS_FC_READ_INPUT_REGISTERS:
+    case MODBUS_FC_READ_HOLDING_REGISTERS: {
+      const auto bank = function == MODBUS_FC_READ_INPUT_REGISTERS ? mm::Bank::input : mm::Bank::holding;
+      if (quantity_outside(MODBUS_MAX_READ_REGISTERS)) {
+        exception = MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+      } else if (!addresses_defined(bank, address, count)) {
+        exception = MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS;
+      }
+      break;
+    }
+    case MODBUS_FC_WRITE_SINGLE_REGISTER:
+      write_address = address;
+      write_count = 1;
+      if (!addresses_defined(mm::Bank::holding, address, 1)) {
+        exception = MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS;
+      } else {
+        scratch[static_cast<size_t>(address)] = be16(query + off + 3);
+      }
+      break;
+    case MODBUS_FC_WRITE_MULTIPLE_REGISTERS: {
+      if (quantity_outside(MODBUS_MAX_WRITE_REGISTERS)) {
+        exception = MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+        break;
+      }
+      write_address = address;
+      write_count = count;
+      if (!addresses_defined(mm::Bank::holding, address, write_count)) {
+        exception = MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS;
+      } else {
+        for (int k = 0; k < write_count; ++k) scratch[static_cast<size_t>(address + k)] = be16(query + off + 6 + 2 * k);
+      }
+      break;
+    }
+    case MODBUS_FC_READ_COILS:
+    case MODBUS_FC_READ_DISCRETE_INPUTS:
+      if (quantity_outside(MODBUS_MAX_READ_BITS)) exception = MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+      break;  // else libmodbus answers (no coils: illegal data address)
+    case MODBUS_FC_WRITE_MULTIPLE_COILS:
+      if (quantity_outside(MODBUS_MAX_WRITE_BITS)) exception = MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+      break;
+    case MODBUS_FC_WRITE_SINGLE_COIL:
+    case MODBUS_FC_REPORT_SLAVE_ID:
+      break;  // libmodbus answers (no coils: illegal data address)
+    default:
+      exception = MODBUS_EXCEPTION_ILLEGAL_FUNCTION;
+  }
+  if (!exception && write_count > 0 && write_address >= 0) {
+    if (splits_element(write_address, write_count)) {
+      exception = MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS;
+    } else {
+      exception = check_holding(drive_, scratch.data(), write_address, write_count, 1.0 / drive_.control_period(),
+                                session_open());
+    }
+  }
+  if (exception) {
+    return modbus_reply_exception(ctx_, query, static_cast<unsigned>(exception)) >= 0;
+  }
+  if (modbus_reply(ctx_, query, rc, map_) < 0) return false;
+  if (write_count > 0) apply_write(write_address, write_count);
+  return true;
+}
+
+void ModbusRequestHandler::apply_write(int address, int count) {
+  std::uint16_t* h = map_->tab_registers;
+  if (overlaps(address, count, mm::kAckReg, 2)) drive_.ack(mm::get_u32(h + mm::kAckReg));
+  if (overlaps(address, count, mm::kUnlockReg, 1)) {
+    session_client_ = current_client_;
+    session_until_ = Clock::now() + seconds(mm::kSessionSeconds);
+    h[mm::kUnlockReg] = 0;
+  }
+  if (!overlaps(address, count, mm::kCommandReg, 1)) return;
+  switch (static_cast<mm::Command>(h[mm::kCommandReg])) {
+    case mm::Command::start:
+      load_trajectory(drive_, h);
+      drive_.start();
+      started_ = Clock::now();
+      mm::set_u32(h + mm::kAckReg, 0);
+      break;
+    case mm::Command::stop:
+      drive_.stop();
+      break;
+    case mm::Command::reset:
+      drive_.reset();
+      break;
+    case mm::Command::commit_table: {
+      session_client_ = kNoClient;  // a commit ends the session
+      const int size = h[mm::kStagingSizeReg];
+      std::vector<std::uint8_t> bytes(static_cast<size_t>(size));
+      mm::regs_to_bytes(h + mm::kStagingTableReg, size, bytes.data());
+      TableStatus st;
+      try {
+        st = drive_.commit(bytes.data(), size);
+      } catch (const std::exception& e) {
+        if (log_) std::fprintf(log_, "dyncal drive: flash write failed: %s\n", e.what());
+        st = TableStatus::bad_size;
+      }
+      map_->tab_input_registers[mm::kCommitResultReg] = static_cast<std::uint16_t>(st);
+      ++map_->tab_input_registers[mm::kCommitCounterReg];
+      if (log_) {
+        std::fprintf(log_, "dyncal drive: commit %s\n", to_string(st));
+        std::fflush(log_);
+      }
+      break;
+    }
+    case mm::Command::none:
+      break;
+  }
+  h[mm::kCommandReg] = 0;
+}
+
+}  // namespace dyncal::host

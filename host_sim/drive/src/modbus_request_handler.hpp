@@ -1,0 +1,77 @@
+#pragma once
+// The simulated drive's Modbus request handler without its transport: the register map
+// (dyncal/modbus_map.hpp), the access and state rules and the staging session (docs/modbus.md
+// "Access and states"). The server (drive_server.cpp) receives the bytes and hands over what a
+// client sent; the fuzz target tests/fuzz/fuzz_modbus_request.cpp hands over any bytes at all.
+
+#include <modbus/modbus.h>
+
+#include <chrono>
+#include <cstddef>
+#include <cstdint>
+#include <cstdio>
+
+#include "dyncal_host/drive/simulated_drive.hpp"
+
+namespace dyncal::host {
+
+class ModbusRequestHandler {
+ public:
+  using Clock = std::chrono::steady_clock;
+  /// The client id of the RTU line (one point-to-point client); TCP clients are their sockets.
+  static constexpr int kRtuClient = -2;
+
+  /// `ctx`: the libmodbus context (TCP or RTU) that parses requests and writes the replies, owned by
+  /// the caller; `unit_id`: the drive's unit id (RTU slave address; on TCP 0xFF is accepted too);
+  /// `log`: where commits are reported (nullptr: nowhere). Throws std::runtime_error if the
+  /// register map cannot be allocated.
+  ModbusRequestHandler(SimulatedDrive& drive, modbus_t* ctx, int unit_id, std::FILE* log = stdout);
+  ~ModbusRequestHandler();
+  ModbusRequestHandler(const ModbusRequestHandler&) = delete;
+  ModbusRequestHandler& operator=(const ModbusRequestHandler&) = delete;
+
+  /// What serve_tcp did with a client's bytes.
+  struct TcpResult {
+    std::size_t used = 0;  ///< bytes of the complete frames consumed; the rest starts a partial frame
+    int frames = 0;        ///< complete frames among them (answered or ignored)
+    bool keep = true;      ///< false: framing lost or a reply not sent in full: close the connection
+  };
+  /// Answers every complete Modbus TCP frame at the start of bytes[0, size) sent by `client` (a
+  /// socket: it becomes ctx's socket, the replies go to it). A frame with a protocol id other than 0
+  /// or another unit id is ignored; a PDU whose length contradicts its function gets exception 3
+  /// (illegal data value); the others are answered by answer().
+  TcpResult serve_tcp(const std::uint8_t* bytes, std::size_t size, int client);
+
+  /// Answers one complete request ADU of `length` bytes (header included, as libmodbus frames it for
+  /// ctx's backend) from `client`, applying a write that passes the access and state rules (else
+  /// the Modbus exception they give). False when the reply could not be sent in full.
+  bool answer(const std::uint8_t* adu, int length, int client);
+
+  /// `client`'s connection closed: a session it held ends (its id may be reused by a new client).
+  void client_closed(int client);
+
+  /// The last complete request of any client (construction time before the first).
+  Clock::time_point last_request() const { return last_request_; }
+  /// When the last start command was applied (real-time mode follows the wall clock from there).
+  Clock::time_point started() const { return started_; }
+
+ private:
+  void apply_write(int address, int count);
+  bool reply_reserved_function(const std::uint8_t* query, int header_length, int client);
+  bool session_open() const;
+
+  static constexpr int kNoClient = -1;
+  SimulatedDrive& drive_;
+  modbus_t* ctx_;
+  int unit_id_;
+  std::FILE* log_;
+  modbus_mapping_t* map_ = nullptr;
+  int current_client_ = kNoClient;  ///< the client whose request is being answered
+  int session_client_ = kNoClient;  ///< the client holding the staging session
+  Clock::time_point session_until_ = Clock::now();
+  Clock::time_point last_request_ = Clock::now();
+  Clock::time_point started_ = Clock::now();
+  long table_generation_ = -1;  ///< the drive's table generation last copied into the registers
+};
+
+}  // namespace dyncal::host
