@@ -31,15 +31,12 @@
 namespace {
 
 namespace mm = dyncal::modbus_map;
+using dyncal::host::be16;
 using dyncal::host::MbapFrame;
 
 void fail(const char* what) {
   std::fprintf(stderr, "fuzz_modbus_request: %s\n", what);
   std::abort();
-}
-
-std::uint16_t be16(const std::uint8_t* p) {
-  return static_cast<std::uint16_t>((p[0] << 8) | p[1]);
 }
 
 // What stays for the whole run: the robot, a socket pair (the handler replies into one end, the

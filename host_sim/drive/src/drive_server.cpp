@@ -13,7 +13,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <memory>
 #include <stdexcept>
 #include <vector>
@@ -146,10 +145,6 @@ class Server {
     if (ready > 0 && (fds[0].revents & POLLIN)) accept_clients(now);
   }
 
-  static Clock::duration seconds(double s) {
-    return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
-  }
-
   // Accepts every pending connection. At max_connections, the client silent for longest makes room
   // if it has sent nothing for frame_timeout_s (a polling host is never that client); otherwise the
   // newcomer is closed at once: a clean refusal that leaves the connected clients served.
@@ -203,9 +198,8 @@ class Server {
   void serve_rtu() {
     std::uint8_t query[MODBUS_RTU_MAX_ADU_LENGTH];
     const int rc = modbus_receive(ctx_, query);
-    if (rc > 0)
-      handler_->answer(
-          query, rc, ModbusRequestHandler::kRtuClient);  // 0: addressed to another slave; < 0: bad frame, keep serving
+    // 0: addressed to another slave; < 0: a bad frame, keep serving.
+    if (rc > 0) handler_->answer(query, rc, ModbusRequestHandler::kRtuClient);
   }
 
   SimulatedDrive& drive_;

@@ -1,13 +1,6 @@
 #include "mbap_frame.hpp"
 
 namespace dyncal::host {
-namespace {
-
-std::uint16_t be16(const std::uint8_t* p) noexcept {
-  return static_cast<std::uint16_t>((p[0] << 8) | p[1]);
-}
-
-}  // namespace
 
 MbapFrame next_mbap_frame(const std::uint8_t* buf, std::size_t n) noexcept {
   MbapFrame f;

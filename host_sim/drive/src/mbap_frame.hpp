@@ -26,6 +26,11 @@ struct MbapFrame {
   std::uint8_t unit = 0;
 };
 
+/// A big-endian 16-bit field (Modbus sends every field high byte first).
+inline std::uint16_t be16(const std::uint8_t* p) noexcept {
+  return static_cast<std::uint16_t>((p[0] << 8) | p[1]);
+}
+
 /// The first frame in `buf[0, n)`.
 MbapFrame next_mbap_frame(const std::uint8_t* buf, std::size_t n) noexcept;
 

@@ -17,10 +17,6 @@ namespace {
 namespace mm = dyncal::modbus_map;
 using Clock = ModbusRequestHandler::Clock;
 
-std::uint16_t be16(const std::uint8_t* p) {
-  return static_cast<std::uint16_t>((p[0] << 8) | p[1]);
-}
-
 /// Copies the drive's state into the input registers (the ring window starts at the ack).
 /// `table_generation`: the drive's table generation last copied into the registers (-1: none yet).
 void refresh_inputs(const SimulatedDrive& d, std::uint16_t* in, long& table_generation) {
@@ -173,10 +169,6 @@ void load_trajectory(SimulatedDrive& d, const std::uint16_t* h) {
       d.trajectory.b(j, l) = mm::get_f32(c + 2 + 2 * mm::kMaxHarmonics + 2 * l);
     }
   }
-}
-
-Clock::duration seconds(double s) {
-  return std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(s));
 }
 
 }  // namespace

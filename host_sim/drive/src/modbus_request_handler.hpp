@@ -15,6 +15,11 @@
 
 namespace dyncal::host {
 
+/// `s` seconds as a steady-clock duration (the drive's time-outs and session length are in seconds).
+inline std::chrono::steady_clock::duration seconds(double s) {
+  return std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(s));
+}
+
 class ModbusRequestHandler {
  public:
   using Clock = std::chrono::steady_clock;
