@@ -82,8 +82,20 @@ void add_identify_command(CLI::App& app, Action& run) {
                   "wls: weighted least squares, each joint's rows weighted by 1 / its residual noise (Gautier); ols: "
                   "unweighted (the survey's IDIM-OLS); kf: Kalman filter (Eq. 19); rls: forgetting (Eq. 23); pcls: "
                   "physically consistent WLS, every link's pseudo-inertia positive definite, robot.json's inertials "
-                  "as prior (Wensing et al.)")
-      ->check(CLI::IsMember({"wls", "ols", "kf", "rls", "pcls"}))
+                  "as prior (Wensing et al.); gd, ga, pf: the survey's optimisers (gradient descent, genetic "
+                  "algorithm, particle filter) on the weighted data, every link's pseudo-inertia positive definite, "
+                  "the inertials searched within --range-width of robot.json's, no prior (docs/cli.md)")
+      ->check(CLI::IsMember({"wls", "ols", "kf", "rls", "pcls", "gd", "ga", "pf"}))
+      ->capture_default_str();
+  cmd->add_option("--range-width", opt.range_width,
+                  "gd, ga, pf: each standard parameter searched within robot.json's value +- this x max(|value|, 5 % "
+                  "of the largest of its kind in the link)")
+      ->capture_default_str();
+  cmd->add_option("--seed", opt.seed, "ga, pf: random seed (the result is deterministic for a seed)")
+      ->capture_default_str();
+  cmd->add_option("--evaluations", opt.search_evaluations,
+                  "gd: cost evaluations at most (default 20000), ga: generations (1500), pf: evaluations per "
+                  "particle (1500); 0: the default")
       ->capture_default_str();
   cmd->add_option("--cutoff", opt.cutoff_hz, "zero-phase Butterworth cut-off [Hz]")->capture_default_str();
   cmd->add_option("--filter-order", opt.filter_order, "Butterworth order (even)")->capture_default_str();

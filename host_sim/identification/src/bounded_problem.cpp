@@ -1,6 +1,7 @@
 #include "bounded_problem.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "dyncal_host/identification/standard_parameters.hpp"
@@ -9,55 +10,69 @@ namespace dyncal::host::detail {
 
 BoundedProblem::BoundedProblem(const RunData& data, FrictionModel model, const MethodSettings& settings,
                                const OptimiserSettings& options)
-    : data_(data),
-      model_(model),
-      settings_(settings),
-      options_(options),
-      objective_(data, model, settings.sigma),
-      ranges_(search_ranges(data, model, nearest_consistent(settings.prior.mean), options.range_width)),
-      cad_(nearest_consistent(settings.prior.mean)) {
+    : data_(data), model_(model), settings_(settings), options_(options), objective_(data, model, settings.sigma) {
+  const Eigen::VectorXd cad = nearest_consistent(settings.prior.mean);
+  SearchRanges ranges = search_ranges(data, model, cad, options.range_width);
   const int kf = objective_.friction_per_joint();
-  for (int i = 0; i < static_cast<int>(ranges_.lo.size()); ++i) {
-    if (ranges_.fixed(i)) continue;
-    free_.push_back(i);
-    logarithmic_.push_back(i >= kStandard && is_scale_parameter(model, (i - kStandard) % kf) && ranges_.lo[i] > 0);
+  std::vector<bool> logarithmic(static_cast<size_t>(ranges.lo.size()), false);
+  for (int i = kStandard; i < static_cast<int>(ranges.lo.size()); ++i) {
+    logarithmic[static_cast<size_t>(i)] = is_scale_parameter(model, (i - kStandard) % kf);
   }
+  set_box(std::move(ranges.lo), std::move(ranges.hi), logarithmic, cad);
 }
 
-double BoundedProblem::scale(int k, const Eigen::VectorXd& x) const {
-  const int i = free_[static_cast<size_t>(k)];
-  return logarithmic_[static_cast<size_t>(k)] ? x[i] * std::log(ranges_.hi[i] / ranges_.lo[i])
-                                              : ranges_.hi[i] - ranges_.lo[i];
-}
-
-Eigen::VectorXd BoundedProblem::full(const double* u) const {
-  Eigen::VectorXd x = ranges_.lo;
-  for (size_t k = 0; k < free_.size(); ++k) {
-    const int i = free_[k];
-    const double t = std::clamp(u[k], 0.0, 1.0);
-    x[i] = logarithmic_[k] ? ranges_.lo[i] * std::pow(ranges_.hi[i] / ranges_.lo[i], t)
-                           : ranges_.lo[i] + t * (ranges_.hi[i] - ranges_.lo[i]);
-  }
-  return x;
-}
-
-Eigen::VectorXd BoundedProblem::unit(const Eigen::VectorXd& x) const {
-  Eigen::VectorXd u(free_.size());
-  for (size_t k = 0; k < free_.size(); ++k) {
-    const int i = free_[k];
-    const double t = logarithmic_[k] ? std::log(std::max(x[i], ranges_.lo[i]) / ranges_.lo[i]) /
-                                           std::log(ranges_.hi[i] / ranges_.lo[i])
-                                     : (x[i] - ranges_.lo[i]) / (ranges_.hi[i] - ranges_.lo[i]);
-    u[static_cast<Eigen::Index>(k)] = std::clamp(t, 0.0, 1.0);
-  }
-  return u;
-}
-
-Eigen::VectorXd BoundedProblem::with_fitted_amplitudes(const Eigen::VectorXd& x, std::array<double, 6>& mean,
-                                                       std::array<double, 6>& var) const {
+Eigen::VectorXd BoundedProblem::with_fitted_amplitudes(const Eigen::VectorXd& x, std::vector<double>& mean,
+                                                       std::vector<double>& var) const {
   Eigen::VectorXd y = x;
-  objective_.fit_amplitudes(y.data(), ranges_.lo.data(), ranges_.hi.data(), &mean, &var);
+  std::array<double, 6> m{}, v{};
+  objective_.fit_amplitudes(y.data(), lo().data(), hi().data(), &m, &v);
+  mean.assign(m.begin(), m.end());
+  var.assign(v.begin(), v.end());
   return y;
+}
+
+Eigen::VectorXd BoundedProblem::data_start() const {
+  Eigen::VectorXd seed(objective_.dimension());
+  seed.head(kStandard) = cad();
+  const std::vector<double> f = friction_start(data_, model_, cad());
+  seed.tail(static_cast<Eigen::Index>(f.size())) =
+      Eigen::Map<const Eigen::VectorXd>(f.data(), static_cast<Eigen::Index>(f.size()));
+  return seed;
+}
+
+std::vector<std::vector<int>> BoundedProblem::scale_groups() const {
+  if (is_linear(model_)) return {};
+  std::vector<std::vector<int>> groups(6);
+  const int kf = friction_count(model_);
+  for (int k = 0; k < free_dimension(); ++k) {
+    const int i = free_index(k) - kStandard;
+    if (i >= 0 && is_scale_parameter(model_, i % kf)) groups[static_cast<size_t>(i / kf)].push_back(k);
+  }
+  if (groups[0].empty()) return {};
+  return groups;
+}
+
+double BoundedProblem::joint_cost(double m, double v) const {
+  return options_.objective == Objective::eq25 ? std::fabs(m) + options_.k_e * std::sqrt(v) : m * m + v;
+}
+
+bool BoundedProblem::memetic_child(const Eigen::VectorXd& best, Eigen::VectorXd& child) const {
+  if (is_linear(model_)) return false;
+  std::vector<double> mean, var, mean_scan, var_scan;
+  child = with_fitted_amplitudes(best, mean, var);
+  Eigen::VectorXd y = child;
+  const std::vector<double> f = friction_start(data_, model_, child.head(kStandard));
+  y.tail(static_cast<Eigen::Index>(f.size())) =
+      Eigen::Map<const Eigen::VectorXd>(f.data(), static_cast<Eigen::Index>(f.size()));
+  y = with_fitted_amplitudes(y, mean_scan, var_scan);
+  const int kf = friction_count(model_);
+  for (size_t j = 0; j < 6; ++j) {
+    if (joint_cost(mean_scan[j], var_scan[j]) < joint_cost(mean[j], var[j])) {
+      child.segment(kStandard + kf * static_cast<Eigen::Index>(j), kf) =
+          y.segment(kStandard + kf * static_cast<Eigen::Index>(j), kf);
+    }
+  }
+  return true;
 }
 
 Estimate BoundedProblem::estimate(const Eigen::VectorXd& x, const char* method,

@@ -50,13 +50,13 @@ double next_inverse_temperature(const Eigen::VectorXd& f, double b) {
 
 }  // namespace
 
-Estimate particle_filter(const RunData& data, FrictionModel model, const MethodSettings& settings,
-                         const OptimiserSettings& options) {
-  const auto t0 = std::chrono::steady_clock::now();
+namespace detail {
+
+Eigen::VectorXd particle_search(const SearchProblem& problem, const OptimiserSettings& options, int& steps) {
   if (options.population < 4 || options.generations < kMovesPerStep) {
     throw InputError("particle filter: >= 4 particles and >= 5 evaluations per particle");
   }
-  const detail::BoundedProblem problem(data, model, settings, options);
+  const int links = problem.num_links();
   const int D = problem.free_dimension(), N = options.population;
   std::mt19937_64 rng(options.seed);
   std::uniform_real_distribution<double> U(0.0, 1.0);
@@ -64,24 +64,26 @@ Estimate particle_filter(const RunData& data, FrictionModel model, const MethodS
   // Initial particles: uniform on the feasible part of the box. Feasibility is per link and the
   // box is a product, so each link's variables are drawn until that link is consistent.
   Eigen::MatrixXd X(D, N);
-  std::vector<std::vector<int>> link_vars(kLinks + 1);  // free variables of each link; last: friction
-  for (int k = 0; k < D; ++k) link_vars[static_cast<size_t>(std::min(problem.free_index(k) / 10, kLinks))].push_back(k);
-  // Negative log-likelihood of the torques under the assumed noise (Table 7 sigma_j, Gaussian):
-  // (S / 2) sum_j ||e_j / sigma_j||^2 / S; the target at b = 1 is the posterior on the ranges.
-  const double half_samples = 0.5 * static_cast<double>(data.q.rows());
+  std::vector<std::vector<int>> link_vars(static_cast<size_t>(links) + 1);  // free variables per link; last: the rest
+  for (int k = 0; k < D; ++k) link_vars[static_cast<size_t>(std::min(problem.free_index(k) / 10, links))].push_back(k);
+  // Negative log-likelihood of the torques under the assumed noise (survey: Table 7 sigma_j,
+  // Gaussian, (S / 2) sum_j ||e_j / sigma_j||^2 / S); the target at b = 1 is the posterior on the ranges.
+  const double likelihood_scale = problem.likelihood_scale();
+  std::vector<double> moments_mean, moments_var;
   // Particle u with its amplitudes at their conditional least-squares values (written back to u),
   // and its cost.
   auto fitted = [&](Eigen::VectorXd& u, double& cost) {
-    std::array<double, 6> mean{}, var{};
-    const Eigen::VectorXd x = problem.with_fitted_amplitudes(problem.full(u.data()), mean, var);
+    const Eigen::VectorXd x = problem.with_fitted_amplitudes(problem.full(u.data()), moments_mean, moments_var);
     u = problem.unit(x);
-    cost = half_samples * TorqueObjective::least_squares_of(mean, var);
+    double ls = 0;
+    for (size_t j = 0; j < moments_mean.size(); ++j) ls += moments_mean[j] * moments_mean[j] + moments_var[j];
+    cost = likelihood_scale * ls;
     return x;
   };
   Eigen::VectorXd f(N);
   for (int i = 0; i < N; ++i) {
     for (int k = 0; k < D; ++k) X(k, i) = U(rng);
-    for (int l = 0; l < kLinks; ++l) {
+    for (int l = 0; l < links; ++l) {
       for (int tries = 0; tries < 100000; ++tries) {
         const Eigen::VectorXd x = problem.full(X.col(i).data());
         if (pseudo_inertia_min_eigenvalue(x.data() + 10 * l, nullptr) > 0) break;
@@ -94,17 +96,10 @@ Estimate particle_filter(const RunData& data, FrictionModel model, const MethodS
     if (problem.violation(x) > 0) throw InputError("particle filter: no feasible point found in the search ranges");
   }
   // Each joint's scale-parameter coordinates (nonlinear models), for the independence moves.
-  std::array<std::vector<int>, 6> joint_scales;
-  const int kf = friction_count(model);
-  for (int k = 0; k < D; ++k) {
-    const int i = problem.free_index(k) - kStandard;
-    if (i >= 0 && !is_linear(model) && is_scale_parameter(model, i % kf)) {
-      joint_scales[static_cast<size_t>(i / kf)].push_back(k);
-    }
-  }
-  const bool independence_moves = !joint_scales[0].empty();
+  const std::vector<std::vector<int>> joint_scales = problem.scale_groups();
+  const bool independence_moves = !joint_scales.empty();
   double b = 0, scale = 2.38 / std::sqrt(static_cast<double>(D));
-  const int steps = options.generations / (kMovesPerStep + (independence_moves ? 1 : 0));
+  steps = options.generations / (kMovesPerStep + (independence_moves ? 1 : 0));
   for (int step = 0; step < steps; ++step) {
     const double b_next = std::min(1.0, b < 1.0 ? next_inverse_temperature(f, b) : 1.0);
     Eigen::VectorXd w = (-(f.array() - f.minCoeff()) * (b_next - b)).exp().matrix();
@@ -153,7 +148,7 @@ Estimate particle_filter(const RunData& data, FrictionModel model, const MethodS
     const double rate = static_cast<double>(accepted) / (kMovesPerStep * N);
     scale *= std::exp(rate - kTargetAcceptance);
     if (independence_moves) {
-      std::uniform_int_distribution<int> joint(0, 5);
+      std::uniform_int_distribution<int> joint(0, static_cast<int>(joint_scales.size()) - 1);
       for (int i = 0; i < N; ++i) {
         Eigen::VectorXd u = X.col(i);
         for (int k : joint_scales[static_cast<size_t>(joint(rng))]) u[k] = U(rng);
@@ -163,7 +158,21 @@ Estimate particle_filter(const RunData& data, FrictionModel model, const MethodS
   }
   // The posterior mean (feasible: the consistent set and the box are convex in these coordinates).
   const Eigen::VectorXd posterior_mean = X.rowwise().mean();
-  return problem.estimate(problem.full(posterior_mean.data()), "particle filter", t0, steps);
+  return problem.full(posterior_mean.data());
+}
+
+}  // namespace detail
+
+Estimate particle_filter(const RunData& data, FrictionModel model, const MethodSettings& settings,
+                         const OptimiserSettings& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (options.population < 4 || options.generations < kMovesPerStep) {
+    throw InputError("particle filter: >= 4 particles and >= 5 evaluations per particle");
+  }
+  const detail::BoundedProblem problem(data, model, settings, options);
+  int steps = 0;
+  const Eigen::VectorXd x = detail::particle_search(problem, options, steps);
+  return problem.estimate(x, "particle filter", t0, steps);
 }
 
 }  // namespace dyncal::host

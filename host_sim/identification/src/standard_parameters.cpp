@@ -168,7 +168,7 @@ Eigen::Matrix4d nearest_positive_definite(const Eigen::Matrix4d& J) {
 
 Eigen::VectorXd nearest_consistent(const Eigen::VectorXd& phi) {
   Eigen::VectorXd out = phi;
-  for (int l = 0; l < kLinks; ++l) {
+  for (Eigen::Index l = 0; l < phi.size() / 10; ++l) {
     standard_from_pseudo_inertia(nearest_positive_definite(pseudo_inertia(phi.data() + 10 * l)), out.data() + 10 * l);
   }
   return out;

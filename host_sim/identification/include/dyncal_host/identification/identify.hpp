@@ -1,6 +1,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -18,7 +19,9 @@ inline constexpr int kMaxFilterOrder = 8;
 /// Options of identify(); each is range-checked against the log before any work (InputError naming
 /// the option and its admissible range).
 struct IdentifyOptions {
-  std::string method = "wls";        ///< wls (Gautier's per-joint weights) | ols (IDIM-OLS) | kf | rls | pcls
+  /// wls (Gautier's per-joint weights) | ols (IDIM-OLS) | kf | rls | pcls (physically consistent WLS) |
+  /// gd | ga | pf (the survey's optimisers on the weighted data: search_consistent)
+  std::string method = "wls";
   unsigned terms = 0;                ///< dyncal::term bits (rigid body always included)
   std::vector<ModelEffect> effects;  ///< effect terms after the compiled ones (model_effects.hpp): wls or ols only
   int filter_order = 4;              ///< Butterworth order (zero-phase: twice the attenuation)
@@ -31,8 +34,11 @@ struct IdentifyOptions {
   double p0 = 1e6;                   ///< initial covariance diag of KF and RLS (prior ignorance)
   double min_speed_fraction = 0.0;   ///< fit only rows with |qd_j| >= this fraction of joint j's top speed
   bool load_regressor = false;       ///< also stack Y(q, qd, 0) (StackedData::W_load): the load torque's regressor
-  bool friction_per_joint = false;   ///< ignore robot.json's coupling: friction and rotor inertia per joint (the log's
-                                     ///< conversion still uses the transmission); lets diagnose rediscover a coupling
+  double range_width = 3.0;          ///< gd, ga, pf: standard parameters within nominal +- this x their scale
+  std::uint64_t seed = 1;            ///< ga, pf: random seed
+  int search_evaluations = 0;       ///< gd: cost evaluations, ga: generations, pf: evaluations per particle; 0: default
+  bool friction_per_joint = false;  ///< ignore robot.json's coupling: friction and rotor inertia per joint (the log's
+                                    ///< conversion still uses the transmission); lets diagnose rediscover a coupling
 };
 
 struct JointMetrics {

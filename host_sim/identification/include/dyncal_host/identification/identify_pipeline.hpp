@@ -212,13 +212,13 @@ class IdentifyPipeline {
     const std::string& m = opt_.method;
     if (m == "ols") {
       ls_statistics(*ls, stdev, cond);
-    } else if (m == "wls" || m == "pcls") {
+    } else if (m == "wls" || m == "pcls" || is_search_method(m)) {
       ls->reset();
       add_rows([&](int j) { return 1.0 / sigma[j]; });
       if (ls->solve(phi) != UpdateStatus::ok) throw InputError("weighted regressor rank deficient");
       if (m == "wls") {
         ls_statistics(*ls, stdev, cond);
-      } else {  // pcls: the WLS solution starts the consistent fit of the same weighted data
+      } else {  // the WLS solution starts the consistent fit of the same weighted data
         ConsistentProblem p;
         p.R = ls->r_factor().template triangularView<Eigen::Upper>();
         p.z = ls->rotated_rhs();
@@ -228,10 +228,20 @@ class IdentifyPipeline {
         p.prior = Eigen::Map<const Eigen::VectorXd>(compiled.nominal_standard.data(), Robot::kNumStandard);
         p.sigma2 = ls->residual_sum_of_squares() / std::max(1.0, static_cast<double>(ls->rows() - P));
         p.start = phi;
-        ConsistentSolution sol = consistent_least_squares(p);
+        ConsistentSolution sol;
+        if (m == "pcls") {
+          sol = consistent_least_squares(p);
+          stdev = sol.params_std;
+          if (cond) *cond = condition_number(*ls);
+        } else {
+          // The optimisers: the model is linear, so the parameters' spread is least squares' (the
+          // Fisher information does not depend on where the search ends). The particle filter's
+          // likelihood takes the residual's autocorrelation into account (S / n_eff).
+          p.sigma2 *= autocorrelation_inflation(data, train, data.y - data.predict(phi));
+          sol = search_consistent(p, search_method(m), search_settings(opt_));
+          ls_statistics(*ls, stdev, cond);
+        }
         phi = sol.params;
-        stdev = sol.params_std;
-        if (cond) *cond = condition_number(*ls);
         if (consistent) *consistent = std::move(sol);
       }
     } else if (m == "kf") {
@@ -247,7 +257,7 @@ class IdentifyPipeline {
       run_recursive(*rls, data, train, [&](auto& f, const auto& Ks, const auto& tau) { return f.update(Ks, tau, w); });
       recursive_result(*rls, *ls, phi, stdev, cond);
     } else {
-      throw InputError("unknown method '" + m + "' (expected wls, ols, kf, rls or pcls)");
+      throw InputError("unknown method '" + m + "' (expected wls, ols, kf, rls, pcls, gd, ga or pf)");
     }
     stdev *= std::sqrt(autocorrelation_inflation(data, train, data.y - data.predict(phi)));
   }
@@ -596,6 +606,7 @@ IdentifyResult run_identify(const RobotDescription& robot, JointLog&& log, const
                     std::sqrt(autocorrelation_inflation(data, all, data.y - data.predict(phi))));
       res.notes.push_back(line);
     }
+    if (is_search_method(opt.method)) res.notes.push_back(search_note(consistent, opt));
     for (size_t l = 0; l < consistent.min_eigenvalue.size(); ++l) {
       const std::array<double, 10> v = physical_parameters(consistent.standard.data() + 10 * l);
       res.links.push_back({static_cast<int>(l) + 1,

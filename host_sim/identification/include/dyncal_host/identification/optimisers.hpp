@@ -6,28 +6,11 @@
 // assumed noise); the last two need no initial values, only the ranges. Deterministic for a seed;
 // budgets are evaluation counts, not times.
 
-#include <cstdint>
-
 #include "dyncal_host/identification/methods.hpp"
 #include "dyncal_host/identification/objective.hpp"
+#include "dyncal_host/identification/optimiser_settings.hpp"
 
 namespace dyncal::host {
-
-/// The genetic algorithm's cost over the residuals e_j / sigma_j.
-enum class Objective {
-  least_squares,  ///< sum_j mean_j^2 + var_j: the Gaussian likelihood's, which its amplitude fit minimises
-  eq25,           ///< survey Eq. 25: sum_j |mean_j| + k_e std_j
-};
-
-struct OptimiserSettings {
-  double range_width = 0.4;  ///< inertial ranges: CAD value +- range_width x |CAD value| (search_ranges)
-  double k_e = 1.0;          ///< Eq. 25 weight of the residual standard deviation
-  Objective objective = Objective::least_squares;  ///< the genetic algorithm's cost
-  std::uint64_t seed = 1;                          ///< GA and particle filter
-  int population = 120;                            ///< GA population / particle count
-  int generations = 1500;                          ///< GA generations / particle-filter iterations
-  int max_evaluations = 3000;                      ///< gradient-based: objective evaluations
-};
 
 /// Gradient-based: NLopt SLSQP from the CAD values on sum_j ||e_j / sigma_j||^2 / S (variables
 /// scaled to their ranges), one inequality lambda_min(J_l) >= 0 per link with its analytic gradient.

@@ -66,8 +66,8 @@ Eigen::Matrix4d pseudo_inertia(const double* phi10);
 /// The nearest positive definite matrix to a pseudo-inertia J (Frobenius norm): eigenvalues floored
 /// at 1e-4 of the largest one (and 1e-13), eigenvectors kept.
 Eigen::Matrix4d nearest_positive_definite(const Eigen::Matrix4d& J);
-/// Every link of phi (60) replaced by its nearest physically consistent parameters (links already
-/// consistent with the floor above are kept as they are).
+/// Every link of phi (10 L, any number of links L) replaced by its nearest physically consistent parameters (links
+/// already consistent with the floor above are kept as they are).
 Eigen::VectorXd nearest_consistent(const Eigen::VectorXd& phi);
 /// The 10 standard parameters of a pseudo-inertia (inverse of pseudo_inertia).
 void standard_from_pseudo_inertia(const Eigen::Matrix4d& J, double* phi10);
