@@ -150,6 +150,9 @@ TEST(CliErrors, IdentifyOptionsOutsideTheirRangeAreRefused) {
   expect_error(tx40 + "--p0 0", "--p0 0 must be finite and > 0");
   expect_error(tx40 + "--min-speed 1", "--min-speed 1 must lie in [0, 1)");
   expect_error(tx40 + "--decimate -3", "--decimate -3 must be >= 0");
+  expect_error(tx40 + "--method pcls --prior-std -1", "--prior-std -1 must lie in [0, 1e6] (0: no prior)");
+  expect_error(tx40 + "--method gd --range-width 0", "--range-width 0 must lie in (0, 10]");
+  expect_error(tx40 + "--method ga --evaluations -5", "--evaluations -5 must lie in [0, 1e7]");
 }
 
 // A log whose time step is absurdly small cannot overflow the filter's edge computation: the

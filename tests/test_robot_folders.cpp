@@ -115,7 +115,8 @@ TEST_P(RobotFolder, RotorInertiaTheFileDoesNotDeclareIsANoteNotACrash) {
   EXPECT_EQ(notes, robot.num_joints);
 }
 
-// identify --method pcls on any robot: every link's pseudo-inertia positive definite, the
+// identify --method pcls on any robot, with robot.json's prior (--prior-std 0.5) and without one
+// (0: consistency alone, a note saying so): every link's pseudo-inertia positive definite, the
 // cross-validated RMS within 1 % of WLS on every joint, the base parameters recovered as WLS
 // recovers them (1 % torque share). Individual masses are printed, not asserted: the log fixes only
 // the base parameters, and where their noise leaves a link at the edge of consistency (arm3's link 2,
@@ -127,27 +128,35 @@ TEST_P(RobotFolder, PhysicallyConsistentLeastSquares) {
   o.terms = dyncal::kFrictionEq7;
   o.method = "wls";
   const IdentifyResult w = identify(robot, s.log, o);
-  o.method = "pcls";
-  const IdentifyResult r = identify(robot, s.log, o);
   const CompiledRobot& c = compiled_robot_for(robot);
-  ASSERT_EQ(static_cast<int>(r.links.size()), c.num_standard / 10);
-  for (const LinkInertial& l : r.links) {
-    SCOPED_TRACE("link " + std::to_string(l.link));
-    EXPECT_GT(l.min_eigenvalue, 0.0);
-    const double nominal_mass = c.nominal_standard[static_cast<size_t>(10 * (l.link - 1) + 9)];
-    std::printf("link %d: mass %.4g kg (file %.4g), lambda_min %.3g\n", l.link, l.mass, nominal_mass, l.min_eigenvalue);
-  }
-  for (int j = 0; j < robot.num_joints; ++j) {
-    SCOPED_TRACE("joint " + std::to_string(j + 1));
-    EXPECT_LE(r.joints[static_cast<size_t>(j)].rms, 1.01 * w.joints[static_cast<size_t>(j)].rms);
-  }
   dyncal::test::Eq7TorqueShare shares(c, s.phi);
   for (Eigen::Index k = 0; k < s.log.samples(); ++k)
     shares.add(s.log.q.row(k).transpose(), s.log.qd.row(k).transpose(), s.log.qdd.row(k).transpose());
-  for (size_t i = 0; i < r.params.size(); ++i) {
-    SCOPED_TRACE(r.params[i].name);
-    EXPECT_LE(shares.share(static_cast<int>(i), r.params[i].value - s.phi[static_cast<Eigen::Index>(i)]), 0.01);
-    EXPECT_TRUE(std::isfinite(r.params[i].std) && r.params[i].std >= 0);
+  for (const double prior : {0.5, 0.0}) {
+    SCOPED_TRACE("--prior-std " + std::to_string(prior));
+    o.method = "pcls";
+    o.prior_std = prior;
+    const IdentifyResult r = identify(robot, s.log, o);
+    ASSERT_EQ(static_cast<int>(r.links.size()), c.num_standard / 10);
+    for (const LinkInertial& l : r.links) {
+      SCOPED_TRACE("link " + std::to_string(l.link));
+      EXPECT_GT(l.min_eigenvalue, 0.0);
+      const double nominal_mass = c.nominal_standard[static_cast<size_t>(10 * (l.link - 1) + 9)];
+      std::printf("prior %g, link %d: mass %.4g kg (file %.4g), lambda_min %.3g\n", prior, l.link, l.mass, nominal_mass,
+                  l.min_eigenvalue);
+    }
+    for (int j = 0; j < robot.num_joints; ++j) {
+      SCOPED_TRACE("joint " + std::to_string(j + 1));
+      EXPECT_LE(r.joints[static_cast<size_t>(j)].rms, 1.01 * w.joints[static_cast<size_t>(j)].rms);
+    }
+    for (size_t i = 0; i < r.params.size(); ++i) {
+      SCOPED_TRACE(r.params[i].name);
+      EXPECT_LE(shares.share(static_cast<int>(i), r.params[i].value - s.phi[static_cast<Eigen::Index>(i)]), 0.01);
+      EXPECT_TRUE(std::isfinite(r.params[i].std) && r.params[i].std >= 0);
+    }
+    int notes = 0;
+    for (const std::string& n : r.notes) notes += n.rfind("pcls: no prior", 0) == 0;
+    EXPECT_EQ(notes, prior == 0 ? 1 : 0);
   }
 }
 

@@ -3,7 +3,7 @@
 // map to base parameters through a random K, plus four parameters the torque is linear in, with
 // unit noise. References: the unconstrained least-squares solution (the truth lies inside the
 // consistent set and the box, so the constrained minimum is the unconstrained one) and physically
-// consistent LS with a negligible prior (Levenberg-Marquardt in log-Cholesky coordinates, another
+// consistent LS without a prior (Levenberg-Marquardt in log-Cholesky coordinates, another
 // algorithm on the same problem).
 #include <gtest/gtest.h>
 
@@ -117,10 +117,11 @@ TEST(SearchConsistent, GradientSearchReachesTheLeastSquaresSolution) {
   EXPECT_LT(s.cost_excess, 1e-4);  // chi-square units: 1e-4 of one standard deviation squared
   EXPECT_LT(worst_in_std(d, s.params), 0.02);
   EXPECT_LE(s.iterations, kSearchGradientEvaluations);
-  // Physically consistent LS with a prior too weak to matter (each parameter +-100x its scale, 1
-  // sigma) solves the same problem by another algorithm.
+  // Physically consistent LS without a prior solves the same problem by another algorithm
+  // (Levenberg-Marquardt in log-Cholesky coordinates; it refused a problem with fewer data rows than
+  // unknowns before its residual was padded).
   ConsistentProblem p = d.problem;
-  p.prior_relative_std = 100;
+  p.prior_relative_std = 0;
   const ConsistentSolution c = consistent_least_squares(p);
   EXPECT_LT(((s.params - c.params).cwiseAbs().array() / d.ls_std.array()).maxCoeff(), 0.02);
 }

@@ -87,6 +87,10 @@ void add_identify_command(CLI::App& app, Action& run) {
                   "the inertials searched within --range-width of robot.json's, no prior (docs/cli.md)")
       ->check(CLI::IsMember({"wls", "ols", "kf", "rls", "pcls", "gd", "ga", "pf"}))
       ->capture_default_str();
+  cmd->add_option("--prior-std", opt.prior_std,
+                  "pcls: the prior's standard deviation relative to max(|value|, 5 % of the largest of its kind in "
+                  "the link) of robot.json's inertials; 0: no prior, consistency alone")
+      ->capture_default_str();
   cmd->add_option("--range-width", opt.range_width,
                   "gd, ga, pf: each standard parameter searched within robot.json's value +- this x max(|value|, 5 % "
                   "of the largest of its kind in the link)")

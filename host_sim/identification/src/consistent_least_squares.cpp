@@ -14,7 +14,9 @@ namespace {
 
 using Mat10 = Eigen::Matrix<double, 10, 10>;
 
-/// r = [R [K phi(theta); x] - z ; (phi(theta) - prior) / s] over v = [theta (10 L) | x (P - num_base)].
+/// r = [R [K phi(theta); x] - z ; (phi(theta) - prior) / s ; 0] over v = [theta (10 L) | x (P - num_base)].
+/// Without a prior there are fewer data rows (P) than unknowns (10 L + P - num_base), which Eigen's
+/// Levenberg-Marquardt refuses: zero rows pad r to the unknowns' count (they change nothing).
 struct Residuals : Eigen::DenseFunctor<double> {
   const ConsistentProblem& p;
   Eigen::MatrixXd RK;  // R's base columns times K: P x 10 L
@@ -24,7 +26,8 @@ struct Residuals : Eigen::DenseFunctor<double> {
 
   Residuals(const ConsistentProblem& problem, int links, const Eigen::VectorXd& inv_std)
       : Eigen::DenseFunctor<double>(10 * links + static_cast<int>(problem.R.cols()) - problem.num_base,
-                                    static_cast<int>(problem.R.rows()) + (inv_std.size() > 0 ? 10 * links : 0)),
+                                    std::max(static_cast<int>(problem.R.rows()) + (inv_std.size() > 0 ? 10 * links : 0),
+                                             10 * links + static_cast<int>(problem.R.cols()) - problem.num_base)),
         p(problem),
         inv_s(inv_std),
         L(links),
@@ -46,7 +49,8 @@ struct Residuals : Eigen::DenseFunctor<double> {
     const Eigen::Index n = p.R.rows();
     r.head(n) = RK * phi - p.z;
     if (nx > 0) r.head(n) += p.R.rightCols(nx) * v.tail(nx);
-    if (with_prior) r.tail(10 * L) = (phi - p.prior).cwiseProduct(inv_s);
+    if (with_prior) r.segment(n, 10 * L) = (phi - p.prior).cwiseProduct(inv_s);
+    r.tail(r.size() - n - (with_prior ? 10 * L : 0)).setZero();
     return 0;
   }
 
@@ -120,7 +124,7 @@ ConsistentSolution consistent_least_squares(const ConsistentProblem& p) {
   f.df(v, J);
   const Eigen::Index n = p.R.rows();
   Eigen::MatrixXd H = J.topRows(n).transpose() * J.topRows(n) / p.sigma2;
-  if (f.with_prior) H += J.bottomRows(10 * L).transpose() * J.bottomRows(10 * L);
+  if (f.with_prior) H += J.middleRows(n, 10 * L).transpose() * J.middleRows(n, 10 * L);
   Eigen::MatrixXd G = Eigen::MatrixXd::Zero(P, f.inputs());
   for (int l = 0; l < L; ++l)
     G.block(0, 10 * l, p.num_base, 10) = p.K.middleCols(10 * l, 10) * jac[static_cast<size_t>(l)];

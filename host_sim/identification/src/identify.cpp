@@ -56,6 +56,8 @@ void check_options(const IdentifyOptions& o, const JointLog& log) {
   }
   if (!(o.rls_mu > 0.0 && o.rls_mu <= 1.0)) throw InputError("--mu " + number_text(o.rls_mu) + " must lie in (0, 1]");
   if (!(o.p0 > 0.0) || !std::isfinite(o.p0)) throw InputError("--p0 " + number_text(o.p0) + " must be finite and > 0");
+  if (!(o.prior_std >= 0.0 && o.prior_std <= 1e6))
+    throw InputError("--prior-std " + number_text(o.prior_std) + " must lie in [0, 1e6] (0: no prior)");
   if (!(o.range_width > 0.0 && o.range_width <= 10.0))
     throw InputError("--range-width " + number_text(o.range_width) + " must lie in (0, 10]");
   if (o.search_evaluations < 0 || o.search_evaluations > 10000000)

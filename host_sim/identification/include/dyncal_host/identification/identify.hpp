@@ -34,9 +34,10 @@ struct IdentifyOptions {
   double p0 = 1e6;                   ///< initial covariance diag of KF and RLS (prior ignorance)
   double min_speed_fraction = 0.0;   ///< fit only rows with |qd_j| >= this fraction of joint j's top speed
   bool load_regressor = false;       ///< also stack Y(q, qd, 0) (StackedData::W_load): the load torque's regressor
-  double range_width = 3.0;          ///< gd, ga, pf: standard parameters within nominal +- this x their scale
-  std::uint64_t seed = 1;            ///< ga, pf: random seed
-  int search_evaluations = 0;       ///< gd: cost evaluations, ga: generations, pf: evaluations per particle; 0: default
+  double prior_std = 0.5;      ///< pcls: the prior's relative std (kPriorRelativeStd); 0: no prior, consistency alone
+  double range_width = 3.0;    ///< gd, ga, pf: standard parameters within nominal +- this x their scale
+  std::uint64_t seed = 1;      ///< ga, pf: random seed
+  int search_evaluations = 0;  ///< gd: cost evaluations, ga: generations, pf: evaluations per particle; 0: default
   bool friction_per_joint = false;  ///< ignore robot.json's coupling: friction and rotor inertia per joint (the log's
                                     ///< conversion still uses the transmission); lets diagnose rediscover a coupling
 };

@@ -228,6 +228,7 @@ class IdentifyPipeline {
         p.prior = Eigen::Map<const Eigen::VectorXd>(compiled.nominal_standard.data(), Robot::kNumStandard);
         p.sigma2 = ls->residual_sum_of_squares() / std::max(1.0, static_cast<double>(ls->rows() - P));
         p.start = phi;
+        p.prior_relative_std = opt_.prior_std;
         ConsistentSolution sol;
         if (m == "pcls") {
           sol = consistent_least_squares(p);
@@ -607,6 +608,11 @@ IdentifyResult run_identify(const RobotDescription& robot, JointLog&& log, const
       res.notes.push_back(line);
     }
     if (is_search_method(opt.method)) res.notes.push_back(search_note(consistent, opt));
+    if (opt.method == "pcls" && opt.prior_std == 0)
+      res.notes.push_back(
+          "pcls: no prior (--prior-std 0): consistency alone; the standard parameters the data do not "
+          "determine stay where the fit leaves them, starting from robot.json's values projected onto "
+          "the consistent set (only their base combinations are identified)");
     for (size_t l = 0; l < consistent.min_eigenvalue.size(); ++l) {
       const std::array<double, 10> v = physical_parameters(consistent.standard.data() + 10 * l);
       res.links.push_back({static_cast<int>(l) + 1,
