@@ -105,7 +105,9 @@ class EffectModel : public ::testing::TestWithParam<const char*> {};
 
 // identify with the effects as --model items recovers each true coefficient within 4 of its
 // standard deviations (the autocorrelation-inflated ones identify reports), and its validation RMS
-// falls to the noise on every joint, where the declared model alone leaves the effects' torque.
+// falls to the noise on every joint, where the declared model alone leaves the effects' torque. The
+// same holds for the physically consistent methods (pcls; gd, the survey's search, standing for
+// ga and pf, which search the same problem), with every link's pseudo-inertia positive definite.
 TEST_P(EffectModel, IdentifyRecoversTheSimulatedEffects) {
   const RobotDescription robot = test_robot(GetParam());
   const TrueEffects truth = true_effects(robot);
@@ -114,25 +116,35 @@ TEST_P(EffectModel, IdentifyRecoversTheSimulatedEffects) {
   o.terms = dyncal::kFrictionEq7;
   const IdentifyResult declared = identify(robot, s.log, o);
   o.effects = parse_model_spec("position_periodic:2:3,coupling:1-2", robot.num_joints).effects;
-  const IdentifyResult r = identify(robot, s.log, o);
-  EXPECT_NE(r.model.find("position_periodic:2:3,coupling:1-2"), std::string::npos) << r.model;
-  const std::map<std::string, double> expected = {
-      {"A2_sin", truth.a_sin}, {"A2_cos", truth.a_cos}, {"Fc1-2", truth.fc}, {"Fv1-2", truth.fv}, {"Ia1-2", 0.0}};
-  int found = 0;
-  for (const ParamEstimate& p : r.params) {
-    const auto it = expected.find(p.name);
-    if (it == expected.end()) continue;
-    ++found;
-    std::printf("%s: %s = %.5g (true %.5g, std %.3g, %.2f std)\n", GetParam(), p.name.c_str(), p.value, it->second,
-                p.std, (p.value - it->second) / p.std);
-    EXPECT_LE(std::abs(p.value - it->second), 4 * p.std) << p.name;
-  }
-  EXPECT_EQ(found, 5);
-  for (int j = 0; j < robot.num_joints; ++j) {
-    SCOPED_TRACE("joint " + std::to_string(j + 1));
-    std::printf("joint %d: validation RMS %.4g Nm with the effects, %.4g without (noise %.4g)\n", j + 1,
-                r.joints[j].rms, declared.joints[j].rms, s.sigma[j]);
-    EXPECT_LT(r.joints[j].rms, 1.2 * s.sigma[j]);
+  for (const char* method : {"wls", "pcls", "gd"}) {
+    SCOPED_TRACE(method);
+    o.method = method;
+    const IdentifyResult r = identify(robot, s.log, o);
+    EXPECT_NE(r.model.find("position_periodic:2:3,coupling:1-2"), std::string::npos) << r.model;
+    const std::map<std::string, double> expected = {
+        {"A2_sin", truth.a_sin}, {"A2_cos", truth.a_cos}, {"Fc1-2", truth.fc}, {"Fv1-2", truth.fv}, {"Ia1-2", 0.0}};
+    int found = 0;
+    for (const ParamEstimate& p : r.params) {
+      const auto it = expected.find(p.name);
+      if (it == expected.end()) continue;
+      ++found;
+      std::printf("%s %s: %s = %.5g (true %.5g, std %.3g, %.2f std)\n", GetParam(), method, p.name.c_str(), p.value,
+                  it->second, p.std, (p.value - it->second) / p.std);
+      EXPECT_LE(std::abs(p.value - it->second), 4 * p.std) << p.name;
+    }
+    EXPECT_EQ(found, 5);
+    for (int j = 0; j < robot.num_joints; ++j) {
+      SCOPED_TRACE("joint " + std::to_string(j + 1));
+      std::printf("joint %d: validation RMS %.4g Nm with the effects, %.4g without (noise %.4g)\n", j + 1,
+                  r.joints[j].rms, declared.joints[j].rms, s.sigma[j]);
+      EXPECT_LT(r.joints[j].rms, 1.2 * s.sigma[j]);
+    }
+    if (std::string(method) == "wls") {
+      EXPECT_TRUE(r.links.empty());
+    } else {
+      EXPECT_EQ(static_cast<int>(r.links.size()), robot.num_joints);
+      for (const LinkInertial& l : r.links) EXPECT_GT(l.min_eigenvalue, 0.0) << "link " << l.link;
+    }
   }
   EXPECT_GT(declared.joints[1].rms, 2 * s.sigma[1]);  // the effects matter: without them joint 2 is off
 }

@@ -117,4 +117,26 @@ TEST(Tx40Identify, PhysicallyConsistentLsFitsAsWellAsWls) {
   }
 }
 
+// The effects a diagnosis finds on the real log fed back into identify (--effects) and fitted
+// physically consistently: every link consistent, and the cross-validated R^2 within 0.01 of WLS with
+// the same effects on every joint.
+TEST(Tx40Identify, DiagnosedEffectsFitPhysicallyConsistently) {
+  const auto diagnosis = std::filesystem::temp_directory_path() / "dyncal_tx40_diagnosis.json";
+  const std::string cmd = std::string(DYNCAL_BINARY) + " diagnose --format tx40 --data " + DYNCAL_TX40_DATA +
+                          " --friction-per-joint --report " + diagnosis.string() + " > /dev/null";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  const std::string extra = " --friction-per-joint --effects " + diagnosis.string();
+  const auto w = identify("wls", extra);
+  const auto p = identify("pcls", extra);
+  ASSERT_EQ(p["links"].size(), 6u);
+  for (const auto& l : p["links"])
+    EXPECT_GT(l["pseudo_inertia_min_eigenvalue"].get<double>(), 0.0) << "link " << l["link"];
+  for (int j = 0; j < 6; ++j) {
+    const double rw = w["joints"][j]["r2_validation"].get<double>(), rp = p["joints"][j]["r2_validation"].get<double>();
+    EXPECT_GE(rp, rw - 0.01) << "joint " << j + 1;
+    std::printf("joint %d: cross-validated R^2 with the diagnosed effects %.4f (pcls), %.4f (wls)\n", j + 1, rp, rw);
+  }
+  std::filesystem::remove(diagnosis);
+}
+
 }  // namespace

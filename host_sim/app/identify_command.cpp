@@ -77,7 +77,7 @@ void add_identify_command(CLI::App& app, Action& run) {
          "coupling:I+J or coupling:I-J (docs/cli.md)")
       ->capture_default_str();
   cmd->add_option("--effects", s->effects,
-                  "add the effects of a dyncal diagnose --report file to the model (wls or ols)");
+                  "add the effects of a dyncal diagnose --report file to the model (any method but kf and rls)");
   cmd->add_option("--method", opt.method,
                   "wls: weighted least squares, each joint's rows weighted by 1 / its residual noise (Gautier); ols: "
                   "unweighted (the survey's IDIM-OLS); kf: Kalman filter (Eq. 19); rls: forgetting (Eq. 23); pcls: "

@@ -142,6 +142,8 @@ OptimiserSettings search_settings(const IdentifyOptions& o) {
   return s;
 }
 
+namespace {
+
 std::string search_note(const ConsistentSolution& s, const IdentifyOptions& o) {
   char line[400];
   std::snprintf(line, sizeof line,
@@ -152,6 +154,26 @@ std::string search_note(const ConsistentSolution& s, const IdentifyOptions& o) {
                 s.at_range_end, o.range_width,
                 s.at_range_end > 0 ? ": the range, not the data, limits the fit; widen it" : "");
   return line;
+}
+
+}  // namespace
+
+bool is_consistent_method(const std::string& m) {
+  return m == "pcls" || is_search_method(m);
+}
+
+void report_consistent(const ConsistentSolution& s, const IdentifyOptions& o, IdentifyResult& res) {
+  if (is_search_method(o.method)) res.notes.push_back(search_note(s, o));
+  if (o.method == "pcls" && o.prior_std == 0)
+    res.notes.push_back(
+        "pcls: no prior (--prior-std 0): consistency alone; the standard parameters the data do not determine stay "
+        "where the fit leaves them, starting from robot.json's values projected onto the consistent set (only their "
+        "base combinations are identified)");
+  for (size_t l = 0; l < s.min_eigenvalue.size(); ++l) {
+    const std::array<double, 10> v = physical_parameters(s.standard.data() + 10 * l);
+    res.links.push_back(
+        {static_cast<int>(l) + 1, v[0], {v[1], v[2], v[3]}, {v[4], v[5], v[6], v[7], v[8], v[9]}, s.min_eigenvalue[l]});
+  }
 }
 
 ConsistentSolution search_consistent(const ConsistentProblem& p, SearchMethod method, OptimiserSettings options) {

@@ -8,6 +8,8 @@
 
 #include "dyncal/effect_terms.hpp"
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/identification/compiled_robot.hpp"
+#include "dyncal_host/identification/consistent_least_squares.hpp"
 #include "dyncal_host/identification/prediction.hpp"
 
 namespace dyncal::host {
@@ -64,6 +66,8 @@ Grams accumulate(const MatrixXd& X, const StackedData& d, const std::vector<int>
 /// training RSS [Nm^2], the weighted Gram's inverse diagonal (for std) and the residual variance.
 struct Fit {
   VectorXd phi, inv_diag;
+  MatrixXd G;         ///< the weighted Gram of the column-scaled design (Grams::scale)
+  VectorXd g;         ///< its moment
   VectorXd rss;       ///< per joint, unweighted
   double sigma2 = 1;  ///< weighted residual variance (1 for WLS up to the fit's own scale)
   double cond = 0;
@@ -113,6 +117,8 @@ Fit solve(const Grams& a, int exclude, const std::string& method) {
                      .diagonal()
                      .cwiseProduct(a.scale.cwiseAbs2());
     f.phi = beta.cwiseProduct(a.scale);
+    f.G = std::move(G);
+    f.g = std::move(g);
   };
   Fit ols;
   fit_with(VectorXd::Ones(N), ols);
@@ -126,10 +132,52 @@ Fit solve(const Grams& a, int exclude, const std::string& method) {
   return wls;
 }
 
+/// pcls, gd, ga, pf on [W E]: the WLS fit `f` of the rows outside group `exclude` made physically
+/// consistent (consistent_least_squares.hpp) on its weighted data: R from the Cholesky factor of the
+/// scaled Gram (R_s D^-1, D the column scaling), z = R_s^-T g; K from the compiled robot's
+/// standard_to_base; robot.json's inertials as prior (pcls) or search centre (gd, ga, pf). f's
+/// parameters replaced; its inv_diag from pcls's Gauss-Newton std, the search keeps WLS's (the model
+/// is linear), as the compiled pipeline.
+ConsistentSolution make_consistent(const StackedData& d, const MatrixXd& X, const std::vector<int>& fold, int exclude,
+                                   const Grams& a, const RobotDescription& robot, const IdentifyOptions& o, Fit& f) {
+  const Eigen::LLT<MatrixXd> llt(f.G);
+  if (llt.info() != Eigen::Success)
+    throw InputError("--method " + o.method + ": the weighted design with its effect terms is not positive definite");
+  const CompiledRobot& compiled = compiled_robot_for(robot);
+  if (compiled.num_base != d.num_base) throw InputError("internal: the data's base parameters are not the robot's");
+  ConsistentProblem p;
+  p.R = MatrixXd(llt.matrixU()) * a.scale.cwiseInverse().asDiagonal();  // beta = D^-1 p
+  p.z = llt.matrixL().solve(f.g);
+  p.num_base = d.num_base;
+  p.K.resize(compiled.num_base, compiled.num_standard);
+  for (int i = 0; i < compiled.num_standard; ++i)
+    p.K.col(i) = compiled.standard_to_base(VectorXd::Unit(compiled.num_standard, i));
+  p.prior = Eigen::Map<const VectorXd>(compiled.nominal_standard.data(), compiled.num_standard);
+  p.prior_relative_std = o.prior_std;
+  p.sigma2 = f.sigma2;
+  p.start = f.phi;
+  ConsistentSolution s;
+  if (o.method == "pcls") {
+    s = consistent_least_squares(p);
+    f.inv_diag = s.params_std.cwiseAbs2() / f.sigma2;
+  } else {
+    // The particle filter's likelihood takes the residual's autocorrelation into account (S / n_eff).
+    std::vector<char> train(static_cast<size_t>(d.t.size()));
+    for (size_t s_ = 0; s_ < train.size(); ++s_) train[s_] = fold[s_] + 1 != exclude;
+    p.sigma2 *= autocorrelation_inflation(d, train, d.y - X * f.phi);
+    s = search_consistent(p, search_method(o.method), search_settings(o));
+  }
+  f.phi = s.params;
+  return s;
+}
+
 /// The fit of the rows outside group `exclude`: load friction's rigid-body torque from a first fit
-/// without the load terms on the same rows. Returns the fit and its design.
+/// without the load terms on the same rows; made consistent for pcls, gd, ga, pf (into *consistent
+/// if given). Returns the fit and its design.
 Fit fit_rows(const StackedData& d, const std::vector<ModelEffect>& effects, const std::vector<int>& fold, int folds,
-             int exclude, const std::string& method, MatrixXd& X) {
+             int exclude, const RobotDescription& robot, const IdentifyOptions& o, MatrixXd& X,
+             ConsistentSolution* consistent = nullptr) {
+  const std::string method = o.method == "ols" ? "ols" : "wls";  // the consistent methods start from WLS
   VectorXd tau_rb = VectorXd::Zero(d.y.size());
   if (has_load_friction(effects)) {
     // The design without the load terms' columns.
@@ -151,7 +199,13 @@ Fit fit_rows(const StackedData& d, const std::vector<ModelEffect>& effects, cons
   const MatrixXd E = effect_design(d, effects, tau_rb);
   X.resize(d.W.rows(), d.W.cols() + E.cols());
   X << d.W, E;
-  return solve(accumulate(X, d, fold, folds), exclude, method);
+  const Grams a = accumulate(X, d, fold, folds);
+  Fit f = solve(a, exclude, method);
+  if (is_consistent_method(o.method)) {
+    ConsistentSolution s = make_consistent(d, X, fold, exclude, a, robot, o, f);
+    if (consistent) *consistent = std::move(s);
+  }
+  return f;
 }
 
 }  // namespace
@@ -255,20 +309,21 @@ MatrixXd model_design(const StackedData& d, const std::vector<ModelEffect>& effe
 void fit_effect_model(const StackedData& d, const std::vector<ModelEffect>& effects, const std::vector<int>& fold,
                       int folds, const RobotDescription& robot, const IdentifyOptions& options, IdentifyResult& res) {
   const std::string& method = options.method;
-  if (method != "ols" && method != "wls")
-    throw InputError("--method " + method + ": a model with effect terms is fitted by wls or ols");
+  if (method != "ols" && method != "wls" && !is_consistent_method(method))
+    throw InputError("--method " + method + ": a model with effect terms is fitted by wls, ols, pcls, gd, ga or pf");
   const int N = static_cast<int>(d.q.cols());
   const Index S = d.t.size();
   VectorXd pred = VectorXd::Constant(S * N, std::nan(""));
   MatrixXd X;
   for (int f = 0; f < folds; ++f) {
-    const Fit fit = fit_rows(d, effects, fold, folds, f + 1, method, X);
+    const Fit fit = fit_rows(d, effects, fold, folds, f + 1, robot, options, X);
     for (Index s = 0; s < S; ++s)
       if (fold[static_cast<size_t>(s)] == f) pred.segment(s * N, N) = X.middleRows(s * N, N) * fit.phi;
   }
   res.joints = torque_metrics(d.y, pred, N, robot.tau_max);
   const auto t0 = std::chrono::steady_clock::now();
-  const Fit fit = fit_rows(d, effects, fold, folds, -1, method, X);
+  ConsistentSolution consistent;
+  const Fit fit = fit_rows(d, effects, fold, folds, -1, robot, options, X, &consistent);
   res.fit_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   res.condition_number = fit.cond;
   // White-noise standard deviations inflated by the residual's autocorrelation (stacked_data.hpp).
@@ -290,6 +345,7 @@ void fit_effect_model(const StackedData& d, const std::vector<ModelEffect>& effe
     res.notes.push_back(
         "load friction: its rigid-body torque from a first fit without the load terms on the same rows (the "
         "transmitted torque, as a drive's feed-forward computes it)");
+  report_consistent(consistent, options, res);
 }
 
 }  // namespace dyncal::host

@@ -20,8 +20,8 @@ namespace {
 // shares its noise with the fit (leaky validation); one cut-off period is dropped at each end of
 // the log, so the log must last more than two.
 void check_options(const IdentifyOptions& o, const JointLog& log) {
-  if (!o.effects.empty() && o.method != "wls" && o.method != "ols")
-    throw InputError("--method " + o.method + ": a model with effect terms is fitted by wls or ols");
+  if (!o.effects.empty() && (o.method == "kf" || o.method == "rls"))
+    throw InputError("--method " + o.method + ": a model with effect terms is fitted by wls, ols, pcls, gd, ga or pf");
   if (o.filter_order < 2 || o.filter_order > kMaxFilterOrder || o.filter_order % 2 != 0)
     throw InputError("--filter-order " + std::to_string(o.filter_order) + " must be even, 2.." +
                      std::to_string(kMaxFilterOrder) + " (cascaded second-order sections)");

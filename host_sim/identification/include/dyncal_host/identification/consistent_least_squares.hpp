@@ -77,11 +77,16 @@ ConsistentSolution search_consistent(const ConsistentProblem& p, SearchMethod me
 inline constexpr int kSearchGradientEvaluations = 20000;
 
 struct IdentifyOptions;
+struct IdentifyResult;
 /// identify's settings of search_consistent: --range-width, --seed, --evaluations (IdentifyOptions).
 OptimiserSettings search_settings(const IdentifyOptions& options);
-/// identify's report line on a search: the cost above least squares' minimum and the parameters
-/// the search range limited.
-std::string search_note(const ConsistentSolution& s, const IdentifyOptions& options);
+/// identify's report of a consistent fit (pcls, gd, ga, pf) into res: each link's inertials
+/// (res.links: mass, centre of mass, inertia about it, smallest pseudo-inertia eigenvalue); for a
+/// search, a note with the cost above least squares' minimum and the parameters the search range
+/// limited; for pcls without a prior, a note that only base combinations are identified.
+void report_consistent(const ConsistentSolution& s, const IdentifyOptions& options, IdentifyResult& res);
+/// True for the methods that fit physically consistent inertials: pcls, gd, ga, pf.
+bool is_consistent_method(const std::string& method);
 
 /// Prior standard deviation of each of the 10 L standard parameters of `nominal` (see
 /// kPriorRelativeStd); a kind that is zero in a link takes the robot's largest of that kind as its

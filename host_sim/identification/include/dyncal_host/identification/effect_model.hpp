@@ -50,7 +50,8 @@ Eigen::VectorXd rigid_body_torque(const StackedData& d, const Eigen::VectorXd& p
 /// torque taken from phi.
 Eigen::MatrixXd model_design(const StackedData& d, const std::vector<ModelEffect>& effects, const Eigen::VectorXd& phi);
 
-/// Fits [W E] to d by options.method (ols or wls; InputError otherwise) with the validation of
+/// Fits [W E] to d by options.method (ols, wls, or pcls, gd, ga, pf: WLS made physically consistent,
+/// consistent_least_squares.hpp, each link's inertials into res.links; InputError otherwise) with the validation of
 /// `fold` (per sample: the fold it validates, -1 training only; `folds` folds): the out-of-fold
 /// metrics into res.joints, the final fit's parameters (names: d.names then effect_param_names) with
 /// standard deviations (white-noise figures times the residual's autocorrelation factor, as the

@@ -607,20 +607,7 @@ IdentifyResult run_identify(const RobotDescription& robot, JointLog&& log, const
                     std::sqrt(autocorrelation_inflation(data, all, data.y - data.predict(phi))));
       res.notes.push_back(line);
     }
-    if (is_search_method(opt.method)) res.notes.push_back(search_note(consistent, opt));
-    if (opt.method == "pcls" && opt.prior_std == 0)
-      res.notes.push_back(
-          "pcls: no prior (--prior-std 0): consistency alone; the standard parameters the data do not "
-          "determine stay where the fit leaves them, starting from robot.json's values projected onto "
-          "the consistent set (only their base combinations are identified)");
-    for (size_t l = 0; l < consistent.min_eigenvalue.size(); ++l) {
-      const std::array<double, 10> v = physical_parameters(consistent.standard.data() + 10 * l);
-      res.links.push_back({static_cast<int>(l) + 1,
-                           v[0],
-                           {v[1], v[2], v[3]},
-                           {v[4], v[5], v[6], v[7], v[8], v[9]},
-                           consistent.min_eigenvalue[l]});
-    }
+    report_consistent(consistent, opt, res);
   }
   for (int j = 0; j < N; ++j) {
     if (!(Terms & term::rotor_inertia) || Robot::rotor_inertia_separate(j)) continue;
