@@ -115,6 +115,14 @@ TEST_P(RobotFolder, RotorInertiaTheFileDoesNotDeclareIsANoteNotACrash) {
   EXPECT_EQ(notes, robot.num_joints);
 }
 
+/// Eq. 7 by WLS: the reference fit the consistent methods and the optimisers are held to.
+IdentifyOptions eq7_options() {
+  IdentifyOptions o;
+  o.terms = dyncal::kFrictionEq7;
+  o.method = "wls";
+  return o;
+}
+
 // identify --method pcls on any robot, with robot.json's prior (--prior-std 0.5) and without one
 // (0: consistency alone, a note saying so): every link's pseudo-inertia positive definite, the
 // cross-validated RMS within 1 % of WLS on every joint, the base parameters recovered as WLS
@@ -124,9 +132,7 @@ TEST_P(RobotFolder, RotorInertiaTheFileDoesNotDeclareIsANoteNotACrash) {
 TEST_P(RobotFolder, PhysicallyConsistentLeastSquares) {
   const RobotDescription robot = test_robot(GetParam());
   const SimulatedLog s = simulate(robot, 3);
-  IdentifyOptions o;
-  o.terms = dyncal::kFrictionEq7;
-  o.method = "wls";
+  IdentifyOptions o = eq7_options();
   const IdentifyResult w = identify(robot, s.log, o);
   const CompiledRobot& c = compiled_robot_for(robot);
   dyncal::test::Eq7TorqueShare shares(c, s.phi);
@@ -170,9 +176,7 @@ TEST_P(RobotFolder, PhysicallyConsistentLeastSquares) {
 TEST_P(RobotFolder, OptimisersFitAsWellAsLeastSquares) {
   const RobotDescription robot = test_robot(GetParam());
   const SimulatedLog s = simulate(robot, 3);
-  IdentifyOptions o;
-  o.terms = dyncal::kFrictionEq7;
-  o.method = "wls";
+  IdentifyOptions o = eq7_options();
   const IdentifyResult w = identify(robot, s.log, o);
   const CompiledRobot& c = compiled_robot_for(robot);
   for (const char* m : {"gd", "ga", "pf"}) {
