@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "dyncal/generated/er20/robot.hpp"
+#include "dyncal/identification_model.hpp"
 #include "dyncal/modbus_map.hpp"
 #include "dyncal_host/calibration/calibrate.hpp"
 #include "dyncal_host/common/input_error.hpp"
@@ -29,8 +30,16 @@ using dyncal::linux_port::ModbusDrive;
 
 // A table off by a unit in its rigid-body part (base parameters x100): plausible term by term
 // (friction and offsets untouched, check_table's ratings), but it throws the arm off its path.
-void make_runaway(dyncal::ParameterTable& t) {
-  for (int i = 0; i < dyncal::generated::er20::Robot::kNumBase; ++i) t.values[i] *= 100.0f;
+// A table the drive's plausibility check takes (Coulomb friction 5 x each joint's tau_max, within its
+// 10 x bound: a unit slip in the friction) whose feed-forward throws the arm off its path.
+void make_runaway(dyncal::ParameterTable& t, const RobotDescription& robot) {
+  using Model = dyncal::IdentificationModel<dyncal::generated::er20::Robot, dyncal::kFrictionEq7>;
+  ASSERT_EQ(t.model_id, Model::kTerms);
+  for (int i = 0; i < t.count; ++i) {
+    const dyncal::ParamInfo info = Model::info(i);
+    if (info.kind == dyncal::ParamKind::term && info.term == dyncal::term::coulomb)
+      t.values[i] = 5.0f * static_cast<float>(robot.tau_max[static_cast<Eigen::Index>(info.joint - 1)]);
+  }
 }
 
 class DriveFault : public ::testing::Test {
@@ -64,7 +73,7 @@ TEST_F(DriveFault, RunawayTableTripsKeepsTheSamplesAndTheTableBeforeIsFlashedBac
   dyncal::ParameterTable runaway;
   dyncal::TableStatus reason;
   ASSERT_EQ(drive_->read(runaway, &reason), dyncal::port::PortStatus::ok) << drive_->error();
-  make_runaway(runaway);
+  make_runaway(runaway, robot_);
   const auto trajectory = default_excitation(robot_, 0.1, 5, 1, 3, nullptr);
   std::string message;
   try {
@@ -124,7 +133,7 @@ TEST_F(DriveFault, CalibrateStopsOnATripInTheExcitationRunWithItsSamplesKept) {
   dyncal::TableStatus reason;
   ASSERT_EQ(drive_->read(previous, &reason), dyncal::port::PortStatus::ok) << drive_->error();
   runaway = previous;
-  make_runaway(runaway);
+  make_runaway(runaway, robot_);
   ASSERT_EQ(drive_->write(runaway, &reason), dyncal::port::PortStatus::ok) << drive_->error();
   CalibrateOptions o;
   o.uri = fixture_drive_uri("DYNCAL_DRIVE_FAULT_READY");
@@ -160,7 +169,7 @@ TEST_F(DriveFault, InFaultOnlyAResetIsTakenAndAnAbsurdTableIsRefusedBeforeItPlay
   EXPECT_EQ(drive_->write(absurd, &reason), dyncal::port::PortStatus::rejected);
   EXPECT_EQ(reason, dyncal::TableStatus::out_of_range);
   runaway = previous;
-  make_runaway(runaway);
+  make_runaway(runaway, robot_);
   ASSERT_EQ(drive_->write(runaway, &reason), dyncal::port::PortStatus::ok) << drive_->error();
   const auto trajectory = default_excitation(robot_, 0.1, 5, 1, 3, nullptr);
   try {

@@ -12,6 +12,7 @@
 #include <random>
 
 #include "dyncal_host/diagnosis/diagnose.hpp"
+#include "dyncal_host/drive/drive_plant.hpp"
 #include "dyncal_host/identification/compiled_robot.hpp"
 #include "dyncal_host/identification/excitation.hpp"
 #include "dyncal_host/identification/identify.hpp"
@@ -198,6 +199,24 @@ TEST_P(RobotFolder, OptimisersFitAsWellAsLeastSquares) {
       SCOPED_TRACE("joint " + std::to_string(j + 1));
       EXPECT_LE(r.joints[static_cast<size_t>(j)].rms, factor * w.joints[static_cast<size_t>(j)].rms);
     }
+  }
+}
+
+// The simulated drive's table plausibility on any robot (table_check.hpp): its nominal table is
+// taken; the same with every base parameter x100 demands far more than 10 x tau_max at the rated
+// states (the rigid body alone: its friction is 0) and is refused; x -5 stays within and is taken.
+TEST_P(RobotFolder, DriveRefusesARigidBodyFarBeyondItsRatings) {
+  const RobotDescription robot = test_robot(GetParam());
+  const std::unique_ptr<DrivePlant> plant = make_drive_plant(robot);
+  plant->configure(robot, default_scenario(robot));
+  const dyncal::ParameterTable nominal = plant->nominal_table(JointArray{}, JointArray{});
+  EXPECT_EQ(plant->check(nominal), dyncal::TableStatus::ok);
+  const int num_base = compiled_robot_for(robot).num_base;
+  for (const float factor : {100.0f, -5.0f}) {
+    dyncal::ParameterTable t = nominal;
+    for (int i = 0; i < num_base; ++i) t.values[i] *= factor;
+    EXPECT_EQ(plant->check(t), factor > 10 ? dyncal::TableStatus::out_of_range : dyncal::TableStatus::ok)
+        << "base parameters x " << factor;
   }
 }
 

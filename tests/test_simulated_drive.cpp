@@ -7,6 +7,8 @@
 #include <filesystem>
 #include <limits>
 
+#include "dyncal/generated/er20/robot.hpp"
+#include "dyncal/identification_model.hpp"
 #include "dyncal_host/calibration/calibrate.hpp"
 #include "dyncal_host/drive/simulated_drive.hpp"
 
@@ -126,13 +128,13 @@ TEST(FrictionModels, MatchTheSurveyEquations) {
   EXPECT_NEAR(friction_torque(f, 0.1, 0), (50 + 10 / std::cosh(0.5)) * std::tanh(2.0) + 4, 1e-12);
 }
 
-// A table off by a unit (every parameter x100): its feed-forward throws the arm off its path, and the drive
-// must stop on its own limits instead of recording a runaway.
-std::vector<std::uint8_t> scaled_table(const SimulatedDrive& d, float factor) {
+/// The drive's active table with `change` applied to its decoded values, encoded.
+template <class Change>
+std::vector<std::uint8_t> changed_table(const SimulatedDrive& d, Change change) {
   dyncal::ParameterTable t;
   const auto& bytes = d.active_table_bytes();
   EXPECT_EQ(dyncal::decode_table(bytes.data(), static_cast<int>(bytes.size()), t), dyncal::TableStatus::ok);
-  for (int i = 0; i < t.count; ++i) t.values[i] *= factor;
+  change(t);
   std::vector<std::uint8_t> out(dyncal::kTableMaxBytes);
   int size = 0;
   EXPECT_EQ(dyncal::encode_table(t, out.data(), static_cast<int>(out.size()), &size), dyncal::TableStatus::ok);
@@ -140,12 +142,49 @@ std::vector<std::uint8_t> scaled_table(const SimulatedDrive& d, float factor) {
   return out;
 }
 
+// The factory table (nominal base parameters, Eq. 7 friction) with every base parameter times `factor`.
+std::vector<std::uint8_t> scaled_rigid_body(const SimulatedDrive& d, float factor) {
+  return changed_table(d, [&](dyncal::ParameterTable& t) {
+    for (int i = 0; i < dyncal::generated::er20::Robot::kNumBase; ++i) t.values[i] *= factor;
+  });
+}
+
+// A table a plausibility check cannot tell from a real one (Coulomb friction 5 x each joint's tau_max,
+// within the 10 x bound; a unit slip in the friction) whose feed-forward throws the arm off its path:
+// the drive must stop on its own limits instead of recording a runaway.
+std::vector<std::uint8_t> runaway_table(const SimulatedDrive& d, const RobotDescription& robot) {
+  return changed_table(d, [&](dyncal::ParameterTable& t) {
+    using Model = dyncal::IdentificationModel<dyncal::generated::er20::Robot, dyncal::kFrictionEq7>;
+    for (int i = 0; i < t.count; ++i) {
+      const dyncal::ParamInfo info = Model::info(i);
+      if (info.kind == dyncal::ParamKind::term && info.term == dyncal::term::coulomb)
+        t.values[i] = 5.0f * static_cast<float>(robot.tau_max[static_cast<Eigen::Index>(info.joint - 1)]);
+    }
+  });
+}
+
+// Table plausibility of the rigid body (table_check.hpp): base parameters 100 times the arm's demand
+// far more than 10 x tau_max at the rated states and are refused before they play; 5 times the
+// arm's stay within it and are taken (a table's values are never refused for size alone).
+TEST_F(SimulatedDriveTest, RefusesATableWhoseRigidBodyDemandsTenTimesItsRatings) {
+  const std::string path = std::filesystem::temp_directory_path() / ("dyncal_rb_" + std::to_string(getpid()));
+  std::filesystem::remove(path);
+  SimulatedDrive d(robot, base(), path);
+  const std::vector<std::uint8_t> factory = d.active_table_bytes();
+  const std::vector<std::uint8_t> absurd = scaled_rigid_body(d, 100.0f);
+  EXPECT_EQ(d.commit(absurd.data(), static_cast<int>(absurd.size())), dyncal::TableStatus::out_of_range);
+  EXPECT_EQ(d.active_table_bytes(), factory);
+  const std::vector<std::uint8_t> heavy = scaled_rigid_body(d, -5.0f);
+  EXPECT_EQ(d.commit(heavy.data(), static_cast<int>(heavy.size())), dyncal::TableStatus::ok);
+  std::filesystem::remove(path);
+}
+
 TEST_F(SimulatedDriveTest, StopsOnTheRobotsLimitsWhenATableThrowsTheArmOffItsPathAndRestartsClean) {
   const std::string path = std::filesystem::temp_directory_path() / ("dyncal_trip_" + std::to_string(getpid()));
   std::filesystem::remove(path);
   SimulatedDrive d(robot, base(), path);
   const std::vector<std::uint8_t> factory = d.active_table_bytes();
-  const std::vector<std::uint8_t> runaway = scaled_table(d, 100.0f);
+  const std::vector<std::uint8_t> runaway = runaway_table(d, robot);
   ASSERT_EQ(d.commit(runaway.data(), static_cast<int>(runaway.size())), dyncal::TableStatus::ok);
   d.trajectory = default_excitation(robot, 0.1, 5, 1, 3, nullptr);
   d.periods = 1;

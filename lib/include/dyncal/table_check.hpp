@@ -48,7 +48,35 @@ struct JointRatings {
   float tau_max[N];  ///< [Nm]
   float qd_max[N];   ///< [rad/s]
   float qdd_max[N];  ///< [rad/s^2]
+  float q_min[N];    ///< [rad] position range (q_min == q_max: a full turn about 0)
+  float q_max[N];    ///< [rad]
 };
+
+/// States of the rated envelope at which a table's rigid-body torque is checked.
+inline constexpr int kRatedStates = 64;
+
+/// The van der Corput radical inverse of i in `base`: the Halton sequence's coordinate, in [0, 1).
+inline float radical_inverse(int i, int base) noexcept {
+  float inv = 1.0f / static_cast<float>(base), f = inv, x = 0.0f;
+  for (; i > 0; i /= base, f *= inv) x += f * static_cast<float>(i % base);
+  return x;
+}
+
+/// State `index` (0 .. kRatedStates - 1) of the rated envelope: q in [q_min, q_max], |qd| <= qd_max,
+/// |qdd| <= qdd_max, one Halton point (the first 3 N primes as bases, index + 1: the origin is
+/// skipped) scaled to it. Deterministic and evenly spread: the same states on every drive.
+template <int N, typename Vec>
+void rated_state(const JointRatings<N>& r, int index, Vec& q, Vec& qd, Vec& qdd) noexcept {
+  constexpr int kPrimes[21] = {2, 3, 5, 7, 11, 13, 17, 19, 23, 29, 31, 37, 41, 43, 47, 53, 59, 61, 67, 71, 73};
+  static_assert(3 * N <= 21, "rated_state: at most 7 joints");
+  for (int j = 0; j < N; ++j) {
+    const float lo = r.q_min[j] < r.q_max[j] ? r.q_min[j] : -3.14159265f;
+    const float hi = r.q_min[j] < r.q_max[j] ? r.q_max[j] : 3.14159265f;
+    q[j] = lo + (hi - lo) * radical_inverse(index + 1, kPrimes[3 * j]);
+    qd[j] = r.qd_max[j] * (2.0f * radical_inverse(index + 1, kPrimes[3 * j + 1]) - 1.0f);
+    qdd[j] = r.qdd_max[j] * (2.0f * radical_inverse(index + 1, kPrimes[3 * j + 2]) - 1.0f);
+  }
+}
 
 /// How many times a joint's tau_max one term of a table may demand at the joint's rated motion.
 /// robot.json's tau_max may be a continuous rating or a scale derived from the nominal model
@@ -59,9 +87,14 @@ inline constexpr float kTableRatingMultiple = 10.0f;
 
 /// check_table, then physical plausibility against the robot's own ratings: no per-joint term may
 /// alone demand more than kTableRatingMultiple x the joint's tau_max at its rated motion —
-/// |offset|, Fc; Fv qd_max; |Fp| qd_max^(1/3) (Eq. 8); Ia qdd_max. Such a table is a unit slip or a
-/// diverged fit (every value 1e5, offsets of 1e5 Nm). Returns out_of_range for such a term (the
-/// first failing check otherwise, as check_table).
+/// |offset|, Fc; Fv qd_max; |Fp| qd_max^(1/3) (Eq. 8); Ia qdd_max —, nor may the rigid body, the
+/// base parameters' torque Y_b(q, qd, qdd) phi_b (Gautier), at any of the kRatedStates states of the
+/// rated envelope (rated_state). Such a table is a unit slip or a diverged fit (every value 1e5,
+/// offsets of 1e5 Nm, base parameters 100 times the arm's). The states are samples: a table absurd
+/// only between them passes (a lower bound of the torque's maximum over the envelope), a table within
+/// the bound everywhere is never refused. Returns out_of_range for such a term (the first failing
+/// check otherwise, as check_table). Host side (the simulated drive's commit): the rigid-body check
+/// evaluates the base regressor kRatedStates times in float.
 template <class Model>
 TableStatus check_table(const ParameterTable& table, const JointRatings<Model::kNumJoints>& r) noexcept {
   const TableStatus st = check_table<Model>(table);
@@ -91,6 +124,21 @@ TableStatus check_table(const ParameterTable& table, const JointRatings<Model::k
         continue;
     }
     if (torque > kTableRatingMultiple * r.tau_max[j]) return TableStatus::out_of_range;
+  }
+  using Robot = typename Model::RobotType;
+  constexpr int N = Model::kNumJoints;
+  using Vec = Eigen::Matrix<float, N, 1>;
+  Eigen::Matrix<float, Robot::kNumBase, 1> phi_b;
+  for (int i = 0; i < Robot::kNumBase; ++i) phi_b[i] = table.values[i];
+  Eigen::Matrix<float, N, Robot::kNumBase> Yb;
+  Vec q, qd, qdd;
+  for (int s = 0; s < kRatedStates; ++s) {
+    rated_state(r, s, q, qd, qdd);
+    Robot::base_regressor(q, qd, qdd, Yb);
+    const Vec tau = Yb * phi_b;
+    for (int j = 0; j < N; ++j)
+      if (r.tau_max[j] > 0.0f && std::fabs(tau[j]) > kTableRatingMultiple * r.tau_max[j])
+        return TableStatus::out_of_range;
   }
   return TableStatus::ok;
 }

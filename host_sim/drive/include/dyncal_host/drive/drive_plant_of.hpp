@@ -77,6 +77,8 @@ class DrivePlantOf final : public DrivePlant {
       ratings_.tau_max[j] = robot.tau_max.size() == N ? static_cast<float>(robot.tau_max[j]) : 0.0f;
       ratings_.qd_max[j] = static_cast<float>(robot.qd_max[j]);
       ratings_.qdd_max[j] = static_cast<float>(robot.qdd_max[j]);
+      ratings_.q_min[j] = static_cast<float>(robot.q_min[j]);
+      ratings_.q_max[j] = static_cast<float>(robot.q_max[j]);
       ia_[j] = scenario.effects[j].rotor_inertia;
       quantum_[j] =
           scenario.encoder_counts > 0 ? 2.0 * M_PI / (scenario.encoder_counts * std::fabs(robot.gear_ratios[j])) : 0.0;
