@@ -3,6 +3,9 @@
 // 100 Hz over two periods of the default excitation) and the host's double-precision replay of
 // the KF, RLS, EKF and friction tracker over them (the reference the firmware images compare against).
 // Usage: dyncal_replay_data OUT.hpp   (CMake target `replay-data`).
+//        dyncal_replay_data --ratings OUT.hpp: port/replay/er20_ratings.hpp, the er20's ratings from
+//        robots/er20/robot.json for the firmware parameter store's table plausibility (same target;
+//        CTest replay_ratings_up_to_date regenerates it and fails on any difference).
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -10,11 +13,13 @@
 #include <iostream>
 #include <memory>
 #include <sstream>
+#include <utility>
 #include <vector>
 
 #include "dyncal_host/common/robot_description.hpp"
 #include "dyncal_host/drive/scenario.hpp"
 #include "dyncal_host/drive/simulated_drive.hpp"
+#include "dyncal_host/identification/compiled_robot.hpp"
 #include "dyncal_host/identification/excitation.hpp"
 #include "replay.hpp"
 
@@ -42,11 +47,47 @@ void write_array(std::ostream& o, const char* name, const std::vector<double>& v
   o << "};\n";
 }
 
+/// The er20's ratings (robot.json's limits, tau_max derived when the file gives none) as float arrays.
+void write_ratings(const char* path) {
+  dyncal::host::RobotDescription robot = dyncal::host::load_robot(dyncal::host::default_robots_dir(), "er20");
+  dyncal::host::derive_tau_max(robot);
+  std::ostringstream o;
+  o << "// GENERATED FILE - DO NOT EDIT.\n"
+    << "// Generator: host_sim/tools/replay_data.cpp --ratings (cmake --build <build> --target replay-data)\n"
+    << "// Input: robots/er20/robot.json (limits, joint side).\n"
+    << "#pragma once\n\n// clang-format off\nnamespace dyncal::replay::data {\n\n"
+    << "/// The er20's ratings: tau_max [Nm], qd_max [rad/s], qdd_max [rad/s^2], q_min, q_max [rad]; the\n"
+    << "/// parameter store's table plausibility (dyncal/table_check.hpp JointRatings).\n";
+  const std::pair<const char*, const Eigen::VectorXd*> ratings[] = {{"kTauMax", &robot.tau_max},
+                                                                    {"kQdMax", &robot.qd_max},
+                                                                    {"kQddMax", &robot.qdd_max},
+                                                                    {"kQMin", &robot.q_min},
+                                                                    {"kQMax", &robot.q_max}};
+  for (const auto& [name, v] : ratings) {
+    o << "inline constexpr float " << name << "[6] = {";
+    for (int j = 0; j < 6; ++j)
+      o << std::showpoint << std::setprecision(9) << static_cast<float>((*v)[j]) << "f" << (j < 5 ? ", " : "};\n");
+  }
+  o << "\n}  // namespace dyncal::replay::data\n// clang-format on\n";
+  std::ofstream f(path);
+  f << o.str();
+  if (!f) throw std::runtime_error(std::string("cannot write ") + path);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc == 3 && std::string(argv[1]) == "--ratings") {
+    try {
+      write_ratings(argv[2]);
+      return 0;
+    } catch (const std::exception& e) {
+      std::cerr << "dyncal_replay_data: " << e.what() << "\n";
+      return 1;
+    }
+  }
   if (argc != 2) {
-    std::cerr << "usage: dyncal_replay_data OUT.hpp\n";
+    std::cerr << "usage: dyncal_replay_data OUT.hpp | --ratings OUT.hpp\n";
     return 2;
   }
   try {

@@ -12,6 +12,7 @@
 #include "dyncal_cortex_m/instruction_counter.hpp"
 #include "dyncal_cortex_m/semihosting.hpp"
 #include "dyncal_cortex_m/stack_usage.hpp"
+#include "er20_ratings.hpp"
 #include "er20_replay_data.hpp"
 
 #ifndef DYNCAL_FW_SCALAR
@@ -64,6 +65,15 @@ bool store_round_trip() {
     static dyncal::ParameterTable table;  // one table: RAM is the budget
     dyncal::make_table<dyncal::replay::LinearModel>(g_est.estimate(), table);
     auto& store = sh::flash_parameter_store<dyncal::replay::LinearModel>();
+    dyncal::JointRatings<6> ratings;
+    for (int j = 0; j < 6; ++j) {
+      ratings.tau_max[j] = data::kTauMax[j];
+      ratings.qd_max[j] = data::kQdMax[j];
+      ratings.qdd_max[j] = data::kQddMax[j];
+      ratings.q_min[j] = data::kQMin[j];
+      ratings.q_max[j] = data::kQMax[j];
+    }
+    store.set_ratings(ratings);
     dyncal::TableStatus reason = dyncal::TableStatus::ok;
     for (int round = 0; round < 3; ++round) {  // three writes: both slots used, newest wins
       table.values[0] += 1.0f;
@@ -89,11 +99,31 @@ bool store_round_trip() {
     dyncal::TableStatus refused = dyncal::TableStatus::ok;
     if (store.write(table, &refused) != dyncal::port::PortStatus::rejected) return false;
     if (store.read(table, &reason) != dyncal::port::PortStatus::ok || table.values[0] != kept) return false;
+    // So is a table whose rigid body demands far more than the ratings (base parameters x100, a
+    // unit slip; table_check.hpp), timed.
+    for (int i = 0; i < dyncal::replay::LinearModel::RobotType::kNumBase; ++i) table.values[i] *= 100.0f;
+    dyncal::TableStatus implausible = dyncal::TableStatus::ok;
+    const std::uint32_t t0 = Counter::ticks();
+    const bool refused_rb = store.write(table, &implausible) == dyncal::port::PortStatus::rejected;
+    const std::uint32_t ticks = Counter::elapsed(t0, Counter::ticks());
+    if (!refused_rb || implausible != dyncal::TableStatus::out_of_range) return false;
+    if (store.read(table, &reason) != dyncal::port::PortStatus::ok || table.values[0] != kept) return false;
+    // The whole check (all kRatedStates states) on the stored, plausible estimate.
+    const std::uint32_t t1 = Counter::ticks();
+    const dyncal::TableStatus plausible = dyncal::check_table<dyncal::replay::LinearModel>(table, ratings);
+    const std::uint32_t check_ticks = Counter::elapsed(t1, Counter::ticks());
+    if (plausible != dyncal::TableStatus::ok) return false;
     sh::write("  parameter table written to the flash store 3 times (generation ");
     sh::write_int(store.generation());
     sh::write("), read back identical; a wrong-model table refused (");
     sh::write(dyncal::to_string(refused));
-    sh::write(")\n");
+    sh::write("), base parameters x100 refused (");
+    sh::write(dyncal::to_string(implausible));
+    sh::write(", the write with its plausibility check about ");
+    sh::write_int(static_cast<long long>(ticks) * Counter::kInstructionsPerTick);
+    sh::write(" instructions); the check of a plausible table at all its states about ");
+    sh::write_int(static_cast<long long>(check_ticks) * Counter::kInstructionsPerTick);
+    sh::write(" instructions\n");
     return true;
   }
 }

@@ -32,7 +32,9 @@ class FlashDevice {
 
 /// Slot layout: magic u32 'DPS1', generation u32, table length u32, then the encoded table (its own
 /// CRC-32, dyncal/parameter_table.hpp). Model: the identification model the drive runs; write()
-/// refuses a table check_table<Model> rejects.
+/// refuses a table check_table<Model> rejects, and with set_ratings also one that is implausible
+/// against the robot's ratings (check_table with JointRatings: no per-joint term and not the rigid
+/// body beyond 10 x tau_max at rated motion; Yb's N x kNumBase floats on the stack while it runs).
 template <class Model>
 class FlashParameterStore final : public port::ParameterStore {
  public:
@@ -41,8 +43,14 @@ class FlashParameterStore final : public port::ParameterStore {
 
   explicit FlashParameterStore(FlashDevice& flash) noexcept : flash_(flash) {}
 
+  /// The robot's ratings (robot.json limits, joint side) that write() checks tables against.
+  void set_ratings(const JointRatings<Model::kNumJoints>& ratings) noexcept {
+    ratings_ = ratings;
+    has_ratings_ = true;
+  }
+
   port::PortStatus write(const ParameterTable& table, TableStatus* reason) noexcept override {
-    TableStatus s = check_table<Model>(table);
+    TableStatus s = has_ratings_ ? check_table<Model>(table, ratings_) : check_table<Model>(table);
     if (s == TableStatus::ok) s = encode_table(table, buffer_ + kSlotHeader, kTableMaxBytes, &length_);
     if (reason != nullptr) *reason = s;
     if (s != TableStatus::ok) return port::PortStatus::rejected;
@@ -119,6 +127,8 @@ class FlashParameterStore final : public port::ParameterStore {
 
   FlashDevice& flash_;
   std::uint8_t buffer_[kSlotHeader + kTableMaxBytes] = {};
+  JointRatings<Model::kNumJoints> ratings_ = {};
+  bool has_ratings_ = false;
   int length_ = 0;
   mutable ParameterTable scratch_;
 };
