@@ -154,6 +154,8 @@ TEST(CliErrors, IdentifyOptionsOutsideTheirRangeAreRefused) {
   expect_error(tx40 + "--method gd --range-width 0", "--range-width 0 must lie in (0, 10]");
   expect_error(tx40 + "--method ga --evaluations -5", "--evaluations -5 must lie in [0, 1e7]");
   expect_error(tx40 + "--method kf --model eq7,offset:2", "a model with effect terms is fitted by wls, ols, pcls, gd");
+  expect_error(tx40 + "--method iv --model eq7", "--method iv needs --law FILE");
+  expect_error(tx40 + "--method wls --law law.json", "--law is the control law of --method iv");
 }
 
 // A log whose time step is absurdly small cannot overflow the filter's edge computation: the

@@ -25,29 +25,17 @@ int run_flash(const FlashSettings& s) {
   if (!s.robot.empty() && p.robot != s.robot)
     throw InputError(s.params + ": parameters are for robot '" + p.robot + "', not '" + s.robot + "'");
   // The drive's form: compiled values per joint, a coupled motor's terms and the file's effects as
-  // effect terms (drive_table.hpp), applied by the drive's feed-forward.
-  const host::DriveTableContent content = host::drive_table_content(p, host::load_robot(s.robots_dir, p.robot));
-  // The table carries the id of the robot the parameters were identified for: the drive refuses it
-  // (wrong robot) unless it runs that robot.
+  // effect terms (drive_table.hpp), applied by the drive's feed-forward. The table carries the id of
+  // the robot the parameters were identified for: the drive refuses it (wrong robot) unless it runs
+  // that robot.
+  std::vector<std::string> notes;
   ParameterTable t;
-  t.robot_id = host::compiled_robot(p.robot).robot_id;
-  t.model_id = p.terms;
-  if (content.values.size() > static_cast<size_t>(kTableMaxParams))
-    throw InputError(s.params + ": more params than a table holds");
-  t.count = static_cast<std::uint16_t>(content.values.size());
-  for (size_t i = 0; i < content.values.size(); ++i) {
-    if (std::fabs(content.values[i]) > 3.4e38)
-      throw InputError(s.params + ": params[" + std::to_string(i + 1) + "] '" + p.names[i] + "': value " +
-                       std::to_string(content.values[i]) + " is not a finite float");
-    t.values[i] = static_cast<float>(content.values[i]);
+  try {
+    t = host::parameter_table(p, host::load_robot(s.robots_dir, p.robot), &notes);
+  } catch (const InputError& e) {
+    throw InputError(s.params + ": " + e.what());
   }
-  for (size_t i = 0; i < content.effects.size(); ++i) {
-    for (float c : content.effects[i].c)
-      if (!std::isfinite(c)) throw InputError(s.params + ": an effect coefficient is not a finite float");
-    t.effects[i] = content.effects[i];
-  }
-  t.effect_count = static_cast<std::uint16_t>(content.effects.size());
-  for (const auto& line : content.notes) std::cout << "note: " << line << "\n";
+  for (const auto& line : notes) std::cout << "note: " << line << "\n";
   auto d = connect_drive(s.uri);
   if (s.reset_fault && d->reset() != port::PortStatus::ok) throw InputError("reset failed: " + d->error());
   TableStatus reason = TableStatus::ok;

@@ -4,6 +4,10 @@
 #include <utility>
 
 #include "commands.hpp"
+#include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/drive/closed_loop.hpp"
+#include "dyncal_host/drive/scenario.hpp"
+#include "dyncal_host/identification/drive_law.hpp"
 #include "dyncal_host/identification/friction_comparison.hpp"
 #include "dyncal_host/identification/identify.hpp"
 #include "dyncal_host/identification/identify_report.hpp"
@@ -16,10 +20,60 @@ namespace {
 struct IdentifySettings {
   LogOption log;
   host::IdentifyOptions options;
-  std::string model = "eq7,rotor_inertia,offset", report, params, effects;
+  std::string model = "eq7,rotor_inertia,offset", report, params, effects, law;
   std::vector<std::string> validate_on;
   bool compare_friction = false;
 };
+
+/// IDIM-IV's closed loop (IdentifyOptions::closed_loop): the law's run on the simulated drive of
+/// `robot` with the iterate's plant, noise-free (no torque noise, no encoder quantisation: the
+/// instruments are the model's states), Eq. 7 friction only, the law's gains, feed-forward table and
+/// control rate; the plant's q interpolated linearly to the grid's times.
+host::JointLog simulate_law(const host::RobotDescription& robot, const host::DriveLaw& law, const host::JointLog& grid,
+                            const Eigen::VectorXd& phi, const Eigen::VectorXd& Fc, const Eigen::VectorXd& Fv) {
+  host::Scenario sc = host::default_scenario(robot);
+  sc.tau_noise_std.fill(0.0);
+  sc.encoder_counts = 0;
+  sc.couplings.clear();
+  if (law.control_rate_hz > 0) sc.control_rate_hz = law.control_rate_hz;
+  sc.sample_rate_hz = law.sample_rate_hz;
+  host::JointArray kp{}, kd{};
+  for (int j = 0; j < robot.num_joints; ++j) {
+    sc.friction[j] = host::JointFriction{};
+    sc.friction[j].model = host::FrictionModel::eq7;
+    sc.friction[j].Fc = Fc[j];
+    sc.friction[j].beta = Fv[j];
+    sc.effects[j] = host::JointEffects{};
+    kp[j] = law.kp[static_cast<size_t>(j)];
+    kd[j] = law.kd[static_cast<size_t>(j)];
+  }
+  std::vector<std::uint8_t> bytes(kTableMaxBytes);
+  int size = 0;
+  const ParameterTable table = law.has_table ? law.table : host::nominal_table(robot.name);
+  if (encode_table(table, bytes.data(), static_cast<int>(bytes.size()), &size) != TableStatus::ok)
+    throw host::InputError(law.source + ": the feed-forward table does not encode");
+  bytes.resize(static_cast<size_t>(size));
+  const auto run = host::play_closed_loop(robot, sc, law.trajectory, law.periods, law.sample_rate_hz, bytes,
+                                          std::vector<double>(phi.data(), phi.data() + phi.size()), &kp, &kd);
+  host::JointLog out;
+  out.t = grid.t;
+  out.segment_starts = grid.segment_starts;
+  out.period = grid.period;
+  out.q.resize(grid.t.size(), robot.num_joints);
+  out.tau = Eigen::MatrixXd::Zero(grid.t.size(), robot.num_joints);
+  const double dt = 1.0 / law.sample_rate_hz;
+  for (Eigen::Index s = 0; s < grid.t.size(); ++s) {
+    const double x = grid.t[s] / dt;
+    const auto k = static_cast<size_t>(std::max(0.0, std::floor(x)));
+    if (!(grid.t[s] >= 0.0) || k + 1 >= run.size())
+      throw host::InputError(
+          law.source + ": the log's t = " + std::to_string(grid.t[s]) + " s lies outside the law's run (0.." +
+          std::to_string(dt * static_cast<double>(run.size() - 1)) + " s: t = 0 at the trajectory's start)");
+    const double a = x - static_cast<double>(k);
+    for (int j = 0; j < robot.num_joints; ++j) out.q(s, j) = (1.0 - a) * run[k].q[j] + a * run[k + 1].q[j];
+  }
+  return out;
+}
 
 int run_identify(IdentifySettings& s) {
   const auto robot = s.log.load_robot();
@@ -38,6 +92,14 @@ int run_identify(IdentifySettings& s) {
   }
   s.options.terms = spec.terms;
   s.options.effects = spec.effects;
+  if (!s.law.empty()) {
+    if (s.options.method != "iv") throw host::InputError("--law is the control law of --method iv");
+    const auto law = std::make_shared<host::DriveLaw>(host::read_drive_law(s.law, robot));
+    s.options.closed_loop = [robot, law](const host::JointLog& grid, const Eigen::VectorXd& phi,
+                                         const Eigen::VectorXd& Fc, const Eigen::VectorXd& Fv) {
+      return simulate_law(robot, *law, grid, phi, Fc, Fv);
+    };
+  }
   auto log = s.log.load_log(robot, &dropped);
   if (s.compare_friction) {
     if (!s.options.effects.empty())
@@ -78,15 +140,20 @@ void add_identify_command(CLI::App& app, Action& run) {
       ->capture_default_str();
   cmd->add_option("--effects", s->effects,
                   "add the effects of a dyncal diagnose --report file to the model (any method but kf and rls)");
-  cmd->add_option("--method", opt.method,
-                  "wls: weighted least squares, each joint's rows weighted by 1 / its residual noise (Gautier); ols: "
-                  "unweighted (the survey's IDIM-OLS); kf: Kalman filter (Eq. 19); rls: forgetting (Eq. 23); pcls: "
-                  "physically consistent WLS, every link's pseudo-inertia positive definite, robot.json's inertials "
-                  "as prior (Wensing et al.); gd, ga, pf: the survey's optimisers (gradient descent, genetic "
-                  "algorithm, particle filter) on the weighted data, every link's pseudo-inertia positive definite, "
-                  "the inertials searched within --range-width of robot.json's, no prior (docs/cli.md)")
-      ->check(CLI::IsMember({"wls", "ols", "kf", "rls", "pcls", "gd", "ga", "pf"}))
+  cmd->add_option(
+         "--method", opt.method,
+         "wls: weighted least squares, each joint's rows weighted by 1 / its residual noise (Gautier); ols: "
+         "unweighted (the survey's IDIM-OLS); kf: Kalman filter (Eq. 19); rls: forgetting (Eq. 23); pcls: "
+         "physically consistent WLS, every link's pseudo-inertia positive definite, robot.json's inertials "
+         "as prior (Wensing et al.); gd, ga, pf: the survey's optimisers (gradient descent, genetic "
+         "algorithm, particle filter) on the weighted data, every link's pseudo-inertia positive definite, "
+         "the inertials searched within --range-width of robot.json's, no prior; iv: IDIM-IV (Eq. 17), instruments "
+         "from closed-loop simulations of the --law the log was recorded under, --model eq7 (docs/cli.md)")
+      ->check(CLI::IsMember({"wls", "ols", "kf", "rls", "pcls", "gd", "ga", "pf", "iv"}))
       ->capture_default_str();
+  cmd->add_option("--law", s->law,
+                  "iv: the drive's control law the log was recorded under (JSON: trajectory, periods, sample_rate_hz, "
+                  "kp, kd, optional control_rate_hz and feed_forward; docs/cli.md)");
   cmd->add_option("--prior-std", opt.prior_std,
                   "pcls: the prior's standard deviation relative to max(|value|, 5 % of the largest of its kind in "
                   "the link) of robot.json's inertials; 0: no prior, consistency alone")

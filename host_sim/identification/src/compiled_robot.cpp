@@ -90,4 +90,11 @@ void derive_tau_max(RobotDescription& robot) {
   robot.tau_max_derived = true;
 }
 
+Eigen::MatrixXd base_map(const CompiledRobot& robot) {
+  Eigen::MatrixXd K(robot.num_base, robot.num_standard);
+  for (int i = 0; i < robot.num_standard; ++i)
+    K.col(i) = robot.standard_to_base(Eigen::VectorXd::Unit(robot.num_standard, i));
+  return K;
+}
+
 }  // namespace dyncal::host

@@ -5,6 +5,7 @@
 
 #include "dyncal/parameter_table.hpp"
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/identification/compiled_robot.hpp"
 
 namespace dyncal::host {
 namespace {
@@ -72,6 +73,30 @@ DriveTableContent drive_table_content(const ParameterSet& p, const RobotDescript
     throw InputError(p.source + ": " + std::to_string(out.effects.size()) + " effect terms, a table holds " +
                      std::to_string(kTableMaxEffects));
   return out;
+}
+
+ParameterTable parameter_table(const ParameterSet& p, const RobotDescription& robot, std::vector<std::string>* notes) {
+  const DriveTableContent content = drive_table_content(p, robot);
+  ParameterTable t;
+  t.robot_id = compiled_robot(p.robot).robot_id;
+  t.model_id = p.terms;
+  if (content.values.size() > static_cast<size_t>(kTableMaxParams))
+    throw InputError("robot '" + p.robot + "': more params than a table holds");
+  t.count = static_cast<std::uint16_t>(content.values.size());
+  for (size_t i = 0; i < content.values.size(); ++i) {
+    if (std::fabs(content.values[i]) > 3.4e38)
+      throw InputError("params[" + std::to_string(i + 1) + "] '" + p.names[i] + "': value " +
+                       std::to_string(content.values[i]) + " is not a finite float");
+    t.values[i] = static_cast<float>(content.values[i]);
+  }
+  for (size_t i = 0; i < content.effects.size(); ++i) {
+    for (float c : content.effects[i].c)
+      if (!std::isfinite(c)) throw InputError("an effect coefficient is not a finite float");
+    t.effects[i] = content.effects[i];
+  }
+  t.effect_count = static_cast<std::uint16_t>(content.effects.size());
+  if (notes) notes->insert(notes->end(), content.notes.begin(), content.notes.end());
+  return t;
 }
 
 }  // namespace dyncal::host

@@ -149,9 +149,7 @@ ConsistentSolution make_consistent(const StackedData& d, const MatrixXd& X, cons
   p.R = MatrixXd(llt.matrixU()) * a.scale.cwiseInverse().asDiagonal();  // beta = D^-1 p
   p.z = llt.matrixL().solve(f.g);
   p.num_base = d.num_base;
-  p.K.resize(compiled.num_base, compiled.num_standard);
-  for (int i = 0; i < compiled.num_standard; ++i)
-    p.K.col(i) = compiled.standard_to_base(VectorXd::Unit(compiled.num_standard, i));
+  p.K = base_map(compiled);
   p.prior = Eigen::Map<const VectorXd>(compiled.nominal_standard.data(), compiled.num_standard);
   p.prior_relative_std = o.prior_std;
   p.sigma2 = f.sigma2;

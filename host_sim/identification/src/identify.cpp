@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <utility>
 
+#include "dyncal/friction.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/number_text.hpp"
 #include "dyncal_host/identification/compiled_robot.hpp"
@@ -20,6 +21,14 @@ namespace {
 // shares its noise with the fit (leaky validation); one cut-off period is dropped at each end of
 // the log, so the log must last more than two.
 void check_options(const IdentifyOptions& o, const JointLog& log) {
+  if (o.method == "iv") {
+    if (!o.closed_loop)
+      throw InputError("--method iv needs --law FILE: the drive's control law the run was recorded under");
+    if (o.terms != kFrictionEq7 || !o.effects.empty())
+      throw InputError(
+          "--method iv fits --model eq7: the closed-loop simulation models the rigid body with Coulomb "
+          "and viscous friction");
+  }
   if (!o.effects.empty() && (o.method == "kf" || o.method == "rls"))
     throw InputError("--method " + o.method + ": a model with effect terms is fitted by wls, ols, pcls, gd, ga or pf");
   if (o.filter_order < 2 || o.filter_order > kMaxFilterOrder || o.filter_order % 2 != 0)

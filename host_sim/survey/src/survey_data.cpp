@@ -1,12 +1,8 @@
 #include "dyncal_host/survey/survey_data.hpp"
 
-#include <unistd.h>
-
 #include <Eigen/Dense>
 #include <algorithm>
-#include <atomic>
 #include <cmath>
-#include <filesystem>
 #include <random>
 #include <string>
 
@@ -15,6 +11,7 @@
 #include "dyncal/parameter_table.hpp"
 #include "dyncal/table_check.hpp"
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/drive/closed_loop.hpp"
 #include "dyncal_host/identification/excitation.hpp"
 #include "dyncal_host/identification/friction_parameters.hpp"
 
@@ -22,14 +19,6 @@ namespace dyncal::host::survey {
 namespace {
 
 using Robot = dyncal::generated::er20::Robot;
-
-/// A scratch file for the drive's simulated flash (removed again by the caller).
-std::string scratch_table_path(std::uint64_t seed) {
-  static std::atomic<int> counter{0};  // runs may be simulated on several threads
-  return (std::filesystem::temp_directory_path() / ("dyncal_survey_" + std::to_string(::getpid()) + "_" +
-                                                    std::to_string(seed) + "_" + std::to_string(counter++) + ".bin"))
-      .string();
-}
 
 /// The study's set friction of one joint for `model`, from robot.json's Eq. 4 values (Fc, Fs, qds,
 /// beta), so that the six curves share Coulomb level, static peak, Stribeck velocity and viscous
@@ -70,45 +59,6 @@ std::vector<std::uint8_t> set_parameter_table(const Scenario& s) {
   }
   bytes.resize(static_cast<size_t>(size));
   return bytes;
-}
-
-/// Plays `trajectory` once (`periods`) on a drive with `scenario`, active table `table`, and
-/// returns the plant samples. plant_standard / gains: overrides (empty / nullptr: the drive's own).
-std::vector<SimulatedDrive::PlantSample> play(const RobotDescription& robot, const Scenario& scenario,
-                                              const DriveTrajectory& trajectory, int periods, double rate_hz,
-                                              const std::vector<std::uint8_t>& table,
-                                              const std::vector<double>& plant_standard, const JointArray* kp,
-                                              const JointArray* kd) {
-  const std::string path = scratch_table_path(scenario.seed);
-  std::filesystem::remove(path);
-  std::vector<SimulatedDrive::PlantSample> out;
-  {
-    SimulatedDrive drive(robot, scenario, path);
-    const TableStatus st = drive.commit(table.data(), static_cast<int>(table.size()));
-    if (st != TableStatus::ok) throw InputError(std::string("survey drive refused its table: ") + to_string(st));
-    drive.trajectory = trajectory;
-    drive.periods = periods;
-    drive.sample_rate_hz = rate_hz;
-    drive.lockstep = false;
-    if (!plant_standard.empty()) drive.set_plant_parameters(plant_standard);
-    if (kp && kd) drive.fix_gains(*kp, *kd);
-    drive.plant_log = &out;
-    drive.start();
-    while (drive.state() == modbus_map::DriveState::playing) {
-      drive.step();
-      if (!drive.ring().empty()) drive.ack(drive.ring().back().seq + 1);  // only the plant log is used
-    }
-    // A plant beyond the robot's limits has left the simulation's valid range (or is unstable):
-    // the drive trips, and the record is refused instead of identified from.
-    if (drive.state() == modbus_map::DriveState::fault) {
-      std::filesystem::remove(path);
-      throw InputError("survey data: the simulated drive stopped at t = " + std::to_string(drive.time()) +
-                       " s: joint " + std::to_string(drive.fault_joint()) + " " + modbus_map::to_string(drive.fault()) +
-                       " (" + std::to_string(drive.fault_value()) + ")");
-    }
-  }
-  std::filesystem::remove(path);
-  return out;
 }
 
 /// The drive's PD gains (natural frequency bandwidth_hz, damping) set from the smallest diagonal
@@ -173,7 +123,8 @@ SurveyData simulate_survey_data(const RobotDescription& robot, const SurveyDataO
   }
   d.sample_rate_hz = o.sample_rate_hz;
   gains_along(d.trajectory, d.scenario, d.kp, d.kd);
-  const auto samples = play(robot, d.scenario, d.trajectory, o.periods, o.sample_rate_hz, d.table, {}, &d.kp, &d.kd);
+  const auto samples =
+      play_closed_loop(robot, d.scenario, d.trajectory, o.periods, o.sample_rate_hz, d.table, {}, &d.kp, &d.kd);
   const Eigen::Index S = static_cast<Eigen::Index>(samples.size());
   d.t.resize(S);
   d.q.resize(S, kSurveyJoints);
@@ -216,8 +167,8 @@ std::vector<SimulatedDrive::PlantSample> simulate_closed_loop(const RobotDescrip
   }
   const int periods = static_cast<int>(
       std::lround(static_cast<double>(data.t.size()) / (data.trajectory.period() * data.sample_rate_hz)));
-  auto samples = play(robot, s, data.trajectory, std::max(periods, 1), data.sample_rate_hz, data.table, phi_standard,
-                      &data.kp, &data.kd);
+  auto samples = play_closed_loop(robot, s, data.trajectory, std::max(periods, 1), data.sample_rate_hz, data.table,
+                                  phi_standard, &data.kp, &data.kd);
   return samples;
 }
 

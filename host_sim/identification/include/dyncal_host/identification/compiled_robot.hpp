@@ -71,6 +71,9 @@ std::vector<std::string> compiled_robot_names();
 /// The operations of `robot` checked against its description (joint count). Throws InputError.
 const CompiledRobot& compiled_robot_for(const RobotDescription& robot);
 
+/// The base map K (num_base x num_standard): phi_b = K phi (Gautier), from standard_to_base.
+Eigen::MatrixXd base_map(const CompiledRobot& robot);
+
 /// Samples and seed of derive_tau_max.
 inline constexpr int kDerivedTauMaxSamples = 4096;
 inline constexpr unsigned kDerivedTauMaxSeed = 20;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "dyncal/effect_terms.hpp"
+#include "dyncal/parameter_table.hpp"
 #include "dyncal_host/common/robot_description.hpp"
 #include "dyncal_host/identification/prediction.hpp"
 
@@ -28,5 +29,12 @@ struct DriveTableContent {
 /// motor turning with more than one other joint (a table term couples two), Eq. 8's power friction
 /// of a coupled motor (no table term), more effect terms than kTableMaxEffects.
 DriveTableContent drive_table_content(const ParameterSet& params, const RobotDescription& robot);
+
+/// The parameter table of `params` for `robot` as a drive takes it (drive_table_content, float
+/// values, the id of the robot the parameters were identified for: a drive of another robot refuses
+/// it); the conversion's notes appended to *notes. Throws InputError as drive_table_content, and for
+/// more values than a table holds or a value or effect coefficient that is no finite float.
+ParameterTable parameter_table(const ParameterSet& params, const RobotDescription& robot,
+                               std::vector<std::string>* notes);
 
 }  // namespace dyncal::host

@@ -2,6 +2,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -20,7 +21,8 @@ inline constexpr int kMaxFilterOrder = 8;
 /// the option and its admissible range).
 struct IdentifyOptions {
   /// wls (Gautier's per-joint weights) | ols (IDIM-OLS) | kf | rls | pcls (physically consistent WLS) |
-  /// gd | ga | pf (the survey's optimisers on the weighted data: search_consistent)
+  /// gd | ga | pf (the survey's optimisers on the weighted data: search_consistent) | iv (IDIM-IV:
+  /// instrumental_variables.hpp, needs closed_loop)
   std::string method = "wls";
   unsigned terms = 0;                ///< dyncal::term bits (rigid body always included)
   std::vector<ModelEffect> effects;  ///< effect terms after the compiled ones (model_effects.hpp): not kf, rls
@@ -40,6 +42,13 @@ struct IdentifyOptions {
   int search_evaluations = 0;  ///< gd: cost evaluations, ga: generations, pf: evaluations per particle; 0: default
   bool friction_per_joint = false;  ///< ignore robot.json's coupling: friction and rotor inertia per joint (the log's
                                     ///< conversion still uses the transmission); lets diagnose rediscover a coupling
+  /// iv: the closed-loop simulation of the logged run under the drive's known control law (identify
+  /// --law; drive_law.hpp): the log's grid (t, segments, period) with q the plant's positions at its
+  /// samples (tau 0), the plant's standard parameters phi_standard (10 N, generated order) and
+  /// Coulomb Fc [Nm] and viscous Fv [Nm s/rad] friction per joint (N). Throws InputError (a trip).
+  std::function<JointLog(const JointLog& grid, const Eigen::VectorXd& phi_standard, const Eigen::VectorXd& Fc,
+                         const Eigen::VectorXd& Fv)>
+      closed_loop;
 };
 
 struct JointMetrics {

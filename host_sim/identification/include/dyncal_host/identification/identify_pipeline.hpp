@@ -21,6 +21,7 @@
 #include "dyncal_host/identification/consistent_least_squares.hpp"
 #include "dyncal_host/identification/effect_model.hpp"
 #include "dyncal_host/identification/identify.hpp"
+#include "dyncal_host/identification/instrumental_variables.hpp"
 #include "dyncal_host/identification/prediction.hpp"
 #include "dyncal_host/identification/signal.hpp"
 #include "dyncal_host/identification/stacked_data.hpp"
@@ -66,14 +67,16 @@ class IdentifyPipeline {
   /// Memory: the log's rate is processed one joint at a time (a few of its columns at once), and
   /// only what the regressor is computed from is kept at the decimated samples; dense: also fill
   /// W (and W_load) for the consumers that need the matrix (StackedData).
-  StackedData prepare(const JointLog& log, bool dense) const {
+  /// band: the standstill band to use instead of the log's own (IDIM-IV's noise-free simulations
+  /// take the measured log's, so that their friction-sign columns are built as the measured ones).
+  StackedData prepare(const JointLog& log, bool dense, const Eigen::VectorXd* band_override = nullptr) const {
     const double fs = 1.0 / log.sample_period();
     const ButterworthLowPass filter(opt_.filter_order, opt_.cutoff_hz, fs);
     int d = opt_.decimate > 0 ? opt_.decimate : static_cast<int>(std::floor(fs / (25.0 * opt_.cutoff_hz)));
     d = std::max(d, 1);
     const Eigen::Index edge = static_cast<Eigen::Index>(std::ceil(fs / opt_.cutoff_hz));
     const auto segments = log.segments();
-    const JointVec band = standstill_band(log, segments);
+    const JointVec band = band_override ? JointVec(*band_override) : standstill_band(log, segments);
     StackedData out;
     out.rate_hz = fs / d;
     out.cutoff_hz = opt_.cutoff_hz;
@@ -536,8 +539,12 @@ IdentifyResult run_identify(const RobotDescription& robot, JointLog&& log, const
     throw InputError("log has " + std::to_string(log.joints()) + " joints, robot " + robot.name + " has " +
                      std::to_string(N));
   Pipe pipe(robot, opt);
-  // Effect terms are fitted on the dense [W E]; the declared model streams the regressor's rows.
-  const StackedData data = pipe.prepare(log, !opt.effects.empty());
+  // Effect terms are fitted on the dense [W E], IDIM-IV on the dense W and its simulated twin; the
+  // declared model streams the regressor's rows.
+  const bool iv = opt.method == "iv";
+  const StackedData data = pipe.prepare(log, !opt.effects.empty() || iv);
+  JointLog grid;  // IDIM-IV's simulations run on the log's grid
+  if (iv) grid.t = log.t, grid.segment_starts = log.segment_starts, grid.period = log.period;
   IdentifyResult res;
   res.notes = data.notes;
   const Eigen::Index S = data.t.size();
@@ -573,7 +580,12 @@ IdentifyResult run_identify(const RobotDescription& robot, JointLog&& log, const
     res.validation = "blocked " + std::to_string(folds) + "-fold cross-validation, " +
                      std::to_string(opt.block_seconds).substr(0, 4) + " s blocks";
   }
-  if (!opt.effects.empty()) {
+  if (iv) {
+    const PrepareLog prepare = [&pipe, &data](const JointLog& l) {
+      return pipe.prepare(l, true, &data.standstill_band);
+    };
+    fit_instrumental(data, grid, fold, folds, robot, opt, prepare, res);
+  } else if (!opt.effects.empty()) {
     // Effect terms (model_effects.hpp): [W E] fitted at run time, validated the same way.
     fit_effect_model(data, opt.effects, fold, folds, robot, opt, res);
     res.model = model_spec_name({Terms, opt.effects});
