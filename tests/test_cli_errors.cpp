@@ -128,6 +128,36 @@ TEST(CliErrors, TrajectoryFileBeyondALimitIsRefused) {
   std::filesystem::remove(path);
 }
 
+// A law file (identify --method iv --law) is read before the log: each fault is one line naming the
+// field, exit 2.
+TEST(CliErrors, LawFileFaultsNameTheField) {
+  const auto dir = std::filesystem::temp_directory_path() / ("dyncal_test_law_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const auto made = run_dyncal("excite --evaluations 20 --out " + (dir / "t.json").string());
+  ASSERT_EQ(made.exit_code, 0) << made.err;
+  const std::string iv =
+      "identify --robot er20 --data " + (dir / "none.csv").string() + " --model eq7 --method iv --law ";
+  const auto law = [&](const std::string& text) {
+    std::ofstream(dir / "law.json") << text;
+    return iv + (dir / "law.json").string();
+  };
+  const std::string gains = R"("kp": [1, 1, 1, 1, 1, 1], "kd": [1, 1, 1, 1, 1, 1])";
+  expect_error(law(R"({"periods": 1, "sample_rate_hz": 1000, )" + gains + "}"), "\"trajectory\" is missing");
+  expect_error(law(R"({"trajectory": "t.json", "sample_rate_hz": 1000, )" + gains + "}"),
+               "\"periods\" must be a number");
+  expect_error(law(R"({"trajectory": "t.json", "periods": 1, "sample_rate_hz": 1000, "kp": [1, 1], "kd": [1]})"),
+               "\"kp\" must be an array of 6 numbers");
+  expect_error(
+      law(R"({"trajectory": "t.json", "periods": 1, "sample_rate_hz": 1000, "kp": [1, 1, 1, 1, 1, -1], "kd": [1, 1, 1, 1, 1, 1]})"),
+      "\"kp\" joint 6: a gain is finite and > 0");
+  expect_error(
+      law(R"({"trajectory": "t.json", "periods": 1, "sample_rate_hz": 1000, )" + gains + R"(, "feed_forward": 3})"),
+      "\"feed_forward\" must be the path");
+  expect_error(law(R"({"trajectory": "missing.json", "periods": 1, "sample_rate_hz": 1000, )" + gains + "}"),
+               "cannot read");
+  std::filesystem::remove_all(dir);
+}
+
 // Every identify option is range-checked against the log before any work (issue 23, fault 8):
 // one-sample folds, a validated tail of one sample, a filter order that runs for minutes and a
 // cut-off that overflows the edge computation were all accepted with exit 0.
