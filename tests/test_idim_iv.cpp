@@ -63,12 +63,7 @@ TEST_P(IdimIv, RecoversTheSimulatedParametersFromALogUnderAKnownLaw) {
     d.start();
     kp = d.kp(), kd = d.kd();
   }
-  const dyncal::ParameterTable factory = nominal_table(robot.name);
-  std::vector<std::uint8_t> bytes(dyncal::kTableMaxBytes);
-  int size = 0;
-  ASSERT_EQ(dyncal::encode_table(factory, bytes.data(), static_cast<int>(bytes.size()), &size),
-            dyncal::TableStatus::ok);
-  bytes.resize(static_cast<size_t>(size));
+  const std::vector<std::uint8_t> bytes = encoded_table(nominal_table(robot.name));
   const auto run = play_closed_loop(robot, scenario, trajectory, 1, kRate, bytes, {}, &kp, &kd);
   std::mt19937_64 rng(7);
   std::normal_distribution<double> noise(0.0, kPositionNoise);

@@ -47,12 +47,7 @@ host::JointLog simulate_law(const host::RobotDescription& robot, const host::Dri
     kp[j] = law.kp[static_cast<size_t>(j)];
     kd[j] = law.kd[static_cast<size_t>(j)];
   }
-  std::vector<std::uint8_t> bytes(kTableMaxBytes);
-  int size = 0;
-  const ParameterTable table = law.has_table ? law.table : host::nominal_table(robot.name);
-  if (encode_table(table, bytes.data(), static_cast<int>(bytes.size()), &size) != TableStatus::ok)
-    throw host::InputError(law.source + ": the feed-forward table does not encode");
-  bytes.resize(static_cast<size_t>(size));
+  const auto bytes = host::encoded_table(law.has_table ? law.table : host::nominal_table(robot.name));
   const auto run = host::play_closed_loop(robot, sc, law.trajectory, law.periods, law.sample_rate_hz, bytes,
                                           std::vector<double>(phi.data(), phi.data() + phi.size()), &kp, &kd);
   host::JointLog out;

@@ -15,9 +15,8 @@
 #include "dyncal_host/common/input_error.hpp"
 
 namespace dyncal::host {
-namespace {
 
-std::vector<std::uint8_t> encode(const ParameterTable& t) {
+std::vector<std::uint8_t> encoded_table(const ParameterTable& t) {
   std::vector<std::uint8_t> bytes(kTableMaxBytes);
   int size = 0;
   if (encode_table(t, bytes.data(), static_cast<int>(bytes.size()), &size) != TableStatus::ok) {
@@ -26,8 +25,6 @@ std::vector<std::uint8_t> encode(const ParameterTable& t) {
   bytes.resize(static_cast<size_t>(size));
   return bytes;
 }
-
-}  // namespace
 
 ParameterTable nominal_table(const std::string& robot, const JointArray& Fc, const JointArray& beta) {
   return make_drive_plant(robot)->nominal_table(Fc, beta);
@@ -55,7 +52,7 @@ SimulatedDrive::SimulatedDrive(const RobotDescription& robot, const Scenario& sc
       startup_note_ = std::string("factory table: ") + table_path_ + " rejected (" + to_string(st) + ")";
     }
   }
-  active_bytes_ = encode(active_);
+  active_bytes_ = encoded_table(active_);
   plant_->set_active(active_);  // the active table passed the plant's check
   trajectory.f_f = 0.1;
   trajectory.harmonics = 5;

@@ -61,11 +61,11 @@ DriveLaw read_drive_law(const std::string& path, const RobotDescription& robot) 
   if (j.contains("feed_forward")) {
     if (!j["feed_forward"].is_string())
       throw InputError(path + ": \"feed_forward\" must be the path of a dyncal identify --params file");
-    const ParameterSet p = read_parameter_file(relative(j["feed_forward"].get<std::string>()));
-    if (p.robot != robot.name)
-      throw InputError(path + ": feed_forward: parameters of robot '" + p.robot + "', not '" + robot.name + "'");
-    std::vector<std::string> notes;
-    law.table = parameter_table(p, robot, &notes);
+    try {
+      law.table = parameter_table(read_parameter_file(relative(j["feed_forward"].get<std::string>())), robot, nullptr);
+    } catch (const InputError& e) {
+      throw InputError(path + ": feed_forward: " + e.what());  // e.g. parameters of another robot
+    }
     law.has_table = true;
   }
   return law;

@@ -99,6 +99,7 @@ void fit_instrumental(const StackedData& d, const JointLog& grid, const std::vec
   bool converged = false, relax = false;
   double previous_step = INFINITY, last_step_se = INFINITY;
   VectorXd simulated_from;  // the estimate whose plant gave Z
+  VectorXd estimate;        // the IV estimate of Z: what is reported
   std::string trip;
   while (simulations < kIvMaxSimulations && !converged) {
     // The first plant: robot.json's inertials with the WLS friction (least squares on noisy
@@ -134,7 +135,8 @@ void fit_instrumental(const StackedData& d, const JointLog& grid, const std::vec
       throw InputError("--method iv: the closed-loop simulation's samples are not the log's");
     Z = sim.W.array().colwise() * w.array();
     simulated_from = phi;
-    const VectorXd next = iv_solve(K, Z, y, VectorXd::Ones(rows));
+    estimate = iv_solve(K, Z, y, VectorXd::Ones(rows));
+    const VectorXd& next = estimate;
     if (!next.allFinite()) throw InputError("--method iv: the instrumental estimate is not finite");
     const double step = (next - phi).norm();
     last_step_se = step_in_standard_errors(K, Z, y, next, next - phi);
@@ -145,8 +147,7 @@ void fit_instrumental(const StackedData& d, const JointLog& grid, const std::vec
     previous_step = step;
     phi = relax && !converged ? VectorXd(0.5 * (phi + next)) : next;
   }
-  // The reported estimate is the IV estimate of the last instruments.
-  phi = iv_solve(K, Z, y, VectorXd::Ones(rows));
+  phi = estimate;  // the IV estimate of the last instruments (the iterate may be a half step)
   res.fit_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   // Cross-validation with the final instruments: each fold's IV estimate from the others' rows.

@@ -51,14 +51,7 @@ std::vector<std::uint8_t> set_parameter_table(const Scenario& s) {
     Fc[static_cast<size_t>(j)] = s.friction[j].Fc;
     beta[static_cast<size_t>(j)] = s.friction[j].beta;
   }
-  const ParameterTable t = nominal_table(s.robot, Fc, beta);
-  std::vector<std::uint8_t> bytes(kTableMaxBytes);
-  int size = 0;
-  if (encode_table(t, bytes.data(), static_cast<int>(bytes.size()), &size) != TableStatus::ok) {
-    throw InputError("cannot encode the set-parameter table");
-  }
-  bytes.resize(static_cast<size_t>(size));
-  return bytes;
+  return encoded_table(nominal_table(s.robot, Fc, beta));
 }
 
 /// The drive's PD gains (natural frequency bandwidth_hz, damping) set from the smallest diagonal

@@ -137,6 +137,10 @@ class SimulatedDrive {
 /// survey's set-parameter feed-forward (Fig. 3). Throws InputError for a robot not compiled in.
 ParameterTable nominal_table(const std::string& robot, const JointArray& Fc = {}, const JointArray& beta = {});
 
+/// `t` encoded as the drive's flash holds it (parameter_table.hpp). Throws std::logic_error if it
+/// does not encode (a table built by the host always does).
+std::vector<std::uint8_t> encoded_table(const ParameterTable& t);
+
 /// Writes `bytes` to `path` atomically (temporary file in the same directory, fsync, rename, fsync
 /// of the directory): a crash at any moment leaves the old or the new content. Throws
 /// std::runtime_error on I/O failure. This is the parameter store's only write path, and its seam
