@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -47,6 +48,31 @@ TEST(ModelSpec, ItemsRoundTripAndNameTheirParameters) {
     EXPECT_EQ(effect_item(again.effects[i]), effect_item(spec.effects[i]));
 }
 
+// A coupled motor is a row of the motor-velocity map, not columns: it parses, prints back exactly
+// and replaces its motor's row (over robot.json's, and over the identity with friction per joint).
+TEST(ModelSpec, CoupledMotorIsARowOfTheMotorMap) {
+  const ModelSpec spec = parse_model_spec("eq7,rotor_inertia,coupled_motor:3-2:0.35,coupled_motor:1+2", 3);
+  ASSERT_EQ(spec.motors.size(), 2u);
+  EXPECT_TRUE(spec.effects.empty());
+  EXPECT_EQ(spec.motors[0].motor, 2);
+  EXPECT_EQ(spec.motors[0].with, 1);
+  EXPECT_EQ(spec.motors[0].ratio, -0.35);
+  EXPECT_EQ(spec.motors[1].ratio, 1.0);
+  EXPECT_EQ(coupled_motor_item(spec.motors[1]), "coupled_motor:1+2");
+  const ModelSpec again = parse_model_spec(model_spec_name(spec), 3);
+  ASSERT_EQ(again.motors.size(), 2u);
+  EXPECT_EQ(again.motors[0].ratio, -0.35);
+  const RobotDescription tx40 = load_robot(default_robots_dir(), "tx40");
+  const Eigen::MatrixXd declared = motor_velocity_map(tx40, true, {});
+  EXPECT_EQ(declared(5, 4), tx40.transmission(5, 4) / tx40.transmission(5, 5));  // motor 6 on q6 + q5
+  EXPECT_TRUE(motor_velocity_map(tx40, false, {}).isIdentity(0.0));
+  const Eigen::MatrixXd diagnosed = motor_velocity_map(tx40, false, {{5, 4, 0.9}});
+  Eigen::MatrixXd expected = Eigen::MatrixXd::Identity(6, 6);
+  expected(5, 4) = 0.9;
+  EXPECT_EQ(diagnosed, expected);
+  EXPECT_EQ(motor_velocity_map(tx40, true, {{5, 3, -0.5}})(5, 4), 0.0);  // the model's row replaces robot.json's
+}
+
 TEST(ModelSpec, BadItemsNameWhatIsWrong) {
   const std::map<std::string, std::string> cases = {
       {"eq7,stribeck:3", "velocity scale"},
@@ -59,6 +85,12 @@ TEST(ModelSpec, BadItemsNameWhatIsWrong) {
       {"eq7,position_periodic:1:2,position_periodic:1:2", "the same effect twice"},
       {"eq7,velocity_power:1:3", "takes no shape"},
       {"eq7,nonsense", "unknown model term"},
+      {"eq7,coupled_motor:2+2", "with its own joint"},
+      {"eq7,coupled_motor:2", "coupled_motor:M+J"},
+      {"eq7,coupled_motor:3+4", "coupled_motor:M+J"},
+      {"eq7,coupled_motor:3+1:-2", "positive number"},
+      {"eq7,coupled_motor:3+1,coupled_motor:3-2", "coupled twice"},
+      {"rigid_body,coupled_motor:3+1", "has none"},
   };
   for (const auto& [model, needle] : cases) {
     SCOPED_TRACE(model);
@@ -310,20 +342,18 @@ TEST(EffectModelCli, Tx40DiagnosisReportFedBackToIdentify) {
 }
 
 // The TX40's coupled wrist in a drive table: identify fits motor 6's friction and rotor inertia at
-// the motor's velocity q5 + q6 (robot.json's transmission); drive_table_content turns them into a
-// coupling term of the table. Applied as identification applies any term (lib/ effect_columns at
-// the log's rate, filtered in parallel), the table's per-joint values plus that term must give the
-// torque identify's motor model gives, up to the one difference of the two paths: the motor's
-// viscous term takes the filtered velocity's sign in the motor model and the unfiltered one in an
-// effect term, which differs only within a filter period of a reversal. A table whose coupling
-// ratio has the wrong sign (a conversion error) must be far off: the check can fail.
-TEST(DriveTable, CoupledMotorTermGivesIdentifysTorque) {
+// the motor's velocity q6 + r q5 (robot.json's transmission, r = 1, or a coupled motor of the model,
+// as diagnose finds it); drive_table_content turns them into a coupling term of the table. Applied as
+// identification applies any term (lib/ effect_columns at the log's rate, filtered in parallel),
+// the table's per-joint values plus that term must give the torque identify's motor model gives, up
+// to the one difference of the two paths: the motor's viscous term takes the filtered velocity's
+// sign in the motor model and the unfiltered one in an effect term, which differs only within a
+// filter period of a reversal. A table whose coupling ratio has the wrong sign (a conversion error)
+// must be far off: the check can fail.
+void expect_table_gives_identifys_torque(const IdentifyOptions& o, double ratio) {
   const RobotDescription robot = load_robot(default_robots_dir(), "tx40");
   const JointLog log = read_tx40_log(DYNCAL_TX40_DATA, robot.transmission, robot.joint_offsets);
-  IdentifyOptions o;  // identify's defaults: wls, eq7 + rotor inertia + offset, friction per motor
-  o.terms = parse_model("eq7,rotor_inertia,offset");
   const IdentifyResult r = identify(robot, log, o);
-  ASSERT_TRUE(r.friction_per_motor);
   const ParameterSet p = parameter_set(r);
   const DriveTableContent table = drive_table_content(p, robot);
   ASSERT_EQ(table.effects.size(), 1u);
@@ -331,11 +361,18 @@ TEST(DriveTable, CoupledMotorTermGivesIdentifysTorque) {
   EXPECT_EQ(term.kind, dyncal::EffectKind::coupling);
   EXPECT_EQ(term.joint, 5);
   EXPECT_EQ(term.joint2, 4);
+  EXPECT_NEAR(term.sign * term.shape, ratio, 1e-6);
+  for (const char* name : {"Fc6", "Fv6", "Ia6"}) {  // motor 6's own terms are the coupling term's
+    const auto it = std::find(p.names.begin(), p.names.end(), name);
+    ASSERT_NE(it, p.names.end()) << name;
+    EXPECT_EQ(table.values[static_cast<size_t>(it - p.names.begin())], 0.0) << name;
+  }
   const Eigen::VectorXd tau_host = prepare_stacked(robot, log, o).W * p.values;
   const Eigen::VectorXd values = Eigen::Map<const Eigen::VectorXd>(table.values.data(), table.values.size());
   auto table_torque = [&](int sign) {
     IdentifyOptions per_joint = o;
     per_joint.friction_per_joint = true;
+    per_joint.motors.clear();
     per_joint.effects = {ModelEffect{term.kind, term.joint, term.joint2, sign, term.shape}};
     const StackedData d = prepare_stacked(robot, log, per_joint);
     const Eigen::Vector3d c(term.c[0], term.c[1], term.c[2]);
@@ -356,6 +393,21 @@ TEST(DriveTable, CoupledMotorTermGivesIdentifysTorque) {
     EXPECT_LT(right, 0.05 * r.joints[j].rms);
     EXPECT_GT(wrong, r.joints[j].rms);
   }
+}
+
+TEST(DriveTable, CoupledMotorTermGivesIdentifysTorque) {
+  IdentifyOptions o;  // identify's defaults: wls, eq7 + rotor inertia + offset, friction per motor
+  o.terms = parse_model("eq7,rotor_inertia,offset");
+  expect_table_gives_identifys_torque(o, 1.0);
+}
+
+TEST(DriveTable, DiagnosedCoupledMotorTermGivesIdentifysTorque) {
+  IdentifyOptions o;  // robot.json's coupling left out, the model's coupled motor (diagnose's ratio) in
+  const ModelSpec spec = parse_model_spec("eq7,rotor_inertia,offset,coupled_motor:6+5:0.921", 6);
+  o.terms = spec.terms;
+  o.motors = spec.motors;
+  o.friction_per_joint = true;
+  expect_table_gives_identifys_torque(o, 0.921);
 }
 
 }  // namespace

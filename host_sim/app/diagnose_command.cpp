@@ -19,6 +19,7 @@ int run_diagnose(DiagnoseSettings& s) {
   const host::ModelSpec spec = host::parse_model_spec(s.model, robot.num_joints);
   s.options.identify.terms = spec.terms;
   s.options.identify.effects = spec.effects;
+  s.options.identify.motors = spec.motors;
   std::vector<std::string> dropped;
   const auto log = s.log.load_log(robot, &dropped);
   auto result = host::diagnose(robot, log, s.options);

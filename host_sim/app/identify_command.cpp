@@ -1,4 +1,5 @@
 // dyncal identify: base parameters and friction from a measured log, cross-validated.
+#include <algorithm>
 #include <iostream>
 #include <memory>
 #include <utility>
@@ -77,16 +78,24 @@ int run_identify(IdentifySettings& s) {
   if (!s.effects.empty()) {
     // A diagnosis report's effects join the model; one the model already has is not added twice.
     std::vector<std::string> skipped;
-    for (const auto& e : host::read_diagnosed_effects(s.effects, robot.num_joints, &skipped)) {
+    const host::ModelSpec found = host::read_diagnosed_effects(s.effects, robot.num_joints, &skipped);
+    for (const auto& e : found.effects) {
       if (host::model_contains(spec, e))
         dropped.push_back(s.effects + ": " + host::effect_item(e) + " is already in the model");
       else
         host::add_effect(spec, e, s.effects);
     }
+    for (const auto& m : found.motors) {
+      if (std::any_of(spec.motors.begin(), spec.motors.end(), [&](const auto& o) { return o.motor == m.motor; }))
+        dropped.push_back(s.effects + ": " + host::coupled_motor_item(m) + ": the model couples that motor already");
+      else
+        spec.motors.push_back(m);
+    }
     for (const auto& k : skipped) dropped.push_back(s.effects + ": " + k + " has no model term (a change over time)");
   }
   s.options.terms = spec.terms;
   s.options.effects = spec.effects;
+  s.options.motors = spec.motors;
   if (!s.law.empty()) {
     if (s.options.method != "iv") throw host::InputError("--law is the control law of --method iv");
     const auto law = std::make_shared<host::DriveLaw>(host::read_drive_law(s.law, robot));

@@ -71,7 +71,53 @@ bool same_effect(const ModelEffect& a, const ModelEffect& b) {
   return a.shape == b.shape;
 }
 
+/// "coupled_motor:M+J[:RATIO]" (1-based) into a CoupledMotor; throws InputError naming `where`.
+CoupledMotor parse_coupled_motor(const std::string& rest, const std::string& ratio_text, bool has_ratio, int num_joints,
+                                 const std::string& where) {
+  const size_t op = rest.find_first_of("+-");
+  const int a = op == std::string::npos ? -1 : joint_number(rest.substr(0, op), num_joints);
+  const int b = op == std::string::npos ? -1 : joint_number(rest.substr(op + 1), num_joints);
+  if (a < 0 || b < 0)
+    throw InputError(where + ": expected coupled_motor:M+J or coupled_motor:M-J with joints 1.." +
+                     std::to_string(num_joints));
+  if (a == b) throw InputError(where + ": a motor coupled with its own joint");
+  double r = 1.0;
+  if (has_ratio) {
+    char* end = nullptr;
+    r = std::strtod(ratio_text.c_str(), &end);
+    if (ratio_text.empty() || *end != '\0' || !std::isfinite(r) || !(r > 0))
+      throw InputError(where + ": the ratio after a second ':' must be a positive number");
+  }
+  return {a - 1, b - 1, rest[op] == '+' ? r : -r};
+}
+
 }  // namespace
+
+std::string coupled_motor_item(const CoupledMotor& m) {
+  std::string out = "coupled_motor:" + J(m.motor) + (m.ratio > 0 ? "+" : "-") + J(m.with);
+  if (std::abs(m.ratio) != 1.0) {
+    char number[32];
+    std::snprintf(number, sizeof number, ":%.17g", std::abs(m.ratio));
+    out += number;
+  }
+  return out;
+}
+
+Eigen::MatrixXd motor_velocity_map(const RobotDescription& robot, bool robot_transmission,
+                                   const std::vector<CoupledMotor>& motors) {
+  const int n = robot.num_joints;
+  Eigen::MatrixXd T = Eigen::MatrixXd::Identity(n, n);
+  if (robot_transmission && robot.transmission.rows() == n && robot.transmission.cols() == n &&
+      (robot.transmission.diagonal().array() != 0.0).all()) {
+    for (int m = 0; m < n; ++m) T.row(m) = robot.transmission.row(m) / robot.transmission(m, m);
+  }
+  for (const CoupledMotor& c : motors) {
+    T.row(c.motor).setZero();
+    T(c.motor, c.motor) = 1.0;
+    T(c.motor, c.with) = c.ratio;
+  }
+  return T;
+}
 
 const char* effect_kind_name(EffectKind k) {
   return info(k).name;
@@ -140,8 +186,19 @@ ModelSpec parse_model_spec(const std::string& model, int num_joints) {
       continue;
     }
     const std::string where = "model item '" + item + "'";
+    if (item.substr(0, colon) == "coupled_motor") {
+      const std::string rest = item.substr(colon + 1);
+      const size_t colon2 = rest.find(':');
+      const CoupledMotor m =
+          parse_coupled_motor(rest.substr(0, colon2), colon2 == std::string::npos ? "" : rest.substr(colon2 + 1),
+                              colon2 != std::string::npos, num_joints, where);
+      for (const CoupledMotor& o : spec.motors)
+        if (o.motor == m.motor) throw InputError(where + ": motor " + J(m.motor) + " coupled twice");
+      spec.motors.push_back(m);
+      continue;
+    }
     const KindInfo* k = find_kind(item.substr(0, colon));
-    if (!k) throw InputError(where + ": unknown effect (expected one of " + kind_list() + ")");
+    if (!k) throw InputError(where + ": unknown effect (expected one of " + kind_list() + ", coupled_motor)");
     std::string rest = item.substr(colon + 1), shape_text;
     const size_t colon2 = rest.find(':');
     if (colon2 != std::string::npos) {
@@ -185,6 +242,10 @@ ModelSpec parse_model_spec(const std::string& model, int num_joints) {
     effects.emplace_back(e, where);
   }
   spec.terms = parse_model(terms_only);
+  if (!spec.motors.empty() && !(spec.terms & (term::coulomb | term::viscous | term::rotor_inertia)))
+    throw InputError("model item '" + coupled_motor_item(spec.motors.front()) +
+                     "': a coupled motor takes over its joint's friction and rotor-inertia terms, and the model has "
+                     "none (add eq7)");
   for (const auto& [e, where] : effects) add_effect(spec, e, where);
   return spec;
 }
@@ -209,15 +270,15 @@ void add_effect(ModelSpec& spec, const ModelEffect& e, const std::string& where)
 std::string model_spec_name(const ModelSpec& spec) {
   std::string out = model_name(spec.terms);
   for (const ModelEffect& e : spec.effects) out += "," + effect_item(e);
+  for (const CoupledMotor& m : spec.motors) out += "," + coupled_motor_item(m);
   return out;
 }
 
-std::vector<ModelEffect> read_diagnosed_effects(const std::string& path, int num_joints,
-                                                std::vector<std::string>* skipped) {
+ModelSpec read_diagnosed_effects(const std::string& path, int num_joints, std::vector<std::string>* skipped) {
   const nlohmann::json j = read_json_file(path);
   if (!j.is_object() || !j.contains("declared_model") || !j.contains("effects") || !j["effects"].is_array())
     throw InputError(path + ": not a dyncal diagnose report (\"declared_model\" and \"effects\")");
-  std::vector<ModelEffect> out;
+  ModelSpec out;
   for (size_t i = 0; i < j["effects"].size(); ++i) {
     const nlohmann::json& x = j["effects"][i];
     const std::string where = path + ": effects[" + std::to_string(i + 1) + "]";
@@ -236,8 +297,18 @@ std::vector<ModelEffect> read_diagnosed_effects(const std::string& path, int num
       if (skipped) skipped->push_back("drift on joint " + std::to_string(joints.front() + 1));
       continue;
     }
+    if (name == "coupled_motor") {
+      if (joints.size() != 2 || joints[0] == joints[1])
+        throw InputError(where + ": a coupled motor needs two joints (its own, then the other)");
+      const double shape =
+          x.contains("shape") && x["shape"].is_number() && x["shape"].get<double>() > 0 ? x["shape"].get<double>() : 1;
+      out.motors.push_back({joints[0], joints[1], x.value("sign", 1.0) < 0 ? -shape : shape});
+      continue;
+    }
     const KindInfo* k = find_kind(name);
-    if (!k) throw InputError(where + ": unknown kind '" + name + "' (expected one of " + kind_list() + ", drift)");
+    if (!k)
+      throw InputError(where + ": unknown kind '" + name + "' (expected one of " + kind_list() +
+                       ", coupled_motor, drift)");
     ModelEffect e;
     e.kind = k->kind;
     e.joint = joints.front();
@@ -253,7 +324,7 @@ std::vector<ModelEffect> read_diagnosed_effects(const std::string& path, int num
         throw InputError(where + ": '" + name + "' needs a positive 'shape'");
       e.shape = x["shape"].get<double>();
     }
-    out.push_back(e);
+    out.effects.push_back(e);
   }
   return out;
 }

@@ -254,6 +254,92 @@ void coupling(const CandidateContext& c, int i, int j, std::vector<Candidate>& o
   out.push_back(std::move(cand));
 }
 
+/// Joint k's own motor turning with q_k + r q_l instead (a coupled wrist, the TX40's motor 6 on
+/// q6 + q5): the model's friction and rotor-inertia columns of joint k (Fc_k, Fv_k, Ia_k, those it
+/// has) give way to the same terms of the motor velocity v = qd_k + r qd_l, on joint k's rows and r
+/// times on joint l's. Unlike an added coupling it adds no parameter, and joint k's own columns no
+/// longer absorb the motor's share: the linear terms alone pin r (with joint k's viscous and inertia
+/// columns left in, any r fits them). r by profile search as the coupling's, each fit with the pair's
+/// other local columns.
+void coupled_motor_of(const CandidateContext& c, int k, int l, std::vector<Candidate>& out) {
+  constexpr int kRatioGrid = 33;
+  const double span = std::log(5.0);
+  const StackedData& d = c.data;
+  const std::vector<int> pair{k, l};
+  const std::vector<Index> local = local_columns(c, pair), own = local_columns(c, {k});
+  // Joint k's motor terms, where the model has them as its own (not yet a coupled motor's).
+  const char* terms[3] = {"Fc", "Fv", "Ia"};
+  std::vector<Index> removed;
+  std::vector<int> use;
+  std::vector<std::string> replaced, names;
+  const std::string tag = J(k);
+  for (int t = 0; t < 3; ++t) {
+    const auto it = std::find(c.model_names.begin(), c.model_names.end(), terms[t] + tag);
+    if (it == c.model_names.end()) continue;
+    const Index col = it - c.model_names.begin();
+    if (std::find(own.begin(), own.end(), col) == own.end()) return;  // already a coupled motor's
+    removed.push_back(col);
+    use.push_back(t);
+    replaced.push_back(terms[t] + tag);
+  }
+  // Coulomb and viscous friction of its own (their signs are checked), and no Eq. 8 power friction.
+  if (use.size() < 2 || use[0] != 0 || use[1] != 1 || has(c, "Fp" + tag)) return;
+  double rss = 0, n_eff = 0;
+  residual_scale(c, pair, rss, n_eff);
+  auto physical = [&](const VectorXd& beta) {  // friction opposes motion
+    for (size_t q = 0; q < use.size(); ++q)
+      if (use[q] < 2 && beta[static_cast<Index>(q)] < 0) return false;
+    return true;
+  };
+  const ReplacementSystem sys = replacement_system(c, pair, local, removed);
+  ShapeFit best;
+  double best_sign = 1;
+  for (double sign : {1.0, -1.0}) {
+    auto gain = [&](double lr) {
+      const double r = sign * std::exp(lr);
+      const double band = std::hypot(d.standstill_band[k], r * d.standstill_band[l]);  // motor_velocity's
+      return replacement_gain<3>(
+          c, sys, EffectKind::coupling, use, {1.0, r},
+          [&](Index s, Eigen::Vector3d& x) {
+            const double v = signed_velocity(d.qd(s, k) + r * d.qd(s, l), d.qd_raw(s, k) + r * d.qd_raw(s, l), band);
+            x << (v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0)), v, d.qdd(s, k) + r * d.qdd(s, l);
+          },
+          physical);
+    };
+    const ShapeFit f = profile_search(gain, -span, span, kRatioGrid, rss, n_eff);
+    if (f.gain > best.gain) best = f, best_sign = sign;
+  }
+  // No gain, or a ratio the data cannot tell from the smallest searched: joint k's motor is its own.
+  if (best.gain <= 0 || best.lo_log <= -span) return;
+  const double r = best_sign * std::exp(best.log_value);
+  const std::string motor_tag = tag + (r > 0 ? "+" : "-") + J(l);
+  Candidate cand = table_candidate(c, Effect::coupled_motor, EffectKind::coupling, {k, l},
+                                   {"Fc" + motor_tag, "Fv" + motor_tag, "Ia" + motor_tag}, 0.0, r);
+  Eigen::MatrixXd kept(cand.columns.rows(), static_cast<Index>(use.size()));
+  for (size_t q = 0; q < use.size(); ++q) {
+    kept.col(static_cast<Index>(q)) = cand.columns.col(use[q]);
+    names.push_back(cand.names[static_cast<size_t>(use[q])]);
+  }
+  cand.columns = std::move(kept);
+  cand.names = std::move(names);
+  cand.replaces = std::move(replaced);
+  cand.sign = r > 0 ? 1.0 : -1.0;
+  cand.shape = std::abs(r);
+  cand.shape_interval = {std::exp(best.lo_log), std::exp(best.hi_log)};
+  std::ostringstream detail;
+  detail << std::setprecision(3) << "motor " << J(k) << " turning with q" << J(k) << (r > 0 ? " + " : " - ")
+         << std::abs(r) << " q" << J(l) << " (ratio 95 % " << cand.shape_interval.first << ".."
+         << cand.shape_interval.second << ")";
+  cand.detail = detail.str();
+  cand.searched = 2 * kRatioGrid;
+  out.push_back(std::move(cand));
+}
+
+void coupled_motor(const CandidateContext& c, int i, int j, std::vector<Candidate>& out) {
+  coupled_motor_of(c, i, j, out);
+  coupled_motor_of(c, j, i, out);
+}
+
 void drift(const CandidateContext& c, int i, int, std::vector<Candidate>& out) {
   // Viscous friction and offset changing linearly over the log (temperature).
   const StackedData& d = c.data;
@@ -339,6 +425,13 @@ std::string explain_coupling(const Candidate& c, const std::vector<double>& p) {
     << " Nm s/rad and inertia " << p[2] << " kg m^2 shared by both joints - transmission coupling";
   return text(s);
 }
+std::string explain_coupled_motor(const Candidate& c, const std::vector<double>& p) {
+  std::ostringstream s;
+  s << std::setprecision(3) << c.detail << " in place of joint " << c.joints[0] + 1 << "'s own: friction";
+  for (size_t k = 0; k < p.size(); ++k) s << (k ? ", " : " ") << c.names[k] << " " << p[k];
+  s << " acting on both joints - coupled transmission (the motor's row of the transmission)";
+  return text(s);
+}
 std::string explain_drift(const Candidate&, const std::vector<double>& p) {
   std::ostringstream s;
   s << std::setprecision(3) << "viscous friction changes by " << p[0] << " Nm s/rad and the offset by " << p[1]
@@ -370,6 +463,8 @@ const std::vector<EffectSpec>& effect_specs() {
       {Effect::position_periodic, "position_periodic", EffectKind::position_periodic, false, position_periodic,
        any_sign, explain_periodic},
       {Effect::coupling, "coupling", EffectKind::coupling, true, coupling, friction_non_negative, explain_coupling},
+      {Effect::coupled_motor, "coupled_motor", EffectKind::coupling, true, coupled_motor, friction_non_negative,
+       explain_coupled_motor},
       {Effect::drift, "drift", std::nullopt, false, drift, any_sign, explain_drift},
   };
   return table;

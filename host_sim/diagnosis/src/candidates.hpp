@@ -4,6 +4,7 @@
 // which signs of its fitted parameters are physical, and how a found effect is explained.
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <utility>
@@ -28,6 +29,10 @@ struct Candidate {
   double shape = 0;  ///< velocity scale (stribeck), cycles per revolution (position_periodic), ratio |r| (coupling)
   double sign = 1;   ///< coupling: the motor turns with q_i + sign shape q_j
   std::pair<double, double> shape_interval{0, 0};  ///< 95 % interval of shape where searched (coupling ratio)
+  std::vector<std::string> replaces;  ///< the model's parameters (columns) it takes the place of (coupled_motor)
+
+  /// Parameters it adds to the model: its columns less those it replaces.
+  Eigen::Index added_parameters() const { return columns.cols() - static_cast<Eigen::Index>(replaces.size()); }
 };
 
 /// What the library reads at one greedy step.
@@ -36,10 +41,12 @@ struct CandidateContext {
   int max_cycles = 64;  ///< position-periodic search: 1..max_cycles cycles per revolution
   /// Load torques for load friction (what it is, S N stacked torque [Nm]); the better one is taken.
   std::vector<std::pair<std::string, Eigen::VectorXd>> load_torques;
-  std::vector<std::string> model_names;      ///< parameters of the model so far (no second Ia or offset)
-  Eigen::VectorXd residual;                  ///< of the model so far (S N)
-  Eigen::VectorXd joint_weights;             ///< the fit's per-joint weights (1 / sigma_j; ones for OLS)
-  const Eigen::MatrixXd* model_X = nullptr;  ///< the model so far's design (S N) x p
+  std::vector<std::string> model_names;        ///< parameters of the model so far (no second Ia or offset)
+  Eigen::VectorXd residual;                    ///< of the model so far (S N)
+  Eigen::VectorXd joint_weights;               ///< the fit's per-joint weights (1 / sigma_j; ones for OLS)
+  const Eigen::MatrixXd* model_X = nullptr;    ///< the model so far's design (S N) x p
+  const Eigen::VectorXd* model_phi = nullptr;  ///< its fitted coefficients (p)
+  std::vector<std::uint32_t> column_joints;    ///< per model column, the joints it is non-zero on (bit j)
   /// The identification's zero-phase low-pass at the data's (decimated) rate, and the sample ranges
   /// of the log's segments: candidate columns are filtered in time as the regressor's were
   /// (parallel filtering), so that a discontinuous column (a friction sign) meets the filtered
@@ -74,7 +81,7 @@ struct EffectSpec {
 };
 
 /// The table, in report order (stribeck, asymmetric_friction, velocity_power, load_friction,
-/// rotor_inertia, offset, position_periodic, coupling, drift).
+/// rotor_inertia, offset, position_periodic, coupling, coupled_motor, drift).
 const std::vector<EffectSpec>& effect_specs();
 const EffectSpec& effect_spec(Effect e);
 

@@ -74,8 +74,9 @@ class CrossValidator {
   /// coefficients of the fit on all rows, X's first.
   /// *novelty: the smallest fraction of a (unit-scaled) candidate column not explained by X (1 if C
   /// is empty); near 0 means the candidate is collinear with the model and not identifiable.
+  /// drop: columns of X left out of this fit (a candidate that replaces them); their coefficients 0.
   void evaluate(const MatrixXd& C, VectorXd& val_rss, VectorXd& train_rss, VectorXd* phi_out = nullptr,
-                double* novelty = nullptr) const {
+                double* novelty = nullptr, const std::vector<Index>& drop = {}) const {
     const MatrixXd& X = *X_;
     const Index p = X.cols(), m = C.cols(), q = p + m, S = d_.t.size();
     VectorXd sc = C.colwise().norm().transpose();
@@ -119,6 +120,40 @@ class CrossValidator {
         }
       }
     }
+    // A dropped column's rows and columns leave the Grams.
+    std::vector<Index> keep;
+    for (Index i = 0; i < q; ++i)
+      if (std::find(drop.begin(), drop.end(), i) == drop.end()) keep.push_back(i);
+    if (!drop.empty()) {
+      auto reduce = [&](MatrixXd& G, VectorXd& g) {
+        G = MatrixXd(G(keep, keep));
+        g = VectorXd(g(keep));
+      };
+      for (int f = 0; f < folds_; ++f) {
+        reduce(G_fit[f], g_fit[f]);
+        for (int j = 0; j < N_; ++j) reduce(G_all[f][j], g_all[f][j]);
+      }
+    }
+    VectorXd beta;
+    solve_and_score(G_fit, g_fit, G_all, g_all, p - static_cast<Index>(drop.size()), m, val_rss, train_rss,
+                    phi_out ? &beta : nullptr, novelty);
+    if (phi_out) {
+      // X's columns then C's, unscaled; the dropped ones 0.
+      VectorXd scale(q);
+      scale << sx_, sc;
+      phi_out->setZero(q);
+      for (size_t i = 0; i < keep.size(); ++i) (*phi_out)[keep[i]] = beta[static_cast<Index>(i)] * scale[keep[i]];
+    }
+  }
+
+ private:
+  /// Fits from the Grams (p base columns, m candidate columns): validation and training RSS per
+  /// joint, the coefficients on the unit-scaled columns (*beta_out), the candidate's novelty.
+  void solve_and_score(const std::vector<MatrixXd>& G_fit, const std::vector<VectorXd>& g_fit,
+                       const std::vector<std::vector<MatrixXd>>& G_all, const std::vector<std::vector<VectorXd>>& g_all,
+                       Index p, Index m, VectorXd& val_rss, VectorXd& train_rss, VectorXd* beta_out,
+                       double* novelty) const {
+    const Index q = p + m;
     std::vector<VectorXd> fold_beta;
     const VectorXd beta = fold_fits(G_fit, g_fit, fold_beta);
     if (novelty) {
@@ -144,14 +179,9 @@ class CrossValidator {
     train_rss = VectorXd::Zero(N_);
     for (int f = 0; f < folds_; ++f)
       for (int j = 0; j < N_; ++j) train_rss[j] += rss(beta, f, j);
-    if (phi_out) {
-      phi_out->resize(q);
-      phi_out->head(p) = beta.head(p).cwiseProduct(sx_);
-      phi_out->tail(m) = beta.tail(m).cwiseProduct(sc);
-    }
+    if (beta_out) *beta_out = beta;
   }
 
- private:
   static double ridge_for(const MatrixXd& G) { return 1e-12 * std::max(1.0, G.diagonal().maxCoeff()); }
 
   /// Least-squares coefficients from per-fold Gram matrices: fold_beta[f] from every fold but f,

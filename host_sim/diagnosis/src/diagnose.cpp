@@ -19,6 +19,7 @@
 #include "dyncal_host/identification/signal.hpp"
 #include "dyncal_host/identification/stacked_data.hpp"
 #include "harmonic_fit.hpp"
+#include "shape_search.hpp"
 
 namespace dyncal::host {
 namespace {
@@ -71,11 +72,27 @@ struct Model {
   VectorXd phi, val, train;
 };
 
+/// The model's columns a candidate replaces (Candidate::replaces), by name.
+std::vector<Index> replaced_columns(const Candidate& c, const Model& m) {
+  std::vector<Index> out;
+  for (const std::string& name : c.replaces)
+    out.push_back(std::find(m.names.begin(), m.names.end(), name) - m.names.begin());
+  return out;
+}
+
+/// The same joints, in any order (a coupling of 5 and 6, joint 6's motor coupled to joint 5).
+bool same_joints(const Candidate& a, const Candidate& b) {
+  std::vector<int> x = a.joints, y = b.joints;
+  std::sort(x.begin(), x.end());
+  std::sort(y.begin(), y.end());
+  return x == y;
+}
+
 Evidence weigh(const CrossValidator& cv, const Candidate& c, const Model& m, const VectorXd& n_eff,
                const VectorXd& val_before) {
   VectorXd val, train, phi_c;
   double novelty = 1;
-  cv.evaluate(c.columns, val, train, &phi_c, &novelty);
+  cv.evaluate(c.columns, val, train, &phi_c, &novelty, replaced_columns(c, m));
   Evidence e;
   e.collinear = novelty < 1e-6;
   // BIC over every joint: the joints share the rigid-body parameters, so a candidate that helps its
@@ -94,7 +111,7 @@ Evidence weigh(const CrossValidator& cv, const Candidate& c, const Model& m, con
       harm += std::max(0.0, after - before);  // another joint's validation made worse
     }
   }
-  e.delta_bic += static_cast<double>(c.columns.cols()) * std::log(n_all);
+  e.delta_bic += static_cast<double>(c.added_parameters()) * std::log(n_all);
   // A candidate picked among several alternatives (the best frequency of a spectral search, ...)
   // pays for the look-elsewhere effect: 2 ln(alternatives), a Bonferroni factor in BIC units.
   e.delta_bic += 2.0 * std::log(static_cast<double>(c.searched));
@@ -108,21 +125,22 @@ bool qualifies(const Evidence& e, const DiagnoseOptions& o) {
   return e.physical && !e.collinear && e.delta_bic < -o.bic_threshold && e.gain >= o.min_gain;
 }
 
-/// Parsimony: among the qualifying candidates on the same joints as `best` with fewer columns, the
-/// one with the fewest (then the lowest BIC) is taken instead, unless `best` is better by BIC by
-/// more than the evidence threshold (a constant offset is asymmetric Coulomb friction's special
-/// case on a joint that never rests: the one-parameter offset wins unless the data need both).
+/// Parsimony: among the qualifying candidates on the same joints as `best` that add fewer
+/// parameters, the one adding the fewest (then the lowest BIC) is taken instead, unless `best` is
+/// better by BIC by more than the evidence threshold (a constant offset is asymmetric Coulomb
+/// friction's special case on a joint that never rests: the one-parameter offset wins unless the
+/// data need both; a coupled motor, which adds none, wins over an added coupling likewise).
 int most_parsimonious(const std::vector<Candidate>& cands, const std::vector<Evidence>& ev, int best,
                       const DiagnoseOptions& o) {
   const Candidate& b = cands[static_cast<size_t>(best)];
   int pick = best;
   for (size_t k = 0; k < cands.size(); ++k) {
     const Candidate& c = cands[k];
-    if (c.joints != b.joints || !qualifies(ev[k], o) || c.columns.cols() >= b.columns.cols()) continue;
+    if (!same_joints(c, b) || !qualifies(ev[k], o) || c.added_parameters() >= b.added_parameters()) continue;
     if (ev[static_cast<size_t>(best)].delta_bic < ev[k].delta_bic - o.bic_threshold) continue;  // the larger is needed
     const Candidate& p = cands[static_cast<size_t>(pick)];
-    if (c.columns.cols() < p.columns.cols() ||
-        (c.columns.cols() == p.columns.cols() && ev[k].delta_bic < ev[static_cast<size_t>(pick)].delta_bic))
+    if (c.added_parameters() < p.added_parameters() ||
+        (c.added_parameters() == p.added_parameters() && ev[k].delta_bic < ev[static_cast<size_t>(pick)].delta_bic))
       pick = static_cast<int>(k);
   }
   return pick;
@@ -159,11 +177,11 @@ std::vector<std::string> indistinguishable(const std::vector<Candidate>& cands, 
   std::vector<std::string> out;
   for (size_t k = 0; k < cands.size(); ++k) {
     const Candidate& a = cands[k];
-    if (static_cast<int>(k) == chosen || a.effect == c.effect || a.joints != c.joints) continue;
+    if (static_cast<int>(k) == chosen || a.effect == c.effect || !same_joints(a, c)) continue;
     if (!ev[k].physical || ev[k].collinear) continue;
     const bool close = std::abs(ev[k].delta_bic - e.delta_bic) < 2.0;
-    const bool nested = !close && a.columns.cols() > c.columns.cols() && ev[k].gain >= e.gain - 0.01 &&
-                        unexplained_fraction(c, a, X, N) < 1.0 / n_min;
+    const bool nested = !close && c.replaces.empty() && a.replaces.empty() && a.columns.cols() > c.columns.cols() &&
+                        ev[k].gain >= e.gain - 0.01 && unexplained_fraction(c, a, X, N) < 1.0 / n_min;
     if (!close && !nested) continue;
     std::ostringstream s;
     s << std::setprecision(4) << effect_name(a.effect) << " (BIC change " << ev[k].delta_bic << ", validation RSS -"
@@ -309,7 +327,7 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
   const Index S = d.t.size();
   DiagnoseResult res;
   res.robot = robot.name;
-  res.declared_model = model_spec_name({io.terms, io.effects});
+  res.declared_model = model_spec_name({io.terms, io.effects, io.motors});
   res.method = io.method;
   res.samples = static_cast<long>(S);
   res.notes = d.notes;
@@ -355,7 +373,8 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
   }
   const Model declared = m;
   const VectorXd oof_before = cv.predict_out_of_fold();
-  detail::CandidateContext library{d, o.max_cycles, load_torques(d, m.phi), {}, {}, weights, &m.X, nullptr, {}};
+  detail::CandidateContext library{d, o.max_cycles, load_torques(d, m.phi), {}, {}, weights, &m.X, &m.phi, {}, nullptr,
+                                   {}};
   // Candidate columns are filtered in time as the regressor was (the same zero-phase low-pass, at
   // the decimated rate, within each segment: a step longer than 1.5 periods starts a new one).
   const ButterworthLowPass filter(io.filter_order, io.cutoff_hz, d.rate_hz);
@@ -371,6 +390,8 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
     library.residual = d.y - m.X * m.phi;
     library.joint_weights = weights;
     library.model_X = &m.X;
+    library.model_phi = &m.phi;
+    library.column_joints = detail::column_joint_masks(m.X, N);
     const std::vector<Candidate> cands = detail::candidate_library(library);
     const VectorXd n_eff = effective_samples_per_joint(library.residual, N);
     if (step == 0) res.effective_samples_per_joint = n_eff.mean();
@@ -394,9 +415,18 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
     best = most_parsimonious(cands, ev, best, o);
     const Candidate& c = cands[static_cast<size_t>(best)];
     std::vector<std::string> alternatives = indistinguishable(cands, ev, best, m.X, n_eff);
-    MatrixXd A(S * N, m.X.cols() + c.columns.cols());
-    A << m.X, c.columns;
-    m.X = A;
+    // [X C], less the columns C replaces.
+    const std::vector<Index> replaced = replaced_columns(c, m);
+    MatrixXd A(S * N, m.X.cols() - static_cast<Index>(replaced.size()) + c.columns.cols());
+    std::vector<std::string> names;
+    for (Index k = 0, col = 0; k < m.X.cols(); ++k) {
+      if (std::find(replaced.begin(), replaced.end(), k) != replaced.end()) continue;
+      A.col(col++) = m.X.col(k);
+      names.push_back(m.names[static_cast<size_t>(k)]);
+    }
+    A.rightCols(c.columns.cols()) = c.columns;
+    m.X = std::move(A);
+    m.names = std::move(names);
     for (const auto& n : c.names) m.names.push_back(n);
     cv.set_base(m.X);
     cv.evaluate(none, m.val, m.train, &m.phi);
@@ -417,7 +447,11 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
   }
 
   res.declared_names = declared.names;
-  res.declared_params.assign(m.phi.data(), m.phi.data() + declared.X.cols());
+  // By name: a declared column a coupled motor replaced is 0 (its value is the motor's term).
+  for (const std::string& name : declared.names) {
+    const auto it = std::find(m.names.begin(), m.names.end(), name);
+    res.declared_params.push_back(it == m.names.end() ? 0.0 : m.phi[it - m.names.begin()]);
+  }
   res.traces = traces(d, declared.X * declared.phi, m.X * m.phi, o.max_cycles);
   res.joints = joint_metrics(d, robot, declared, m, oof_before, cv.predict_out_of_fold());
   // The report never hides a joint the effects made worse (shared rigid-body parameters).

@@ -1,4 +1,5 @@
 // dyncal diagnose's report: text, JSON, and the effects as parameter-table terms.
+#include <algorithm>
 #include <iomanip>
 #include <optional>
 
@@ -73,7 +74,9 @@ std::vector<EffectTerm> effect_terms(const DiagnoseResult& r, std::vector<std::s
         skipped->push_back(std::string(effect_name(e.kind)) + " on joint " + std::to_string(e.joints.front()));
       continue;
     }
-    out.push_back(effect_term(*m, e.params.data()));
+    std::vector<double> c = e.params;  // a coupled motor without rotor inertia: Ia 0
+    c.resize(std::max(c.size(), effect_param_names(*m).size()), 0.0);
+    out.push_back(effect_term(*m, c.data()));
   }
   return out;
 }
@@ -91,7 +94,9 @@ nlohmann::json diagnose_report_json(const DiagnoseResult& r) {
   for (const auto& e : r.effects) {
     // The effect as a --model item for identify (none for drift, which has no model term).
     const std::optional<ModelEffect> me = model_effect(e);
-    const std::string item = me ? effect_item(*me) : "";
+    const std::string item = e.kind == Effect::coupled_motor
+                                 ? coupled_motor_item({e.joints[0] - 1, e.joints[1] - 1, e.sign * e.shape})
+                                 : (me ? effect_item(*me) : "");
     nlohmann::json p = nlohmann::json::object();
     for (size_t i = 0; i < e.params.size(); ++i) p[e.param_names[i]] = e.params[i];
     j["effects"].push_back({{"kind", effect_name(e.kind)},

@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 #include "candidates.hpp"
@@ -15,23 +16,23 @@
 
 namespace dyncal::host::detail {
 
+/// Per column of X ((S N) x p): bit j set where it is non-zero on joint j's rows.
+inline std::vector<std::uint32_t> column_joint_masks(const Eigen::MatrixXd& X, int N) {
+  std::vector<std::uint32_t> out(static_cast<size_t>(X.cols()), 0);
+  for (Eigen::Index k = 0; k < X.cols(); ++k)
+    for (Eigen::Index r = 0; r < X.rows(); ++r)
+      if (X(r, k) != 0.0) out[static_cast<size_t>(k)] |= 1u << (r % N);
+  return out;
+}
+
 /// The model's columns local to `joints` (non-zero only on their rows: their friction, rotor
 /// inertia, offset and effect terms), the ones a candidate on those joints trades off with.
 inline std::vector<Eigen::Index> local_columns(const CandidateContext& c, const std::vector<int>& joints) {
-  const Eigen::MatrixXd& X = *c.model_X;
-  const int N = static_cast<int>(c.data.q.cols());
+  std::uint32_t mask = 0;
+  for (int j : joints) mask |= 1u << j;
   std::vector<Eigen::Index> out;
-  for (Eigen::Index k = 0; k < X.cols(); ++k) {
-    bool on = false, elsewhere = false;
-    for (Eigen::Index r = 0; r < X.rows() && !elsewhere; ++r) {
-      if (X(r, k) == 0.0) continue;
-      if (std::find(joints.begin(), joints.end(), static_cast<int>(r % N)) != joints.end())
-        on = true;
-      else
-        elsewhere = true;
-    }
-    if (on && !elsewhere) out.push_back(k);
-  }
+  for (size_t k = 0; k < c.column_joints.size(); ++k)
+    if (c.column_joints[k] != 0 && (c.column_joints[k] & ~mask) == 0) out.push_back(static_cast<Eigen::Index>(k));
   return out;
 }
 
@@ -89,6 +90,87 @@ double local_gain(const CandidateContext& c, EffectKind kind, const std::vector<
   const Vec beta = schur.ldlt().solve(g);
   if (!physical(beta)) return 0.0;
   return std::max(0.0, g.dot(beta));
+}
+
+/// A replacement's fixed part during its shape search (replacement_gain): the weighted rows of
+/// `joints` with the model's local columns less the `removed` ones (L), the residual r0 and the
+/// residual with the removed columns' share of the fit given back (r1), and their products.
+struct ReplacementSystem {
+  std::vector<int> joints;
+  Eigen::MatrixXd L, LL;
+  Eigen::VectorXd r1, Lr1;
+  double r0_sq = 0, r1_sq = 0;
+};
+
+inline ReplacementSystem replacement_system(const CandidateContext& c, const std::vector<int>& joints,
+                                            const std::vector<Eigen::Index>& local,
+                                            const std::vector<Eigen::Index>& removed) {
+  const StackedData& d = c.data;
+  const Eigen::MatrixXd& X = *c.model_X;
+  const Eigen::VectorXd& phi = *c.model_phi;
+  const int N = static_cast<int>(d.q.cols());
+  std::vector<Eigen::Index> kept;
+  for (Eigen::Index q : local)
+    if (std::find(removed.begin(), removed.end(), q) == removed.end()) kept.push_back(q);
+  const Eigen::Index S = d.t.size(), P = static_cast<Eigen::Index>(joints.size());
+  const Eigen::Index k = static_cast<Eigen::Index>(kept.size()), R = S * P;
+  ReplacementSystem sys;
+  sys.joints = joints;
+  sys.L.resize(R, k);
+  sys.r1.resize(R);
+  for (Eigen::Index s = 0; s < S; ++s)
+    for (Eigen::Index p = 0; p < P; ++p) {
+      const int j = joints[static_cast<size_t>(p)];
+      const Eigen::Index row = s * N + j, out = s * P + p;
+      const double w = c.joint_weights[j];
+      for (Eigen::Index q = 0; q < k; ++q) sys.L(out, q) = w * X(row, kept[static_cast<size_t>(q)]);
+      double back = 0;
+      for (Eigen::Index q : removed) back += X(row, q) * phi[q];
+      sys.r0_sq += std::pow(w * c.residual[row], 2);
+      sys.r1[out] = w * (c.residual[row] + back);
+    }
+  sys.LL = sys.L.transpose() * sys.L;
+  sys.Lr1 = sys.L.transpose() * sys.r1;
+  sys.r1_sq = sys.r1.squaredNorm();
+  return sys;
+}
+
+/// The weighted RSS of the system's joints removed when its removed columns give way to the columns
+/// `use` (indices into M) of a motor's M columns over time, columns(s, x), acting on the system's
+/// joint p times factor[p] (a coupled motor: 1 on its own joint, r on the other), filtered in time
+/// as `kind`'s, and fitted with the other local columns: r0^T r0 - (r1^T r1 - b^T beta) for
+/// [L C] beta = r1 in least squares. Negative when the replacement fits worse; 0 when the new
+/// coefficients are not physical(coefficients) (no replacement).
+template <int M, class Columns, class Physical>
+double replacement_gain(const CandidateContext& c, const ReplacementSystem& sys, EffectKind kind,
+                        const std::vector<int>& use, const std::vector<double>& factor, Columns columns,
+                        Physical physical) {
+  const Eigen::Index S = c.data.t.size(), P = static_cast<Eigen::Index>(sys.joints.size());
+  const Eigen::Index k = sys.L.cols(), u = static_cast<Eigen::Index>(use.size());
+  Eigen::MatrixXd series(S, M);  // filtering is linear: once for every joint the motor acts on
+  Eigen::Matrix<double, M, 1> x;
+  for (Eigen::Index s = 0; s < S; ++s) {
+    columns(s, x);
+    series.row(s) = x.transpose();
+  }
+  filter_in_time(c, series, kind, M);
+  Eigen::MatrixXd C(S * P, u);
+  for (Eigen::Index s = 0; s < S; ++s)
+    for (Eigen::Index p = 0; p < P; ++p) {
+      const double w = c.joint_weights[sys.joints[static_cast<size_t>(p)]] * factor[static_cast<size_t>(p)];
+      for (Eigen::Index q = 0; q < u; ++q) C(s * P + p, q) = w * series(s, use[static_cast<size_t>(q)]);
+    }
+  Eigen::MatrixXd G(k + u, k + u);
+  G.topLeftCorner(k, k) = sys.LL;
+  G.topRightCorner(k, u).noalias() = sys.L.transpose() * C;
+  G.bottomLeftCorner(u, k) = G.topRightCorner(k, u).transpose();
+  G.bottomRightCorner(u, u).noalias() = C.transpose() * C;
+  G.diagonal().array() += 1e-12 * std::max(1.0, G.diagonal().maxCoeff());
+  Eigen::VectorXd b(k + u);
+  b << sys.Lr1, C.transpose() * sys.r1;
+  const Eigen::VectorXd beta = G.ldlt().solve(b);
+  if (!physical(Eigen::VectorXd(beta.tail(u)))) return 0.0;
+  return sys.r0_sq - (sys.r1_sq - b.dot(beta));
 }
 
 /// A shape found by profile search: log of its value, the gain there, and the 95 % interval.

@@ -27,42 +27,41 @@ DriveTableContent drive_table_content(const ParameterSet& p, const RobotDescript
   DriveTableContent out;
   out.values.assign(p.values.data(), p.values.data() + count);
   const int n = robot.num_joints;
-  if (p.friction_per_motor && robot.transmission.rows() == n) {
-    for (int m = 0; m < n; ++m) {
-      std::vector<int> others;
-      for (int j = 0; j < n; ++j)
-        if (j != m && robot.transmission(m, j) != 0.0) others.push_back(j);
-      if (others.empty()) continue;
-      const std::string motor = std::to_string(m + 1);
-      if (others.size() > 1)
-        throw InputError(p.source + ": motor " + motor +
-                         " turns with several other joints; a table's coupling term couples two (flash a file "
-                         "identified with --friction-per-joint)");
-      const int j = others.front();
-      const int fp = index_of(p, "Fp" + motor, count);
-      if (fp >= 0 && out.values[static_cast<size_t>(fp)] != 0.0)
-        throw InputError(p.source + ": Eq. 8 power friction of coupled motor " + motor + " has no table term");
-      const double r = robot.transmission(m, j) / robot.transmission(m, m);
-      EffectTerm t;
-      t.kind = EffectKind::coupling;
-      t.joint = static_cast<std::uint8_t>(m);
-      t.joint2 = static_cast<std::uint8_t>(j);
-      t.sign = static_cast<std::int8_t>(r > 0 ? 1 : -1);
-      t.shape = static_cast<float>(std::abs(r));
-      const char* names[3] = {"Fc", "Fv", "Ia"};
-      for (int c = 0; c < 3; ++c) {
-        const int i = index_of(p, names[c] + motor, count);
-        if (i < 0) continue;
-        t.c[c] = static_cast<float>(out.values[static_cast<size_t>(i)]);
-        out.values[static_cast<size_t>(i)] = 0.0;
-      }
-      out.effects.push_back(t);
-      char line[160];
-      std::snprintf(line, sizeof line,
-                    "motor %d (turns with q%d %+g q%d): its friction and rotor inertia as a coupling term", m + 1,
-                    m + 1, r, j + 1);
-      out.notes.push_back(line);
+  const Eigen::MatrixXd T = motor_velocity_map(robot, p.friction_per_motor, p.motors);
+  for (int m = 0; m < n; ++m) {
+    std::vector<int> others;
+    for (int j = 0; j < n; ++j)
+      if (j != m && T(m, j) != 0.0) others.push_back(j);
+    if (others.empty()) continue;
+    const std::string motor = std::to_string(m + 1);
+    if (others.size() > 1)
+      throw InputError(p.source + ": motor " + motor +
+                       " turns with several other joints; a table's coupling term couples two (flash a file "
+                       "identified with --friction-per-joint)");
+    const int j = others.front();
+    const int fp = index_of(p, "Fp" + motor, count);
+    if (fp >= 0 && out.values[static_cast<size_t>(fp)] != 0.0)
+      throw InputError(p.source + ": Eq. 8 power friction of coupled motor " + motor + " has no table term");
+    const double r = T(m, j);
+    EffectTerm t;
+    t.kind = EffectKind::coupling;
+    t.joint = static_cast<std::uint8_t>(m);
+    t.joint2 = static_cast<std::uint8_t>(j);
+    t.sign = static_cast<std::int8_t>(r > 0 ? 1 : -1);
+    t.shape = static_cast<float>(std::abs(r));
+    const char* names[3] = {"Fc", "Fv", "Ia"};
+    for (int c = 0; c < 3; ++c) {
+      const int i = index_of(p, names[c] + motor, count);
+      if (i < 0) continue;
+      t.c[c] = static_cast<float>(out.values[static_cast<size_t>(i)]);
+      out.values[static_cast<size_t>(i)] = 0.0;
     }
+    out.effects.push_back(t);
+    char line[160];
+    std::snprintf(line, sizeof line,
+                  "motor %d (turns with q%d %+g q%d): its friction and rotor inertia as a coupling term", m + 1, m + 1,
+                  r, j + 1);
+    out.notes.push_back(line);
   }
   size_t k = count;
   for (const ModelEffect& e : p.effects) {

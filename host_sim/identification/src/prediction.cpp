@@ -31,6 +31,7 @@ ParameterSet read_parameter_file(const std::string& path) {
     const ModelSpec spec = parse_model_spec(p.model, compiled.num_joints);
     p.terms = spec.terms;
     p.effects = spec.effects;
+    p.motors = spec.motors;
   } catch (const InputError& e) {
     throw InputError(path + ": " + e.what());
   }
@@ -68,6 +69,7 @@ ParameterSet parameter_set(const IdentifyResult& r) {
   const ModelSpec spec = parse_model_spec(r.model, static_cast<int>(r.joints.size()));
   p.terms = spec.terms;
   p.effects = spec.effects;
+  p.motors = spec.motors;
   p.friction_per_motor = r.friction_per_motor;
   p.source = "identify";
   p.values.resize(static_cast<Eigen::Index>(r.params.size()));
@@ -125,6 +127,7 @@ LogPrediction predict(const RobotDescription& robot, const JointLog& log, Identi
     throw InputError(params.source + ": parameters are for robot '" + params.robot + "', not '" + robot.name + "'");
   options.terms = params.terms;
   options.effects = params.effects;
+  options.motors = params.motors;
   options.friction_per_joint = !params.friction_per_motor;
   options.load_regressor = false;
   const StackedData d = prepare_stacked(robot, log, options);

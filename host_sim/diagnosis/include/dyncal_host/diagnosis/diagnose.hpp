@@ -33,7 +33,8 @@ enum class Effect {
   rotor_inertia,        ///< Ia qdd
   offset,               ///< constant torque
   position_periodic,    ///< sin / cos of k q: cogging, gear ripple
-  coupling,             ///< a motor turning with qd_i + sign qd_j (coupled transmission)
+  coupling,             ///< a motor turning with qd_i + r qd_j added to both joints (coupled transmission)
+  coupled_motor,        ///< joint i's own motor turning with qd_i + r qd_j instead of qd_i (a coupled wrist)
   drift,                ///< viscous friction and offset changing linearly over the log
 };
 

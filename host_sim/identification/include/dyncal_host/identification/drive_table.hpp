@@ -20,8 +20,9 @@ struct DriveTableContent {
   std::vector<std::string> notes;   ///< what was converted
 };
 
-/// The table form of `params` for `robot` (its robot.json transmission N). With friction per motor,
-/// each motor m that turns with one other joint j (T = diag(N)^-1 N, r = T(m, j)) gives a coupling
+/// The table form of `params` for `robot`. Each motor m of the params' motor-velocity map (T =
+/// motor_velocity_map: robot.json's transmission N as diag(N)^-1 N with friction per motor, the
+/// model's coupled motors) that turns with one other joint j (r = T(m, j)) gives a coupling
 /// term on joints m and j with ratio r and coefficients (Fc_m, Fv_m, Ia_m) — Ia_m 0 when the model
 /// has no separate Ia_m — and those values are set to 0 among the compiled ones: the drive then
 /// applies f = Fc sgn(v) + Fv v + Ia a at v = qd_m + r qd_j on joint m and r f on joint j, what

@@ -26,6 +26,7 @@ struct IdentifyOptions {
   std::string method = "wls";
   unsigned terms = 0;                ///< dyncal::term bits (rigid body always included)
   std::vector<ModelEffect> effects;  ///< effect terms after the compiled ones (model_effects.hpp): not kf, rls
+  std::vector<CoupledMotor> motors;  ///< coupled motors (model_effects.hpp): rows of the motor-velocity map
   int filter_order = 4;              ///< Butterworth order (zero-phase: twice the attenuation)
   double cutoff_hz = 20.0;           ///< low-pass cut-off for q, tau and the regressor columns
   int decimate = 0;                  ///< decimation factor; 0: floor(fs / (25 * cutoff)), at least 1

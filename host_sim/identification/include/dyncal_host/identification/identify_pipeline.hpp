@@ -41,7 +41,8 @@ class IdentifyPipeline {
   IdentifyPipeline(const RobotDescription& robot, const IdentifyOptions& options)
       : robot_(robot),
         opt_(options),
-        motor_(options.friction_per_joint ? Eigen::Matrix<double, N, N>::Identity() : motor_map(robot)) {
+        motor_(motor_velocity_map(robot, !options.friction_per_joint, options.motors)),
+        robot_coupled_(!motor_velocity_map(robot, !options.friction_per_joint, {}).isDiagonal(0.0)) {
     for (int m = 0; m < N; ++m) {
       for (int j = 0; j < N; ++j) {
         if (j != m && motor_(m, j) != 0.0) {
@@ -159,7 +160,10 @@ class IdentifyPipeline {
     std::snprintf(v, sizeof v, "; %.3g %%", 100.0 * at_rest);
     out.notes.push_back(line + v + " of the joint samples at rest");
     for (const int m : coupled_) {
-      std::string t = "transmission (robot.json): motor " + std::to_string(m + 1) + " turns with";
+      const bool declared =
+          std::none_of(opt_.motors.begin(), opt_.motors.end(), [m](const CoupledMotor& c) { return c.motor == m; });
+      std::string t = std::string(declared ? "transmission (robot.json)" : "coupled motor (model)") + ": motor " +
+                      std::to_string(m + 1) + " turns with";
       std::string on;
       for (int j = 0; j < N; ++j) {
         if (motor_(m, j) == 0.0) continue;
@@ -173,9 +177,10 @@ class IdentifyPipeline {
     return out;
   }
 
-  /// True when a coupled motor's friction and rotor inertia act on several joints (robot.json's
-  /// transmission, not --friction-per-joint).
-  bool models_coupled_motors() const { return !coupled_.empty(); }
+  /// True when robot.json's coupled motors are modelled (its transmission, not --friction-per-joint):
+  /// a parameter file's "friction_per": "motor". Coupled motors of the model (IdentifyOptions::motors)
+  /// are in its model string.
+  bool models_coupled_motors() const { return robot_coupled_; }
 
   /// Fits on the samples with train[s] true. Writes phi and parameter standard deviations; with
   /// pcls, the consistent solution into *consistent if given.
@@ -273,21 +278,6 @@ class IdentifyPipeline {
   }
 
  private:
-  /// Motor velocities in joint units, v = T qd: T = diag(N)^-1 N of robot.json's transmission N
-  /// (q_motor = N q), so that an uncoupled motor's row is its joint's unit row and a coupled
-  /// motor's row says how much each joint turns it (TX40 motor 6: q5 + q6). Identity without a
-  /// transmission or with a zero gear ratio.
-  static Eigen::Matrix<double, N, N> motor_map(const RobotDescription& robot) {
-    Eigen::Matrix<double, N, N> T = Eigen::Matrix<double, N, N>::Identity();
-    if (robot.transmission.rows() != N || robot.transmission.cols() != N) return T;
-    for (int m = 0; m < N; ++m) {
-      const double d = robot.transmission(m, m);
-      if (d == 0.0) return Eigen::Matrix<double, N, N>::Identity();
-      T.row(m) = robot.transmission.row(m) / d;
-    }
-    return T;
-  }
-
   /// phi_b = K phi (num_base x num_standard), the generated standard_to_base as a matrix (built once).
   static const Eigen::MatrixXd& base_map() {
     static const Eigen::MatrixXd K = [] {
@@ -524,7 +514,8 @@ class IdentifyPipeline {
 
   const RobotDescription& robot_;
   const IdentifyOptions& opt_;
-  Eigen::Matrix<double, N, N> motor_;   ///< motor_map(robot_)
+  Eigen::Matrix<double, N, N> motor_;   ///< motor_velocity_map(robot_, ...): v = T qd
+  bool robot_coupled_;                  ///< robot.json's coupling is in motor_
   std::vector<int> coupled_;            ///< motors turning with more than their own joint (0-based)
   std::vector<FilteredTerm> filtered_;  ///< StackedData::filtered_terms' columns
 };
@@ -550,7 +541,7 @@ IdentifyResult run_identify(const RobotDescription& robot, JointLog&& log, const
   const Eigen::Index S = data.t.size();
   res.robot = robot.name;
   res.method = opt.method;
-  res.model = model_name(Terms);
+  res.model = model_spec_name({Terms, opt.effects, opt.motors});
   res.friction_per_motor = pipe.models_coupled_motors();
   res.data_source = log.source;
   res.sample_rate_hz = 1.0 / log.sample_period();
@@ -588,7 +579,7 @@ IdentifyResult run_identify(const RobotDescription& robot, JointLog&& log, const
   } else if (!opt.effects.empty()) {
     // Effect terms (model_effects.hpp): [W E] fitted at run time, validated the same way.
     fit_effect_model(data, opt.effects, fold, folds, robot, opt, res);
-    res.model = model_spec_name({Terms, opt.effects});
+    res.model = model_spec_name({Terms, opt.effects, opt.motors});
   } else {
     Eigen::VectorXd pred = Eigen::VectorXd::Constant(S * N, std::nan(""));
     typename Pipe::ParamVec phi, stdev;

@@ -16,6 +16,7 @@ struct ParameterSet {
   std::string robot, model, source;
   unsigned terms = 0;                ///< dyncal::term bits of `model`
   std::vector<ModelEffect> effects;  ///< effect terms of `model` after the compiled ones (model_effects.hpp)
+  std::vector<CoupledMotor> motors;  ///< coupled motors of `model` (their terms are the compiled ones)
   bool friction_per_motor = false;   ///< "friction_per": "motor" (robot.json's coupling modelled) or "joint"
   std::vector<std::string> names;    ///< the compiled robot's parameter names for the terms, then the effects'
   Eigen::VectorXd values;
