@@ -12,7 +12,8 @@ The effect's size is set by the part the declared model cannot explain: its colu
 projection on the joint's own Coulomb and viscous columns have an RMS of kappa noise standard
 deviations, kappa uniform in [3, 8] (--kappa).
 
-Every log has a clean twin (same trajectory, friction and noise, no effect). The manifest
+Every trajectory also gets one coupled-motor case (EXTRA_KINDS) from its own random stream. Every
+log has a clean twin (same trajectory, friction and noise, no effect). The manifest
 (cases.json) gives the truth of every log: kind, 1-based joints, shape (Stribeck velocity scale,
 cycles per revolution, coupling ratio) and coefficients.
 """
@@ -29,6 +30,9 @@ ENCODER_STEP = 2 * math.pi / (1 << 20)
 GRAVITY = (0.0, 0.0, -9.81)  # URDF convention: z up in the root link's frame
 KINDS = ["stribeck", "asymmetric_friction", "velocity_power", "load_friction", "rotor_inertia", "offset",
          "position_periodic", "coupling", "drift"]
+# One more case per trajectory, after the others and from its own random stream (the cases above
+# stay as they were): a coupled motor, joint j's own motor turning with q_j + r q_i in place of q_j.
+EXTRA_KINDS = ["coupled_motor"]
 
 
 # --- URDF ---------------------------------------------------------------------------------------
@@ -231,6 +235,14 @@ def effect_columns(kind, joints, shape, m):
         mix = rng.dirichlet([2, 2, 1])
         motor = mix[0] * _sgn(v) + mix[1] * v / np.abs(v).max() + mix[2] * a / np.abs(a).max()
         out[:, j], out[:, i2] = motor, shape * motor
+    elif kind == "coupled_motor":
+        # Joint j's own motor turns with qd_j + r qd_i2 instead of qd_j: its Coulomb and viscous
+        # friction (the joint's own values) at that velocity, on joint j and r times on joint i2.
+        # The column is the motor's friction only: generate() takes the joint's own friction out.
+        i2 = joints[1] - 1
+        v = qd + shape * m["qd"][:, i2]
+        motor = m["Fc"][j] * _sgn(v) + m["Fv"][j] * v
+        out[:, j], out[:, i2] = motor, shape * motor
     elif kind == "drift":
         out[:, j] = (m["t"] - m["t"][0]) / (m["t"][-1] - m["t"][0]) * qd / top
     else:
@@ -267,7 +279,7 @@ def draw_effect(kind, arm, rng, m):
     n = arm.n
     if kind == "rotor_inertia":
         return [int(rng.choice(separable_rotor_joints(arm))) + 1], 0.0
-    if kind == "coupling":
+    if kind in ("coupling", "coupled_motor"):
         i = int(rng.integers(0, n - 1))
         pair = [i + 1, i + 2] if rng.uniform() < 0.5 else [i + 2, i + 1]
         ratio = math.exp(rng.uniform(math.log(0.2), math.log(3.0))) * (1 if rng.uniform() < 0.7 else -1)
@@ -331,16 +343,27 @@ def generate(robots, out_dir, fs=250.0, seconds=30.0, seed=22, kappa=(3.0, 8.0))
             write_log(os.path.join(out_dir, clean + ".csv"), m, m["tau"] + m["noise"])
             manifest.append(dict(name=clean, robot=name, log=clean + ".csv", clean_twin=clean, rests=rests, truth=None,
                                  sigma=m["sigma"].tolist()))
+            cases = []
             for e in range(per_trajectory):
                 kind = order[kind_index % len(order)]
                 kind_index += 1
-                rng = np.random.default_rng(int(master.integers(1 << 31)))
+                cases.append((kind, np.random.default_rng(int(master.integers(1 << 31)))))
+            for x, kind in enumerate(EXTRA_KINDS):
+                cases.append((kind, np.random.default_rng([traj_seed, 1 + x])))
+            for e, (kind, rng) in enumerate(cases):
                 joints, shape = draw_effect(kind, arm, rng, m)
                 col = effect_columns(kind, joints, shape, dict(m, rng=rng))
                 size = rng.uniform(*kappa)
+                # The effect's size in noise units: what the joints' own Coulomb and viscous columns
+                # cannot take (unexplained). A coupled motor's friction is scaled to it from the
+                # joint's own, which it replaces (that part is in the own columns' span: size 0).
                 scale = size / unexplained(col, m["qd"], m["sigma"])
+                tau = m["tau"] + m["noise"] + scale * col
+                if kind == "coupled_motor":
+                    j = joints[0] - 1
+                    tau[:, j] -= m["Fc"][j] * _sgn(m["qd"][:, j]) + m["Fv"][j] * m["qd"][:, j]
                 log = f"{name}_t{k + 1}_{e + 1}_{kind}_{'_'.join(str(j) for j in joints)}"
-                write_log(os.path.join(out_dir, log + ".csv"), m, m["tau"] + m["noise"] + scale * col)
+                write_log(os.path.join(out_dir, log + ".csv"), m, tau)
                 manifest.append(dict(name=log, robot=name, log=log + ".csv", clean_twin=clean, rests=rests,
                                      truth=dict(kind=kind, joints=joints, shape=float(shape), coefficient=float(scale),
                                                 kappa=float(size)),

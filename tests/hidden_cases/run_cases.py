@@ -44,6 +44,8 @@ def diagnose(dyncal, robots_dir, out, case):
 
 
 def same_effect(effect, truth):
+    if truth["kind"] == "coupled_motor":  # the motor's own joint first
+        return effect["kind"] == "coupled_motor" and effect["joints"] == truth["joints"]
     if truth["kind"] == "coupling":
         return effect["kind"] == "coupling" and sorted(effect["joints"]) == sorted(truth["joints"])
     return effect["kind"] == truth["kind"] and effect["joints"] == truth["joints"]
@@ -68,7 +70,7 @@ def rms(report, key):
 
 def describe(effect):
     s = f"{effect['kind']} {'+'.join(str(j) for j in effect['joints'])}"
-    if effect["kind"] == "coupling":
+    if effect["kind"] in ("coupling", "coupled_motor"):
         s += f" r={effect['sign'] * effect['shape']:.3g}"
     elif effect["kind"] in ("stribeck", "position_periodic"):
         s += f" {effect['shape']:.3g}"
@@ -93,7 +95,7 @@ def score(manifest, reports):
         harm = max([after[j] / before[j] - 1 for j in before if j not in affected] or [0.0])
         shape = truth["shape"]
         rows.append(dict(name=case["name"], truth=f"{truth['kind']} {'+'.join(str(j) for j in affected)}"
-                         + (f" r={shape:.3g}" if truth["kind"] == "coupling" else
+                         + (f" r={shape:.3g}" if truth["kind"] in ("coupling", "coupled_motor") else
                             f" {shape:.3g}" if truth["kind"] in ("stribeck", "position_periodic") else ""),
                          kappa=truth["kappa"], verdict=found(rep, truth),
                          first=describe(rep["effects"][0]) if rep["effects"] else "-",

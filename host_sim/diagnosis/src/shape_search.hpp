@@ -173,6 +173,78 @@ double replacement_gain(const CandidateContext& c, const ReplacementSystem& sys,
   return sys.r0_sq - (sys.r1_sq - b.dot(beta));
 }
 
+/// The whole model's weighted fit when the columns `removed` of X give way to new columns (all
+/// joints' rows, every model column refitted, the rigid body included): the part of the Gram that
+/// does not depend on the new columns, built once.
+struct FullReplacement {
+  std::vector<Eigen::Index> kept;  ///< X's columns that stay
+  Eigen::MatrixXd G;               ///< X_kept^T W^2 X_kept
+  Eigen::VectorXd g;               ///< X_kept^T W^2 y
+  double yy = 0, rss_now = 0;      ///< y^T W^2 y; the model's weighted RSS now
+};
+
+inline FullReplacement full_replacement(const CandidateContext& c, const std::vector<Eigen::Index>& removed) {
+  const StackedData& d = c.data;
+  const Eigen::MatrixXd& X = *c.model_X;
+  const int N = static_cast<int>(d.q.cols());
+  FullReplacement f;
+  for (Eigen::Index q = 0; q < X.cols(); ++q)
+    if (std::find(removed.begin(), removed.end(), q) == removed.end()) f.kept.push_back(q);
+  Eigen::VectorXd w(X.rows());
+  for (Eigen::Index r = 0; r < X.rows(); ++r) w[r] = d.fit_row[static_cast<size_t>(r)] ? c.joint_weights[r % N] : 0.0;
+  const Eigen::MatrixXd A = w.asDiagonal() * X(Eigen::all, f.kept);
+  const Eigen::VectorXd wy = w.cwiseProduct(d.y);
+  f.G = A.transpose() * A;
+  f.g = A.transpose() * wy;
+  f.yy = wy.squaredNorm();
+  f.rss_now = w.cwiseProduct(c.residual).squaredNorm();
+  return f;
+}
+
+/// The weighted RSS of the whole model removed when its replaced columns give way to the columns
+/// `use` of a motor's M columns over time on `joints` (times factor[p]; columns(s, x) as for
+/// replacement_gain), every other column refitted: rss_now - (y^T W^2 y - b^T beta). The exact
+/// criterion that replacement_gain approximates on the pair's rows (there the rigid body stays at its
+/// current fit); 0 when the new coefficients are not physical.
+template <int M, class Columns, class Physical>
+double full_replacement_gain(const CandidateContext& c, const FullReplacement& f, EffectKind kind,
+                             const std::vector<int>& joints, const std::vector<int>& use,
+                             const std::vector<double>& factor, Columns columns, Physical physical) {
+  const StackedData& d = c.data;
+  const Eigen::MatrixXd& X = *c.model_X;
+  const int N = static_cast<int>(d.q.cols());
+  const Eigen::Index S = d.t.size(), P = static_cast<Eigen::Index>(joints.size());
+  const Eigen::Index k = static_cast<Eigen::Index>(f.kept.size()), u = static_cast<Eigen::Index>(use.size());
+  Eigen::MatrixXd series(S, M);
+  Eigen::Matrix<double, M, 1> x;
+  for (Eigen::Index s = 0; s < S; ++s) {
+    columns(s, x);
+    series.row(s) = x.transpose();
+  }
+  filter_in_time(c, series, kind, M);
+  Eigen::MatrixXd Gxc = Eigen::MatrixXd::Zero(k, u), Gcc = Eigen::MatrixXd::Zero(u, u);
+  Eigen::VectorXd gc = Eigen::VectorXd::Zero(u), cr(u);
+  for (Eigen::Index s = 0; s < S; ++s)
+    for (Eigen::Index p = 0; p < P; ++p) {
+      const int j = joints[static_cast<size_t>(p)];
+      const Eigen::Index row = s * N + j;
+      if (!d.fit_row[static_cast<size_t>(row)]) continue;
+      const double w2 = c.joint_weights[j] * c.joint_weights[j], a = factor[static_cast<size_t>(p)];
+      for (Eigen::Index q = 0; q < u; ++q) cr[q] = a * series(s, use[static_cast<size_t>(q)]);
+      for (Eigen::Index q = 0; q < k; ++q) Gxc.row(q) += w2 * X(row, f.kept[static_cast<size_t>(q)]) * cr.transpose();
+      Gcc.noalias() += w2 * cr * cr.transpose();
+      gc += w2 * d.y[row] * cr;
+    }
+  Eigen::MatrixXd G(k + u, k + u);
+  G << f.G, Gxc, Gxc.transpose(), Gcc;
+  G.diagonal().array() += 1e-12 * std::max(1.0, G.diagonal().maxCoeff());
+  Eigen::VectorXd b(k + u);
+  b << f.g, gc;
+  const Eigen::VectorXd beta = G.ldlt().solve(b);
+  if (!physical(Eigen::VectorXd(beta.tail(u)))) return 0.0;
+  return f.rss_now - (f.yy - b.dot(beta));
+}
+
 /// A shape found by profile search: log of its value, the gain there, and the 95 % interval.
 struct ShapeFit {
   double log_value = 0, gain = -1, lo_log = 0, hi_log = 0;
