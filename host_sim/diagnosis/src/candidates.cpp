@@ -293,20 +293,22 @@ void coupled_motor_of(const CandidateContext& c, int k, int l, std::vector<Candi
       if (use[q] < 2 && beta[static_cast<Index>(q)] < 0) return false;
     return true;
   };
+  // The motor's columns at ratio r over time: sgn(v), v, qdd_k + r qdd_l, v = qd_k + r qd_l with
+  // motor_velocity's sign and band.
+  auto motor_columns = [&d, k, l](double r) {
+    const double band = std::hypot(d.standstill_band[k], r * d.standstill_band[l]);
+    return [&d, k, l, r, band](Index s, Eigen::Vector3d& x) {
+      const double v = signed_velocity(d.qd(s, k) + r * d.qd(s, l), d.qd_raw(s, k) + r * d.qd_raw(s, l), band);
+      x << (v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0)), v, d.qdd(s, k) + r * d.qdd(s, l);
+    };
+  };
   const ReplacementSystem sys = replacement_system(c, pair, local, removed);
   ShapeFit best;
   double best_sign = 1;
   for (double sign : {1.0, -1.0}) {
     auto gain = [&](double lr) {
       const double r = sign * std::exp(lr);
-      const double band = std::hypot(d.standstill_band[k], r * d.standstill_band[l]);  // motor_velocity's
-      return replacement_gain<3>(
-          c, sys, EffectKind::coupling, use, {1.0, r},
-          [&](Index s, Eigen::Vector3d& x) {
-            const double v = signed_velocity(d.qd(s, k) + r * d.qd(s, l), d.qd_raw(s, k) + r * d.qd_raw(s, l), band);
-            x << (v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0)), v, d.qdd(s, k) + r * d.qdd(s, l);
-          },
-          physical);
+      return replacement_gain<3>(c, sys, EffectKind::coupling, use, {1.0, r}, motor_columns(r), physical);
     };
     const ShapeFit f = profile_search(gain, -span, span, kRatioGrid, rss, n_eff);
     if (f.gain > best.gain) best = f, best_sign = sign;
@@ -330,14 +332,7 @@ void coupled_motor_of(const CandidateContext& c, int k, int l, std::vector<Candi
     for (double sign : {1.0, -1.0}) {
       auto gain = [&](double lr) {
         const double r = sign * std::exp(lr);
-        const double band = std::hypot(d.standstill_band[k], r * d.standstill_band[l]);
-        return full_replacement_gain<3>(
-            c, full, EffectKind::coupling, pair, use, {1.0, r},
-            [&](Index s, Eigen::Vector3d& x) {
-              const double v = signed_velocity(d.qd(s, k) + r * d.qd(s, l), d.qd_raw(s, k) + r * d.qd_raw(s, l), band);
-              x << (v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0)), v, d.qdd(s, k) + r * d.qdd(s, l);
-            },
-            physical);
+        return full_replacement_gain<3>(c, full, EffectKind::coupling, pair, use, {1.0, r}, motor_columns(r), physical);
       };
       const ShapeFit f = profile_search(gain, -span, span, kRefineGrid, full.rss_now, n_eff_all);
       if (f.gain > refined.gain) refined = f, refined_sign = sign;
