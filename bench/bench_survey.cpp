@@ -4,7 +4,10 @@
 // physically consistent least-squares solve per model.
 #include <benchmark/benchmark.h>
 
+#include <cmath>
 #include <map>
+#include <string>
+#include <vector>
 
 #include "dyncal_host/common/robot_description.hpp"
 #include "dyncal_host/identification/objective.hpp"
@@ -77,6 +80,38 @@ void BM_FitAmplitudes(benchmark::State& state) {
   state.SetLabel(model_key(m));
 }
 BENCHMARK(BM_FitAmplitudes)->DenseRange(0, 5)->Unit(benchmark::kMicrosecond);
+
+/// A sampler's population of 120 (the study's) evaluated one vector after another (state.range(1)
+/// 0) or joint by joint over the population (1: fit_amplitudes' batch form, what the genetic
+/// algorithm and the particle filter run; same results).
+void BM_FitAmplitudesPopulation(benchmark::State& state) {
+  const FrictionModel m = kModels[state.range(0)];
+  const AtRangeCentre c(m);
+  std::vector<Eigen::VectorXd> population;
+  for (int i = 0; i < 120; ++i) {
+    Eigen::VectorXd x = c.ranges.lo;
+    for (Eigen::Index k = 0; k < x.size(); ++k) {  // spread over the box, deterministic
+      x[k] += (0.5 + 0.45 * std::sin(1.7 * i + 0.3 * static_cast<double>(k))) * (c.ranges.hi[k] - c.ranges.lo[k]);
+    }
+    population.push_back(x);
+  }
+  std::vector<Eigen::VectorXd> xs = population;
+  std::vector<double*> ptrs;
+  for (Eigen::VectorXd& x : xs) ptrs.push_back(x.data());
+  std::vector<std::array<double, 6>> means, vars;
+  std::array<double, 6> mean{}, var{};
+  for (auto _ : state) {
+    for (size_t i = 0; i < xs.size(); ++i) xs[i] = population[i];
+    if (state.range(1) == 1) {
+      c.objective.fit_amplitudes(ptrs, c.ranges.lo.data(), c.ranges.hi.data(), &means, &vars);
+    } else {
+      for (double* x : ptrs) c.objective.fit_amplitudes(x, c.ranges.lo.data(), c.ranges.hi.data(), &mean, &var);
+    }
+    benchmark::DoNotOptimize(xs.front().data());
+  }
+  state.SetLabel(std::string(model_key(m)) + (state.range(1) == 1 ? " joint by joint" : " one by one"));
+}
+BENCHMARK(BM_FitAmplitudesPopulation)->ArgsProduct({{3, 4, 5}, {0, 1}})->Unit(benchmark::kMillisecond);
 
 void BM_PhysicallyConsistentLs(benchmark::State& state) {
   const FrictionModel m = kModels[state.range(0)];

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <random>
 
 #include "dyncal/generated/er20/robot.hpp"
 #include "dyncal_host/common/input_error.hpp"
@@ -154,6 +155,46 @@ TEST(SurveyObjective, FittedAmplitudesAreTheLeastSquaresOnesGivenTheRest) {
 // noise (seed 5), bounded around the set value where the Stribeck peak stands out, and open on both
 // sides on joint 6, whose peak (Fs - Fc = 1.6 Nm) is below its 1.78 Nm noise: there the fit's qds
 // (5.6 rad/s for 0.1) is not a finding, and the interval says so.
+// The samplers evaluate a population joint by joint (fit_amplitudes over a batch): every vector's
+// amplitudes and moments must be the single call's bit for bit, or the study's results would
+// depend on how it is batched.
+TEST(SurveyObjective, BatchFitEqualsOneByOneBitForBit) {
+  for (FrictionModel m : kAllModels) {
+    SCOPED_TRACE(model_key(m));
+    const TorqueObjective obj(data(m), m, kSigma);
+    const SearchRanges r = search_ranges(data(m), m, cad_prior(0.2, 7).mean, 0.4);
+    std::mt19937_64 rng(5);
+    std::uniform_real_distribution<double> U(0.0, 1.0);
+    std::vector<Eigen::VectorXd> batch, single, drawn;
+    for (int i = 0; i < 7; ++i) {
+      Eigen::VectorXd x = r.lo;
+      for (Eigen::Index k = 0; k < x.size(); ++k) x[k] += U(rng) * (r.hi[k] - r.lo[k]);
+      batch.push_back(x);
+      single.push_back(x);
+      drawn.push_back(x);
+    }
+    std::vector<double*> ptrs;
+    for (Eigen::VectorXd& x : batch) ptrs.push_back(x.data());
+    std::vector<std::array<double, 6>> means, vars;
+    obj.fit_amplitudes(ptrs, r.lo.data(), r.hi.data(), &means, &vars);
+    ASSERT_EQ(means.size(), batch.size());
+    for (size_t i = 0; i < single.size(); ++i) {
+      std::array<double, 6> mean{}, var{};
+      obj.fit_amplitudes(single[i].data(), r.lo.data(), r.hi.data(), &mean, &var);
+      EXPECT_TRUE(single[i] == batch[i]) << "vector " << i;
+      EXPECT_EQ(mean, means[i]) << "vector " << i;
+      EXPECT_EQ(var, vars[i]) << "vector " << i;
+      EXPECT_FALSE(batch[i] == drawn[i]) << "vector " << i << ": no amplitude was fitted";
+    }
+  }
+}
+
+TEST(SurveyObjective, FrictionCountIsTheNumberOfNames) {
+  for (FrictionModel m : kAllModels) {
+    EXPECT_EQ(friction_count(m), static_cast<int>(friction_parameter_names(m).size())) << model_key(m);
+  }
+}
+
 TEST(SurveyObjective, StribeckVelocityIntervalIsBoundedOnlyWhereTheDataDetermineIt) {
   const auto robot = load_robot(default_robots_dir(), "er20");
   for (bool noise : {false, true}) {

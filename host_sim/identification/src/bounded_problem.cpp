@@ -31,6 +31,20 @@ Eigen::VectorXd BoundedProblem::with_fitted_amplitudes(const Eigen::VectorXd& x,
   return y;
 }
 
+void BoundedProblem::fit_population(std::vector<Eigen::VectorXd>& xs, std::vector<std::vector<double>>& means,
+                                    std::vector<std::vector<double>>& vars) const {
+  std::vector<double*> ptrs;
+  for (Eigen::VectorXd& x : xs) ptrs.push_back(x.data());
+  std::vector<std::array<double, 6>> m, v;
+  objective_.fit_amplitudes(ptrs, lo().data(), hi().data(), &m, &v);
+  means.resize(xs.size());
+  vars.resize(xs.size());
+  for (size_t i = 0; i < xs.size(); ++i) {
+    means[i].assign(m[i].begin(), m[i].end());
+    vars[i].assign(v[i].begin(), v[i].end());
+  }
+}
+
 Eigen::VectorXd BoundedProblem::data_start() const {
   Eigen::VectorXd seed(objective_.dimension());
   seed.head(kStandard) = cad();

@@ -28,6 +28,9 @@ class BoundedProblem : public SearchProblem {
   /// parameters (TorqueObjective::fit_amplitudes), clamped into their ranges.
   Eigen::VectorXd with_fitted_amplitudes(const Eigen::VectorXd& x, std::vector<double>& mean,
                                          std::vector<double>& var) const override;
+  /// The same for a population, joint by joint (TorqueObjective's batch fit_amplitudes).
+  void fit_population(std::vector<Eigen::VectorXd>& xs, std::vector<std::vector<double>>& means,
+                      std::vector<std::vector<double>>& vars) const override;
   /// S / 2: the assumed noise (MethodSettings::sigma) normalises the residual.
   double likelihood_scale() const override { return 0.5 * static_cast<double>(data_.q.rows()); }
   /// The consistent CAD values and each joint's friction_start (scale parameters from a log-grid scan).

@@ -56,7 +56,20 @@ std::vector<std::string> friction_parameter_names(FrictionModel model) {
 }
 
 int friction_count(FrictionModel model) {
-  return static_cast<int>(friction_parameter_names(model).size());
+  switch (model) {  // friction_parameter_names(model).size(), without building the names (hot loops call it)
+    case FrictionModel::eq7:
+      return 2;
+    case FrictionModel::eq8:
+    case FrictionModel::eq9:
+      return 3;
+    case FrictionModel::eq4:
+      return 4;
+    case FrictionModel::eq5:
+      return 6;
+    case FrictionModel::eq6:
+      return 5;
+  }
+  throw InputError("unknown friction model");
 }
 
 bool is_scale_parameter(FrictionModel model, int k) {

@@ -80,12 +80,21 @@ Eigen::VectorXd genetic_search(const SearchProblem& problem, const OptimiserSett
     }
     return c;
   };
-  std::vector<double> mean, var;
-  auto evaluate = [&](Individual& ind) {
-    const Eigen::VectorXd x = problem.with_fitted_amplitudes(problem.full(ind.u.data()), mean, var);
-    ind.u = problem.unit(x);
-    ind.f = cost(mean, var);
-    ind.violation = problem.violation(x);
+  // Individuals [from, end) of `inds` evaluated as one population (fit_population: the same
+  // results as one by one; the operators draw no random number while evaluating, so the children
+  // of a generation are made first and evaluated together).
+  std::vector<Eigen::VectorXd> xs;
+  std::vector<std::vector<double>> means, vars;
+  auto evaluate = [&](std::vector<Individual>& inds, size_t from) {
+    xs.clear();
+    for (size_t i = from; i < inds.size(); ++i) xs.push_back(problem.full(inds[i].u.data()));
+    problem.fit_population(xs, means, vars);
+    for (size_t i = from; i < inds.size(); ++i) {
+      Individual& ind = inds[i];
+      ind.u = problem.unit(xs[i - from]);
+      ind.f = cost(means[i - from], vars[i - from]);
+      ind.violation = problem.violation(xs[i - from]);
+    }
   };
   std::vector<Individual> pop(static_cast<size_t>(N));
   for (auto& ind : pop) {
@@ -97,7 +106,7 @@ Eigen::VectorXd genetic_search(const SearchProblem& problem, const OptimiserSett
   // could lose the right decade of a Stribeck velocity early (Eq. 4 with noise: J_e 1.22 or 0.87
   // depending on rounding, e_f 0.74 or 0.09).
   pop.front().u = problem.unit(problem.data_start());
-  for (auto& ind : pop) evaluate(ind);
+  evaluate(pop, 0);
   std::uniform_int_distribution<int> pick(0, N - 1);
   auto tournament = [&]() -> const Individual& {
     const Individual& a = pop[static_cast<size_t>(pick(rng))];
@@ -117,10 +126,10 @@ Eigen::VectorXd genetic_search(const SearchProblem& problem, const OptimiserSett
       for (Individual* c : {&c1, &c2}) {
         for (int k = 0; k < D; ++k)
           if (U(rng) < p_mutation) mutate(c->u[k], rng);
-        evaluate(*c);
         all.push_back(std::move(*c));
       }
     }
+    evaluate(all, static_cast<size_t>(N));
     // Memetic step (nonlinear friction models): the best individual's friction, joint by joint,
     // replaced by friction_start's scan at its own inertial parameters where that lowers the joint's
     // term of the cost; one more child. Given the rigid body the cost is a sum of per-joint terms,
@@ -130,9 +139,8 @@ Eigen::VectorXd genetic_search(const SearchProblem& problem, const OptimiserSett
     // robot): its child is a short local gradient search from the best individual (without it the search ended 0.03 to
     // 57 chi-square units above the least-squares minimum on twelve synthetic 3-link problems).
     if ((g + 1) % kScanEvery == 0 && problem.memetic_child(problem.full(pop.front().u.data()), child)) {
-      Individual c{problem.unit(child)};
-      evaluate(c);
-      all.push_back(std::move(c));
+      all.push_back(Individual{problem.unit(child)});
+      evaluate(all, all.size() - 1);
     }
     // (mu + lambda): the best N of parents and children survive.
     std::stable_sort(all.begin(), all.end(), better);

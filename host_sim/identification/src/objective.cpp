@@ -282,6 +282,29 @@ void TorqueObjective::amplitude_columns(const Joint& J, const double* th, Eigen:
 
 void TorqueObjective::fit_amplitudes(double* x, const double* lo, const double* hi, std::array<double, 6>* mean,
                                      std::array<double, 6>* var) const {
+  AmplitudeScratch scratch;
+  for (int j = 0; j < 6; ++j) {
+    fit_joint_amplitudes(j, x, lo, hi, mean ? &(*mean)[j] : nullptr, var ? &(*var)[j] : nullptr, scratch);
+  }
+}
+
+void TorqueObjective::fit_amplitudes(const std::vector<double*>& xs, const double* lo, const double* hi,
+                                     std::vector<std::array<double, 6>>* mean,
+                                     std::vector<std::array<double, 6>>* var) const {
+  if (mean) mean->resize(xs.size());
+  if (var) var->resize(xs.size());
+  AmplitudeScratch scratch;
+  // Joint-major: one joint's sorted rows (S x up to 60 doubles, about 1 MB at 2 000 samples) stay in
+  // cache for every vector of the batch; each vector's arithmetic is the single call's.
+  for (int j = 0; j < 6; ++j) {
+    for (size_t i = 0; i < xs.size(); ++i) {
+      fit_joint_amplitudes(j, xs[i], lo, hi, mean ? &(*mean)[i][j] : nullptr, var ? &(*var)[i][j] : nullptr, scratch);
+    }
+  }
+}
+
+void TorqueObjective::fit_joint_amplitudes(int j, double* x, const double* lo, const double* hi, double* mean,
+                                           double* var, AmplitudeScratch& scratch) const {
   const Eigen::Map<const Eigen::Matrix<double, kStandard, 1>> phi(x);
   const int nl = static_cast<int>(linear_.size());
   const std::vector<int>& amp = amplitudes_;
@@ -290,75 +313,77 @@ void TorqueObjective::fit_amplitudes(double* x, const double* lo, const double* 
   // At most 5 amplitudes per joint (friction_count): small fixed-capacity solves, no heap.
   using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6>;
   using SmallVector = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 6, 1>;
-  Eigen::ArrayXXd D;  // the amplitudes' nonlinear columns on the rows the nonlinear part reaches
-  Eigen::VectorXd r;  // there: the rigid-body residual
-  for (int j = 0; j < 6; ++j) {
-    const Joint& J = joints_[j];
-    double* f = x + kStandard + kf_ * j;
-    Small M = Small::Zero(na, na);
-    SmallVector rhs = SmallVector::Zero(na);
-    for (int a = 0; a < na; ++a) {
-      const int ca = col[static_cast<size_t>(a)];
-      if (ca < 0) continue;
-      rhs[a] = J.h[ca] - J.G.row(ca).head<kStandard>().dot(phi);
-      for (int b = 0; b < na; ++b) {
-        if (col[static_cast<size_t>(b)] >= 0) M(a, b) = J.G(ca, col[static_cast<size_t>(b)]);
-      }
+  Eigen::ArrayXXd& D = scratch.D;  // the amplitudes' nonlinear columns on the rows the nonlinear part reaches
+  Eigen::VectorXd& r = scratch.r;  // there: the rigid-body residual
+  const Joint& J = joints_[j];
+  double* f = x + kStandard + kf_ * j;
+  Small M = Small::Zero(na, na);
+  SmallVector rhs = SmallVector::Zero(na);
+  for (int a = 0; a < na; ++a) {
+    const int ca = col[static_cast<size_t>(a)];
+    if (ca < 0) continue;
+    rhs[a] = J.h[ca] - J.G.row(ca).head<kStandard>().dot(phi);
+    for (int b = 0; b < na; ++b) {
+      if (col[static_cast<size_t>(b)] >= 0) M(a, b) = J.G(ca, col[static_cast<size_t>(b)]);
     }
-    Eigen::Index k = 0;
-    if (!is_linear(model_)) {
-      // The nonlinear columns d_a (independent of the amplitudes) add d_a . r to the right-hand side
-      // and l_b . d_a + l_a . d_b + d_a . d_b to the normal matrix (l: the linear columns).
-      k = reach(J, f);
-      amplitude_columns(J, f, k, D);
-      const auto Ak = J.A_sorted.topRows(k);
-      r = J.tau_sorted.head(k).matrix() - Ak.leftCols(kStandard - J.first) * phi.tail(kStandard - J.first);
-      for (const int a : nonlinear_amplitudes_) {
-        const auto da = D.col(amp[static_cast<size_t>(a)]).matrix();
-        rhs[a] += da.dot(r);
-        for (int b = 0; b < na; ++b) {
-          const int cb = col[static_cast<size_t>(b)];
-          if (cb < 0) continue;
-          const double lb_da = Ak.col(cb - J.first).dot(da);
-          M(a, b) += lb_da;
-          M(b, a) += lb_da;
-        }
-        for (const int b : nonlinear_amplitudes_) {
-          if (b < a) continue;
-          const double da_db = da.dot(D.col(amp[static_cast<size_t>(b)]).matrix());
-          M(a, b) += da_db;
-          if (b != a) M(b, a) += da_db;
-        }
-      }
-    }
-    SmallVector sol = M.completeOrthogonalDecomposition().solve(rhs);
-    for (int a = 0; a < na; ++a) {
-      const int i = kStandard + kf_ * j + amp[static_cast<size_t>(a)];
-      if (lo) sol[a] = std::max(sol[a], lo[i]);
-      if (hi) sol[a] = std::min(sol[a], hi[i]);
-      f[amp[static_cast<size_t>(a)]] = sol[a];
-    }
-    if (!mean || !var) continue;
-    // The residual moments at the new amplitudes without another pass over the samples: the linear
-    // columns from the reduced sums, the nonlinear part n = sum_a sol_a d_a (linear in the amplitudes).
-    Eigen::VectorXd z(kStandard + nl);
-    z.head<kStandard>() = phi;
-    for (int i = 0; i < nl; ++i) z[kStandard + i] = f[linear_[static_cast<size_t>(i)]];
-    double sse = z.dot(J.G * z) - 2 * J.h.dot(z) + J.tt, sum = J.ts - J.a.dot(z);
-    if (!is_linear(model_)) {
-      const auto Ak = J.A_sorted.topRows(k);
-      Eigen::VectorXd nk = Eigen::VectorXd::Zero(k), r_left = r;  // r less the linear columns' part
-      for (const int a : nonlinear_amplitudes_) nk += sol[a] * D.col(amp[static_cast<size_t>(a)]).matrix();
+  }
+  Eigen::Index k = 0;
+  if (!is_linear(model_)) {
+    // The nonlinear columns d_a (independent of the amplitudes) add d_a . r to the right-hand side
+    // and l_b . d_a + l_a . d_b + d_a . d_b to the normal matrix (l: the linear columns).
+    k = reach(J, f);
+    amplitude_columns(J, f, k, D);
+    const auto Ak = J.A_sorted.topRows(k);
+    r = J.tau_sorted.head(k).matrix() - Ak.leftCols(kStandard - J.first) * phi.tail(kStandard - J.first);
+    for (const int a : nonlinear_amplitudes_) {
+      const auto da = D.col(amp[static_cast<size_t>(a)]).matrix();
+      rhs[a] += da.dot(r);
       for (int b = 0; b < na; ++b) {
         const int cb = col[static_cast<size_t>(b)];
-        if (cb >= 0) r_left -= sol[b] * Ak.col(cb - J.first);
+        if (cb < 0) continue;
+        const double lb_da = Ak.col(cb - J.first).dot(da);
+        M(a, b) += lb_da;
+        M(b, a) += lb_da;
       }
-      sse += -2 * nk.dot(r_left) + nk.squaredNorm();
-      sum -= nk.sum();
+      for (const int b : nonlinear_amplitudes_) {
+        if (b < a) continue;
+        const double da_db = da.dot(D.col(amp[static_cast<size_t>(b)]).matrix());
+        M(a, b) += da_db;
+        if (b != a) M(b, a) += da_db;
+      }
     }
-    (*mean)[j] = sum / n_;
-    (*var)[j] = std::max(0.0, sse / n_ - (*mean)[j] * (*mean)[j]);
   }
+  SmallVector sol = M.completeOrthogonalDecomposition().solve(rhs);
+  for (int a = 0; a < na; ++a) {
+    const int i = kStandard + kf_ * j + amp[static_cast<size_t>(a)];
+    if (lo) sol[a] = std::max(sol[a], lo[i]);
+    if (hi) sol[a] = std::min(sol[a], hi[i]);
+    f[amp[static_cast<size_t>(a)]] = sol[a];
+  }
+  if (!mean || !var) return;
+  // The residual moments at the new amplitudes without another pass over the samples: the linear
+  // columns from the reduced sums, the nonlinear part n = sum_a sol_a d_a (linear in the amplitudes).
+  Eigen::VectorXd& z = scratch.z;
+  z.resize(kStandard + nl);
+  z.head<kStandard>() = phi;
+  for (int i = 0; i < nl; ++i) z[kStandard + i] = f[linear_[static_cast<size_t>(i)]];
+  double sse = z.dot(J.G * z) - 2 * J.h.dot(z) + J.tt, sum = J.ts - J.a.dot(z);
+  if (!is_linear(model_)) {
+    const auto Ak = J.A_sorted.topRows(k);
+    Eigen::VectorXd& nk = scratch.n;
+    Eigen::VectorXd& r_left = scratch.r_left;  // r less the linear columns' part
+    nk.setZero(k);
+    r_left = r;
+    for (const int a : nonlinear_amplitudes_) nk += sol[a] * D.col(amp[static_cast<size_t>(a)]).matrix();
+    for (int b = 0; b < na; ++b) {
+      const int cb = col[static_cast<size_t>(b)];
+      if (cb >= 0) r_left -= sol[b] * Ak.col(cb - J.first);
+    }
+    sse += -2 * nk.dot(r_left) + nk.squaredNorm();
+    sum -= nk.sum();
+  }
+  *mean = sum / n_;
+  *var = std::max(0.0, sse / n_ - *mean * *mean);
 }
 
 double TorqueObjective::eq25_of(const std::array<double, 6>& mean, const std::array<double, 6>& var, double k_e) {

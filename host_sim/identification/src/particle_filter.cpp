@@ -69,18 +69,27 @@ Eigen::VectorXd particle_search(const SearchProblem& problem, const OptimiserSet
   // Negative log-likelihood of the torques under the assumed noise (survey: Table 7 sigma_j,
   // Gaussian, (S / 2) sum_j ||e_j / sigma_j||^2 / S); the target at b = 1 is the posterior on the ranges.
   const double likelihood_scale = problem.likelihood_scale();
-  std::vector<double> moments_mean, moments_var;
-  // Particle u with its amplitudes at their conditional least-squares values (written back to u),
-  // and its cost.
-  auto fitted = [&](Eigen::VectorXd& u, double& cost) {
-    const Eigen::VectorXd x = problem.with_fitted_amplitudes(problem.full(u.data()), moments_mean, moments_var);
-    u = problem.unit(x);
-    double ls = 0;
-    for (size_t j = 0; j < moments_mean.size(); ++j) ls += moments_mean[j] * moments_mean[j] + moments_var[j];
-    cost = likelihood_scale * ls;
-    return x;
+  // Proposals us (unit coordinates) with their amplitudes at their conditional least-squares values
+  // (written back), their full vectors into xs and their costs into costs: one population
+  // (fit_population; no random number is drawn while evaluating, so a pass's proposals are drawn
+  // first and evaluated together, with the results of one by one).
+  std::vector<Eigen::VectorXd> xs;
+  std::vector<std::vector<double>> means, vars;
+  std::vector<double> costs;
+  auto fitted = [&](std::vector<Eigen::VectorXd>& us) {
+    xs.clear();
+    for (const Eigen::VectorXd& u : us) xs.push_back(problem.full(u.data()));
+    problem.fit_population(xs, means, vars);
+    costs.assign(us.size(), 0.0);
+    for (size_t p = 0; p < us.size(); ++p) {
+      us[p] = problem.unit(xs[p]);
+      double ls = 0;
+      for (size_t j = 0; j < means[p].size(); ++j) ls += means[p][j] * means[p][j] + vars[p][j];
+      costs[p] = likelihood_scale * ls;
+    }
   };
   Eigen::VectorXd f(N);
+  std::vector<Eigen::VectorXd> us;
   for (int i = 0; i < N; ++i) {
     for (int k = 0; k < D; ++k) X(k, i) = U(rng);
     for (int l = 0; l < links; ++l) {
@@ -90,10 +99,14 @@ Eigen::VectorXd particle_search(const SearchProblem& problem, const OptimiserSet
         for (int k : link_vars[static_cast<size_t>(l)]) X(k, i) = U(rng);
       }
     }
-    Eigen::VectorXd ui = X.col(i);
-    const Eigen::VectorXd x = fitted(ui, f[i]);
-    X.col(i) = ui;
-    if (problem.violation(x) > 0) throw InputError("particle filter: no feasible point found in the search ranges");
+    us.push_back(X.col(i));
+  }
+  fitted(us);
+  for (int i = 0; i < N; ++i) {
+    X.col(i) = us[static_cast<size_t>(i)];
+    f[i] = costs[static_cast<size_t>(i)];
+    if (problem.violation(xs[static_cast<size_t>(i)]) > 0)
+      throw InputError("particle filter: no feasible point found in the search ranges");
   }
   // Each joint's scale-parameter coordinates (nonlinear models), for the independence moves.
   const std::vector<std::vector<int>> joint_scales = problem.scale_groups();
@@ -124,26 +137,40 @@ Eigen::VectorXd particle_search(const SearchProblem& problem, const OptimiserSet
     Eigen::MatrixXd cov = C * C.transpose() / std::max(N - 1, 1);
     cov.diagonal().array() += 1e-14;
     const Eigen::MatrixXd L = Eigen::LLT<Eigen::MatrixXd>(cov).matrixL();
-    // Metropolis acceptance of u for particle i at the current b (u written back with its fitted
-    // amplitudes); infeasible proposals have density 0.
-    auto try_move = [&](int i, Eigen::VectorXd& u, double logu) {
-      double fu = 0;
-      const Eigen::VectorXd x = fitted(u, fu);
-      if (problem.violation(x) > 0 || !(logu < -b * (fu - f[i]))) return false;
-      X.col(i) = u;
-      f[i] = fu;
-      return true;
+    // One pass of proposals, at most one per particle (particle[p], proposal us[p], log u logu[p]):
+    // Metropolis acceptance of each at the current b (written back with its fitted amplitudes);
+    // infeasible proposals have density 0. Returns the number accepted.
+    std::vector<int> particle;
+    std::vector<double> logu;
+    auto try_moves = [&]() {
+      fitted(us);
+      int taken = 0;
+      for (size_t p = 0; p < us.size(); ++p) {
+        const int i = particle[p];
+        if (problem.violation(xs[p]) > 0 || !(logu[p] < -b * (costs[p] - f[i]))) continue;
+        X.col(i) = us[p];
+        f[i] = costs[p];
+        ++taken;
+      }
+      particle.clear();
+      logu.clear();
+      us.clear();
+      return taken;
     };
     int accepted = 0;
+    us.clear();
     for (int move = 0; move < kMovesPerStep; ++move) {
       for (int i = 0; i < N; ++i) {
         Eigen::VectorXd z(D);
         for (int k = 0; k < D; ++k) z[k] = normal(rng);
         Eigen::VectorXd u = X.col(i) + scale * (L * z);
-        const double logu = std::log(U(rng));
+        const double lu = std::log(U(rng));
         if ((u.array() < 0).any() || (u.array() > 1).any()) continue;  // outside the box: density 0
-        accepted += try_move(i, u, logu);
+        particle.push_back(i);
+        logu.push_back(lu);
+        us.push_back(std::move(u));
       }
+      accepted += try_moves();
     }
     const double rate = static_cast<double>(accepted) / (kMovesPerStep * N);
     scale *= std::exp(rate - kTargetAcceptance);
@@ -152,8 +179,11 @@ Eigen::VectorXd particle_search(const SearchProblem& problem, const OptimiserSet
       for (int i = 0; i < N; ++i) {
         Eigen::VectorXd u = X.col(i);
         for (int k : joint_scales[static_cast<size_t>(joint(rng))]) u[k] = U(rng);
-        try_move(i, u, std::log(U(rng)));
+        particle.push_back(i);
+        logu.push_back(std::log(U(rng)));
+        us.push_back(std::move(u));
       }
+      try_moves();
     }
   }
   // The posterior mean (feasible: the consistent set and the box are convex in these coordinates).

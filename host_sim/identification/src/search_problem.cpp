@@ -51,6 +51,13 @@ Eigen::VectorXd SearchProblem::unit(const Eigen::VectorXd& x) const {
   return u;
 }
 
+void SearchProblem::fit_population(std::vector<Eigen::VectorXd>& xs, std::vector<std::vector<double>>& means,
+                                   std::vector<std::vector<double>>& vars) const {
+  means.resize(xs.size());
+  vars.resize(xs.size());
+  for (size_t i = 0; i < xs.size(); ++i) xs[i] = with_fitted_amplitudes(xs[i], means[i], vars[i]);
+}
+
 double SearchProblem::violation(const Eigen::VectorXd& x) const {
   double v = 0;
   for (int l = 0; l < num_links_; ++l) {

@@ -48,6 +48,11 @@ class SearchProblem {
   /// where they are free variables); each group's residual mean and (population) variance there.
   virtual Eigen::VectorXd with_fitted_amplitudes(const Eigen::VectorXd& x, std::vector<double>& mean,
                                                  std::vector<double>& var) const = 0;
+  /// with_fitted_amplitudes of every vector of xs (full), in place, with each one's group moments
+  /// in means[i], vars[i]: the samplers' population at once. Each result equals the single call's
+  /// bit for bit; a problem may order the work for its memory (BoundedProblem: joint by joint).
+  virtual void fit_population(std::vector<Eigen::VectorXd>& xs, std::vector<std::vector<double>>& means,
+                              std::vector<std::vector<double>>& vars) const;
   /// The negative log-likelihood of the data under the assumed noise, up to a constant, is
   /// likelihood_scale() x the least-squares cost (the particle filter's target).
   virtual double likelihood_scale() const = 0;

@@ -124,6 +124,7 @@ struct Study {
   MethodSettings ms;
   OptimiserSettings oo;
   std::array<double, 6> tau_max{};
+  std::array<ExciteResult, 2> designs{};  ///< the excitations of the linear and the nonlinear runs
 };
 
 /// A run of the simulated drive: `periods` excitation periods, Table 7 torque noise when `noisy`.
@@ -133,6 +134,7 @@ SurveyDataOptions run_options(const Study& st, FrictionModel model, bool noisy, 
   o.torque_noise = noisy;
   o.periods = periods;
   o.seed = st.options.seed;
+  o.design = &st.designs[is_linear(model) ? 0 : 1];
   return o;
 }
 
@@ -424,7 +426,7 @@ struct TrackingStudy {
 }  // namespace
 
 json run_survey(const RobotDescription& robot, const SurveyOptions& o, SurveySeries* series) {
-  Study st{robot, o, {}, {}, {}};
+  Study st{robot, o, {}, {}, {}, {}};
   const int jobs = o.jobs > 0 ? o.jobs : default_jobs();
   st.oo.seed = o.seed;
   if (o.quick) {  // a sixth of the genetic algorithm's and the particle filter's evaluations
@@ -439,8 +441,14 @@ json run_survey(const RobotDescription& robot, const SurveyOptions& o, SurveySer
   Table10Study t10;
   Table12Study t12;
   TrackingStudy tracking;
-  // Two rounds: every run's data, then every method on them.
-  std::vector<Task> simulations, fits;
+  // Three rounds: the two excitation designs (every run plays one of them), every run's data, then
+  // every method on them.
+  std::vector<Task> designs, simulations, fits;
+  for (size_t k = 0; k < st.designs.size(); ++k) {
+    designs.push_back(
+        {1, [&st, k] { st.designs[k] = study_excitation(st.robot, k == 0 ? M::eq7 : M::eq4, st.options.seed); }});
+  }
+  run_parallel(std::move(designs), jobs);
   for (ModelStudy& m : models) m.add_simulations(st, simulations);
   t10.add_simulations(st, simulations);
   t12.add_simulations(st, simulations);

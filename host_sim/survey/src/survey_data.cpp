@@ -81,6 +81,15 @@ void gains_along(const DriveTrajectory& trajectory, const Scenario& scenario, Jo
 
 }  // namespace
 
+ExciteResult study_excitation(const RobotDescription& robot, FrictionModel model, std::uint64_t seed) {
+  // The survey designed for Eq. 7 and Eq. 4 only, so the other linear models (Eq. 8, 9) play Eq. 7's
+  // design and the other nonlinear ones (Eq. 5, 6) Eq. 4's.
+  ExciteOptions xo;
+  xo.model = is_linear(model) ? FrictionModel::eq7 : FrictionModel::eq4;
+  xo.seed = seed;
+  return design_excitation(robot, xo);
+}
+
 SurveyData simulate_survey_data(const RobotDescription& robot, const SurveyDataOptions& o) {
   if (robot.name != Robot::kName) throw InputError("the survey study runs on the er20 arm");
   if (!(o.sample_rate_hz > 0) || o.periods < 1) throw InputError("survey data: sample rate > 0 and periods >= 1");
@@ -95,14 +104,7 @@ SurveyData simulate_survey_data(const RobotDescription& robot, const SurveyDataO
     d.scenario.effects[j].rotor_inertia = 0.0;  // the survey's model (Eq. 2) has none
   }
   d.table = set_parameter_table(d.scenario);
-  // The survey's optimal trajectory (Sec. 6.1, Fig. 2): Eq. 27 with L = 5, f_f = 0.1 Hz, cond(K) of
-  // the run's friction model minimised (dyncal excite's design): the survey designed for Eq. 7 and
-  // Eq. 4 only, so the other linear models (Eq. 8, 9) play Eq. 7's design and the other nonlinear
-  // ones (Eq. 5, 6) Eq. 4's.
-  ExciteOptions xo;
-  xo.model = is_linear(o.friction) ? FrictionModel::eq7 : FrictionModel::eq4;
-  xo.seed = o.seed;
-  const ExciteResult designed = design_excitation(robot, xo);
+  const ExciteResult designed = o.design ? *o.design : study_excitation(robot, o.friction, o.seed);
   const auto& traj = designed.trajectory;
   d.trajectory_cond = designed.cond;
   d.trajectory.f_f = traj.f_f;

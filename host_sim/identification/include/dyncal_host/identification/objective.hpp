@@ -46,6 +46,11 @@ class TorqueObjective {
   /// at no further pass over the samples.
   void fit_amplitudes(double* x, const double* lo = nullptr, const double* hi = nullptr,
                       std::array<double, 6>* mean = nullptr, std::array<double, 6>* var = nullptr) const;
+  /// fit_amplitudes of every decision vector in xs (each dimension() long), joint by joint over the
+  /// batch so that a joint's samples are read from cache; each vector's result is bit-identical to
+  /// fit_amplitudes(xs[i], ...). mean, var (if given) are resized to xs.size().
+  void fit_amplitudes(const std::vector<double*>& xs, const double* lo, const double* hi,
+                      std::vector<std::array<double, 6>>* mean, std::vector<std::array<double, 6>>* var) const;
   /// Eq. 25 and the least-squares cost from residual moments (as eq25, least_squares).
   static double eq25_of(const std::array<double, 6>& mean, const std::array<double, 6>& var, double k_e);
   static double least_squares_of(const std::array<double, 6>& mean, const std::array<double, 6>& var);
@@ -70,6 +75,14 @@ class TorqueObjective {
   /// The nonlinear part's columns d n / d amplitude on rows [0, k) of joint J into D (k x kf; only the
   /// columns of nonlinear_amplitudes_ are set): what separable least squares needs of it.
   void amplitude_columns(const Joint& J, const double* theta, Eigen::Index k, Eigen::ArrayXXd& D) const;
+  /// fit_amplitudes' work buffers, reused from one joint and vector to the next.
+  struct AmplitudeScratch {
+    Eigen::ArrayXXd D;
+    Eigen::VectorXd r, n, r_left, z;
+  };
+  /// fit_amplitudes of joint j alone (its amplitudes in x; its mean and variance if both given).
+  void fit_joint_amplitudes(int j, double* x, const double* lo, const double* hi, double* mean, double* var,
+                            AmplitudeScratch& scratch) const;
 
   FrictionModel model_;
   int kf_ = 2;

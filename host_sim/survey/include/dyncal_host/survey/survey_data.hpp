@@ -11,6 +11,7 @@
 #include "dyncal_host/common/robot_description.hpp"
 #include "dyncal_host/drive/scenario.hpp"
 #include "dyncal_host/drive/simulated_drive.hpp"
+#include "dyncal_host/identification/excitation.hpp"
 #include "dyncal_host/identification/idim_iv.hpp"
 #include "dyncal_host/identification/run_data.hpp"
 
@@ -23,7 +24,15 @@ struct SurveyDataOptions {
   int periods = 2;                              ///< excitation periods recorded (10 s each at f_f = 0.1 Hz)
   std::uint64_t seed = 1;                       ///< noise and excitation seed
   double position_noise_std = 0;                ///< Gaussian noise on the measured position q_meas [rad]
+  /// The excitation designed for this run (study_excitation of its friction model and seed), when
+  /// the caller has it: the design is deterministic, so a study designs each one once; null: designed here.
+  const ExciteResult* design = nullptr;
 };
+
+/// The survey's optimal trajectory for a run of friction model `model` (Sec. 6.1, Fig. 2): Eq. 27
+/// with L = 5, f_f = 0.1 Hz, cond(K) minimised for Eq. 7 (linear models) or Eq. 4 (nonlinear ones)
+/// by dyncal excite's design from `seed`.
+ExciteResult study_excitation(const RobotDescription& robot, FrictionModel model, std::uint64_t seed);
 
 /// One recorded run of the study: the RunData the methods take (q, qd, qdd the exact plant state at
 /// the samples: q_m, qd_m, qdd_m of Fig. 3; q_meas with position_noise_std noise; tau the measured
