@@ -55,6 +55,9 @@ void add_calibrate_command(CLI::App& app, Action& run) {
   cmd->add_option("--min-speed", o.identify.min_speed_fraction,
                   "fit only rows where |qd_j| >= this fraction of joint j's top speed (stiction)")
       ->capture_default_str();
+  cmd->add_flag(
+      "--friction-per-joint", o.identify.friction_per_joint,
+      "batch fit: friction and rotor inertia per joint, leaving robot.json's coupled motors out (as identify)");
   cmd->add_flag("--no-flash", s->no_flash, "identify and verify, but leave the drive's table alone");
   cmd->add_flag("--diagnose", o.diagnose,
                 "diagnose the residual (as dyncal diagnose) and flash the effects found with the table");

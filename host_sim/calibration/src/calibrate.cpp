@@ -17,8 +17,10 @@
 #include "dyncal_host/common/model_terms.hpp"
 #include "dyncal_host/common/number_text.hpp"
 #include "dyncal_host/identification/compiled_robot.hpp"
+#include "dyncal_host/identification/drive_table.hpp"
 #include "dyncal_host/identification/excitation.hpp"
 #include "dyncal_host/identification/identify_report.hpp"
+#include "dyncal_host/identification/prediction.hpp"
 
 namespace dyncal::host {
 namespace {
@@ -278,46 +280,43 @@ CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions&
   r.samples_per_second = static_cast<double>(r.samples) / std::max(1e-9, r.stream_seconds);
   IdentifyOptions io = o.identify;
   io.terms = o.terms;
-  // The drive's feed-forward (lib IdentificationModel) applies friction and rotor inertia per joint,
-  // so the table it gets is identified that way, whatever coupling robot.json declares.
-  io.friction_per_joint = true;
+  // Friction and rotor inertia belong to motors: a motor that robot.json couples to two joints
+  // (the TX40's motor 6 on q5 + q6) is fitted at its own velocity, unless
+  // options.identify.friction_per_joint. The drive's table carries its terms as a coupling term
+  // (parameter_table), which the feed-forward applies at the motor's velocity.
   r.batch = identify(robot, log, io);
   for (const auto& p : r.batch.params) {
     r.names.push_back(p.name);
     r.phi_batch.push_back(p.value);
   }
+  r.friction_per_motor = r.batch.friction_per_motor;
+  ParameterSet batch_set = parameter_set(r.batch);
   // 2. Fresh trajectory with the drive's current table, flash, same trajectory again.
   const auto fresh = default_excitation(robot, o.f_f, o.harmonics, 1, o.seed + 1000, nullptr);
   progress << "verification run with the drive's current table\n";
   const JointLog vlog = verification_run(*drive, fresh, o, prog, &r.lost, r.drive_error_before);
   const OnlineModel::VerifyFn verify = online.verify[static_cast<size_t>(term_set)];
-  r.verify_batch = verify(vlog, r.phi_batch, o.online_cutoff_hz);
-  r.verify_kf = verify(vlog, r.phi_kf, o.online_cutoff_hz);
-  r.verify_rls = verify(vlog, r.phi_rls, o.online_cutoff_hz);
+  {
+    // The batch estimate as the drive would apply it: the table's parameters and effect terms.
+    const DriveTableContent batch_table = drive_table_content(batch_set, robot);
+    r.verify_batch = verify(vlog, batch_table.values, batch_table.effects, o.online_cutoff_hz);
+  }
+  r.verify_kf = verify(vlog, r.phi_kf, {}, o.online_cutoff_hz);
+  r.verify_rls = verify(vlog, r.phi_rls, {}, o.online_cutoff_hz);
   if (o.flash) {
-    ParameterTable table;
-    table.robot_id = compiled.robot_id;
-    table.model_id = o.terms;
-    table.count = static_cast<std::uint16_t>(r.phi_batch.size());
-    for (size_t i = 0; i < r.phi_batch.size(); ++i) table.values[i] = static_cast<float>(r.phi_batch[i]);
     if (o.diagnose) {
       // The same analysis as `dyncal diagnose` on the excitation; the table then carries the effects
       // found and the declared parameters re-estimated with them.
       DiagnoseOptions dopt;
       dopt.identify = io;
       const DiagnoseResult d = diagnose(robot, log, dopt);
-      std::vector<std::string> skipped;
-      const std::vector<EffectTerm> terms = effect_terms(d, &skipped);
-      if (static_cast<int>(terms.size()) > kTableMaxEffects) throw InputError("more effects than a table holds");
-      for (size_t i = 0; i < d.declared_params.size(); ++i) table.values[i] = static_cast<float>(d.declared_params[i]);
-      table.effect_count = static_cast<std::uint16_t>(terms.size());
-      for (size_t i = 0; i < terms.size(); ++i) table.effects[i] = terms[i];
+      batch_set = diagnosed_parameter_set(batch_set, d, &r.effects_not_flashed);
       for (const auto& e : d.effects) r.effects.push_back(e.explanation);
-      r.effects_not_flashed = skipped;
       progress << "diagnosis: " << d.effects.size() << " effect(s) found";
       for (const auto& e : d.effects) progress << "\n  " << e.explanation;
       progress << "\n";
     }
+    const ParameterTable table = parameter_table(batch_set, robot, &r.table_notes);
     const FlashOutcome f = flash_and_verify(*drive, table, [&] {
       progress << kFlashedMessage << "\nverification run with the new table\n";
       verification_run(*drive, fresh, o, prog, &r.lost, r.drive_error_after);
@@ -336,7 +335,9 @@ void print_calibrate_report(std::ostream& out, const CalibrateResult& r) {
   out << "\ncalibration: " << r.samples << " samples streamed in " << std::setprecision(1) << r.stream_seconds << " s ("
       << std::setprecision(0) << r.samples_per_second << " samples/s), " << r.lost << " lost; online updates "
       << r.online_updates << " (" << r.online_rejected << " rejected)\n";
-  out << "batch fit (" << r.batch.method << ", " << r.batch.model << "), cross-validated on the excitation run:\n";
+  out << "batch fit (" << r.batch.method << ", " << r.batch.model
+      << (r.friction_per_motor ? ", friction and rotor inertia per motor" : "")
+      << "), cross-validated on the excitation run:\n";
   out << "  joint    RMS [Nm]   rel. RMS      R2     e_T\n";
   for (const auto& j : r.batch.joints) {
     out << "  " << std::setw(5) << j.joint << std::setprecision(3) << std::setw(11) << j.rms << std::setw(11)
@@ -354,6 +355,7 @@ void print_calibrate_report(std::ostream& out, const CalibrateResult& r) {
     for (const auto& e : r.effects) out << "  " << e << "\n";
     for (const auto& e : r.effects_not_flashed) out << "  (not flashed: " << e << " - drift has no table term)\n";
   }
+  for (const auto& n : r.table_notes) out << "table: " << n << "\n";
   out << "flash: " << r.flash_message << "\n";
   if (r.flashed) {
     out << "drive model error RMS(tau - tau_ff) [Nm] on the fresh trajectory, before -> after the flash:\n";
@@ -389,6 +391,8 @@ nlohmann::json calibrate_report_json(const CalibrateResult& r) {
                            {"drive_error_before", r.drive_error_before[k]},
                            {"drive_error_after", r.drive_error_after[k]}});
   }
+  j["friction_per"] = r.friction_per_motor ? "motor" : "joint";
+  j["table_notes"] = r.table_notes;
   j["flashed"] = r.flashed;
   j["flash_message"] = r.flash_message;
   j["total_seconds"] = r.total_seconds;

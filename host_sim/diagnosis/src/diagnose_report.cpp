@@ -81,6 +81,33 @@ std::vector<EffectTerm> effect_terms(const DiagnoseResult& r, std::vector<std::s
   return out;
 }
 
+ParameterSet diagnosed_parameter_set(const ParameterSet& declared, const DiagnoseResult& r,
+                                     std::vector<std::string>* skipped) {
+  if (r.declared_params.size() != declared.names.size())
+    throw InputError("the diagnosis has " + std::to_string(r.declared_params.size()) + " declared parameters, the " +
+                     "declared model " + std::to_string(declared.names.size()));
+  ParameterSet p = declared;
+  std::vector<double> values = r.declared_params;
+  for (const auto& e : r.effects) {
+    const std::optional<ModelEffect> m = model_effect(e);
+    if (!m) {
+      if (skipped)
+        skipped->push_back(std::string(effect_name(e.kind)) + " on joint " + std::to_string(e.joints.front()));
+      continue;
+    }
+    const std::vector<std::string> names = effect_param_names(*m);
+    std::vector<double> c = e.params;  // a coupled motor without rotor inertia: Ia 0
+    c.resize(names.size(), 0.0);
+    p.effects.push_back(*m);
+    p.names.insert(p.names.end(), names.begin(), names.end());
+    values.insert(values.end(), c.begin(), c.end());
+    p.model += "," + effect_item(*m);
+  }
+  p.values = Eigen::Map<const Eigen::VectorXd>(values.data(), static_cast<Eigen::Index>(values.size()));
+  p.source = declared.source + " with the diagnosis";
+  return p;
+}
+
 nlohmann::json diagnose_report_json(const DiagnoseResult& r) {
   nlohmann::json j;
   j["robot"] = r.robot;

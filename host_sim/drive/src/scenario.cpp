@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/common/model_effects.hpp"
 
 namespace dyncal::host {
 namespace {
@@ -87,6 +88,12 @@ bool joint_list(const json& j, const char* key, int n, const std::string& path,
 
 }  // namespace
 
+MotorMap identity_motor_map() {
+  MotorMap T{};
+  for (int m = 0; m < kMaxDriveJoints; ++m) T[static_cast<size_t>(m)][static_cast<size_t>(m)] = 1.0;
+  return T;
+}
+
 Scenario default_scenario(const RobotDescription& robot) {
   if (robot.num_joints < 1 || robot.num_joints > kMaxDriveJoints)
     throw InputError("the simulated drive runs 1 to " + std::to_string(kMaxDriveJoints) + " joints, '" + robot.name +
@@ -94,6 +101,9 @@ Scenario default_scenario(const RobotDescription& robot) {
   Scenario s;
   s.robot = robot.name;
   s.num_joints = robot.num_joints;
+  const Eigen::MatrixXd T = motor_velocity_map(robot, true, {});
+  for (int m = 0; m < robot.num_joints; ++m)
+    for (int j = 0; j < robot.num_joints; ++j) s.motor_map[static_cast<size_t>(m)][static_cast<size_t>(j)] = T(m, j);
   std::array<double, kMaxDriveJoints> motor_inertia{};
   bool noise_given = false;
   const std::string drive_file = robot.directory + "/drive.json";

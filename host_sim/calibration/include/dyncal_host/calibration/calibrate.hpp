@@ -58,21 +58,25 @@ struct VerificationErrors {
 };
 
 struct CalibrateResult {
-  int num_joints = 0;              ///< the robot's; per-joint arrays are filled to here
-  IdentifyResult batch;            ///< OLS fit of the excitation run, with cross-validation
-  std::vector<std::string> names;  ///< parameter names, model order
-  std::vector<double> phi_batch, phi_kf, phi_rls;
-  double trajectory_cond = 0;     ///< cond(K) of the chosen excitation (Eq. 26, columns unit-scaled)
-  long samples = 0;               ///< excitation samples streamed
-  std::uint32_t lost = 0;         ///< samples lost to drive overruns (all runs)
-  double stream_seconds = 0;      ///< wall time of the excitation stream
-  double samples_per_second = 0;  ///< streamed samples per wall second
+  int num_joints = 0;                              ///< the robot's; per-joint arrays are filled to here
+  IdentifyResult batch;                            ///< OLS fit of the excitation run, with cross-validation
+  std::vector<std::string> names;                  ///< parameter names, model order
+  std::vector<double> phi_batch, phi_kf, phi_rls;  ///< batch: identify's model; KF, RLS: lib's (per joint)
+  double trajectory_cond = 0;                      ///< cond(K) of the chosen excitation (Eq. 26, columns unit-scaled)
+  long samples = 0;                                ///< excitation samples streamed
+  std::uint32_t lost = 0;                          ///< samples lost to drive overruns (all runs)
+  double stream_seconds = 0;                       ///< wall time of the excitation stream
+  double samples_per_second = 0;                   ///< streamed samples per wall second
   long online_updates = 0, online_rejected = 0;
   VerificationErrors verify_batch, verify_kf, verify_rls;  ///< fresh trajectory, identified models
   std::array<double, modbus_map::kMaxJoints> drive_error_before{},
       drive_error_after{};           ///< drive's own RMS(tau - tau_ff)
   std::vector<std::string> effects;  ///< explanations of the effects diagnosed and flashed
   std::vector<std::string> effects_not_flashed;
+  /// The batch fit's friction and rotor inertia are per motor (robot.json's coupled motors at their
+  /// own velocity; the online KF and RLS are lib's per-joint models either way).
+  bool friction_per_motor = false;
+  std::vector<std::string> table_notes;  ///< how the table holds the batch model (a coupled motor's coupling term)
   bool flashed = false;
   TableStatus flash_status = TableStatus::ok;
   std::string flash_message;

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "dyncal/effect_terms.hpp"
 #include "dyncal/port.hpp"
 #include "dyncal_host/calibration/calibrate.hpp"
 #include "dyncal_host/common/model_terms.hpp"
@@ -28,8 +29,12 @@ struct OnlineModel {
   /// options.identify.min_speed_fraction of qd_max [rad/s] left out) behind `sink`.
   /// Throws InputError (cut-off not below half the sample rate).
   using OnlineFn = void (*)(const Eigen::VectorXd& qd_max, const CalibrateOptions& options, SampleSink& sink);
-  /// RMS of tau - K phi and of tau per joint over `log` through the causal differentiator at `cutoff` [Hz].
-  using VerifyFn = VerificationErrors (*)(const JointLog& log, const std::vector<double>& phi, double cutoff);
+  /// RMS of tau - tau_hat and of tau per joint over `log` through the causal differentiator at
+  /// `cutoff` [Hz]; tau_hat = K phi plus the torques of `effects` (a table's effect terms, as the
+  /// drive's feed-forward applies them: a coupled motor's coupling term among them). Throws
+  /// InputError for an effect term not valid for the robot.
+  using VerifyFn = VerificationErrors (*)(const JointLog& log, const std::vector<double>& phi,
+                                          const std::vector<EffectTerm>& effects, double cutoff);
 
   std::array<OnlineFn, kBuiltTermSets> online{};  ///< by built_term_set_index
   std::array<VerifyFn, kBuiltTermSets> verify{};

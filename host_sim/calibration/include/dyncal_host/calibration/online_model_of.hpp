@@ -6,6 +6,7 @@
 #include <utility>
 
 #include "dyncal/causal_differentiator.hpp"
+#include "dyncal/effect_terms.hpp"
 #include "dyncal/identification_model.hpp"
 #include "dyncal/kalman_filter.hpp"
 #include "dyncal/rls_forgetting.hpp"
@@ -73,9 +74,13 @@ struct OnlineModelRun {
     sink.finish = [st](CalibrateResult& r) { st->finish(r); };
   }
 
-  static VerificationErrors verify(const JointLog& log, const std::vector<double>& phi_v, double cutoff) {
+  static VerificationErrors verify(const JointLog& log, const std::vector<double>& phi_v,
+                                   const std::vector<EffectTerm>& effects, double cutoff) {
     ParamVec phi;
     for (int i = 0; i < P; ++i) phi[i] = phi_v[static_cast<size_t>(i)];
+    for (const EffectTerm& e : effects) {
+      if (!effect_term_valid(e, N)) throw InputError("verification: an effect term is not valid for this robot");
+    }
     CausalDifferentiator<double, N> diff;
     diff.reset(log.sample_period(), cutoff);
     typename Model::template Regressor<double> K;
@@ -86,7 +91,12 @@ struct OnlineModelRun {
       if (diff.update(log.q.row(s).transpose(), log.tau.row(s).transpose(), q, qd, qdd, tau) != UpdateStatus::ok)
         continue;
       Model::regressor(q, qd, qdd, Vec::Zero().eval(), K);
-      se += (tau - K * phi).cwiseAbs2();
+      Vec tau_hat = K * phi;
+      if (!effects.empty()) {  // as the drive's feed-forward applies a table's effect terms
+        const Vec tau_rb = K.template leftCols<Robot::kNumBase>() * phi.template head<Robot::kNumBase>();
+        add_effect_torques(effects.data(), static_cast<int>(effects.size()), q, qd, qdd, tau_rb, tau_hat);
+      }
+      se += (tau - tau_hat).cwiseAbs2();
       st += tau.cwiseAbs2();
       ++n;
     }

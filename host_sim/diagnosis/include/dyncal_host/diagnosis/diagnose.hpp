@@ -11,6 +11,7 @@
 
 #include "dyncal/effect_terms.hpp"
 #include "dyncal_host/identification/identify.hpp"
+#include "dyncal_host/identification/prediction.hpp"
 
 namespace dyncal::host {
 
@@ -110,6 +111,14 @@ std::optional<ModelEffect> model_effect(const DiagnosedEffect& e);
 /// The effects as parameter-table terms (dyncal/effect_terms.hpp). Drift has no table term (it is a
 /// change over time, not a model term): it is skipped and named in *skipped.
 std::vector<EffectTerm> effect_terms(const DiagnoseResult& r, std::vector<std::string>* skipped);
+
+/// The declared model's parameter set (`declared`: the identify fit the diagnosis started from, its
+/// names the diagnosis's declared_names) with the diagnosis's re-estimated declared parameters and
+/// its effects appended as effect terms (model_effect; drift, which has none, skipped and named in
+/// *skipped): what a drive table of the diagnosed model holds (parameter_table). Throws
+/// InputError when the counts differ.
+ParameterSet diagnosed_parameter_set(const ParameterSet& declared, const DiagnoseResult& r,
+                                     std::vector<std::string>* skipped);
 nlohmann::json diagnose_report_json(const DiagnoseResult& r);
 
 }  // namespace dyncal::host

@@ -79,10 +79,14 @@ class DrivePlantOf final : public DrivePlant {
       ratings_.qdd_max[j] = static_cast<float>(robot.qdd_max[j]);
       ratings_.q_min[j] = static_cast<float>(robot.q_min[j]);
       ratings_.q_max[j] = static_cast<float>(robot.q_max[j]);
-      ia_[j] = scenario.effects[j].rotor_inertia;
+      for (int k = 0; k < N; ++k) motor_(j, k) = scenario.motor_map[static_cast<size_t>(j)][static_cast<size_t>(k)];
       quantum_[j] =
           scenario.encoder_counts > 0 ? 2.0 * M_PI / (scenario.encoder_counts * std::fabs(robot.gear_ratios[j])) : 0.0;
     }
+    // The rotor inertias at their motors' accelerations: sum_m Ia_m T_m^T T_m (diag(Ia) without
+    // coupled motors).
+    rotor_.setZero();
+    for (int m = 0; m < N; ++m) rotor_ += scenario.effects[m].rotor_inertia * motor_.row(m).transpose() * motor_.row(m);
   }
 
   void set_plant_parameters(const std::vector<double>& phi_standard) override {
@@ -111,14 +115,15 @@ class DrivePlantOf final : public DrivePlant {
     Mat M;
     Robot::mass_matrix(q_, phi_true_, M);
     const Vec m_eff = lightest_effective_inertia(trajectory);
+    M += rotor_;
     for (int j = 0; j < N; ++j) {
-      const double m = std::min(M(j, j) + ia_[j], m_eff[j] / (2.0 * scenario.damping * w * dt));
+      const double m = std::min(M(j, j), m_eff[j] / (2.0 * scenario.damping * w * dt));
       kp_[j] = m * w * w;
       kd_[j] = 2.0 * scenario.damping * m * w;
     }
   }
 
-  /// Per joint, the smallest 1 / (M + Ia)^-1_jj on 400 points of one period of `trajectory`.
+  /// Per joint, the smallest 1 / (M + rotor inertia)^-1_jj on 400 points of one period of `trajectory`.
   Vec lightest_effective_inertia(const DriveTrajectory& trajectory) const {
     constexpr int kGrid = 400;
     Vec m = Vec::Constant(std::numeric_limits<double>::infinity());
@@ -127,7 +132,7 @@ class DrivePlantOf final : public DrivePlant {
       trajectory.evaluate(trajectory.period() * k / kGrid, q, qd, qdd);
       Mat M;
       Robot::mass_matrix(q, phi_true_, M);
-      M.diagonal() += ia_;
+      M += rotor_;
       m = m.cwiseMin(M.ldlt().solve(Mat::Identity()).diagonal().cwiseInverse());
     }
     return m;
@@ -245,7 +250,8 @@ class DrivePlantOf final : public DrivePlant {
 
   GeneratedRobotData data_;
   StdVec phi_true_;
-  Vec ia_ = Vec::Zero();
+  Mat motor_ = Mat::Identity();             // Scenario::motor_map: motor velocities v = T qd
+  Mat rotor_ = Mat::Zero();                 // the motors' rotor inertia on the joints: sum_m Ia_m T_m^T T_m
   Vec q_ = Vec::Zero(), qd_ = Vec::Zero();  // plant state
   Vec q_meas_prev_ = Vec::Zero();
   Vec kp_ = Vec::Zero(), kd_ = Vec::Zero();
@@ -255,7 +261,8 @@ class DrivePlantOf final : public DrivePlant {
   ModelOps ops_{};             // feed-forward and check of the active table's model
 };
 
-/// Plant: (M(q) + diag(Ia)) qdd = tau - h(q, qd) - friction - effects, RK4 with zero-order hold.
+/// Plant: (M(q) + sum_m Ia_m T_m^T T_m) qdd = tau - h(q, qd) - T^T f(T qd) - effects, RK4 with
+/// zero-order hold (T the motor map, f the motors' friction; the identity without coupled motors).
 /// qdd0: the acceleration at the period's start (the first RK4 stage).
 template <class Robot>
 void DrivePlantOf<Robot>::integrate(const Scenario& scenario, const Vec& tau_cmd, double clock, double dt,
@@ -264,15 +271,20 @@ void DrivePlantOf<Robot>::integrate(const Scenario& scenario, const Vec& tau_cmd
   auto accel = [&](const Vec& q, const Vec& qd, Vec& qdd) {
     Mat M;
     Robot::mass_matrix(q, phi_true_, M);
-    M.diagonal() += ia_;
+    M += rotor_;
     Vec h;
     Robot::inverse_dynamics(q, qd, Vec::Zero().eval(), phi_true_, h);
     Vec rhs = tau_cmd - h;
+    const Vec v_motor = motor_ * qd;
     for (int j = 0; j < N; ++j) {
       const JointEffects& e = scenario.effects[j];
       JointFriction f = scenario.friction[j];
       if (e.viscous_drift != 0) f.beta *= 1.0 + e.viscous_drift * (1.0 - std::exp(-warm / e.drift_time_constant));
-      double tf = friction_torque(f, qd[j], h[j]) + e.offset;
+      const double friction = friction_torque(f, v_motor[j], h[j]);  // motor j's, at its velocity
+      for (int k = 0; k < N; ++k) {
+        if (k != j && motor_(j, k) != 0.0) rhs[k] -= motor_(j, k) * friction;
+      }
+      double tf = motor_(j, j) * friction + e.offset;
       if (e.load_friction != 0) tf += e.load_friction * std::fabs(h[j]) * (qd[j] > 0 ? 1.0 : (qd[j] < 0 ? -1.0 : 0.0));
       if (e.cogging_amplitude != 0) tf += e.cogging_amplitude * std::sin(e.cogging_cycles * q[j] + e.cogging_phase);
       rhs[j] -= tf;
@@ -292,16 +304,17 @@ void DrivePlantOf<Robot>::integrate(const Scenario& scenario, const Vec& tau_cmd
   {
     Mat M;
     Robot::mass_matrix(q_, phi_true_, M);
-    M.diagonal() += ia_;
+    M += rotor_;
     const Eigen::LLT<Mat> llt(M);
     if (llt.info() == Eigen::Success) {
-      Mat B = Mat::Zero();
+      Vec beta_m;
       for (int j = 0; j < N; ++j) {
         const JointEffects& e = scenario.effects[j];
         double beta = scenario.friction[j].beta;
         if (e.viscous_drift != 0) beta *= 1.0 + e.viscous_drift;
-        B(j, j) = std::max(beta, 0.0);
+        beta_m[j] = std::max(beta, 0.0);
       }
+      const Mat B = motor_.transpose() * beta_m.asDiagonal() * motor_;  // T^T diag(beta) T
       // lambda_max(M^-1 B) = lambda_max(L^-1 B L^-T), bounded by its largest row sum.
       const Mat A = llt.matrixL().solve(llt.matrixL().solve(B).transpose());
       const double lambda = A.cwiseAbs().rowwise().sum().maxCoeff();

@@ -49,7 +49,18 @@ struct CoupledFriction {
   double Fc = 0, beta = 0;
 };
 
-/// Per joint, joint 1 first; entries past num_joints are unused.
+/// Motor velocities in joint units, v = T qd: row m is motor m's (kMaxDriveJoints x kMaxDriveJoints,
+/// the first num_joints rows and columns used).
+using MotorMap = std::array<std::array<double, kMaxDriveJoints>, kMaxDriveJoints>;
+
+/// The identity map: every motor turns with its own joint alone.
+MotorMap identity_motor_map();
+
+/// Per joint, joint 1 first; entries past num_joints are unused. friction[m] and
+/// effects[m].rotor_inertia are motor m's: its friction acts at its velocity v_m = (T qd)_m and its
+/// torque on every joint j by T(m, j) (the transmission's transpose); its rotor inertia Ia_m adds
+/// Ia_m T_m^T T_m to the mass matrix. With the identity map (a robot without coupled motors) they
+/// are joint m's. The other effects are per joint.
 struct Scenario {
   std::string robot = "er20";
   int num_joints = 6;
@@ -64,10 +75,12 @@ struct Scenario {
   std::array<JointFriction, kMaxDriveJoints> friction{};
   std::array<JointEffects, kMaxDriveJoints> effects{};
   std::vector<CoupledFriction> couplings;
+  MotorMap motor_map = identity_motor_map();  ///< T: robot.json's transmission (motor_velocity_map)
 };
 
-/// The default scenario for `robot`: Eq. 7 friction with the robot file's Fc and beta; from the
-/// folder's optional drive.json (docs/robots.md) the motor inertias J_m [kg m^2] (reflected rotor
+/// The default scenario for `robot`: robot.json's transmission as the motor map (a coupled motor,
+/// such as the TX40's motor 6 on q5 + q6, simulated as the motor it is); Eq. 7 friction with the robot file's Fc and
+/// beta; from the folder's optional drive.json (docs/robots.md) the motor inertias J_m [kg m^2] (reflected rotor
 /// inertia Ia = J_m N^2, N the gear ratio; none without the file) and the torque noise [Nm]
 /// (kDefaultNoiseFractionOfTauMax of tau_max without it); no undeclared effects. Throws InputError
 /// (a malformed drive.json, a robot of more than kMaxDriveJoints joints).
