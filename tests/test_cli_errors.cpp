@@ -184,6 +184,8 @@ TEST(CliErrors, IdentifyOptionsOutsideTheirRangeAreRefused) {
   expect_error(tx40 + "--method gd --range-width 0", "--range-width 0 must lie in (0, 10]");
   expect_error(tx40 + "--method ga --evaluations -5", "--evaluations -5 must lie in [0, 1e7]");
   expect_error(tx40 + "--method kf --model eq7,offset:2", "a model with effect terms is fitted by wls, ols, pcls, gd");
+  expect_error(tx40 + "--method kf --sign-constraints", "--sign-constraints: method wls or ols, not kf");
+  expect_error(tx40 + "--model eq7,offset:2 --sign-constraints", "--sign-constraints: a model of compiled terms only");
   expect_error(tx40 + "--method iv --model eq7", "--method iv needs --law FILE");
   expect_error(tx40 + "--method wls --law law.json", "--law is the control law of --method iv");
 }
@@ -254,6 +256,15 @@ TEST(CliErrors, FlashChecksTheParameterFileAgainstItsModel) {
                "position_periodic:9:3");
   expect_error(variant("per_what", "\"friction_per\": \"joint\"", "\"friction_per\": \"wheel\""),
                "'friction_per' is 'wheel'");
+  // A negative friction coefficient (a drive refuses it): named with its value before the drive is contacted.
+  {
+    const auto name = text.find("\"name\": \"Fv1\"");
+    ASSERT_NE(name, std::string::npos);
+    const auto value = text.find("\"value\": ", name);
+    const auto end = text.find_first_of(",}\n", value + 9);
+    expect_error(variant("negative", text.substr(name, end - name), text.substr(name, value + 9 - name) + "-0.25"),
+                 "'Fv1' = -0.25: Coulomb and viscous");
+  }
   std::filesystem::remove_all(dir);
 }
 

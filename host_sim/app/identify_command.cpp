@@ -188,6 +188,9 @@ void add_identify_command(CLI::App& app, Action& run) {
                   "also predict this other log (same --format) with the final fit and report its per-joint RMS, R^2 "
                   "and e_T; repeat for several")
       ->take_all();
+  cmd->add_flag("--sign-constraints", opt.sign_constraints,
+                "wls, ols: Coulomb, viscous friction and rotor inertia held >= 0 (Lawson-Hanson), as a drive table "
+                "must have them");
   cmd->add_flag("--friction-per-joint", opt.friction_per_joint,
                 "friction and rotor inertia per joint, ignoring a coupling robot.json's transmission declares");
   cmd->add_option("--report", s->report, "write the report as JSON");

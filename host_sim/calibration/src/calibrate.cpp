@@ -309,6 +309,7 @@ CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions&
       // found and the declared parameters re-estimated with them.
       DiagnoseOptions dopt;
       dopt.identify = io;
+      dopt.identify.sign_constraints = false;  // the diagnosis's statistics are unconstrained fits
       const DiagnoseResult d = diagnose(robot, log, dopt);
       batch_set = diagnosed_parameter_set(batch_set, d, &r.effects_not_flashed);
       for (const auto& e : d.effects) r.effects.push_back(e.explanation);

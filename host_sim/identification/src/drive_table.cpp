@@ -76,6 +76,22 @@ DriveTableContent drive_table_content(const ParameterSet& p, const RobotDescript
 
 ParameterTable parameter_table(const ParameterSet& p, const RobotDescription& robot, std::vector<std::string>* notes) {
   const DriveTableContent content = drive_table_content(p, robot);
+  size_t count = p.names.size();
+  for (const ModelEffect& e : p.effects) count -= effect_param_names(e).size();
+  // What a drive refuses (lib/ table_check.hpp: friction opposes motion, inertia is positive),
+  // named here, before any drive is contacted; a coupled motor's terms too, which the table holds as
+  // a coupling term's coefficients.
+  for (size_t i = 0; i < count; ++i) {
+    const std::string& name = p.names[i];
+    const bool dissipative = name.rfind("Fc", 0) == 0 || name.rfind("Fv", 0) == 0 || name.rfind("Ia", 0) == 0;
+    if (dissipative && p.values[static_cast<Eigen::Index>(i)] < 0.0) {
+      char value[32];
+      std::snprintf(value, sizeof value, "%.6g", p.values[static_cast<Eigen::Index>(i)]);
+      throw InputError(p.source + ": params[" + std::to_string(i + 1) + "] '" + name + "' = " + value +
+                       ": Coulomb and viscous friction and rotor inertia must be >= 0 in a drive table (identify "
+                       "--sign-constraints holds them there)");
+    }
+  }
   ParameterTable t;
   t.robot_id = compiled_robot(p.robot).robot_id;
   t.model_id = p.terms;

@@ -31,6 +31,10 @@ void check_options(const IdentifyOptions& o, const JointLog& log) {
   }
   if (!o.effects.empty() && (o.method == "kf" || o.method == "rls"))
     throw InputError("--method " + o.method + ": a model with effect terms is fitted by wls, ols, pcls, gd, ga or pf");
+  if (o.sign_constraints && o.method != "wls" && o.method != "ols")
+    throw InputError("--sign-constraints: method wls or ols, not " + o.method);
+  if (o.sign_constraints && !o.effects.empty())
+    throw InputError("--sign-constraints: a model of compiled terms only (no effect terms)");
   if (o.filter_order < 2 || o.filter_order > kMaxFilterOrder || o.filter_order % 2 != 0)
     throw InputError("--filter-order " + std::to_string(o.filter_order) + " must be even, 2.." +
                      std::to_string(kMaxFilterOrder) + " (cascaded second-order sections)");

@@ -44,10 +44,13 @@ struct CalibrateOptions {
 
   /// Batch defaults for drive data: rows of a joint below 2 % of its top speed are left out of the
   /// fit, because the excitation reverses every joint several times per period and a joint with
-  /// Coulomb friction sticks at reversals (see IdentifyOptions::min_speed_fraction).
+  /// Coulomb friction sticks at reversals (see IdentifyOptions::min_speed_fraction); friction and
+  /// rotor inertia held >= 0 (IdentifyOptions::sign_constraints), since the fit becomes the drive's
+  /// table and a joint with negligible friction would otherwise come out negative half the time.
   static IdentifyOptions stiction_excluded() {
     IdentifyOptions o;
     o.min_speed_fraction = 0.02;
+    o.sign_constraints = true;
     return o;
   }
 };

@@ -33,8 +33,10 @@ DriveTableContent drive_table_content(const ParameterSet& params, const RobotDes
 
 /// The parameter table of `params` for `robot` as a drive takes it (drive_table_content, float
 /// values, the id of the robot the parameters were identified for: a drive of another robot refuses
-/// it); the conversion's notes appended to *notes. Throws InputError as drive_table_content, and for
-/// more values than a table holds or a value or effect coefficient that is no finite float.
+/// it); the conversion's notes appended to *notes. Throws InputError as drive_table_content, for a
+/// Coulomb, viscous or rotor-inertia parameter below 0 (what a drive refuses, named here with its
+/// value; a coupled motor's too), and for more values than a table holds or a value or effect
+/// coefficient that is no finite float.
 ParameterTable parameter_table(const ParameterSet& params, const RobotDescription& robot,
                                std::vector<std::string>* notes);
 

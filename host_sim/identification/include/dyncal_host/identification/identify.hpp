@@ -43,6 +43,10 @@ struct IdentifyOptions {
   int search_evaluations = 0;  ///< gd: cost evaluations, ga: generations, pf: evaluations per particle; 0: default
   bool friction_per_joint = false;  ///< ignore robot.json's coupling: friction and rotor inertia per joint (the log's
                                     ///< conversion still uses the transmission); lets diagnose rediscover a coupling
+  /// wls, ols: Coulomb and viscous friction and rotor inertia held >= 0 (sign_constrained.hpp:
+  /// Lawson-Hanson on the weighted data's triangular factor), what a drive's table must hold
+  /// (lib/ table_check.hpp); a parameter held at 0 is named in the notes, its std 0.
+  bool sign_constraints = false;
   /// iv: the closed-loop simulation of the logged run under the drive's known control law (identify
   /// --law; drive_law.hpp): the log's grid (t, segments, period) with q the plant's positions at its
   /// samples (tau 0), the plant's standard parameters phi_standard (10 N, generated order) and

@@ -23,6 +23,7 @@
 #include "dyncal_host/identification/identify.hpp"
 #include "dyncal_host/identification/instrumental_variables.hpp"
 #include "dyncal_host/identification/prediction.hpp"
+#include "dyncal_host/identification/sign_constrained.hpp"
 #include "dyncal_host/identification/signal.hpp"
 #include "dyncal_host/identification/stacked_data.hpp"
 #include "dyncal_host/identification/standard_parameters.hpp"
@@ -183,9 +184,10 @@ class IdentifyPipeline {
   bool models_coupled_motors() const { return robot_coupled_; }
 
   /// Fits on the samples with train[s] true. Writes phi and parameter standard deviations; with
-  /// pcls, the consistent solution into *consistent if given.
+  /// pcls, the consistent solution into *consistent if given; with sign constraints, the indices
+  /// held at 0 into *held if given.
   void fit(const StackedData& data, const std::vector<char>& train, ParamVec& phi, ParamVec& stdev,
-           double* cond = nullptr, ConsistentSolution* consistent = nullptr) const {
+           double* cond = nullptr, ConsistentSolution* consistent = nullptr, std::vector<int>* held = nullptr) const {
     const Eigen::Index S = data.t.size();
     auto ls = std::make_unique<StreamingLeastSquares<double, P>>();
     Eigen::MatrixXd K;
@@ -218,14 +220,18 @@ class IdentifyPipeline {
     }
     const JointVec sigma = joint_noise_std(ss, n, P);
     const std::string& m = opt_.method;
+    if (opt_.sign_constraints && m != "ols" && m != "wls")
+      throw InputError("sign constraints: method wls or ols, not " + m);
     if (m == "ols") {
       ls_statistics(*ls, stdev, cond);
+      if (opt_.sign_constraints) constrain_signs(*ls, phi, stdev, held);
     } else if (m == "wls" || m == "pcls" || is_search_method(m)) {
       ls->reset();
       add_rows([&](int j) { return 1.0 / sigma[j]; });
       if (ls->solve(phi) != UpdateStatus::ok) throw InputError("weighted regressor rank deficient");
       if (m == "wls") {
         ls_statistics(*ls, stdev, cond);
+        if (opt_.sign_constraints) constrain_signs(*ls, phi, stdev, held);
       } else {  // the WLS solution starts the consistent fit of the same weighted data
         ConsistentProblem p;
         p.R = ls->r_factor().template triangularView<Eigen::Upper>();
@@ -505,6 +511,29 @@ class IdentifyPipeline {
     if (cond) *cond = condition_number(ls);
   }
 
+  /// IdentifyOptions::sign_constraints on a least-squares fit: the dissipative and inertial terms
+  /// the drive's table check requires >= 0 (Coulomb, viscous, rotor inertia) held there when the
+  /// unconstrained phi has them negative; stdev of the free ones from the reduced problem (sigma^2
+  /// from the constrained residual), 0 on the held ones.
+  static void constrain_signs(const StreamingLeastSquares<double, P>& ls, ParamVec& phi, ParamVec& stdev,
+                              std::vector<int>* held) {
+    std::vector<int> nonnegative;
+    for (int i = 0; i < P; ++i) {
+      const ParamInfo info = Model::info(i);
+      if (info.kind == ParamKind::term &&
+          (info.term == term::coulomb || info.term == term::viscous || info.term == term::rotor_inertia))
+        nonnegative.push_back(i);
+    }
+    const Eigen::MatrixXd R = ls.r_factor().template triangularView<Eigen::Upper>();
+    const SignConstrainedSolution sol = sign_constrained_least_squares(R, ls.rotated_rhs(), nonnegative, phi);
+    if (held) *held = sol.held;
+    if (sol.held.empty()) return;
+    phi = sol.x;
+    const double dof = std::max(1.0, static_cast<double>(ls.rows() - P + static_cast<long>(sol.held.size())));
+    const double sigma2 = (ls.residual_sum_of_squares() + sol.residual_increase) / dof;
+    stdev = (sol.inverse_gram_diag * sigma2).cwiseSqrt();
+  }
+
   // cond(W) = cond(R): the triangular factor has the singular values of the stacked regressor.
   static double condition_number(const StreamingLeastSquares<double, P>& ls) {
     Eigen::JacobiSVD<Eigen::MatrixXd> svd(Eigen::MatrixXd(ls.r_factor()));
@@ -600,7 +629,8 @@ IdentifyResult run_identify(const RobotDescription& robot, JointLog&& log, const
     std::vector<char> all(static_cast<size_t>(S), 1);
     const auto t0 = std::chrono::steady_clock::now();
     ConsistentSolution consistent;
-    pipe.fit(data, all, phi, stdev, &res.condition_number, &consistent);
+    std::vector<int> held;
+    pipe.fit(data, all, phi, stdev, &res.condition_number, &consistent, &held);
     res.fit_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     for (int i = 0; i < P; ++i) res.params.push_back({Pipe::param_name(i), phi[i], stdev[i]});
     {
@@ -611,6 +641,12 @@ IdentifyResult run_identify(const RobotDescription& robot, JointLog&& log, const
       res.notes.push_back(line);
     }
     report_consistent(consistent, opt, res);
+    if (!held.empty()) {
+      std::string names;
+      for (int i : held) names += (names.empty() ? "" : ", ") + Pipe::param_name(i);
+      res.notes.push_back("sign constraints: " + names +
+                          " held at 0 (negative without the constraint: friction and rotor inertia cannot be)");
+    }
   }
   for (int j = 0; j < N; ++j) {
     if (!(Terms & term::rotor_inertia) || Robot::rotor_inertia_separate(j)) continue;
