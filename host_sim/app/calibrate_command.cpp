@@ -62,6 +62,9 @@ void add_calibrate_command(CLI::App& app, Action& run) {
   cmd->add_flag("--diagnose", o.diagnose,
                 "diagnose the residual (as dyncal diagnose) and flash the effects found with the table");
   cmd->add_option("--save-log", o.save_log, "write the excitation log here (CSV, as dyncal identify --data reads)");
+  cmd->add_option("--save-law", o.save_law,
+                  "write the excitation run's control law here (JSON, and the table active during it as .table "
+                  "beside it): what identify --method iv --law needs for the --save-log log");
   cmd->add_option("--fault-dir", o.fault_dir,
                   "where a run the drive stops on a fault leaves the samples recorded before it")
       ->capture_default_str();

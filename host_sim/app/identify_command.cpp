@@ -36,6 +36,7 @@ host::JointLog simulate_law(const host::RobotDescription& robot, const host::Dri
   sc.tau_noise_std.fill(0.0);
   sc.encoder_counts = 0;
   sc.couplings.clear();
+  sc.motor_map = host::identity_motor_map();  // the plant IDIM-IV fits: Eq. 7 friction per joint
   if (law.control_rate_hz > 0) sc.control_rate_hz = law.control_rate_hz;
   sc.sample_rate_hz = law.sample_rate_hz;
   host::JointArray kp{}, kd{};
@@ -60,7 +61,9 @@ host::JointLog simulate_law(const host::RobotDescription& robot, const host::Dri
   const double dt = 1.0 / law.sample_rate_hz;
   for (Eigen::Index s = 0; s < grid.t.size(); ++s) {
     const double x = grid.t[s] / dt;
-    const auto k = static_cast<size_t>(std::max(0.0, std::floor(x)));
+    auto k = static_cast<size_t>(std::max(0.0, std::floor(x)));
+    // The run's last sample itself (a log as long as the law's run) within rounding of its time.
+    if (!run.empty() && k + 1 == run.size() && x - static_cast<double>(k) < 1e-6) --k;
     if (!(grid.t[s] >= 0.0) || k + 1 >= run.size())
       throw host::InputError(
           law.source + ": the log's t = " + std::to_string(grid.t[s]) + " s lies outside the law's run (0.." +

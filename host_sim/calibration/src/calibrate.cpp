@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <iomanip>
 #include <memory>
@@ -227,6 +228,39 @@ void check_run_options(const CalibrateOptions& o) {
   }
 }
 
+/// The law file of the excitation run (docs/cli.md "Law file") at `path`, with the table active
+/// during it as `path` with the extension .table (its bytes as the drive held them).
+void write_law_file(const std::string& path, const RobotDescription& robot, const linux_port::Trajectory& excitation,
+                    const CalibrateOptions& o, const linux_port::DriveControlLaw& law,
+                    const std::vector<std::uint8_t>& table) {
+  const std::filesystem::path table_path = std::filesystem::path(path).replace_extension(".table");
+  nlohmann::json j;
+  j["comment"] =
+      "the control law of dyncal calibrate's excitation run (calibrate --save-law): identify --method iv "
+      "--law this file, with the log of --save-log";
+  j["trajectory"] = trajectory_to_json(robot, excitation);
+  j["periods"] = o.periods;
+  j["sample_rate_hz"] = o.sample_rate_hz;
+  j["control_rate_hz"] = law.control_rate_hz;
+  j["kp"] = nlohmann::json::array();
+  j["kd"] = nlohmann::json::array();
+  for (int k = 0; k < robot.num_joints; ++k) {
+    if (!(law.kp[k] > 0.0) || !(law.kd[k] > 0.0))
+      throw InputError("drive: the PD gains of joint " + std::to_string(k + 1) + " read back as not > 0");
+    j["kp"].push_back(law.kp[k]);
+    j["kd"].push_back(law.kd[k]);
+  }
+  j["feed_forward_table"] = table_path.filename().string();
+  {
+    std::ofstream out(table_path, std::ios::binary);
+    out.write(reinterpret_cast<const char*>(table.data()), static_cast<std::streamsize>(table.size()));
+    if (!out) throw InputError("cannot write " + table_path.string());
+  }
+  std::ofstream out(path);
+  out << j.dump(2) << "\n";
+  if (!out) throw InputError("cannot write " + path);
+}
+
 }  // namespace
 
 CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions& o, std::ostream& progress) {
@@ -237,10 +271,12 @@ CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions&
   const int term_set = built_term_set_index(o.terms);
   if (!std::filesystem::is_directory(o.fault_dir))
     throw InputError("fault directory '" + o.fault_dir + "' is not a directory");
-  if (!o.save_log.empty()) {
-    const std::filesystem::path parent = std::filesystem::path(o.save_log).parent_path();
+  for (const auto& [what, path] : {std::pair{"log", o.save_log}, std::pair{"law", o.save_law}}) {
+    if (path.empty()) continue;
+    const std::filesystem::path parent = std::filesystem::path(path).parent_path();
     if (!parent.empty() && !std::filesystem::is_directory(parent))
-      throw InputError("cannot write the log '" + o.save_log + "': no directory '" + parent.string() + "'");
+      throw InputError(std::string("cannot write the ") + what + " '" + path + "': no directory '" + parent.string() +
+                       "'");
   }
   std::string error;
   auto drive = linux_port::ModbusDrive::connect(o.uri, &error);
@@ -269,11 +305,25 @@ CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions&
            << " Hz, cond(K) = " << std::setprecision(3) << r.trajectory_cond << "\n";
   SampleSink sink;
   online.online[static_cast<size_t>(term_set)](robot.qd_max, o, sink);
+  std::vector<std::uint8_t> feed_forward;  // the table active during the excitation (--save-law)
+  if (!o.save_law.empty()) {
+    feed_forward.resize(kTableMaxBytes);
+    int size = 0;
+    if (drive->read_active_bytes(feed_forward.data(), kTableMaxBytes, &size) != port::PortStatus::ok)
+      throw InputError("drive: " + drive->error());
+    feed_forward.resize(static_cast<size_t>(size));
+  }
   const JointLog log = stream_run(*drive, excitation, {"excitation", o.periods, o.sample_rate_hz, o.fault_dir}, prog,
                                   &r.lost, &r.stream_seconds, sink.push);
   if (!o.save_log.empty()) {
     write_csv_log(o.save_log, log);
     progress << "excitation log written to " << o.save_log << "\n";
+  }
+  if (!o.save_law.empty()) {
+    linux_port::DriveControlLaw law;  // the gains the drive set when the excitation started
+    if (drive->read_control_law(law) != port::PortStatus::ok) throw InputError("drive: " + drive->error());
+    write_law_file(o.save_law, robot, excitation, o, law, feed_forward);
+    progress << "control law of the excitation run written to " << o.save_law << "\n";
   }
   sink.finish(r);
   r.samples = static_cast<long>(log.samples());

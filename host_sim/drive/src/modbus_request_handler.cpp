@@ -35,6 +35,13 @@ void refresh_inputs(const SimulatedDrive& d, std::uint16_t* in, long& table_gene
   in[mm::kFaultReg] = static_cast<std::uint16_t>(d.fault());
   in[mm::kFaultJointReg] = static_cast<std::uint16_t>(d.fault_joint());
   mm::set_f32(in + mm::kFaultValueReg, static_cast<float>(d.fault_value()));
+  // The control law of the run started last: what IDIM-IV simulates (identify --method iv --law).
+  mm::set_f32(in + mm::kControlRateReg, static_cast<float>(d.control_rate_hz()));
+  const JointArray kp = d.kp(), kd = d.kd();
+  for (int j = 0; j < n_joints; ++j) {
+    mm::set_f32(in + mm::kGainKpReg + 2 * j, static_cast<float>(kp[j]));
+    mm::set_f32(in + mm::kGainKdReg + 2 * j, static_cast<float>(kd[j]));
+  }
   // The table registers change only with the table: copy them when it changed.
   if (table_generation != static_cast<long>(d.table_generation())) {
     const auto& bytes = d.active_table_bytes();

@@ -2,10 +2,13 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/json_file.hpp"
+#include "dyncal_host/identification/compiled_robot.hpp"
 #include "dyncal_host/identification/drive_table.hpp"
 #include "dyncal_host/identification/excitation.hpp"
 #include "dyncal_host/identification/prediction.hpp"
@@ -58,6 +61,22 @@ DriveLaw read_drive_law(const std::string& path, const RobotDescription& robot) 
   if (j.contains("control_rate_hz")) law.control_rate_hz = positive(j, "control_rate_hz", path);
   law.kp = gains(j, "kp", robot.num_joints, path);
   law.kd = gains(j, "kd", robot.num_joints, path);
+  if (j.contains("feed_forward") && j.contains("feed_forward_table"))
+    throw InputError(path + ": \"feed_forward\" and \"feed_forward_table\": give one");
+  if (j.contains("feed_forward_table")) {
+    // The table as the drive held it (calibrate --save-law): its bytes, CRC-checked.
+    if (!j["feed_forward_table"].is_string())
+      throw InputError(path + ": \"feed_forward_table\" must be the path of a table file (calibrate --save-law)");
+    const std::string file = relative(j["feed_forward_table"].get<std::string>());
+    std::ifstream in(file, std::ios::binary);
+    if (!in) throw InputError(path + ": feed_forward_table: cannot read " + file);
+    const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const TableStatus st = decode_table(bytes.data(), static_cast<int>(bytes.size()), law.table);
+    if (st != TableStatus::ok) throw InputError(path + ": feed_forward_table " + file + ": " + to_string(st));
+    if (law.table.robot_id != compiled_robot(robot.name).robot_id)
+      throw InputError(path + ": feed_forward_table " + file + ": a table of another robot than '" + robot.name + "'");
+    law.has_table = true;
+  }
   if (j.contains("feed_forward")) {
     if (!j["feed_forward"].is_string())
       throw InputError(path + ": \"feed_forward\" must be the path of a dyncal identify --params file");

@@ -30,7 +30,7 @@ inline constexpr int kMaxHarmonics = 8;
 /// 4: up to 7 joints (model error and coefficients sized for 7; ring samples packed for the
 /// drive's num_joints, as many per block as fit). 5: the `unlock` register and the `reset`
 /// command (access and state rules, docs/modbus.md "Access and states").
-inline constexpr std::uint16_t kMapVersion = 5;
+inline constexpr std::uint16_t kMapVersion = 6;
 
 /// Key that, written to `unlock`, opens a staging session for the writing connection.
 inline constexpr std::uint16_t kUnlockKey = 0xCA1B;
@@ -128,11 +128,14 @@ inline constexpr std::uint16_t kModelErrorReg = 18;       // f32[kMaxJoints]
 inline constexpr std::uint16_t kActiveTableSizeReg = 32;  // u16 bytes
 inline constexpr std::uint16_t kActiveTableReg = 33;      // bytes, kTableMaxBytes
 inline constexpr std::uint16_t kTableWords = kTableMaxBytes / 2;
-inline constexpr std::uint16_t kFaultReg = 460;       // u16 DriveFault
-inline constexpr std::uint16_t kFaultJointReg = 461;  // u16 1-based joint that tripped, 0: none
-inline constexpr std::uint16_t kFaultValueReg = 462;  // f32 the measured q [rad] or qd [rad/s] at the trip
-inline constexpr std::uint16_t kRingReg = 500;        // u32 first seq, u16 count, samples
-inline constexpr std::uint16_t kRingWords = 123;      // one read of at most 125 registers
+inline constexpr std::uint16_t kFaultReg = 460;        // u16 DriveFault
+inline constexpr std::uint16_t kFaultJointReg = 461;   // u16 1-based joint that tripped, 0: none
+inline constexpr std::uint16_t kFaultValueReg = 462;   // f32 the measured q [rad] or qd [rad/s] at the trip
+inline constexpr std::uint16_t kControlRateReg = 464;  // f32 [Hz] the control loop's rate
+inline constexpr std::uint16_t kGainKpReg = 466;       // f32[kMaxJoints] PD position gains of the last start
+inline constexpr std::uint16_t kGainKdReg = 480;       // f32[kMaxJoints] PD velocity gains of the last start
+inline constexpr std::uint16_t kRingReg = 500;         // u32 first seq, u16 count, samples
+inline constexpr std::uint16_t kRingWords = 123;       // one read of at most 125 registers
 /// Registers of one ring sample of a drive with `joints` joints: u32 seq, f32 q, qd, tau [joints].
 constexpr int sample_words(int joints) noexcept {
   return 2 + 3 * 2 * joints;
@@ -161,12 +164,14 @@ inline constexpr std::uint16_t kHoldingWords = kStagingTableReg + kTableWords;
 static_assert(kCoefficientsReg + kCoefficientWords <= kStagingSizeReg, "holding fields overlap");
 static_assert(kModelErrorReg + 2 * kMaxJoints <= kActiveTableSizeReg, "input fields overlap");
 static_assert(kActiveTableReg + kTableWords <= kFaultReg, "input fields overlap");
-static_assert(kFaultValueReg + 2 <= kRingReg, "input fields overlap");
+static_assert(kFaultValueReg + 2 <= kControlRateReg, "input fields overlap");
+static_assert(kControlRateReg + 2 <= kGainKpReg && kGainKpReg + 2 * kMaxJoints <= kGainKdReg, "input fields overlap");
+static_assert(kGainKdReg + 2 * kMaxJoints <= kRingReg, "input fields overlap");
 static_assert(kRingWords <= 125, "one ring block must fit one Modbus read");
 static_assert(samples_per_block(kMaxJoints) >= 2, "a block carries at least two samples");
 
 inline constexpr Field kRegisterMap[] = {
-    {"map_version", Bank::input, kMapVersionReg, 1, Type::u16, "-", "register map version (4)"},
+    {"map_version", Bank::input, kMapVersionReg, 1, Type::u16, "-", "register map version (6)"},
     {"num_joints", Bank::input, kNumJointsReg, 1, Type::u16, "-", "joints of the arm"},
     {"robot_id", Bank::input, kRobotIdReg, 2, Type::u32, "-", "generated kRobotId of the drive's robot"},
     {"active_model_id", Bank::input, kActiveModelIdReg, 2, Type::u32, "-", "model id of the active table"},
@@ -188,6 +193,12 @@ inline constexpr Field kRegisterMap[] = {
     {"fault_joint", Bank::input, kFaultJointReg, 1, Type::u16, "-", "joint that tripped (1-based; 0 none)"},
     {"fault_value", Bank::input, kFaultValueReg, 2, Type::f32, "rad, rad/s",
      "the measured q (position limit) or qd (velocity limit) of that joint at the trip"},
+    {"control_rate", Bank::input, kControlRateReg, 2, Type::f32, "Hz",
+     "rate of the control loop (PD plus feed-forward) and of its zero-order hold"},
+    {"gain_kp", Bank::input, kGainKpReg, 2 * kMaxJoints, Type::f32, "Nm/rad",
+     "per joint: PD position gain of the run started last (set at start; 0 before the first)"},
+    {"gain_kd", Bank::input, kGainKdReg, 2 * kMaxJoints, Type::f32, "Nm s/rad",
+     "per joint: PD velocity gain (on the backward-difference velocity) of the run started last"},
     {"ring", Bank::input, kRingReg, kRingWords, Type::bytes, "-",
      "u32 first seq, u16 count n <= 120 / (2 + 6 N), then n samples of N = num_joints: u32 seq, "
      "f32 q[N] rad, qd[N] rad/s, tau[N] Nm"},

@@ -122,6 +122,18 @@ port::PortStatus ModbusDrive::read_info(DriveInfo& info) {
   return port::PortStatus::ok;
 }
 
+port::PortStatus ModbusDrive::read_control_law(DriveControlLaw& law) {
+  constexpr int kWords = mm::kGainKdReg + 2 * mm::kMaxJoints - mm::kControlRateReg;
+  std::uint16_t r[kWords];
+  if (const auto st = read_input(mm::kControlRateReg, kWords, r); st != port::PortStatus::ok) return st;
+  law.control_rate_hz = mm::get_f32(r);
+  for (int j = 0; j < mm::kMaxJoints; ++j) {
+    law.kp[j] = mm::get_f32(r + (mm::kGainKpReg - mm::kControlRateReg) + 2 * j);
+    law.kd[j] = mm::get_f32(r + (mm::kGainKdReg - mm::kControlRateReg) + 2 * j);
+  }
+  return port::PortStatus::ok;
+}
+
 std::string describe_fault(const DriveInfo& info) {
   char text[160];
   if (info.fault == mm::DriveFault::communication_lost) {

@@ -34,6 +34,15 @@ struct DriveInfo {
   double fault_value = 0;  ///< measured q [rad] or qd [rad/s] of that joint at the trip
 };
 
+/// The drive's control law of the run it started last (registers control_rate, gain_kp, gain_kd):
+/// PD on the encoder position and its backward difference plus the active table's feed-forward,
+/// what IDIM-IV simulates (identify --method iv --law).
+struct DriveControlLaw {
+  double control_rate_hz = 0;                       ///< [Hz]
+  std::array<double, modbus_map::kMaxJoints> kp{};  ///< [Nm/rad], num_joints used; 0 before any start
+  std::array<double, modbus_map::kMaxJoints> kd{};  ///< [Nm s/rad]
+};
+
 /// The drive's fault in words: "joint 2 velocity limit: qd = 3.51 rad/s at t = 1.234 s".
 std::string describe_fault(const DriveInfo& info);
 
@@ -59,6 +68,9 @@ class ModbusDrive final : public port::SampleSource, public port::ParameterStore
   /// version is not modbus_map::kMapVersion: error() names both versions, or the joint count is not
   /// 1..kMaxJoints).
   port::PortStatus read_info(DriveInfo& info);
+  /// Reads the control law of the run the drive started last (input registers 464..493).
+  /// Errors: transport_error, rejected.
+  port::PortStatus read_control_law(DriveControlLaw& law);
   /// Writes the trajectory (Eq. 27 coefficients), periods and sample rate; the drive must be idle.
   /// Errors: transport_error, rejected (a value outside the register's range, or a run longer than
   /// modbus_map::kMaxRunSamples: checked before sending, error() names the value; docs/modbus.md).

@@ -38,6 +38,10 @@ struct CalibrateOptions {
   bool diagnose = false;  ///< run dyncal diagnose on the excitation and flash the effects found
   bool progress = true;   ///< progress bar on the progress stream
   std::string save_log;   ///< if set, the excitation log is written here as CSV (dyncal identify --data)
+  /// If set, the excitation run's control law is written here (docs/cli.md "Law file": trajectory,
+  /// periods, rates, the drive's PD gains, the table active during the run beside it as NAME.table),
+  /// what `identify --method iv --law` needs for the saved log.
+  std::string save_law;
   /// Where a run that ends in a drive fault leaves the samples recorded before it.
   std::string fault_dir = ".";
   IdentifyOptions identify = stiction_excluded();  ///< batch fit settings (terms copied from above)

@@ -108,6 +108,8 @@ class SimulatedDrive {
   void fix_gains(const JointArray& kp, const JointArray& kd);
   JointArray kp() const;
   JointArray kd() const;
+  /// The control loop's rate [Hz] (the scenario's).
+  double control_rate_hz() const { return scenario_.control_rate_hz; }
 
  private:
   std::unique_ptr<DrivePlant> plant_;  ///< the robot's compiled model (drive_plant.hpp)
