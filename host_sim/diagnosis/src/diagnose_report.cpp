@@ -65,22 +65,6 @@ std::optional<ModelEffect> model_effect(const DiagnosedEffect& e) {
   return m;
 }
 
-std::vector<EffectTerm> effect_terms(const DiagnoseResult& r, std::vector<std::string>* skipped) {
-  std::vector<EffectTerm> out;
-  for (const auto& e : r.effects) {
-    const std::optional<ModelEffect> m = model_effect(e);
-    if (!m) {
-      if (skipped)
-        skipped->push_back(std::string(effect_name(e.kind)) + " on joint " + std::to_string(e.joints.front()));
-      continue;
-    }
-    std::vector<double> c = e.params;  // a coupled motor without rotor inertia: Ia 0
-    c.resize(std::max(c.size(), effect_param_names(*m).size()), 0.0);
-    out.push_back(effect_term(*m, c.data()));
-  }
-  return out;
-}
-
 ParameterSet diagnosed_parameter_set(const ParameterSet& declared, const DiagnoseResult& r,
                                      std::vector<std::string>* skipped) {
   if (r.declared_params.size() != declared.names.size())

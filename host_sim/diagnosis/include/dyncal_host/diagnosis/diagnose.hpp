@@ -108,10 +108,6 @@ std::vector<std::string> write_diagnose_plots(const DiagnoseResult& r, const std
 /// The effect as a model term (identify's --model vocabulary); none for drift.
 std::optional<ModelEffect> model_effect(const DiagnosedEffect& e);
 
-/// The effects as parameter-table terms (dyncal/effect_terms.hpp). Drift has no table term (it is a
-/// change over time, not a model term): it is skipped and named in *skipped.
-std::vector<EffectTerm> effect_terms(const DiagnoseResult& r, std::vector<std::string>* skipped);
-
 /// The declared model's parameter set (`declared`: the identify fit the diagnosis started from, its
 /// names the diagnosis's declared_names) with the diagnosis's re-estimated declared parameters and
 /// its effects appended as effect terms (model_effect; drift, which has none, skipped and named in
