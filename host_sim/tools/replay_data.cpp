@@ -2,6 +2,9 @@
 // drive of host_sim with Eq. 4 Stribeck friction and the survey's Table 7 torque noise, recorded at
 // 100 Hz over two periods of the default excitation) and the host's double-precision replay of
 // the KF, RLS, EKF and friction tracker over them (the reference the firmware images compare against).
+// The samples are a recording, not regenerated when the simulated drive changes (the firmware's
+// figures stay comparable from one commit to the next); tests/test_firmware_replay.cpp checks that
+// the references are the replay of the committed samples.
 // Usage: dyncal_replay_data OUT.hpp   (CMake target `replay-data`).
 //        dyncal_replay_data --ratings OUT.hpp: port/replay/er20_ratings.hpp, the er20's ratings from
 //        robots/er20/robot.json for the firmware parameter store's table plausibility (same target;
@@ -145,6 +148,9 @@ int main(int argc, char** argv) {
     std::ostringstream o;
     o << "// GENERATED FILE - DO NOT EDIT.\n"
       << "// Generator: host_sim/tools/replay_data.cpp (cmake --build <build> --target replay-data)\n"
+      << "// A recording: the simulated drive as it was when this file was written (git log dates it);\n"
+      << "// recording again after the simulator changed gives other samples. What must hold is that the\n"
+      << "// references below are the replay of these samples: FirmwareReplay checks it on every test run.\n"
       << "// Inputs: robots/er20, the simulated drive (seed " << kSeed << ", Eq. 4 friction from robot.json, survey\n"
       << "// Table 7 torque noise, encoder quantisation), default excitation (cond(K) " << std::setprecision(4) << cond
       << "), " << kRate << " Hz, 2 periods.\n"

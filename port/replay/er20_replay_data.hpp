@@ -1,5 +1,8 @@
 // GENERATED FILE - DO NOT EDIT.
 // Generator: host_sim/tools/replay_data.cpp (cmake --build <build> --target replay-data)
+// A recording: the simulated drive as it was when this file was written (git log dates it);
+// recording again after the simulator changed gives other samples. What must hold is that the
+// references below are the replay of these samples: FirmwareReplay checks it on every test run.
 // Inputs: robots/er20, the simulated drive (seed 2026, Eq. 4 friction from robot.json, survey
 // Table 7 torque noise, encoder quantisation), default excitation (cond(K) 8.941), 100 Hz, 2 periods.
 // Reference estimates: port/replay/replay.hpp run in double on the host

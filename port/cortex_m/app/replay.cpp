@@ -32,9 +32,16 @@ namespace sh = dyncal::cortex_m;
 using Counter = sh::InstructionCounter;
 
 // Tolerance on the relative RMS difference between the torques predicted by this run's estimate
-// and by the host double run's (over the replayed samples): float32 carries ~7 digits and the
-// recursion loses a few of them; double differs from the host only by rounding order.
-constexpr double kTolerance = sizeof(Scalar) == 4 ? 1e-3 : 1e-8;
+// and by the host double run's (over the replayed samples). Double differs from the host only by
+// rounding order: 1e-8. Float32 carries ~7 digits and the recursion loses as many as the data's
+// conditioning takes, so its bound is set by what matters to the drive: the float estimate's
+// departure from the double one stays under a tenth of the model's own residual (it then adds at
+// most 0.5 % to the RMS error the drive sees, sqrt(1 + 0.1^2) - 1), whatever the data.
+constexpr bool kFloat = sizeof(Scalar) == 4;
+constexpr double kResidualFraction = 0.1;
+double tolerance(double rel_residual) {
+  return kFloat ? kResidualFraction * rel_residual : 1e-8;
+}
 
 // Static storage: no heap, no large stack frames.
 Estimator g_est;
@@ -210,7 +217,8 @@ int main() {
   sh::write("\n  torque predicted by this estimate vs the host double run: relative RMS difference ");
   sh::write_float(difference, 3);
   sh::write(" (tolerance ");
-  sh::write_float(kTolerance, 1);
+  sh::write_float(tolerance(residual), kFloat ? 2 : 1);
+  sh::write(kFloat ? " = 0.1 x the relative residual" : "");
   sh::write("); relative residual ");
   sh::write_float(residual, 4);
   sh::write("\n");
@@ -221,6 +229,6 @@ int main() {
   sh::write_int(sh::StackUsage::reserved_bytes());
   sh::write(" reserved\n");
   const bool refusals = refusal_check();
-  const bool ok = difference < kTolerance && c.accepted > data::kCount * 9 / 10 && stored && refusals;
+  const bool ok = difference < tolerance(residual) && c.accepted > data::kCount * 9 / 10 && stored && refusals;
   return ok ? 0 : 1;
 }
