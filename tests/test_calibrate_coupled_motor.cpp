@@ -10,25 +10,17 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
-#include <fstream>
 #include <iostream>
 #include <sstream>
 
 #include "dyncal_host/calibration/calibrate.hpp"
 #include "dyncal_host/drive/ground_truth.hpp"
 #include "dyncal_host/drive/scenario.hpp"
+#include "support/drive_uri.hpp"
 
 namespace {
 
 using namespace dyncal::host;
-
-std::string drive_uri() {
-  const char* ready = std::getenv("DYNCAL_DRIVE_TX40_READY");
-  if (!ready) return "";
-  std::string uri;
-  std::getline(std::ifstream(ready), uri);
-  return uri;
-}
 
 CalibrateOptions options(const std::string& uri) {
   CalibrateOptions o;
@@ -39,7 +31,7 @@ CalibrateOptions options(const std::string& uri) {
 }
 
 TEST(CalibrateCoupledMotor, PerMotorFitRecoversMotor6AndItsTableCutsTheModelError) {
-  const std::string uri = drive_uri();
+  const std::string uri = fixture_drive_uri("DYNCAL_DRIVE_TX40_READY");
   ASSERT_FALSE(uri.empty()) << "run through ctest (fixture drive_tx40)";
   const RobotDescription robot = load_robot(default_robots_dir(), "tx40");
   const Scenario scenario = load_scenario(DYNCAL_SOURCE_DIR "/tests/data/scenarios/tx40_published.json", robot);

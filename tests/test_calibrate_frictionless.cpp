@@ -4,21 +4,18 @@
 // them sign-constrained (IdentifyOptions::sign_constraints), names what it held at 0, and flashes.
 #include <gtest/gtest.h>
 
-#include <cstdlib>
-#include <fstream>
 #include <sstream>
 
 #include "dyncal_host/calibration/calibrate.hpp"
+#include "support/drive_uri.hpp"
 
 namespace {
 
 using namespace dyncal::host;
 
 TEST(CalibrateFrictionless, NegligibleFrictionIsHeldAtZeroAndTheTableFlashes) {
-  const char* ready = std::getenv("DYNCAL_DRIVE_TX40_PLAIN_READY");
-  ASSERT_NE(ready, nullptr) << "run through ctest (fixture drive_tx40_plain)";
-  std::string uri;
-  std::getline(std::ifstream(ready), uri);
+  const std::string uri = fixture_drive_uri("DYNCAL_DRIVE_TX40_PLAIN_READY");
+  ASSERT_FALSE(uri.empty()) << "run through ctest (fixture drive_tx40_plain)";
   const RobotDescription robot = load_robot(default_robots_dir(), "tx40");
   CalibrateOptions o;
   o.uri = uri;

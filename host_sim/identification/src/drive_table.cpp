@@ -1,7 +1,9 @@
 #include "dyncal_host/identification/drive_table.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <iterator>
 
 #include "dyncal/parameter_table.hpp"
 #include "dyncal_host/common/input_error.hpp"
@@ -9,6 +11,22 @@
 
 namespace dyncal::host {
 namespace {
+
+/// A motor's terms, by name prefix: Coulomb, viscous friction, rotor inertia (a coupling term's c[0..2];
+/// what a drive refuses below 0).
+constexpr const char* kMotorTerms[3] = {"Fc", "Fv", "Ia"};
+
+/// How many of `p`'s parameters are compiled ones (the rest are its effects' coefficients).
+size_t compiled_count(const ParameterSet& p) {
+  size_t count = p.names.size();
+  for (const ModelEffect& e : p.effects) count -= effect_param_names(e).size();
+  return count;
+}
+
+bool is_motor_term(const std::string& name) {
+  return std::any_of(std::begin(kMotorTerms), std::end(kMotorTerms),
+                     [&name](const char* prefix) { return name.rfind(prefix, 0) == 0; });
+}
 
 /// Index of parameter `name` among the compiled ones (the first `count`), or -1.
 int index_of(const ParameterSet& p, const std::string& name, size_t count) {
@@ -22,8 +40,7 @@ int index_of(const ParameterSet& p, const std::string& name, size_t count) {
 DriveTableContent drive_table_content(const ParameterSet& p, const RobotDescription& robot) {
   if (p.robot != robot.name)
     throw InputError(p.source + ": parameters are for robot '" + p.robot + "', not '" + robot.name + "'");
-  size_t count = p.names.size();
-  for (const ModelEffect& e : p.effects) count -= effect_param_names(e).size();
+  const size_t count = compiled_count(p);
   DriveTableContent out;
   out.values.assign(p.values.data(), p.values.data() + count);
   const int n = robot.num_joints;
@@ -49,9 +66,8 @@ DriveTableContent drive_table_content(const ParameterSet& p, const RobotDescript
     t.joint2 = static_cast<std::uint8_t>(j);
     t.sign = static_cast<std::int8_t>(r > 0 ? 1 : -1);
     t.shape = static_cast<float>(std::abs(r));
-    const char* names[3] = {"Fc", "Fv", "Ia"};
     for (int c = 0; c < 3; ++c) {
-      const int i = index_of(p, names[c] + motor, count);
+      const int i = index_of(p, kMotorTerms[c] + motor, count);
       if (i < 0) continue;
       t.c[c] = static_cast<float>(out.values[static_cast<size_t>(i)]);
       out.values[static_cast<size_t>(i)] = 0.0;
@@ -76,15 +92,13 @@ DriveTableContent drive_table_content(const ParameterSet& p, const RobotDescript
 
 ParameterTable parameter_table(const ParameterSet& p, const RobotDescription& robot, std::vector<std::string>* notes) {
   const DriveTableContent content = drive_table_content(p, robot);
-  size_t count = p.names.size();
-  for (const ModelEffect& e : p.effects) count -= effect_param_names(e).size();
+  const size_t count = compiled_count(p);
   // What a drive refuses (lib/ table_check.hpp: friction opposes motion, inertia is positive),
   // named here, before any drive is contacted; a coupled motor's terms too, which the table holds as
   // a coupling term's coefficients.
   for (size_t i = 0; i < count; ++i) {
     const std::string& name = p.names[i];
-    const bool dissipative = name.rfind("Fc", 0) == 0 || name.rfind("Fv", 0) == 0 || name.rfind("Ia", 0) == 0;
-    if (dissipative && p.values[static_cast<Eigen::Index>(i)] < 0.0) {
+    if (is_motor_term(name) && p.values[static_cast<Eigen::Index>(i)] < 0.0) {
       char value[32];
       std::snprintf(value, sizeof value, "%.6g", p.values[static_cast<Eigen::Index>(i)]);
       throw InputError(p.source + ": params[" + std::to_string(i + 1) + "] '" + name + "' = " + value +

@@ -220,8 +220,6 @@ class IdentifyPipeline {
     }
     const JointVec sigma = joint_noise_std(ss, n, P);
     const std::string& m = opt_.method;
-    if (opt_.sign_constraints && m != "ols" && m != "wls")
-      throw InputError("sign constraints: method wls or ols, not " + m);
     if (m == "ols") {
       ls_statistics(*ls, stdev, cond);
       if (opt_.sign_constraints) constrain_signs(*ls, phi, stdev, held);
