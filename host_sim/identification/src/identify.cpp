@@ -110,18 +110,17 @@ IdentifyResult identify(const RobotDescription& robot, JointLog raw, const Ident
   return r;
 }
 
-double autocorrelation_inflation(const StackedData& d, const std::vector<char>& train,
-                                 const Eigen::VectorXd& residual) {
+namespace {
+
+// autocorrelation_inflation from each joint's residual series over its rows with train and
+// fit_row, written by series(j, e) into e (S long) in sample order; returns its length.
+template <class Series>
+double inflation_of_series(const StackedData& d, Series series) {
   const int N = static_cast<int>(d.q.cols());
-  const Eigen::Index S = d.t.size();
   double rows = 0, weighted = 0;
-  Eigen::VectorXd e(S);
+  Eigen::VectorXd e(d.t.size());
   for (int j = 0; j < N; ++j) {
-    Eigen::Index n = 0;
-    for (Eigen::Index s = 0; s < S; ++s) {
-      if (!train[static_cast<size_t>(s)] || !d.fit_row[s * N + j]) continue;
-      e[n++] = residual[s * N + j];
-    }
+    const Eigen::Index n = series(j, e);
     if (n < 8) continue;
     const double dn = static_cast<double>(n);
     rows += dn;
@@ -130,11 +129,42 @@ double autocorrelation_inflation(const StackedData& d, const std::vector<char>& 
   return rows > 0 ? std::max(1.0, weighted / rows) : 1.0;
 }
 
+}  // namespace
+
+double autocorrelation_inflation(const StackedData& d, const std::vector<char>& train,
+                                 const Eigen::VectorXd& residual) {
+  const int N = static_cast<int>(d.q.cols());
+  return inflation_of_series(d, [&](int j, Eigen::VectorXd& e) {
+    Eigen::Index n = 0;
+    for (Eigen::Index s = 0; s < d.t.size(); ++s) {
+      if (train[static_cast<size_t>(s)] && d.fit_row[s * N + j]) e[n++] = residual[s * N + j];
+    }
+    return n;
+  });
+}
+
+double streamed_autocorrelation_inflation(const StackedData& d, const std::vector<char>& train,
+                                          const Eigen::VectorXd& phi) {
+  const int N = static_cast<int>(d.q.cols());
+  Eigen::MatrixXd K;
+  Eigen::VectorXd tau_hat(N);
+  return inflation_of_series(d, [&](int j, Eigen::VectorXd& e) {
+    Eigen::Index n = 0;
+    for (Eigen::Index s = 0; s < d.t.size(); ++s) {
+      if (!train[static_cast<size_t>(s)] || !d.fit_row[s * N + j]) continue;
+      d.regressor(s, K);
+      tau_hat.noalias() = K * phi;  // as StackedData::predict computes it
+      e[n++] = d.y[s * N + j] - tau_hat[j];
+    }
+    return n;
+  });
+}
+
 StackedData prepare_stacked(const RobotDescription& robot, const JointLog& raw, const IdentifyOptions& options) {
   JointLog log;
   std::string note;
   const CompiledRobot& c = checked(robot, raw, options, log, note);  // a copy: the caller keeps raw
-  StackedData d = c.prepare[static_cast<size_t>(built_term_set_index(options.terms))](robot, log, options);
+  StackedData d = c.prepare[static_cast<size_t>(built_term_set_index(options.terms))](robot, std::move(log), options);
   d.notes.insert(d.notes.begin(), note);
   return d;
 }

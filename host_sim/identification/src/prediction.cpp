@@ -1,5 +1,6 @@
 #include "dyncal_host/identification/prediction.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <nlohmann/json.hpp>
 
@@ -82,40 +83,56 @@ ParameterSet parameter_set(const IdentifyResult& r) {
 
 std::vector<JointMetrics> torque_metrics(const Eigen::VectorXd& y, const Eigen::VectorXd& pred, int N,
                                          const Eigen::VectorXd& tau_max) {
+  return torque_metrics(
+      y, N, tau_max, [&](Eigen::Index s, int j) { return !std::isnan(pred[s * N + j]); },
+      [&](Eigen::Index s) { return pred.data() + s * N; });
+}
+
+std::vector<JointMetrics> torque_metrics(const Eigen::VectorXd& y, int N, const Eigen::VectorXd& tau_max,
+                                         const std::function<bool(Eigen::Index s, int j)>& predicted,
+                                         const std::function<const double*(Eigen::Index s)>& prediction) {
   const Eigen::Index S = y.size() / N;
+  // Per joint, sums over its predicted rows in sample order (first the torque's mean, then the errors).
+  Eigen::VectorXd sum_tau = Eigen::VectorXd::Zero(N), se = sum_tau, st = sum_tau, sum_abs = sum_tau, sum_abs2 = sum_tau;
+  std::vector<long> n(static_cast<size_t>(N), 0);
+  for (Eigen::Index s = 0; s < S; ++s) {
+    for (int j = 0; j < N; ++j) {
+      if (!predicted(s, j)) continue;
+      sum_tau[j] += y[s * N + j];
+      ++n[static_cast<size_t>(j)];
+    }
+  }
+  Eigen::VectorXd mean_tau(N);
+  for (int j = 0; j < N; ++j)
+    mean_tau[j] = n[static_cast<size_t>(j)] > 0 ? sum_tau[j] / static_cast<double>(n[static_cast<size_t>(j)]) : 0.0;
+  for (Eigen::Index s = 0; s < S; ++s) {
+    const double* p = nullptr;
+    for (int j = 0; j < N; ++j) {
+      if (!predicted(s, j)) continue;
+      if (!p) p = prediction(s);
+      const double v = y[s * N + j];
+      const double e = v - p[j];
+      se[j] += e * e;
+      st[j] += (v - mean_tau[j]) * (v - mean_tau[j]);
+      const double a = std::abs(e) / tau_max[j];
+      sum_abs[j] += a;
+      sum_abs2[j] += a * a;
+    }
+  }
   std::vector<JointMetrics> out;
   for (int j = 0; j < N; ++j) {
-    double se = 0, st = 0, sum_tau = 0, sum_abs = 0, sum_abs2 = 0;
-    long n = 0;
-    for (Eigen::Index s = 0; s < S; ++s) {
-      if (std::isnan(pred[s * N + j])) continue;
-      sum_tau += y[s * N + j];
-      ++n;
-    }
     JointMetrics m;
     m.joint = j + 1;
-    if (n == 0) {
-      out.push_back(m);
-      continue;
+    const long count = n[static_cast<size_t>(j)];
+    if (count > 0) {
+      const double dn = static_cast<double>(count);
+      m.rms = std::sqrt(se[j] / dn);
+      m.rms_tau = std::sqrt((st[j] + dn * mean_tau[j] * mean_tau[j]) / dn);
+      m.relative_rms = m.rms / m.rms_tau;
+      m.r2 = 1.0 - se[j] / st[j];
+      m.e_T = sum_abs[j] / dn;
+      m.e_T_std = std::sqrt(std::max(0.0, sum_abs2[j] / dn - m.e_T * m.e_T));
     }
-    const double mean_tau = sum_tau / static_cast<double>(n);
-    for (Eigen::Index s = 0; s < S; ++s) {
-      if (std::isnan(pred[s * N + j])) continue;
-      const double v = y[s * N + j];
-      const double e = v - pred[s * N + j];
-      se += e * e;
-      st += (v - mean_tau) * (v - mean_tau);
-      const double a = std::abs(e) / tau_max[j];
-      sum_abs += a;
-      sum_abs2 += a * a;
-    }
-    const double dn = static_cast<double>(n);
-    m.rms = std::sqrt(se / dn);
-    m.rms_tau = std::sqrt((st + dn * mean_tau * mean_tau) / dn);
-    m.relative_rms = m.rms / m.rms_tau;
-    m.r2 = 1.0 - se / st;
-    m.e_T = sum_abs / dn;
-    m.e_T_std = std::sqrt(std::max(0.0, sum_abs2 / dn - m.e_T * m.e_T));
     out.push_back(m);
   }
   return out;

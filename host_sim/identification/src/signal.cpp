@@ -63,7 +63,7 @@ Eigen::VectorXd white_noise_std(const Eigen::MatrixXd& x,
   return out;
 }
 
-double effective_samples(const Eigen::VectorXd& r) {
+double effective_samples(const Eigen::Ref<const Eigen::VectorXd>& r) {
   const Eigen::Index S = r.size();
   const Eigen::VectorXd c = r.array() - r.mean();
   const double c0 = c.squaredNorm();

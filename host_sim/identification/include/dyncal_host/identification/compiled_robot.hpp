@@ -28,7 +28,7 @@ struct CompiledRobot {
   std::vector<double> nominal_standard;  ///< kNominalStandard: the description's inertials
 
   using IdentifyFn = IdentifyResult (*)(const RobotDescription&, JointLog&&, const IdentifyOptions&);
-  using PrepareFn = StackedData (*)(const RobotDescription&, const JointLog&, const IdentifyOptions&);
+  using PrepareFn = StackedData (*)(const RobotDescription&, JointLog&&, const IdentifyOptions&);  ///< consumes the log
   /// Stacked, column-normalised regressor of one period of `t` on `grid` points (rows N x grid):
   /// Eq. 7 (base parameters, Fc and beta per joint), or Eq. 4 (base parameters and d tau_f /
   /// d(Fc, Fs, qds, beta) at `friction`).

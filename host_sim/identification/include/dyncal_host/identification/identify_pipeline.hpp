@@ -22,6 +22,7 @@
 #include "dyncal_host/identification/effect_model.hpp"
 #include "dyncal_host/identification/identify.hpp"
 #include "dyncal_host/identification/instrumental_variables.hpp"
+#include "dyncal_host/identification/kept_samples.hpp"
 #include "dyncal_host/identification/prediction.hpp"
 #include "dyncal_host/identification/sign_constrained.hpp"
 #include "dyncal_host/identification/signal.hpp"
@@ -61,69 +62,73 @@ class IdentifyPipeline {
     }
   }
 
+  /// As below on a copy of `log`, which the caller keeps.
+  StackedData prepare(const JointLog& log, bool dense, const Eigen::VectorXd* band_override = nullptr) const {
+    return prepare(JointLog(log), dense, band_override);
+  }
+
   /// Filtering, differentiation, regressor, parallel filtering and decimation (Gautier 1997), each
   /// segment of `log` (on a uniform grid, uniform_grid.hpp) on its own: nothing is filtered or
   /// differentiated across a segment boundary, and one cut-off period is dropped at both ends of
   /// every segment, where differentiation and filtering are one-sided.
   ///
-  /// Memory: the log's rate is processed one joint at a time (a few of its columns at once), and
-  /// only what the regressor is computed from is kept at the decimated samples; dense: also fill
-  /// W (and W_load) for the consumers that need the matrix (StackedData).
+  /// Memory: the log is consumed. Its torques are filtered first and released; its positions are
+  /// filtered in place and, with its time stamps, shrunk to the kept samples in their own buffers
+  /// (kept_samples.hpp). The rest is processed one joint at a time, and only what the regressor is
+  /// computed from is kept at the decimated samples; dense: also fill W (and W_load) for the
+  /// consumers that need the matrix (StackedData).
   /// band: the standstill band to use instead of the log's own (IDIM-IV's noise-free simulations
   /// take the measured log's, so that their friction-sign columns are built as the measured ones).
-  StackedData prepare(const JointLog& log, bool dense, const Eigen::VectorXd* band_override = nullptr) const {
+  StackedData prepare(JointLog&& log, bool dense, const Eigen::VectorXd* band_override = nullptr) const {
     const double fs = 1.0 / log.sample_period();
     const ButterworthLowPass filter(opt_.filter_order, opt_.cutoff_hz, fs);
     int d = opt_.decimate > 0 ? opt_.decimate : static_cast<int>(std::floor(fs / (25.0 * opt_.cutoff_hz)));
     d = std::max(d, 1);
-    const Eigen::Index edge = static_cast<Eigen::Index>(std::ceil(fs / opt_.cutoff_hz));
-    const auto segments = log.segments();
-    const JointVec band = band_override ? JointVec(*band_override) : standstill_band(log, segments);
+    const KeptSamples keep{log.segments(), static_cast<Eigen::Index>(std::ceil(fs / opt_.cutoff_hz)), d};
+    const JointVec band = band_override ? JointVec(*band_override) : standstill_band(log, keep.segments);
     StackedData out;
     out.rate_hz = fs / d;
     out.cutoff_hz = opt_.cutoff_hz;
     out.num_base = Robot::kNumBase;
     for (int i = 0; i < P; ++i) out.names.push_back(param_name(i));
-    // Samples kept: every d-th of each segment's interior.
-    Eigen::Index kept = 0;
+    const Eigen::Index kept = keep.count();
     long short_segments = 0;
-    for (const auto& [a, b] : segments) {
-      const Eigen::Index len = b - a;
-      if (len <= 2 * edge) {
-        ++short_segments;
-        continue;
-      }
-      kept += (len - 2 * edge + d - 1) / d;
-    }
+    for (const auto& [a, b] : keep.segments) short_segments += keep.count(a, b) == 0;
     if (kept * N <= 2 * P) {
       throw InputError("too few samples (" + std::to_string(log.samples()) + ", " + std::to_string(kept) +
                        " after filtering and decimation) for " + std::to_string(P) + " parameters");
     }
     if (short_segments > 0)
       out.notes.push_back(std::to_string(short_segments) + " segment(s) not longer than two cut-off periods (" +
-                          std::to_string(2 * edge) + " samples) left out: filtering would only see their ends");
-    const Eigen::Index num_effect_cols = effect_column_count(opt_.effects);
-    out.E.resize(kept * N, num_effect_cols);
+                          std::to_string(2 * keep.edge) + " samples) left out: filtering would only see their ends");
+    // The torques first, filtered in place; then their memory goes back before the rest is built.
     out.y.resize(kept * N);
-    out.t.resize(kept);
-    out.q.resize(kept, N);
+    for (const auto& [a, b] : keep.segments) {
+      if (keep.count(a, b) == 0) continue;
+      for (int j = 0; j < N; ++j) filter.filtfilt(log.tau.col(j).segment(a, b - a));
+    }
+    keep.for_each([&](Eigen::Index row, Eigen::Index k) { out.y.segment(k * N, N) = log.tau.row(row).transpose(); });
+    log.tau = Eigen::MatrixXd();
+    out.E.resize(kept * N, effect_column_count(opt_.effects));
     out.qd.resize(kept, N);
     out.qdd.resize(kept, N);
-    // The unfiltered velocity is read by a coupled motor's regressor columns and by the consumers of
-    // dense data (the diagnosis' friction candidates); otherwise it is not kept.
-    out.qd_raw.resize(dense || !coupled_.empty() ? kept : 0, N);
+    // The unfiltered velocity is read by the consumers of dense data (the diagnosis' friction
+    // candidates); otherwise it is not kept. A coupled motor's unfiltered velocity is.
+    out.qd_raw.resize(dense ? kept : 0, N);
+    out.motor_qd_raw.resize(kept, static_cast<Eigen::Index>(coupled_.size()));
     out.filtered_terms.resize(kept, static_cast<Eigen::Index>(filtered_.size()));
     out.standstill_band = Eigen::VectorXd(band);
     Eigen::Index k = 0;
-    std::vector<Eigen::Index> rows;
-    for (const auto& [a, b] : segments) {
-      if (b - a <= 2 * edge) continue;
-      rows.clear();
-      for (Eigen::Index s = edge; s < b - a - edge; s += d) rows.push_back(s);
-      for (size_t i = 0; i < rows.size(); ++i) out.t[k + static_cast<Eigen::Index>(i)] = log.t[a + rows[i]];
-      process_segment(log, a, b, filter, band, rows, k, out);
-      k += static_cast<Eigen::Index>(rows.size());
+    for (const auto& [a, b] : keep.segments) {
+      if (keep.count(a, b) == 0) continue;
+      process_segment(log, a, b, filter, band, keep, k, out);
+      k += keep.count(a, b);
     }
+    // process_segment left the filtered positions in the log: they and the times become the kept q, t.
+    keep_rows_in_place(log.q, keep);
+    out.q = std::move(log.q);
+    keep_rows_in_place(log.t, keep);
+    out.t = std::move(log.t);
     out.regressor_rows = [motor = motor_, coupled = coupled_, filtered = filtered_](
                              const StackedData& data, Eigen::Index s, bool load, Eigen::MatrixXd& K) {
       regressor_at(data, s, load, motor, coupled, filtered, K);
@@ -183,11 +188,15 @@ class IdentifyPipeline {
   /// are in its model string.
   bool models_coupled_motors() const { return robot_coupled_; }
 
-  /// Fits on the samples with train[s] true. Writes phi and parameter standard deviations; with
-  /// pcls, the consistent solution into *consistent if given; with sign constraints, the indices
-  /// held at 0 into *held if given.
+  /// Fits on the samples with train[s] true. Writes phi and parameter standard deviations: with
+  /// `inflation` given, the white-noise figures times the square root of the residual's
+  /// autocorrelation factor S / n_eff (streamed_autocorrelation_inflation, N passes over the data),
+  /// which is also written there; without it, the white-noise figures (a fold's fit needs only phi).
+  /// With pcls, the consistent solution into *consistent if given; with sign constraints, the
+  /// indices held at 0 into *held if given.
   void fit(const StackedData& data, const std::vector<char>& train, ParamVec& phi, ParamVec& stdev,
-           double* cond = nullptr, ConsistentSolution* consistent = nullptr, std::vector<int>* held = nullptr) const {
+           double* cond = nullptr, ConsistentSolution* consistent = nullptr, std::vector<int>* held = nullptr,
+           double* inflation = nullptr) const {
     const Eigen::Index S = data.t.size();
     auto ls = std::make_unique<StreamingLeastSquares<double, P>>();
     Eigen::MatrixXd K;
@@ -250,7 +259,7 @@ class IdentifyPipeline {
           // The optimisers: the model is linear, so the parameters' spread is least squares' (the
           // Fisher information does not depend on where the search ends). The particle filter's
           // likelihood takes the residual's autocorrelation into account (S / n_eff).
-          p.sigma2 *= autocorrelation_inflation(data, train, data.y - data.predict(phi));
+          p.sigma2 *= streamed_autocorrelation_inflation(data, train, phi);
           sol = search_consistent(p, search_method(m), search_settings(opt_));
           ls_statistics(*ls, stdev, cond);
         }
@@ -272,7 +281,9 @@ class IdentifyPipeline {
     } else {
       throw InputError("unknown method '" + m + "' (expected wls, ols, kf, rls, pcls, gd, ga or pf)");
     }
-    stdev *= std::sqrt(autocorrelation_inflation(data, train, data.y - data.predict(phi)));
+    if (!inflation) return;
+    *inflation = streamed_autocorrelation_inflation(data, train, phi);
+    stdev *= std::sqrt(*inflation);
   }
 
   static std::string param_name(int i) {
@@ -336,8 +347,10 @@ class IdentifyPipeline {
         for (int j = 0; j < N; ++j) K(j, f.col) = motor(f.m, j) * value;
       }
     }
-    for (const int m : coupled) {
-      const double sign = friction_sign(motor.row(m).dot(d.qd_raw.row(s)), motor_band(motor, m, d.standstill_band));
+    for (size_t c = 0; c < coupled.size(); ++c) {
+      const int m = coupled[c];
+      const double sign =
+          friction_sign(d.motor_qd_raw(s, static_cast<Eigen::Index>(c)), motor_band(motor, m, d.standstill_band));
       const double vm = sign == 0.0 ? 0.0 : motor.row(m).dot(qd), am = motor.row(m).dot(qdd);
       for (const unsigned t : {term::viscous, term::rotor_inertia}) {
         const int col = Model::column(t, m);
@@ -350,20 +363,20 @@ class IdentifyPipeline {
   }
 
   /// One segment [a, b) of the log filtered and differentiated joint by joint; what the regressor
-  /// is computed from written to `out` at the segment's kept rows (`rows`, relative to a) from
-  /// sample k0 on. The sign columns (Coulomb, also of a coupled motor) and qd^(1/3), built from the
-  /// unfiltered velocity's sign, are low-passed here at the log's rate, as tau is: the columns
-  /// built from the filtered q, qd, qdd have had the low-pass already (filtering them again would
-  /// low-pass their qdd twice against tau's once: an acceleration step, a start or stop, would
-  /// leave a residual at low speed that looks like Stribeck friction).
-  void process_segment(const JointLog& log, Eigen::Index a, Eigen::Index b, const ButterworthLowPass& filter,
-                       const JointVec& band, const std::vector<Eigen::Index>& rows, Eigen::Index k0,
-                       StackedData& out) const {
-    const Eigen::Index S = b - a;
+  /// is computed from written to `out` at the segment's kept samples from sample k0 on, the
+  /// filtered positions back into the log (the caller keeps them in place). The sign columns
+  /// (Coulomb, also of a coupled motor) and qd^(1/3), built from the unfiltered velocity's sign, are
+  /// low-passed here at the log's rate, as tau is: the columns built from the filtered q, qd, qdd
+  /// have had the low-pass already (filtering them again would low-pass their qdd twice against
+  /// tau's once: an acceleration step, a start or stop, would leave a residual at low speed that
+  /// looks like Stribeck friction).
+  void process_segment(JointLog& log, Eigen::Index a, Eigen::Index b, const ButterworthLowPass& filter,
+                       const JointVec& band, const KeptSamples& kept, Eigen::Index k0, StackedData& out) const {
+    const Eigen::Index S = b - a, n = kept.count(a, b);
     const double dt = log.sample_period();
     const bool effects = !opt_.effects.empty();
-    auto keep = [&](const Eigen::VectorXd& x, Eigen::MatrixXd& to, Eigen::Index col) {
-      for (size_t i = 0; i < rows.size(); ++i) to(k0 + static_cast<Eigen::Index>(i), col) = x[rows[i]];
+    auto keep = [&](const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::MatrixXd& to, Eigen::Index col) {
+      for (Eigen::Index i = 0; i < n; ++i) to(k0 + i, col) = x[kept.edge + i * kept.step];
     };
     // Effect columns are computed from every joint's signals at the log's rate.
     Eigen::MatrixXd all_q, all_qd, all_qdd, all_v;
@@ -373,14 +386,23 @@ class IdentifyPipeline {
     const Eigen::Index C = static_cast<Eigen::Index>(coupled_.size());
     Eigen::MatrixXd motor_raw = Eigen::MatrixXd::Zero(S, C), motor_qd = Eigen::MatrixXd::Zero(S, C);
     // One joint at a time; v, once kept, holds each sign column in turn (filtered in place).
-    Eigen::VectorXd x(S), xd(S), xdd(S), v(S);
+    Eigen::VectorXd xd(S), xdd(S), v(S);
     Eigen::VectorXd& series = v;
     auto filter_and_keep = [&](size_t i) {
       filter.filtfilt(series);
       keep(series, out.filtered_terms, static_cast<Eigen::Index>(i));
     };
     for (int j = 0; j < N; ++j) {
-      x = log.q.col(j).segment(a, S);
+      // Friction sign from the unfiltered velocity (central differences of q, or the measured qd):
+      // sgn is discontinuous, and of a filtered velocity it would switch up to a cut-off period
+      // after a stop; filtering the sign column in parallel averages the noise. Inside the noise
+      // band the joint is at rest: sign 0, and its filtered velocity 0.
+      if (log.has_qd) {
+        v = log.qd.col(j).segment(a, S);
+      } else {
+        v = central_difference(log.q.col(j).segment(a, S), dt);
+      }
+      auto x = log.q.col(j).segment(a, S);  // filtered in place
       filter.filtfilt(x);
       if (log.has_qd) {
         xd = log.qd.col(j).segment(a, S);
@@ -394,15 +416,6 @@ class IdentifyPipeline {
       } else {
         xdd = smooth_derivative(xd, dt);
       }
-      // Friction sign from the unfiltered velocity (central differences of q, or the measured qd):
-      // sgn is discontinuous, and of a filtered velocity it would switch up to a cut-off period
-      // after a stop; filtering the sign column in parallel averages the noise. Inside the noise
-      // band the joint is at rest: sign 0, and its filtered velocity 0.
-      if (log.has_qd) {
-        v = log.qd.col(j).segment(a, S);
-      } else {
-        v = central_difference(log.q.col(j).segment(a, S), dt);
-      }
       for (Eigen::Index s = 0; s < S; ++s) {
         if (std::abs(v[s]) < band[j]) xd[s] = 0.0;
       }
@@ -412,7 +425,6 @@ class IdentifyPipeline {
         motor_raw.col(c) += r * v;
         motor_qd.col(c) += r * xd;
       }
-      keep(x, out.q, j);
       keep(xd, out.qd, j);
       keep(xdd, out.qdd, j);
       if (out.qd_raw.rows() > 0) keep(v, out.qd_raw, j);
@@ -425,15 +437,13 @@ class IdentifyPipeline {
         }
         filter_and_keep(i);
       }
-      x = log.tau.col(j).segment(a, S);
-      filter.filtfilt(x);
-      for (size_t i = 0; i < rows.size(); ++i) out.y[(k0 + static_cast<Eigen::Index>(i)) * N + j] = x[rows[i]];
     }
     // Coupled motors: sign and velocity v_m = T.row(m) qd of the motor, its noise band from the
     // joints' bands.
     for (Eigen::Index c = 0; c < C; ++c) {
       const int m = coupled_[static_cast<size_t>(c)];
       const double band_m = motor_band(motor_, m, band);
+      keep(motor_raw.col(c), out.motor_qd_raw, c);
       for (size_t i = 0; i < filtered_.size(); ++i) {
         const FilteredTerm& f = filtered_[i];
         if (f.m != m) continue;
@@ -450,9 +460,8 @@ class IdentifyPipeline {
       const Eigen::Index m = static_cast<Eigen::Index>(discontinuous.size());
       for (Eigen::Index c = 0; c < Et.cols(); ++c)
         if (discontinuous[static_cast<size_t>(c % m)]) filter.filtfilt(Et.col(c));
-      for (size_t i = 0; i < rows.size(); ++i) {
-        for (int j = 0; j < N; ++j)
-          out.E.row((k0 + static_cast<Eigen::Index>(i)) * N + j) = Et.row(rows[i]).segment(j * m, m);
+      for (Eigen::Index i = 0; i < n; ++i) {
+        for (int j = 0; j < N; ++j) out.E.row((k0 + i) * N + j) = Et.row(kept.edge + i * kept.step).segment(j * m, m);
       }
     }
   }
@@ -547,7 +556,7 @@ class IdentifyPipeline {
   std::vector<FilteredTerm> filtered_;  ///< StackedData::filtered_terms' columns
 };
 
-/// Runs the whole `identify` job for one robot and term set; the log is released once prepared.
+/// Runs the whole `identify` job for one robot and term set; preparing the data consumes the log.
 template <class Robot, unsigned Terms>
 IdentifyResult run_identify(const RobotDescription& robot, JointLog&& log, const IdentifyOptions& opt) {
   using Pipe = IdentifyPipeline<Robot, Terms>;
@@ -560,19 +569,18 @@ IdentifyResult run_identify(const RobotDescription& robot, JointLog&& log, const
   // Effect terms are fitted on the dense [W E], IDIM-IV on the dense W and its simulated twin; the
   // declared model streams the regressor's rows.
   const bool iv = opt.method == "iv";
-  const StackedData data = pipe.prepare(log, !opt.effects.empty() || iv);
   JointLog grid;  // IDIM-IV's simulations run on the log's grid
   if (iv) grid.t = log.t, grid.segment_starts = log.segment_starts, grid.period = log.period;
   IdentifyResult res;
+  res.data_source = log.source;
+  res.sample_rate_hz = 1.0 / log.sample_period();
+  const StackedData data = pipe.prepare(std::move(log), !opt.effects.empty() || iv);  // consumes the log
   res.notes = data.notes;
   const Eigen::Index S = data.t.size();
   res.robot = robot.name;
   res.method = opt.method;
   res.model = model_spec_name({Terms, opt.effects, opt.motors});
   res.friction_per_motor = pipe.models_coupled_motors();
-  res.data_source = log.source;
-  res.sample_rate_hz = 1.0 / log.sample_period();
-  log = JointLog();  // the fit works on the prepared data only
   res.decimated_rate_hz = data.rate_hz;
   res.cutoff_hz = opt.cutoff_hz;
   res.samples_used = static_cast<long>(S);
@@ -599,8 +607,8 @@ IdentifyResult run_identify(const RobotDescription& robot, JointLog&& log, const
                      std::to_string(opt.block_seconds).substr(0, 4) + " s blocks";
   }
   if (iv) {
-    const PrepareLog prepare = [&pipe, &data](const JointLog& l) {
-      return pipe.prepare(l, true, &data.standstill_band);
+    const PrepareLog prepare = [&pipe, &data](JointLog&& l) {
+      return pipe.prepare(std::move(l), true, &data.standstill_band);
     };
     fit_instrumental(data, grid, fold, folds, robot, opt, prepare, res);
   } else if (!opt.effects.empty()) {
@@ -608,34 +616,38 @@ IdentifyResult run_identify(const RobotDescription& robot, JointLog&& log, const
     fit_effect_model(data, opt.effects, fold, folds, robot, opt, res);
     res.model = model_spec_name({Terms, opt.effects, opt.motors});
   } else {
-    Eigen::VectorXd pred = Eigen::VectorXd::Constant(S * N, std::nan(""));
     typename Pipe::ParamVec phi, stdev;
-    Eigen::MatrixXd K;
+    std::vector<typename Pipe::ParamVec> fold_phi(static_cast<size_t>(folds));
     for (int f = 0; f < folds; ++f) {
       std::vector<char> train(static_cast<size_t>(S));
       for (Eigen::Index s = 0; s < S; ++s) train[s] = fold[s] != f;
-      pipe.fit(data, train, phi, stdev);
-      for (Eigen::Index s = 0; s < S; ++s) {
-        if (fold[s] != f) continue;
-        data.regressor(s, K);
-        pred.segment(s * N, N) = K * phi;
-      }
+      pipe.fit(data, train, fold_phi[static_cast<size_t>(f)], stdev);
     }
-    // Metrics from the pooled out-of-fold residuals.
-    res.joints = torque_metrics(data.y, pred, N, robot.tau_max);
+    // Metrics from the pooled out-of-fold residuals, each sample predicted by the fit without its
+    // fold (made sample by sample: no stored prediction).
+    Eigen::MatrixXd K;
+    Eigen::VectorXd tau_hat(N);
+    res.joints = torque_metrics(
+        data.y, N, robot.tau_max, [&](Eigen::Index s, int) { return fold[s] >= 0; },
+        [&](Eigen::Index s) {
+          data.regressor(s, K);
+          tau_hat = K * fold_phi[static_cast<size_t>(fold[s])];
+          return tau_hat.data();
+        });
     // Final fit on all data: reported parameters.
     std::vector<char> all(static_cast<size_t>(S), 1);
     const auto t0 = std::chrono::steady_clock::now();
     ConsistentSolution consistent;
     std::vector<int> held;
-    pipe.fit(data, all, phi, stdev, &res.condition_number, &consistent, &held);
+    double inflation = 1;
+    pipe.fit(data, all, phi, stdev, &res.condition_number, &consistent, &held, &inflation);
     res.fit_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     for (int i = 0; i < P; ++i) res.params.push_back({Pipe::param_name(i), phi[i], stdev[i]});
     {
       char line[200];
       std::snprintf(line, sizeof line,
                     "parameter std: the white-noise figures times %.3g for the residual's autocorrelation (S / n_eff)",
-                    std::sqrt(autocorrelation_inflation(data, all, data.y - data.predict(phi))));
+                    std::sqrt(inflation));
       res.notes.push_back(line);
     }
     report_consistent(consistent, opt, res);

@@ -16,7 +16,7 @@ namespace dyncal::host {
 
 /// Prepares a log as the measured one was (the identify pipeline's prepare, dense W, the measured
 /// log's standstill band: the instruments' friction-sign columns are 0 where the measured ones are).
-using PrepareLog = std::function<StackedData(const JointLog&)>;
+using PrepareLog = std::function<StackedData(JointLog&&)>;
 
 /// Closed-loop simulations at most, and the convergence test: an iteration moving the estimate by
 /// at most kIvTolerance of its standard errors (RMS over the parameters, in the IV covariance) ends

@@ -4,6 +4,7 @@
 // regressor as identification; per-joint RMS, R^2 and e_T of the prediction error.
 
 #include <Eigen/Core>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,14 @@ ParameterSet parameter_set(const IdentifyResult& r);
 /// prediction is NaN skipped; e_T and e_T_std relative to tau_max (survey Sec. 5.1).
 std::vector<JointMetrics> torque_metrics(const Eigen::VectorXd& y, const Eigen::VectorXd& prediction, int N,
                                          const Eigen::VectorXd& tau_max);
+
+/// As above with the prediction made sample by sample instead of stored (no (S N) vector):
+/// predicted(s, j) says whether row s * N + j has a prediction, prediction(s) computes sample s's N
+/// predicted torques [Nm] (called once per sample with a predicted row, the pointer read before the
+/// next call). The same sums in the same order as above: the same figures, bit for bit.
+std::vector<JointMetrics> torque_metrics(const Eigen::VectorXd& y, int N, const Eigen::VectorXd& tau_max,
+                                         const std::function<bool(Eigen::Index s, int j)>& predicted,
+                                         const std::function<const double*(Eigen::Index s)>& prediction);
 
 /// The torque of `log` predicted by `params` (every sample, none fitted): log prepared as identify
 /// prepares it with `options` (filter, cut-off, decimation; terms and friction per motor or per joint

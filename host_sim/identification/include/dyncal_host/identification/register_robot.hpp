@@ -80,8 +80,8 @@ Eigen::MatrixXd base_regressor(const Eigen::VectorXd& q, const Eigen::VectorXd& 
 }
 
 template <class Robot, unsigned Terms>
-StackedData prepare_stacked_with(const RobotDescription& robot, const JointLog& log, const IdentifyOptions& o) {
-  return IdentifyPipeline<Robot, Terms>(robot, o).prepare(log, true);
+StackedData prepare_stacked_with(const RobotDescription& robot, JointLog&& log, const IdentifyOptions& o) {
+  return IdentifyPipeline<Robot, Terms>(robot, o).prepare(std::move(log), true);
 }
 
 template <class Robot, unsigned Terms>

@@ -34,6 +34,6 @@ inline constexpr double kStandstillQuantile = 3.29;
 /// Effective number of independent samples of a residual series r (S values): S / (1 + 2 sum rho_k),
 /// rho_k its autocorrelation at lag k, summed over the initial positive sequence (Geyer 1992), lags
 /// below S / 4. A low-passed residual carrying smooth model error has far fewer than S.
-double effective_samples(const Eigen::VectorXd& r);
+double effective_samples(const Eigen::Ref<const Eigen::VectorXd>& r);
 
 }  // namespace dyncal::host

@@ -14,8 +14,9 @@ namespace dyncal::host {
 
 /// Stacked, filtered and decimated identification data: row s * N + j is joint j at sample s.
 ///
-/// The regressor is kept as what it is computed from at the kept samples (q, qd, qdd, qd_raw and
-/// the parallel-filtered friction-sign columns), about 6 N numbers per sample instead of its N P:
+/// The regressor is kept as what it is computed from at the kept samples (q, qd, qdd, a coupled
+/// motor's raw velocity and the parallel-filtered friction-sign columns), about 5 N numbers per
+/// sample instead of its N P:
 /// regressor(s, K) gives sample s's N rows. W and W_load hold it as one dense matrix when the
 /// data were prepared for a consumer that needs it (prepare_stacked; identify without effect
 /// terms streams the rows and leaves them empty).
@@ -38,7 +39,9 @@ struct StackedData {
   std::vector<char> fit_row;        ///< (S N): 1 where row s * N + j enters the fit (see min_speed_fraction)
   Eigen::MatrixXd q, qd, qdd;       ///< S x N filtered joint signals at the kept samples (for extra columns)
   Eigen::MatrixXd qd_raw;           ///< S x N unfiltered velocity at the kept samples (friction signs); kept
-                                    ///< with dense data or coupled motors, else 0 x N
+                                    ///< with dense data, else 0 x N
+  Eigen::MatrixXd motor_qd_raw;     ///< S x C unfiltered velocity T.row(m) qd of each coupled motor m (in the
+                                    ///< pipeline's order) at the kept samples: its friction sign [rad/s]
   Eigen::VectorXd standstill_band;  ///< N: |qd_raw| below it is rest [rad/s]
   std::vector<std::string> names;   ///< P parameter names
   int num_base = 0;                 ///< the first num_base columns are the base parameters (rigid body)
@@ -87,6 +90,12 @@ inline Eigen::VectorXd joint_noise_std(const Eigen::VectorXd& rss, const Eigen::
 /// 1992) per joint over the rows with train[s] and fit_row, the row-weighted mean over the joints, at
 /// least 1. residual: (S N) stacked, y - W phi.
 double autocorrelation_inflation(const StackedData& d, const std::vector<char>& train, const Eigen::VectorXd& residual);
+
+/// autocorrelation_inflation of the residual y - W phi (phi: P), computed joint by joint from the
+/// regressor's rows instead of stored: N passes over the samples, no (S N) vector (the streamed fit's
+/// memory, docs/reliability.md). The same figure, bit for bit.
+double streamed_autocorrelation_inflation(const StackedData& d, const std::vector<char>& train,
+                                          const Eigen::VectorXd& phi);
 
 /// Prepares `log` for the declared model options.terms (a built term set, model_terms.hpp) of
 /// `robot` (a compiled robot, compiled_robot.hpp). Throws InputError.
