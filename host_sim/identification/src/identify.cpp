@@ -153,7 +153,7 @@ double streamed_autocorrelation_inflation(const StackedData& d, const std::vecto
     for (Eigen::Index s = 0; s < d.t.size(); ++s) {
       if (!train[static_cast<size_t>(s)] || !d.fit_row[s * N + j]) continue;
       d.regressor(s, K);
-      tau_hat.noalias() = K * phi;  // as StackedData::predict computes it
+      tau_hat.noalias() = K * phi;
       e[n++] = d.y[s * N + j] - tau_hat[j];
     }
     return n;

@@ -50,17 +50,6 @@ struct StackedData {
 
   /// Sample s's regressor rows (N x P, rows s N .. s N + N - 1 of W) into K; load: W_load's.
   void regressor(Eigen::Index s, Eigen::MatrixXd& K, bool load = false) const { regressor_rows(*this, s, load, K); }
-  /// W phi over all samples, (S N) [Nm], streamed row block by row block (phi: P).
-  Eigen::VectorXd predict(const Eigen::VectorXd& phi) const {
-    const Eigen::Index n = q.cols();
-    Eigen::VectorXd out(y.size());
-    Eigen::MatrixXd K;
-    for (Eigen::Index s = 0; s < t.size(); ++s) {
-      regressor(s, K);
-      out.segment(s * n, n).noalias() = K * phi;
-    }
-    return out;
-  }
 };
 
 /// The friction sign of an unfiltered velocity `raw`: 0 inside the standstill band [rad/s] (at
