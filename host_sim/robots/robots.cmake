@@ -3,10 +3,11 @@
 # else generated here into the build tree by codegen/generate.py whenever robot.json, a URDF of the
 # folder or the generator changes) and translation units made from the templates in this
 # folder, which register the robot's operations by name at start-up: the model (robot_model.cpp.in,
-# compiled_robot.hpp), `identify` for the Eq. 7 and the Eq. 8 term sets (robot_identify.cpp.in, two
-# units so that a robot's heaviest code compiles on two cores) and the simulated drive's plant
-# (robot_drive.cpp.in, drive_plant.hpp) and calibrate's online estimators (robot_calibration.cpp.in,
-# online_model.hpp, two units). Adding a robot compiles only its own units. Part `robots` of the
+# compiled_robot.hpp), the identification models of the built term sets (robot_identify.cpp.in:
+# layout, generated regressor, least squares; the pipeline is compiled once, identify_pipeline.cpp),
+# the simulated drive's plant (robot_drive.cpp.in, drive_plant.hpp) and calibrate's online
+# estimators, which identify's KF and RLS share (robot_calibration.cpp.in, online_model.hpp,
+# recursive_fits_of.hpp; two units so that a robot's heaviest code compiles on two cores). Adding a robot compiles only its own units. Part `robots` of the
 # dependency rule: it depends on calibration, identification and drive.
 set(DYNCAL_ROBOTS_GENERATED ${CMAKE_BINARY_DIR}/robots_generated)
 file(GLOB codegen_sources ${PROJECT_SOURCE_DIR}/codegen/*.py ${PROJECT_SOURCE_DIR}/codegen/dyncal_codegen/*.py)
@@ -27,12 +28,12 @@ foreach(dir ${DYNCAL_ROBOT_DIRS})
   set(unit ${CMAKE_CURRENT_BINARY_DIR}/robots/${DYNCAL_ROBOT})
   configure_file(${CMAKE_CURRENT_LIST_DIR}/robot_model.cpp.in ${unit}_model.cpp @ONLY)
   configure_file(${CMAKE_CURRENT_LIST_DIR}/robot_drive.cpp.in ${unit}_drive.cpp @ONLY)
+  configure_file(${CMAKE_CURRENT_LIST_DIR}/robot_identify.cpp.in ${unit}_identify.cpp @ONLY)
   foreach(DYNCAL_FIRST 0 4)
-    configure_file(${CMAKE_CURRENT_LIST_DIR}/robot_identify.cpp.in ${unit}_identify_${DYNCAL_FIRST}.cpp @ONLY)
     configure_file(${CMAKE_CURRENT_LIST_DIR}/robot_calibration.cpp.in ${unit}_calibration_${DYNCAL_FIRST}.cpp @ONLY)
-    list(APPEND robot_sources ${unit}_identify_${DYNCAL_FIRST}.cpp ${unit}_calibration_${DYNCAL_FIRST}.cpp)
+    list(APPEND robot_sources ${unit}_calibration_${DYNCAL_FIRST}.cpp)
   endforeach()
-  list(APPEND robot_sources ${unit}_model.cpp ${unit}_drive.cpp)
+  list(APPEND robot_sources ${unit}_model.cpp ${unit}_identify.cpp ${unit}_drive.cpp)
 endforeach()
 add_library(dyncal_host_robots OBJECT ${robot_sources})
 target_include_directories(dyncal_host_robots PRIVATE ${DYNCAL_ROBOTS_GENERATED})

@@ -28,9 +28,13 @@ bool register_robot(const CompiledRobot& robot) {
   }
   for (int i = 0; i < kBuiltTermSets; ++i) {
     const auto k = static_cast<size_t>(i);
-    if (robot.identify[k]) entry.identify[k] = robot.identify[k];
-    if (robot.prepare[k]) entry.prepare[k] = robot.prepare[k];
-    if (robot.param_names[k]) entry.param_names[k] = robot.param_names[k];
+    const TermSetModel& m = robot.models[k];
+    TermSetModel& e = entry.models[k];
+    const auto kf = m.make_kalman_filter ? m.make_kalman_filter : e.make_kalman_filter;
+    const auto rls = m.make_rls ? m.make_rls : e.make_rls;
+    if (m.regressor) e = m;  // the model's unit; the recursive fits come from the calibration units
+    e.make_kalman_filter = kf;
+    e.make_rls = rls;
   }
   if (robot.excitation_regressor) entry.excitation_regressor = robot.excitation_regressor;
   if (robot.inverse_dynamics) entry.inverse_dynamics = robot.inverse_dynamics;
@@ -88,6 +92,12 @@ void derive_tau_max(RobotDescription& robot) {
   }
   robot.tau_max = peak;
   robot.tau_max_derived = true;
+}
+
+const TermSetModel& term_set_model(const CompiledRobot& robot, unsigned terms) {
+  const TermSetModel& m = robot.models[static_cast<size_t>(built_term_set_index(terms))];
+  if (!m.regressor) throw InputError("robot '" + robot.name + "' has no identification model compiled: build again");
+  return m;
 }
 
 Eigen::MatrixXd base_map(const CompiledRobot& robot) {

@@ -8,6 +8,7 @@
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/number_text.hpp"
 #include "dyncal_host/identification/compiled_robot.hpp"
+#include "dyncal_host/identification/identify_pipeline.hpp"
 #include "dyncal_host/identification/signal.hpp"
 #include "dyncal_host/identification/stacked_data.hpp"
 #include "dyncal_host/identification/uniform_grid.hpp"
@@ -104,8 +105,7 @@ IdentifyResult identify(const RobotDescription& robot, JointLog raw, const Ident
   JointLog log;
   std::string note;
   const CompiledRobot& c = checked(robot, std::move(raw), options, log, note);
-  IdentifyResult r =
-      c.identify[static_cast<size_t>(built_term_set_index(options.terms))](robot, std::move(log), options);
+  IdentifyResult r = run_identify(robot, term_set_model(c, options.terms), std::move(log), options);
   r.notes.insert(r.notes.begin(), note);
   return r;
 }
@@ -164,7 +164,7 @@ StackedData prepare_stacked(const RobotDescription& robot, const JointLog& raw, 
   JointLog log;
   std::string note;
   const CompiledRobot& c = checked(robot, raw, options, log, note);  // a copy: the caller keeps raw
-  StackedData d = c.prepare[static_cast<size_t>(built_term_set_index(options.terms))](robot, std::move(log), options);
+  StackedData d = IdentifyPipeline(robot, options, term_set_model(c, options.terms)).prepare(std::move(log), true);
   d.notes.insert(d.notes.begin(), note);
   return d;
 }

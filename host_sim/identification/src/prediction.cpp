@@ -36,7 +36,7 @@ ParameterSet read_parameter_file(const std::string& path) {
   } catch (const InputError& e) {
     throw InputError(path + ": " + e.what());
   }
-  p.names = compiled.param_names[static_cast<size_t>(built_term_set_index(p.terms))]();
+  p.names = term_set_model(compiled, p.terms).names;
   for (const ModelEffect& e : p.effects)
     for (const std::string& n : effect_param_names(e)) p.names.push_back(n);
   // Checked by name, so that a file edited by hand or written for another model cannot give

@@ -16,6 +16,7 @@
 #include "dyncal_host/common/robot_description.hpp"
 #include "dyncal_host/identification/identify.hpp"
 #include "dyncal_host/identification/stacked_data.hpp"
+#include "dyncal_host/identification/term_set_model.hpp"
 
 namespace dyncal::host {
 
@@ -27,8 +28,6 @@ struct CompiledRobot {
   int num_joints = 0, num_standard = 0, num_base = 0;
   std::vector<double> nominal_standard;  ///< kNominalStandard: the description's inertials
 
-  using IdentifyFn = IdentifyResult (*)(const RobotDescription&, JointLog&&, const IdentifyOptions&);
-  using PrepareFn = StackedData (*)(const RobotDescription&, JointLog&&, const IdentifyOptions&);  ///< consumes the log
   /// Stacked, column-normalised regressor of one period of `t` on `grid` points (rows N x grid):
   /// Eq. 7 (base parameters, Fc and beta per joint), or Eq. 4 (base parameters and d tau_f /
   /// d(Fc, Fs, qds, beta) at `friction`).
@@ -45,13 +44,11 @@ struct CompiledRobot {
   using BaseRegressorFn = Eigen::MatrixXd (*)(const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
                                               const Eigen::VectorXd& qdd);
 
-  /// Names of the identified parameters in table order (base parameters, then the terms'), as
-  /// identify reports them and a parameter file lists them.
-  using ParamNamesFn = std::vector<std::string> (*)();
-
-  std::array<IdentifyFn, kBuiltTermSets> identify{};  ///< by built_term_set_index
-  std::array<ParamNamesFn, kBuiltTermSets> param_names{};
-  std::array<PrepareFn, kBuiltTermSets> prepare{};
+  /// The identification model of each built term set (by built_term_set_index): what the
+  /// identification pipeline, compiled once, needs of this robot. Its names are the identified
+  /// parameters in table order (base parameters, then the terms'), as identify reports them and a
+  /// parameter file lists them.
+  std::array<TermSetModel, kBuiltTermSets> models{};
   ExcitationRegressorFn excitation_regressor = nullptr;
   InverseDynamicsFn inverse_dynamics = nullptr;
   StandardToBaseFn standard_to_base = nullptr;
@@ -70,6 +67,10 @@ std::vector<std::string> compiled_robot_names();
 
 /// The operations of `robot` checked against its description (joint count). Throws InputError.
 const CompiledRobot& compiled_robot_for(const RobotDescription& robot);
+
+/// The identification model of `robot` for the built term set `terms` (model_terms.hpp). Throws
+/// InputError naming the model when it is not built.
+const TermSetModel& term_set_model(const CompiledRobot& robot, unsigned terms);
 
 /// The base map K (num_base x num_standard): phi_b = K phi (Gautier), from standard_to_base.
 Eigen::MatrixXd base_map(const CompiledRobot& robot);

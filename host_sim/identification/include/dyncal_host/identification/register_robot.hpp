@@ -8,7 +8,7 @@
 #include "dyncal/identification_model.hpp"
 #include "dyncal/nonlinear_friction.hpp"
 #include "dyncal_host/identification/compiled_robot.hpp"
-#include "dyncal_host/identification/identify_pipeline.hpp"
+#include "dyncal_host/identification/term_set_model_of.hpp"
 
 namespace dyncal::host {
 
@@ -79,19 +79,6 @@ Eigen::MatrixXd base_regressor(const Eigen::VectorXd& q, const Eigen::VectorXd& 
   return Yb;
 }
 
-template <class Robot, unsigned Terms>
-StackedData prepare_stacked_with(const RobotDescription& robot, JointLog&& log, const IdentifyOptions& o) {
-  return IdentifyPipeline<Robot, Terms>(robot, o).prepare(std::move(log), true);
-}
-
-template <class Robot, unsigned Terms>
-std::vector<std::string> param_names_of() {
-  std::vector<std::string> names;
-  for (int i = 0; i < IdentifyPipeline<Robot, Terms>::P; ++i)
-    names.push_back(IdentifyPipeline<Robot, Terms>::param_name(i));
-  return names;
-}
-
 /// Registers the robot's identity, nominal standard parameters (the generated kNominalStandard),
 /// excitation regressor and inverse dynamics.
 template <class Robot>
@@ -110,16 +97,14 @@ bool register_robot_model(const double (&nominal_standard)[Robot::kNumStandard])
   return register_robot(c);
 }
 
-/// Registers identify and prepare for the built term sets First..First+3 (one translation unit
-/// per half, so that a robot's heaviest code compiles on two cores).
+/// Registers the identification models (TermSetModel) of the built term sets First..First+3: the
+/// generated regressor and the lib/ estimators of each model's size, the only per-robot code of
+/// identify (one translation unit per half, so that a robot's code compiles on two cores).
 template <class Robot, int First, int... I>
 bool register_identification(std::integer_sequence<int, I...>) {
   CompiledRobot c;
   c.name = Robot::kName;
-  ((c.identify[First + I] = &run_identify<Robot, built_term_set(First + I)>,
-    c.prepare[First + I] = &prepare_stacked_with<Robot, built_term_set(First + I)>,
-    c.param_names[First + I] = &param_names_of<Robot, built_term_set(First + I)>),
-   ...);
+  ((c.models[First + I] = term_set_model_of<Robot, built_term_set(First + I)>()), ...);
   return register_robot(c);
 }
 
