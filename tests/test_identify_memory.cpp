@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "dyncal_host/identification/kept_samples.hpp"
+#include "dyncal_host/identification/pipeline/kept_samples.hpp"
 #include "support/simulated_log.hpp"
 
 namespace dyncal::test {

@@ -15,8 +15,8 @@
 #include "dyncal_host/drive/closed_loop.hpp"
 #include "dyncal_host/drive/scenario.hpp"
 #include "dyncal_host/drive/simulated_drive.hpp"
-#include "dyncal_host/identification/compiled_robot.hpp"
-#include "dyncal_host/identification/excitation.hpp"
+#include "dyncal_host/identification/excitation/excitation.hpp"
+#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
 #include "support/simulated_log.hpp"
 #include "support/torque_share.hpp"
 

@@ -14,12 +14,12 @@
 #include <random>
 
 #include "dyncal_host/common/input_error.hpp"
-#include "dyncal_host/identification/compiled_robot.hpp"
-#include "dyncal_host/identification/excitation.hpp"
-#include "dyncal_host/identification/identify.hpp"
-#include "dyncal_host/identification/signal.hpp"
-#include "dyncal_host/identification/stacked_data.hpp"
-#include "dyncal_host/identification/uniform_grid.hpp"
+#include "dyncal_host/identification/excitation/excitation.hpp"
+#include "dyncal_host/identification/logs/uniform_grid.hpp"
+#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
+#include "dyncal_host/identification/pipeline/identify.hpp"
+#include "dyncal_host/identification/pipeline/signal.hpp"
+#include "dyncal_host/identification/pipeline/stacked_data.hpp"
 #include "support/dyncal_cli.hpp"
 #include "support/simulated_log.hpp"
 #include "support/torque_share.hpp"

@@ -13,9 +13,9 @@
 
 #include "dyncal_host/diagnosis/diagnose.hpp"
 #include "dyncal_host/drive/drive_plant.hpp"
-#include "dyncal_host/identification/compiled_robot.hpp"
-#include "dyncal_host/identification/excitation.hpp"
-#include "dyncal_host/identification/identify.hpp"
+#include "dyncal_host/identification/excitation/excitation.hpp"
+#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
+#include "dyncal_host/identification/pipeline/identify.hpp"
 #include "support/simulated_log.hpp"
 #include "support/torque_share.hpp"
 

@@ -13,9 +13,9 @@
 #include <random>
 
 #include "dyncal_host/common/input_error.hpp"
-#include "dyncal_host/identification/consistent_least_squares.hpp"
-#include "dyncal_host/identification/objective.hpp"
-#include "dyncal_host/identification/standard_parameters.hpp"
+#include "dyncal_host/identification/methods/consistent_least_squares.hpp"
+#include "dyncal_host/identification/methods/objective.hpp"
+#include "dyncal_host/identification/survey_methods/standard_parameters.hpp"
 
 namespace {
 

@@ -8,7 +8,7 @@
 #include <random>
 
 #include "dyncal_host/common/input_error.hpp"
-#include "dyncal_host/identification/sign_constrained.hpp"
+#include "dyncal_host/identification/methods/sign_constrained.hpp"
 
 namespace {
 

@@ -12,7 +12,7 @@
 
 #include "dyncal_host/common/json_file.hpp"
 #include "dyncal_host/common/robot_description.hpp"
-#include "dyncal_host/identification/joint_log.hpp"
+#include "dyncal_host/identification/logs/joint_log.hpp"
 #include "dyncal_port/modbus_drive.hpp"
 
 namespace dyncal::app {

@@ -7,9 +7,9 @@
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/model_terms.hpp"
 #include "dyncal_host/common/robot_description.hpp"
-#include "dyncal_host/identification/compiled_robot.hpp"
-#include "dyncal_host/identification/drive_table.hpp"
-#include "dyncal_host/identification/prediction.hpp"
+#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
+#include "dyncal_host/identification/reports/drive_table.hpp"
+#include "dyncal_host/identification/reports/prediction.hpp"
 
 namespace dyncal::app {
 namespace {

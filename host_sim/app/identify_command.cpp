@@ -8,12 +8,12 @@
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/drive/closed_loop.hpp"
 #include "dyncal_host/drive/scenario.hpp"
-#include "dyncal_host/identification/drive_law.hpp"
-#include "dyncal_host/identification/friction_comparison.hpp"
-#include "dyncal_host/identification/identify.hpp"
-#include "dyncal_host/identification/identify_report.hpp"
-#include "dyncal_host/identification/prediction.hpp"
-#include "dyncal_host/identification/stacked_data.hpp"
+#include "dyncal_host/identification/logs/drive_law.hpp"
+#include "dyncal_host/identification/methods/friction_comparison.hpp"
+#include "dyncal_host/identification/pipeline/identify.hpp"
+#include "dyncal_host/identification/pipeline/stacked_data.hpp"
+#include "dyncal_host/identification/reports/identify_report.hpp"
+#include "dyncal_host/identification/reports/prediction.hpp"
 
 namespace dyncal::app {
 namespace {

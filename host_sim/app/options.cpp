@@ -5,9 +5,9 @@
 #include "commands.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/robot_description.hpp"
-#include "dyncal_host/identification/compiled_robot.hpp"
-#include "dyncal_host/identification/log_plausibility.hpp"
-#include "dyncal_host/identification/uniform_grid.hpp"
+#include "dyncal_host/identification/logs/log_plausibility.hpp"
+#include "dyncal_host/identification/logs/uniform_grid.hpp"
+#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
 
 namespace dyncal::app {
 

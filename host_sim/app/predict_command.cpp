@@ -4,8 +4,8 @@
 
 #include "commands.hpp"
 #include "dyncal_host/common/input_error.hpp"
-#include "dyncal_host/identification/identify_report.hpp"
-#include "dyncal_host/identification/prediction.hpp"
+#include "dyncal_host/identification/reports/identify_report.hpp"
+#include "dyncal_host/identification/reports/prediction.hpp"
 
 namespace dyncal::app {
 namespace {

@@ -15,7 +15,7 @@
 
 #include "commands.hpp"
 #include "dyncal_host/common/input_error.hpp"
-#include "dyncal_host/identification/compiled_robot.hpp"
+#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
 
 extern char** environ;
 

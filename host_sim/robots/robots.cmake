@@ -7,14 +7,18 @@
 # layout, generated regressor, least squares; the pipeline is compiled once, identify_pipeline.cpp),
 # the simulated drive's plant (robot_drive.cpp.in, drive_plant.hpp) and calibrate's online
 # estimators, which identify's KF and RLS share (robot_calibration.cpp.in, online_model.hpp,
-# recursive_fits_of.hpp; two units so that a robot's heaviest code compiles on two cores). Adding a robot compiles only its own units. Part `robots` of the
-# dependency rule: it depends on calibration, identification and drive.
+# recursive_fits_of.hpp; two units so that a robot's heaviest code compiles on two cores). Adding a
+# robot compiles only its own units. The test robots (tests/robots/) go into the test programs and
+# dyncal_test_cli, not into the dyncal program. Part `robots` of the dependency rule: it depends on
+# calibration, identification and drive.
 set(DYNCAL_ROBOTS_GENERATED ${CMAKE_BINARY_DIR}/robots_generated)
 file(GLOB codegen_sources ${PROJECT_SOURCE_DIR}/codegen/*.py ${PROJECT_SOURCE_DIR}/codegen/dyncal_codegen/*.py)
-set(robot_sources "")
+set(robot_sources "")       # robots/*: the robots the dyncal program ships with (and the user's)
+set(test_robot_sources "")  # tests/robots/*: test fixtures, compiled into the test programs only
 foreach(dir ${DYNCAL_ROBOT_DIRS})
   get_filename_component(DYNCAL_ROBOT ${dir} NAME)
   file(RELATIVE_PATH DYNCAL_ROBOT_DIR ${PROJECT_SOURCE_DIR} ${dir})
+  set(sources "")
   if(NOT DYNCAL_ROBOT IN_LIST DYNCAL_ROBOTS)
     set(out ${DYNCAL_ROBOTS_GENERATED}/dyncal/generated/${DYNCAL_ROBOT})
     file(GLOB inputs CONFIGURE_DEPENDS ${dir}/*.json ${dir}/*.urdf)
@@ -23,7 +27,7 @@ foreach(dir ${DYNCAL_ROBOT_DIRS})
       COMMAND /usr/bin/python3 ${PROJECT_SOURCE_DIR}/codegen/generate.py ${dir} ${out}
       DEPENDS ${inputs} ${codegen_sources}
       COMMENT "Generating the ${DYNCAL_ROBOT} model from ${DYNCAL_ROBOT_DIR}" VERBATIM)
-    list(APPEND robot_sources ${headers})
+    list(APPEND sources ${headers})
   endif()
   set(unit ${CMAKE_CURRENT_BINARY_DIR}/robots/${DYNCAL_ROBOT})
   configure_file(${CMAKE_CURRENT_LIST_DIR}/robot_model.cpp.in ${unit}_model.cpp @ONLY)
@@ -31,13 +35,32 @@ foreach(dir ${DYNCAL_ROBOT_DIRS})
   configure_file(${CMAKE_CURRENT_LIST_DIR}/robot_identify.cpp.in ${unit}_identify.cpp @ONLY)
   foreach(DYNCAL_FIRST 0 4)
     configure_file(${CMAKE_CURRENT_LIST_DIR}/robot_calibration.cpp.in ${unit}_calibration_${DYNCAL_FIRST}.cpp @ONLY)
-    list(APPEND robot_sources ${unit}_calibration_${DYNCAL_FIRST}.cpp)
+    list(APPEND sources ${unit}_calibration_${DYNCAL_FIRST}.cpp)
   endforeach()
-  list(APPEND robot_sources ${unit}_model.cpp ${unit}_identify.cpp ${unit}_drive.cpp)
+  list(APPEND sources ${unit}_model.cpp ${unit}_identify.cpp ${unit}_drive.cpp)
+  if(DYNCAL_ROBOT_DIR MATCHES "^tests/")
+    list(APPEND test_robot_sources ${sources})
+  else()
+    list(APPEND robot_sources ${sources})
+  endif()
 endforeach()
-add_library(dyncal_host_robots OBJECT ${robot_sources})
-target_include_directories(dyncal_host_robots PRIVATE ${DYNCAL_ROBOTS_GENERATED})
-target_link_libraries(dyncal_host_robots PUBLIC dyncal_host_identification dyncal_host_drive dyncal_host_calibration)
-target_compile_options(dyncal_host_robots PRIVATE ${DYNCAL_WARNINGS})
+# dyncal_host_robots: the shipped and the user's robots (the dyncal program); dyncal_host_test_robots:
+# the test robots (the test programs and dyncal_test_cli). An empty set gets an empty unit.
+foreach(set robot_sources test_robot_sources)
+  if(NOT ${set})
+    file(WRITE ${CMAKE_CURRENT_BINARY_DIR}/robots/no_${set}.cpp "// no robot folder in this set\n")
+    set(${set} ${CMAKE_CURRENT_BINARY_DIR}/robots/no_${set}.cpp)
+  endif()
+endforeach()
+foreach(target dyncal_host_robots dyncal_host_test_robots)
+  if(target STREQUAL dyncal_host_robots)
+    add_library(${target} OBJECT ${robot_sources})
+  else()
+    add_library(${target} OBJECT ${test_robot_sources})
+  endif()
+  target_include_directories(${target} PRIVATE ${DYNCAL_ROBOTS_GENERATED})
+  target_link_libraries(${target} PUBLIC dyncal_host_identification dyncal_host_drive dyncal_host_calibration)
+  target_compile_options(${target} PRIVATE ${DYNCAL_WARNINGS})
+endforeach()
 set_property(GLOBAL PROPERTY DYNCAL_HOST_CLOSURE_robots "calibration;diagnosis;identification;drive;common")
 set_property(GLOBAL APPEND PROPERTY DYNCAL_HOST_PARTS robots)

@@ -22,8 +22,8 @@
 #include "dyncal_host/common/robot_description.hpp"
 #include "dyncal_host/drive/scenario.hpp"
 #include "dyncal_host/drive/simulated_drive.hpp"
-#include "dyncal_host/identification/compiled_robot.hpp"
-#include "dyncal_host/identification/excitation.hpp"
+#include "dyncal_host/identification/excitation/excitation.hpp"
+#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
 #include "replay.hpp"
 
 namespace {

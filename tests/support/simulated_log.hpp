@@ -10,9 +10,9 @@
 #include <string>
 #include <vector>
 
-#include "dyncal_host/identification/compiled_robot.hpp"
-#include "dyncal_host/identification/excitation.hpp"
-#include "dyncal_host/identification/joint_log.hpp"
+#include "dyncal_host/identification/excitation/excitation.hpp"
+#include "dyncal_host/identification/logs/joint_log.hpp"
+#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
 
 namespace dyncal::test {
 

@@ -17,11 +17,11 @@
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/model_terms.hpp"
 #include "dyncal_host/common/number_text.hpp"
-#include "dyncal_host/identification/compiled_robot.hpp"
-#include "dyncal_host/identification/drive_table.hpp"
-#include "dyncal_host/identification/excitation.hpp"
-#include "dyncal_host/identification/identify_report.hpp"
-#include "dyncal_host/identification/prediction.hpp"
+#include "dyncal_host/identification/excitation/excitation.hpp"
+#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
+#include "dyncal_host/identification/reports/drive_table.hpp"
+#include "dyncal_host/identification/reports/identify_report.hpp"
+#include "dyncal_host/identification/reports/prediction.hpp"
 
 namespace dyncal::host {
 namespace {

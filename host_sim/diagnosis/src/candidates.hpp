@@ -12,9 +12,9 @@
 
 #include "dyncal/effect_terms.hpp"
 #include "dyncal_host/diagnosis/diagnose.hpp"
-#include "dyncal_host/identification/butterworth.hpp"
-#include "dyncal_host/identification/effect_model.hpp"
-#include "dyncal_host/identification/stacked_data.hpp"
+#include "dyncal_host/identification/methods/effect_model.hpp"
+#include "dyncal_host/identification/pipeline/butterworth.hpp"
+#include "dyncal_host/identification/pipeline/stacked_data.hpp"
 
 namespace dyncal::host::detail {
 

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "candidates.hpp"
-#include "dyncal_host/identification/signal.hpp"
+#include "dyncal_host/identification/pipeline/signal.hpp"
 
 namespace dyncal::host::detail {
 

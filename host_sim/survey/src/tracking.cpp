@@ -12,7 +12,7 @@
 #include "dyncal/kalman_filter.hpp"
 #include "dyncal/rls_forgetting.hpp"
 #include "dyncal_host/common/input_error.hpp"
-#include "dyncal_host/identification/friction_parameters.hpp"
+#include "dyncal_host/identification/methods/friction_parameters.hpp"
 
 namespace dyncal::host::survey {
 namespace {

@@ -13,8 +13,8 @@
 
 #include "dyncal/parameter_table.hpp"
 #include "dyncal_host/diagnosis/diagnose.hpp"
-#include "dyncal_host/identification/excitation.hpp"
-#include "dyncal_host/identification/identify.hpp"
+#include "dyncal_host/identification/excitation/excitation.hpp"
+#include "dyncal_host/identification/pipeline/identify.hpp"
 #include "dyncal_port/modbus_drive.hpp"
 
 namespace dyncal::host {

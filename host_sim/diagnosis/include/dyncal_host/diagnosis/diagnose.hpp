@@ -10,8 +10,8 @@
 #include <vector>
 
 #include "dyncal/effect_terms.hpp"
-#include "dyncal_host/identification/identify.hpp"
-#include "dyncal_host/identification/prediction.hpp"
+#include "dyncal_host/identification/pipeline/identify.hpp"
+#include "dyncal_host/identification/reports/prediction.hpp"
 
 namespace dyncal::host {
 

@@ -1,0 +1,96 @@
+#pragma once
+// Physically consistent weighted least squares for any robot (identify --method pcls): the base
+// parameters are K phi, phi the standard parameters of every link with its pseudo-inertia positive
+// definite by construction (log-Cholesky, log_cholesky.hpp; Wensing et al. 2017, Rucker and Wensing
+// 2022), the model's other parameters (friction, rotor inertia, offsets) free; maximum a posteriori
+// with a Gaussian prior on phi centred on the robot file's nominal inertials, which decides only the
+// directions of phi the data cannot see. Solved by Levenberg-Marquardt on the data compressed to
+// its triangular factor (P rows, not the log's).
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "dyncal_host/identification/methods/optimiser_settings.hpp"
+
+namespace dyncal::host {
+
+/// Relative standard deviation of the nominal (CAD) inertials in the prior: each standard
+/// parameter within +-50 % (1 sigma) of max(|value|, 5 % of the largest of its kind in the link:
+/// inertia, first moment, mass). Weak beside a log's thousands of samples on what they identify.
+inline constexpr double kPriorRelativeStd = 0.5;
+
+struct ConsistentProblem {
+  Eigen::MatrixXd R;      ///< P x P upper triangular: R^T R = W^T W of the weighted data (StreamingLeastSquares)
+  Eigen::VectorXd z;      ///< P: the rotated right-hand side, ||W p - y||^2 = ||R p - z||^2 + const
+  int num_base = 0;       ///< the first num_base of the P model parameters are base parameters
+  Eigen::MatrixXd K;      ///< num_base x 10 L: base parameters of the standard ones (Gautier)
+  Eigen::VectorXd prior;  ///< 10 L nominal standard parameters (robot.json inertials)
+  double prior_relative_std = kPriorRelativeStd;  ///< <= 0: no prior (consistency alone)
+  double sigma2 = 1;      ///< variance of the weighted residual, for the parameters' standard deviations
+  Eigen::VectorXd start;  ///< P: start of the non-inertial parameters (e.g. the WLS solution); empty: 0
+};
+
+struct ConsistentSolution {
+  Eigen::VectorXd params;              ///< P model parameters (base ones = K standard)
+  Eigen::VectorXd params_std;          ///< their standard deviations (Gauss-Newton at the solution, sigma2)
+  Eigen::VectorXd standard;            ///< 10 L consistent standard parameters
+  std::vector<double> min_eigenvalue;  ///< per link, of its pseudo-inertia (> 0: consistent)
+  int iterations = 0;
+  /// search_consistent: standard parameters that end at an end of their range (within 1e-6 of its
+  /// width) that binds: moving that parameter alone outwards to where the cost is least along it
+  /// would lower the cost by more than 3.84 chi-square units (95 %, one degree of freedom).
+  int at_range_end = 0;
+  /// search_consistent: ||R params - z||^2 / sigma2, the weighted cost above its least-squares
+  /// minimum (chi-square units).
+  double cost_excess = 0;
+};
+
+/// Solves `p`. Throws InputError when Levenberg-Marquardt fails or ends non-finite.
+ConsistentSolution consistent_least_squares(const ConsistentProblem& p);
+
+/// The survey's optimisers (Sec. 3.4; optimisers.hpp) on the same weighted problem as
+/// consistent_least_squares, for any robot (identify --method gd|ga|pf). They search the 10 L
+/// standard parameters phi within nominal +- options.range_width x prior_std(nominal, 1) (every
+/// parameter within range_width of max(|value|, 5 % of the largest of its kind in the link)), centred
+/// on the nominal values projected onto the consistent set, with every link's pseudo-inertia
+/// positive definite (Wensing et al. 2017); no prior. The model's other parameters (friction, rotor
+/// inertia, offsets, effects), in which the torque is linear, take their least-squares values given
+/// phi (variable projection, Golub and Pereyra 1973), unbounded as in WLS. Cost: ||R p - z||^2 /
+/// sigma2, p = [K phi; the others] (the weighted residual's sum of squares less its least-squares
+/// minimum); the particle filter's target is exp(-cost / 2); the genetic algorithm's cost is this one
+/// (options.objective is ignored: the compressed data keep no per-joint means for Eq. 25).
+/// Deterministic for options.seed.
+/// Gradient-based: NLopt CCSAQ (Svanberg 2002) from the consistent nominal values (SLSQP, the
+/// survey's, stalls at its start on a real robot file's wide box); genetic algorithm and particle
+/// filter as in optimisers.hpp, the former seeded with that start.
+/// params_std is left empty (the caller's least-squares statistics apply: the model is linear);
+/// iterations: cost evaluations (gradient), generations (genetic), tempering steps (particle).
+enum class SearchMethod { gradient_descent, genetic_algorithm, particle_filter };
+/// identify's method names of the optimisers: gd, ga, pf.
+bool is_search_method(const std::string& method);
+/// The optimiser of gd, ga or pf; throws InputError on another name.
+SearchMethod search_method(const std::string& method);
+ConsistentSolution search_consistent(const ConsistentProblem& p, SearchMethod method, OptimiserSettings options);
+
+/// Cost evaluations of identify's gradient-based search when IdentifyOptions::search_evaluations is 0.
+inline constexpr int kSearchGradientEvaluations = 20000;
+
+struct IdentifyOptions;
+struct IdentifyResult;
+/// identify's settings of search_consistent: --range-width, --seed, --evaluations (IdentifyOptions).
+OptimiserSettings search_settings(const IdentifyOptions& options);
+/// identify's report of a consistent fit (pcls, gd, ga, pf) into res: each link's inertials
+/// (res.links: mass, centre of mass, inertia about it, smallest pseudo-inertia eigenvalue); for a
+/// search, a note with the cost above least squares' minimum and the parameters the search range
+/// limited; for pcls without a prior, a note that only base combinations are identified.
+void report_consistent(const ConsistentSolution& s, const IdentifyOptions& options, IdentifyResult& res);
+/// True for the methods that fit physically consistent inertials: pcls, gd, ga, pf.
+bool is_consistent_method(const std::string& method);
+
+/// Prior standard deviation of each of the 10 L standard parameters of `nominal` (see
+/// kPriorRelativeStd); a kind that is zero in a link takes the robot's largest of that kind as its
+/// scale (and 1 if zero everywhere).
+Eigen::VectorXd prior_std(const Eigen::VectorXd& nominal, double relative_std);
+
+}  // namespace dyncal::host

@@ -1,0 +1,96 @@
+#pragma once
+// The identification pipeline for one compiled robot and one built term set (host side), compiled
+// once: the robot enters through its TermSetModel (term_set_model.hpp), the generated regressor and
+// the lib/ estimators of the model's size.
+
+#include <Eigen/Core>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "dyncal_host/identification/methods/consistent_least_squares.hpp"
+#include "dyncal_host/identification/pipeline/butterworth.hpp"
+#include "dyncal_host/identification/pipeline/identify.hpp"
+#include "dyncal_host/identification/pipeline/kept_samples.hpp"
+#include "dyncal_host/identification/pipeline/stacked_data.hpp"
+#include "dyncal_host/identification/pipeline/term_set_model.hpp"
+
+namespace dyncal::host {
+
+class IdentifyPipeline {
+ public:
+  /// `robot` and `options` are referenced, not copied: they must outlive the pipeline; `model` is
+  /// the compiled robot's TermSetModel of options.terms.
+  IdentifyPipeline(const RobotDescription& robot, const IdentifyOptions& options, const TermSetModel& model);
+
+  /// As below on a copy of `log`, which the caller keeps.
+  StackedData prepare(const JointLog& log, bool dense, const Eigen::VectorXd* band_override = nullptr) const {
+    return prepare(JointLog(log), dense, band_override);
+  }
+
+  /// Filtering, differentiation, regressor, parallel filtering and decimation (Gautier 1997), each
+  /// segment of `log` (on a uniform grid, uniform_grid.hpp) on its own: nothing is filtered or
+  /// differentiated across a segment boundary, and one cut-off period is dropped at both ends of
+  /// every segment, where differentiation and filtering are one-sided.
+  ///
+  /// Memory: the log is consumed. Its torques are filtered first and released; its positions are
+  /// filtered in place and, with its time stamps, shrunk to the kept samples in their own buffers
+  /// (kept_samples.hpp). The rest is processed one joint at a time, and only what the regressor is
+  /// computed from is kept at the decimated samples; dense: also fill W (and W_load) for the
+  /// consumers that need the matrix (StackedData).
+  /// band: the standstill band to use instead of the log's own (IDIM-IV's noise-free simulations
+  /// take the measured log's, so that their friction-sign columns are built as the measured ones).
+  StackedData prepare(JointLog&& log, bool dense, const Eigen::VectorXd* band_override = nullptr) const;
+
+  /// True when robot.json's coupled motors are modelled (its transmission, not --friction-per-joint):
+  /// a parameter file's "friction_per": "motor". Coupled motors of the model (IdentifyOptions::motors)
+  /// are in its model string.
+  bool models_coupled_motors() const { return robot_coupled_; }
+
+  /// Fits on the samples with train[s] true. Writes phi and parameter standard deviations (P): with
+  /// `inflation` given, the white-noise figures times the square root of the residual's
+  /// autocorrelation factor S / n_eff (streamed_autocorrelation_inflation, N passes over the data),
+  /// which is also written there; without it, the white-noise figures (a fold's fit needs only phi).
+  /// With pcls, the consistent solution into *consistent if given; with sign constraints, the
+  /// indices held at 0 into *held if given. Throws InputError.
+  void fit(const StackedData& data, const std::vector<char>& train, Eigen::VectorXd& phi, Eigen::VectorXd& stdev,
+           double* cond = nullptr, ConsistentSolution* consistent = nullptr, std::vector<int>* held = nullptr,
+           double* inflation = nullptr) const;
+
+  const TermSetModel& model() const { return model_; }
+
+  /// A regressor column built from an unfiltered velocity's sign, and therefore low-passed in
+  /// parallel at the log's rate (StackedData::filtered_terms): term t (Coulomb or power) of joint
+  /// or motor m (0-based) in column col, on joint m's row, or, for a coupled motor, on every row j
+  /// times its transmission entry.
+  struct FilteredTerm {
+    unsigned t;
+    int m;
+    int col;
+    bool coupled;
+  };
+
+ private:
+  void process_segment(JointLog& log, Eigen::Index a, Eigen::Index b, const ButterworthLowPass& filter,
+                       const Eigen::VectorXd& band, const KeptSamples& kept, Eigen::Index k0, StackedData& out) const;
+  Eigen::VectorXd standstill_band(const JointLog& log,
+                                  const std::vector<std::pair<Eigen::Index, Eigen::Index>>& segments) const;
+  void constrain_signs(const LeastSquaresFit& ls, Eigen::VectorXd& phi, Eigen::VectorXd& stdev,
+                       std::vector<int>* held) const;
+
+  const RobotDescription& robot_;
+  const IdentifyOptions& opt_;
+  const TermSetModel& model_;
+  int N, P;
+  Eigen::MatrixXd motor_;               ///< motor_velocity_map(robot_, ...): v = T qd (N x N)
+  bool robot_coupled_;                  ///< robot.json's coupling is in motor_
+  std::vector<int> coupled_;            ///< motors turning with more than their own joint (0-based)
+  std::vector<FilteredTerm> filtered_;  ///< StackedData::filtered_terms' columns
+};
+
+/// Runs the whole `identify` job for one robot and term set; preparing the data consumes the log.
+/// Throws InputError.
+IdentifyResult run_identify(const RobotDescription& robot, const TermSetModel& model, JointLog&& log,
+                            const IdentifyOptions& opt);
+
+}  // namespace dyncal::host

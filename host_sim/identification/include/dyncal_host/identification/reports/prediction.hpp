@@ -1,0 +1,55 @@
+#pragma once
+// A model validated on logs it was not fitted to: the identified parameters (a parameter file, or
+// identify's own result) predict the torque of another log, through the same filtering and
+// regressor as identification; per-joint RMS, R^2 and e_T of the prediction error.
+
+#include <Eigen/Core>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "dyncal_host/identification/pipeline/identify.hpp"
+
+namespace dyncal::host {
+
+/// Identified parameters of one robot and model, in the model's parameter order.
+struct ParameterSet {
+  std::string robot, model, source;
+  unsigned terms = 0;                ///< dyncal::term bits of `model`
+  std::vector<ModelEffect> effects;  ///< effect terms of `model` after the compiled ones (model_effects.hpp)
+  std::vector<CoupledMotor> motors;  ///< coupled motors of `model` (their terms are the compiled ones)
+  bool friction_per_motor = false;   ///< "friction_per": "motor" (robot.json's coupling modelled) or "joint"
+  std::vector<std::string> names;    ///< the compiled robot's parameter names for the terms, then the effects'
+  Eigen::VectorXd values;
+};
+
+/// Reads a `dyncal identify --params` file (docs/cli.md). Throws InputError with the file and what
+/// is wrong: not JSON, not a dyncal parameter file, robot or model missing, a robot not compiled into
+/// this build, a model not built, a wrong parameter count, a name that is not the model's parameter
+/// at that place, a value that is not a finite number.
+ParameterSet read_parameter_file(const std::string& path);
+
+/// The parameters identify reports (IdentifyResult::params) as a set.
+ParameterSet parameter_set(const IdentifyResult& r);
+
+/// Per-joint metrics of a prediction: y and prediction stacked (row s * N + j), rows whose
+/// prediction is NaN skipped; e_T and e_T_std relative to tau_max (survey Sec. 5.1).
+std::vector<JointMetrics> torque_metrics(const Eigen::VectorXd& y, const Eigen::VectorXd& prediction, int N,
+                                         const Eigen::VectorXd& tau_max);
+
+/// As above with the prediction made sample by sample instead of stored (no (S N) vector):
+/// predicted(s, j) says whether row s * N + j has a prediction, prediction(s) computes sample s's N
+/// predicted torques [Nm] (called once per sample with a predicted row, the pointer read before the
+/// next call). The same sums in the same order as above: the same figures, bit for bit.
+std::vector<JointMetrics> torque_metrics(const Eigen::VectorXd& y, int N, const Eigen::VectorXd& tau_max,
+                                         const std::function<bool(Eigen::Index s, int j)>& predicted,
+                                         const std::function<const double*(Eigen::Index s)>& prediction);
+
+/// The torque of `log` predicted by `params` (every sample, none fitted): log prepared as identify
+/// prepares it with `options` (filter, cut-off, decimation; terms and friction per motor or per joint
+/// taken from params), tau_hat = W phi, or [W E] phi with effect terms (effect_model.hpp).
+/// Throws InputError: params for another robot than `robot`, and whatever prepare_stacked throws.
+LogPrediction predict(const RobotDescription& robot, const JointLog& log, IdentifyOptions options,
+                      const ParameterSet& params);
+
+}  // namespace dyncal::host

@@ -1,0 +1,104 @@
+#include "dyncal_host/identification/logs/numeric_csv.hpp"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+#include "dyncal_host/common/input_error.hpp"
+
+namespace dyncal::host {
+namespace {
+
+std::string trim(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t\r");
+  if (b == std::string::npos) return "";
+  const auto e = s.find_last_not_of(" \t\r");
+  return s.substr(b, e - b + 1);
+}
+
+std::vector<std::string> split(const std::string& line) {
+  std::vector<std::string> out;
+  std::string::size_type start = 0;
+  while (true) {
+    const auto comma = line.find(',', start);
+    out.push_back(trim(line.substr(start, comma == std::string::npos ? std::string::npos : comma - start)));
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return out;
+}
+
+}  // namespace
+
+NumericCsv read_numeric_csv(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw InputError("'" + path + "' is a directory, not a CSV file");
+  std::ifstream in(path);
+  if (!in) throw InputError("cannot read '" + path + "'");
+  return parse_numeric_csv(in, path);
+}
+
+NumericCsv parse_numeric_csv(std::istream& in, const std::string& path) {
+  NumericCsv csv;
+  std::string line;
+  if (!std::getline(in, line) || trim(line).empty()) throw InputError(path + ": empty file (no header line)");
+  // A UTF-8 byte-order mark (spreadsheet exports) is not part of the first column's name.
+  if (line.compare(0, 3, "\xEF\xBB\xBF") == 0) line.erase(0, 3);
+  csv.header = split(line);
+  const size_t cols = csv.header.size();
+  // Rows are read into blocks of kBlockRows and copied into the matrix block by block, each freed
+  // once copied: the peak is the table twice, not a growing vector's reallocations (issue 23).
+  constexpr size_t kBlockRows = 8192;
+  std::vector<std::vector<double>> blocks;
+  size_t rows = 0;
+  long line_no = 1;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (trim(line).empty()) continue;
+    const auto fields = split(line);
+    if (fields.size() != cols) {
+      throw InputError(path + ":" + std::to_string(line_no) + ": " + std::to_string(fields.size()) +
+                       " fields, header has " + std::to_string(cols));
+    }
+    if (rows % kBlockRows == 0) {
+      blocks.emplace_back();
+      blocks.back().reserve(kBlockRows * cols);
+    }
+    ++rows;
+    for (size_t c = 0; c < cols; ++c) {
+      const std::string& f = fields[c];
+      char* end = nullptr;
+      errno = 0;
+      const double v = std::strtod(f.c_str(), &end);
+      if (f.empty() || end != f.c_str() + f.size()) {
+        throw InputError(path + ":" + std::to_string(line_no) + ": column '" + csv.header[c] + "': '" + f +
+                         "' is not a number");
+      }
+      // ERANGE: overflow gives +-HUGE_VAL (refused below as non-finite, with its own words);
+      // underflow (1e-320) gives the nearest subnormal or zero, a faithful reading of the text.
+      if (errno == ERANGE && std::isinf(v)) {
+        throw InputError(path + ":" + std::to_string(line_no) + ": column '" + csv.header[c] + "': '" + f +
+                         "' is beyond the range of a double");
+      }
+      if (!std::isfinite(v)) {
+        throw InputError(path + ":" + std::to_string(line_no) + ": column '" + csv.header[c] + "': non-finite value '" +
+                         f + "'");
+      }
+      blocks.back().push_back(v);
+    }
+  }
+  using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  csv.values.resize(static_cast<Eigen::Index>(rows), static_cast<Eigen::Index>(cols));
+  Eigen::Index row = 0;
+  for (std::vector<double>& block : blocks) {
+    const Eigen::Index n = static_cast<Eigen::Index>(block.size() / cols);
+    csv.values.middleRows(row, n) = Eigen::Map<const RowMajor>(block.data(), n, static_cast<Eigen::Index>(cols));
+    row += n;
+    std::vector<double>().swap(block);
+  }
+  return csv;
+}
+
+}  // namespace dyncal::host

@@ -1,0 +1,284 @@
+#include "dyncal_host/identification/logs/uniform_grid.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <utility>
+
+#include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/common/number_text.hpp"
+
+namespace dyncal::host {
+namespace {
+
+using Index = Eigen::Index;
+
+double median_step(const Eigen::VectorXd& t, const std::vector<std::pair<Index, Index>>& segments) {
+  std::vector<double> steps;
+  steps.reserve(static_cast<size_t>(t.size()));
+  for (const auto& [a, b] : segments) {
+    for (Index i = a + 1; i < b; ++i) steps.push_back(t[i] - t[i - 1]);
+  }
+  if (steps.empty()) return 0.0;
+  auto mid = steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2);
+  std::nth_element(steps.begin(), mid, steps.end());
+  return *mid;
+}
+
+/// Natural cubic spline through (x_i, Y.row(i)) for every column of Y at once (Thomas algorithm on
+/// the tridiagonal system of the second derivatives; M_0 = M_n = 0).
+class NaturalCubicSpline {
+ public:
+  NaturalCubicSpline(const Eigen::VectorXd& x, const Eigen::MatrixXd& y) : x_(x), y_(y) {
+    const Index n = x.size() - 1;
+    m_ = Eigen::MatrixXd::Zero(n + 1, y.cols());
+    if (n < 2) return;
+    Eigen::VectorXd c(n + 1);  // modified super-diagonal
+    Eigen::MatrixXd d(n + 1, y.cols());
+    for (Index i = 1; i < n; ++i) {
+      const double h0 = x[i] - x[i - 1], h1 = x[i + 1] - x[i];
+      const double lower = (i > 1) ? h0 : 0.0;
+      const double diag = 2.0 * (h0 + h1) - lower * (i > 1 ? c[i - 1] : 0.0);
+      c[i] = h1 / diag;
+      d.row(i) = 6.0 * ((y.row(i + 1) - y.row(i)) / h1 - (y.row(i) - y.row(i - 1)) / h0);
+      if (i > 1) d.row(i) -= lower * d.row(i - 1);
+      d.row(i) /= diag;
+    }
+    m_.row(n - 1) = d.row(n - 1);
+    for (Index i = n - 2; i >= 1; --i) m_.row(i) = d.row(i) - c[i] * m_.row(i + 1);
+  }
+
+  /// Values at the increasing times `at` into out (rows = at.size()).
+  void evaluate(const Eigen::VectorXd& at, Eigen::Ref<Eigen::MatrixXd> out) const {
+    Index i = 0;
+    const Index n = x_.size() - 1;
+    for (Index k = 0; k < at.size(); ++k) {
+      while (i < n - 1 && at[k] > x_[i + 1]) ++i;
+      const double h = x_[i + 1] - x_[i];
+      const double A = (x_[i + 1] - at[k]) / h, B = 1.0 - A;
+      out.row(k) = A * y_.row(i) + B * y_.row(i + 1) +
+                   ((A * A * A - A) * m_.row(i) + (B * B * B - B) * m_.row(i + 1)) * (h * h / 6.0);
+    }
+  }
+
+ private:
+  const Eigen::VectorXd& x_;
+  const Eigen::MatrixXd& y_;
+  Eigen::MatrixXd m_;
+};
+
+/// The raw log's columns side by side: q | [qd] | [qdd] | tau.
+Eigen::MatrixXd columns_of(const JointLog& log, Index a, Index b) {
+  const int n = log.joints();
+  const int blocks = 2 + (log.has_qd ? 1 : 0) + (log.has_qdd ? 1 : 0);
+  Eigen::MatrixXd m(b - a, blocks * n);
+  int c = 0;
+  auto put = [&](const Eigen::MatrixXd& x) {
+    m.middleCols(c, n) = x.middleRows(a, b - a);
+    c += n;
+  };
+  put(log.q);
+  if (log.has_qd) put(log.qd);
+  if (log.has_qdd) put(log.qdd);
+  put(log.tau);
+  return m;
+}
+
+}  // namespace
+
+JointLog to_uniform_grid(JointLog raw, double max_gap, SamplingReport& report) {
+  report = SamplingReport{};
+  const Index S = raw.samples();
+  report.raw_samples = static_cast<long>(S);
+  if (S < 3) throw InputError(raw.source + ": fewer than 3 samples");
+  for (Index i = 1; i < S; ++i) {
+    if (!(raw.t[i] > raw.t[i - 1])) {
+      throw InputError(raw.source + ": time is not strictly increasing at data row " + std::to_string(i + 1) +
+                       " (t = " + number_text(raw.t[i]) + " s after " + number_text(raw.t[i - 1]) + " s)");
+    }
+  }
+  const auto input_segments = raw.segments();
+  // Input segments (several logs) must share one rate: interpolating one onto another's grid would
+  // alias (no anti-alias filter on the way down) or invent samples (on the way up).
+  double T = 0;
+  for (const auto& seg : input_segments) {
+    const double step = median_step(raw.t, {seg});
+    if (!(step > 0)) throw InputError(raw.source + ": a log segment has fewer than 2 samples");
+    if (T == 0) T = step;
+    if (std::abs(step - T) > 0.01 * T) {
+      throw InputError(raw.source + ": logs of different rates (" + number_text(1.0 / T) + " Hz and " +
+                       number_text(1.0 / step) + " Hz at data row " + std::to_string(seg.first + 1) +
+                       "): give logs of one rate");
+    }
+  }
+  // The median step is biased by missing samples (their steps are 2T, 3T, ...) and jitter; the
+  // period is the total time over the number of periods spanned, each step counting as its nearest
+  // multiple of the period (twice, from the median and then from the first estimate).
+  T = median_step(raw.t, input_segments);
+  for (int pass = 0; pass < 2; ++pass) {
+    double spanned = 0, periods = 0;
+    for (const auto& [a, b] : input_segments) {
+      for (Index i = a + 1; i < b; ++i) {
+        const double step = raw.t[i] - raw.t[i - 1];
+        const double m = std::round(step / T);
+        if (m < 1 || step > std::max(max_gap, 1.5 * T)) continue;  // gaps say nothing of the period
+        spanned += step;
+        periods += m;
+      }
+    }
+    if (periods > 0) T = spanned / periods;
+  }
+  report.period = T;
+  report.raw_rate_hz = 1.0 / T;
+  max_gap = std::max(max_gap, 1.5 * T);  // a single period is never a gap
+  // Pieces: input segments split at gaps. Jitter: each step's distance to its nearest multiple of
+  // the period (at least one). The grid only needs T to be the spacing it uses: the spline reads the
+  // raw time stamps as they are, so a period a little off the logger's nominal one costs nothing.
+  std::vector<std::pair<Index, Index>> pieces;
+  double jitter2 = 0;
+  long steps = 0;
+  bool uniform = true;
+  auto add_piece = [&](Index a, Index b) {
+    pieces.emplace_back(a, b);
+    for (Index i = a + 1; i < b; ++i) {
+      const double step = raw.t[i] - raw.t[i - 1];
+      const double e = step - std::max(1.0, std::round(step / T)) * T;
+      jitter2 += e * e;
+      ++steps;
+    }
+  };
+  for (const auto& [a, b] : input_segments) {
+    Index start = a;
+    for (Index i = a + 1; i < b; ++i) {
+      const double step = raw.t[i] - raw.t[i - 1];
+      if (step > max_gap) {
+        add_piece(start, i);
+        start = i;
+        ++report.gaps;
+        report.gap_seconds += step;
+        uniform = false;
+        continue;
+      }
+      if (std::abs(step - T) > kUniformStepTolerance * T) uniform = false;
+    }
+    add_piece(start, b);
+  }
+  report.jitter_rms = steps > 0 ? std::sqrt(jitter2 / static_cast<double>(steps)) / T : 0.0;
+  if (uniform) {
+    report.grid_samples = report.raw_samples;
+    report.segments = static_cast<int>(input_segments.size());
+    raw.period = T;
+    return raw;  // moved: a uniform log is not copied
+  }
+  report.resampled = true;
+  // Grid of each piece; pieces shorter than 3 grid samples are dropped.
+  std::vector<Eigen::VectorXd> grids;
+  std::vector<std::pair<Index, Index>> kept;
+  Index total = 0;
+  for (const auto& [a, b] : pieces) {
+    const Index n = static_cast<Index>(std::floor((raw.t[b - 1] - raw.t[a]) / T * (1 + 1e-12))) + 1;
+    if (n < 3 || b - a < 3) continue;
+    grids.push_back(raw.t[a] + T * Eigen::VectorXd::LinSpaced(n, 0.0, static_cast<double>(n - 1)).array());
+    kept.emplace_back(a, b);
+    total += n;
+    report.missing += std::max<long>(0, static_cast<long>(n - (b - a)));
+  }
+  if (total == 0) throw InputError(raw.source + ": no stretch of at least 3 samples without a gap");
+  JointLog out;
+  out.source = raw.source;
+  out.has_qd = raw.has_qd;
+  out.has_qdd = raw.has_qdd;
+  out.period = T;
+  const int nj = raw.joints();
+  out.t.resize(total);
+  out.q.resize(total, nj);
+  out.tau.resize(total, nj);
+  if (out.has_qd) out.qd.resize(total, nj);
+  if (out.has_qdd) out.qdd.resize(total, nj);
+  Index row = 0;
+  for (size_t k = 0; k < kept.size(); ++k) {
+    const auto [a, b] = kept[k];
+    const Eigen::VectorXd& g = grids[k];
+    if (row > 0) out.segment_starts.push_back(row);
+    const Eigen::VectorXd x = raw.t.segment(a, b - a);
+    const Eigen::MatrixXd y = columns_of(raw, a, b);
+    Eigen::MatrixXd v(g.size(), y.cols());
+    NaturalCubicSpline(x, y).evaluate(g, v);
+    out.t.segment(row, g.size()) = g;
+    int c = 0;
+    auto take = [&](Eigen::MatrixXd& to) {
+      to.middleRows(row, g.size()) = v.middleCols(c, nj);
+      c += nj;
+    };
+    take(out.q);
+    if (out.has_qd) take(out.qd);
+    if (out.has_qdd) take(out.qdd);
+    take(out.tau);
+    row += g.size();
+  }
+  report.grid_samples = static_cast<long>(total);
+  report.segments = static_cast<int>(kept.size());
+  return out;
+}
+
+std::string describe(const SamplingReport& r, double max_gap) {
+  char line[512];
+  if (!r.resampled) {
+    std::snprintf(line, sizeof line, "sampling: %.6g Hz, uniform, %ld samples in %d segment%s", r.raw_rate_hz,
+                  r.grid_samples, r.segments, r.segments == 1 ? "" : "s");
+    return line;
+  }
+  std::snprintf(
+      line, sizeof line,
+      "sampling: raw %.6g Hz (period %.4g ms), step jitter RMS %.3g %% of the period; resampled to a "
+      "uniform grid by cubic spline: %ld raw -> %ld grid samples (%ld, %.2g %%, more: missing samples bridged); "
+      "%d gap%s longer than %.4g ms (%.4g s in all) split the log: %d segment%s",
+      r.raw_rate_hz, 1e3 * r.period, 100.0 * r.jitter_rms, r.raw_samples, r.grid_samples, r.missing,
+      100.0 * static_cast<double>(r.missing) / static_cast<double>(std::max(1L, r.grid_samples)), r.gaps,
+      r.gaps == 1 ? "" : "s", 1e3 * max_gap, r.gap_seconds, r.segments, r.segments == 1 ? "" : "s");
+  return line;
+}
+
+JointLog stack_logs(std::vector<JointLog> logs) {
+  if (logs.empty()) throw InputError("no log given");
+  if (logs.size() == 1) return std::move(logs.front());
+  JointLog out;
+  const JointLog& first = logs.front();
+  out.has_qd = first.has_qd;
+  out.has_qdd = first.has_qdd;
+  Index total = 0;
+  for (const JointLog& l : logs) {
+    if (l.joints() != first.joints() || l.has_qd != first.has_qd || l.has_qdd != first.has_qdd)
+      throw InputError(l.source + ": columns differ from " + first.source +
+                       " (joints, measured qd, qdd): stacked logs must have the same columns");
+    if (l.samples() < 3) throw InputError(l.source + ": fewer than 3 samples");
+    total += l.samples();
+  }
+  const int n = first.joints();
+  out.t.resize(total);
+  out.q.resize(total, n);
+  out.tau.resize(total, n);
+  if (out.has_qd) out.qd.resize(total, n);
+  if (out.has_qdd) out.qdd.resize(total, n);
+  Index row = 0;
+  double shift_to = 0;
+  for (const JointLog& l : logs) {
+    const Index m = l.samples();
+    if (row > 0) {
+      out.segment_starts.push_back(row);
+      out.source += " + ";
+    }
+    for (const Index s : l.segment_starts) out.segment_starts.push_back(row + s);
+    out.source += l.source;
+    out.t.segment(row, m) = l.t.array() - l.t[0] + shift_to;
+    out.q.middleRows(row, m) = l.q;
+    out.tau.middleRows(row, m) = l.tau;
+    if (out.has_qd) out.qd.middleRows(row, m) = l.qd;
+    if (out.has_qdd) out.qdd.middleRows(row, m) = l.qdd;
+    shift_to = out.t[row + m - 1] + l.sample_period();
+    row += m;
+  }
+  return out;
+}
+
+}  // namespace dyncal::host

@@ -1,0 +1,137 @@
+#include "dyncal_host/identification/methods/consistent_least_squares.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <unsupported/Eigen/LevenbergMarquardt>
+
+#include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/identification/methods/log_cholesky.hpp"
+#include "dyncal_host/identification/survey_methods/standard_parameters.hpp"
+
+namespace dyncal::host {
+namespace {
+
+using Mat10 = Eigen::Matrix<double, 10, 10>;
+
+/// r = [R [K phi(theta); x] - z ; (phi(theta) - prior) / s ; 0] over v = [theta (10 L) | x (P - num_base)].
+/// Without a prior there are fewer data rows (P) than unknowns (10 L + P - num_base), which Eigen's
+/// Levenberg-Marquardt refuses: zero rows pad r to the unknowns' count (they change nothing).
+struct Residuals : Eigen::DenseFunctor<double> {
+  const ConsistentProblem& p;
+  Eigen::MatrixXd RK;  // R's base columns times K: P x 10 L
+  Eigen::VectorXd inv_s;
+  int L = 0, nx = 0;
+  bool with_prior = false;
+
+  Residuals(const ConsistentProblem& problem, int links, const Eigen::VectorXd& inv_std)
+      : Eigen::DenseFunctor<double>(10 * links + static_cast<int>(problem.R.cols()) - problem.num_base,
+                                    std::max(static_cast<int>(problem.R.rows()) + (inv_std.size() > 0 ? 10 * links : 0),
+                                             10 * links + static_cast<int>(problem.R.cols()) - problem.num_base)),
+        p(problem),
+        inv_s(inv_std),
+        L(links),
+        nx(static_cast<int>(problem.R.cols()) - problem.num_base),
+        with_prior(inv_std.size() > 0) {
+    RK = p.R.leftCols(p.num_base) * p.K;
+  }
+
+  Eigen::VectorXd standard(const Eigen::VectorXd& v, std::vector<Mat10>* jac = nullptr) const {
+    Eigen::VectorXd phi(10 * L);
+    if (jac) jac->resize(static_cast<size_t>(L));
+    for (int l = 0; l < L; ++l)
+      standard_from_theta(v.data() + 10 * l, phi.data() + 10 * l, jac ? &(*jac)[static_cast<size_t>(l)] : nullptr);
+    return phi;
+  }
+
+  int operator()(const Eigen::VectorXd& v, Eigen::VectorXd& r) const {
+    const Eigen::VectorXd phi = standard(v);
+    const Eigen::Index n = p.R.rows();
+    r.head(n) = RK * phi - p.z;
+    if (nx > 0) r.head(n) += p.R.rightCols(nx) * v.tail(nx);
+    if (with_prior) r.segment(n, 10 * L) = (phi - p.prior).cwiseProduct(inv_s);
+    r.tail(r.size() - n - (with_prior ? 10 * L : 0)).setZero();
+    return 0;
+  }
+
+  int df(const Eigen::VectorXd& v, Eigen::MatrixXd& J) const {
+    J.setZero();
+    std::vector<Mat10> jac;
+    standard(v, &jac);
+    const Eigen::Index n = p.R.rows();
+    for (int l = 0; l < L; ++l) {
+      const Mat10& d = jac[static_cast<size_t>(l)];
+      J.block(0, 10 * l, n, 10) = RK.middleCols(10 * l, 10) * d;
+      if (with_prior) J.block(n + 10 * l, 10 * l, 10, 10) = inv_s.segment(10 * l, 10).asDiagonal() * d;
+    }
+    if (nx > 0) J.block(0, 10 * L, n, nx) = p.R.rightCols(nx);
+    return 0;
+  }
+};
+
+}  // namespace
+
+Eigen::VectorXd prior_std(const Eigen::VectorXd& nominal, double relative_std) {
+  const int L = static_cast<int>(nominal.size() / 10);
+  const int kinds[3][2] = {{0, 6}, {6, 9}, {9, 10}};  // inertia, first moment, mass
+  double robot_max[3] = {0, 0, 0};
+  for (int l = 0; l < L; ++l)
+    for (int k = 0; k < 3; ++k)
+      for (int i = kinds[k][0]; i < kinds[k][1]; ++i)
+        robot_max[k] = std::max(robot_max[k], std::abs(nominal[10 * l + i]));
+  Eigen::VectorXd s(nominal.size());
+  for (int l = 0; l < L; ++l) {
+    for (int k = 0; k < 3; ++k) {
+      double m = 0;
+      for (int i = kinds[k][0]; i < kinds[k][1]; ++i) m = std::max(m, std::abs(nominal[10 * l + i]));
+      if (m == 0) m = robot_max[k] > 0 ? robot_max[k] : 1.0;
+      for (int i = kinds[k][0]; i < kinds[k][1]; ++i)
+        s[10 * l + i] = relative_std * std::max(std::abs(nominal[10 * l + i]), 0.05 * m);
+    }
+  }
+  return s;
+}
+
+ConsistentSolution consistent_least_squares(const ConsistentProblem& p) {
+  const int L = static_cast<int>(p.K.cols() / 10);
+  const Eigen::Index P = p.R.cols();
+  const int nx = static_cast<int>(P) - p.num_base;
+  Eigen::VectorXd inv_s;
+  if (p.prior_relative_std > 0) inv_s = prior_std(p.prior, p.prior_relative_std).cwiseInverse();
+  Residuals f(p, L, inv_s);
+  // Start: the nominal inertials projected onto the consistent set, the other parameters from `start`.
+  Eigen::VectorXd v = Eigen::VectorXd::Zero(10 * L + nx);
+  for (int l = 0; l < L; ++l) theta_from_pseudo_inertia(pseudo_inertia(p.prior.data() + 10 * l), v.data() + 10 * l);
+  if (nx > 0 && p.start.size() == P) v.tail(nx) = p.start.tail(nx);
+  Eigen::LevenbergMarquardt<Residuals> lm(f);
+  lm.setMaxfev(400);
+  lm.setFtol(1e-12);
+  lm.setXtol(1e-12);
+  const auto status = lm.minimize(v);
+  if (status == Eigen::LevenbergMarquardtSpace::ImproperInputParameters || !v.allFinite())
+    throw InputError("physically consistent LS: Levenberg-Marquardt failed (status " + std::to_string(status) + ")");
+  ConsistentSolution s;
+  s.iterations = static_cast<int>(lm.iterations());
+  std::vector<Mat10> jac;
+  s.standard = f.standard(v, &jac);
+  s.params.resize(P);
+  s.params.head(p.num_base) = p.K * s.standard;
+  if (nx > 0) s.params.tail(nx) = v.tail(nx);
+  for (int l = 0; l < L; ++l) s.min_eigenvalue.push_back(theta_min_eigenvalue(v.data() + 10 * l));
+  // Covariance of v from the Gauss-Newton matrix (data scaled by sigma2, prior as is), propagated
+  // to the model parameters p = G v, G = [K dphi/dtheta, 0; 0, I].
+  Eigen::MatrixXd J(f.values(), f.inputs());
+  f.df(v, J);
+  const Eigen::Index n = p.R.rows();
+  Eigen::MatrixXd H = J.topRows(n).transpose() * J.topRows(n) / p.sigma2;
+  if (f.with_prior) H += J.middleRows(n, 10 * L).transpose() * J.middleRows(n, 10 * L);
+  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(P, f.inputs());
+  for (int l = 0; l < L; ++l)
+    G.block(0, 10 * l, p.num_base, 10) = p.K.middleCols(10 * l, 10) * jac[static_cast<size_t>(l)];
+  if (nx > 0) G.block(p.num_base, 10 * L, nx, nx).setIdentity();
+  const Eigen::MatrixXd cov = G * H.completeOrthogonalDecomposition().pseudoInverse() * G.transpose();
+  s.params_std = cov.diagonal().cwiseMax(0.0).cwiseSqrt();
+  return s;
+}
+
+}  // namespace dyncal::host

@@ -1,0 +1,189 @@
+#include "dyncal_host/identification/methods/instrumental_variables.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/identification/methods/consistent_least_squares.hpp"
+#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
+#include "dyncal_host/identification/reports/prediction.hpp"
+
+namespace dyncal::host {
+namespace {
+
+using Eigen::Index;
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+
+/// The IV estimate of y = K phi on the rows with keep[row] (the others weigh 0): (Z^T K)^-1 Z^T y.
+VectorXd iv_solve(const MatrixXd& K, const MatrixXd& Z, const VectorXd& y, const VectorXd& keep) {
+  const MatrixXd Zk = Z.array().colwise() * keep.array();
+  return (Zk.transpose() * K).colPivHouseholderQr().solve(Zk.transpose() * y);
+}
+
+/// The length of `step` in standard errors of the IV estimate phi of the weighted system y = K phi
+/// with instruments Z: sqrt(step^T C^-1 step / P), C = s^2 (Z^T K)^-1 Z^T Z (K^T Z)^-1, s^2 the
+/// residual variance; step^T C^-1 step = |P_Z K step|^2 / s^2 (P_Z the projection onto Z's columns).
+double step_in_standard_errors(const MatrixXd& K, const MatrixXd& Z, const VectorXd& y, const VectorXd& phi,
+                               const VectorXd& step) {
+  const double P = static_cast<double>(K.cols());
+  const double s2 = (y - K * phi).squaredNorm() / (static_cast<double>(K.rows()) - P);
+  const VectorXd projected = Z * Z.colPivHouseholderQr().solve(K * step);
+  return std::sqrt(projected.squaredNorm() / s2 / P);
+}
+
+int param_index(const StackedData& d, const std::string& name) {
+  const auto it = std::find(d.names.begin(), d.names.end(), name);
+  if (it == d.names.end())
+    throw InputError("--method iv: no parameter " + name +
+                     " (a coupled motor's friction: the closed loop simulates friction per joint, use "
+                     "--friction-per-joint)");
+  return static_cast<int>(it - d.names.begin());
+}
+
+}  // namespace
+
+void fit_instrumental(const StackedData& d, const JointLog& grid, const std::vector<int>& fold, int folds,
+                      const RobotDescription& robot, const IdentifyOptions& o, const PrepareLog& prepare,
+                      IdentifyResult& res) {
+  if (!o.closed_loop)
+    throw InputError("--method iv needs --law FILE: the drive's control law the run was recorded under");
+  const auto t0 = std::chrono::steady_clock::now();
+  const int N = static_cast<int>(d.q.cols());
+  const Index S = d.t.size(), rows = S * N, P = d.W.cols();
+  if (d.W.rows() != rows) throw InputError("internal: --method iv needs the dense regressor");
+  std::vector<int> fc(static_cast<size_t>(N)), fv(static_cast<size_t>(N));
+  for (int j = 0; j < N; ++j) {
+    fc[static_cast<size_t>(j)] = param_index(d, "Fc" + std::to_string(j + 1));
+    fv[static_cast<size_t>(j)] = param_index(d, "Fv" + std::to_string(j + 1));
+  }
+  VectorXd fit = VectorXd::Zero(rows);
+  for (Index r = 0; r < rows; ++r) fit[r] = d.fit_row.empty() || d.fit_row[static_cast<size_t>(r)] ? 1.0 : 0.0;
+
+  // Gautier's weights from the OLS residual, then the WLS start.
+  const MatrixXd Kf = d.W.array().colwise() * fit.array();
+  const VectorXd ols = Kf.colPivHouseholderQr().solve(d.y.cwiseProduct(fit));
+  const VectorXd r_ols = (d.y - d.W * ols).cwiseProduct(fit);
+  VectorXd rss = VectorXd::Zero(N), n = VectorXd::Zero(N);
+  for (Index r = 0; r < rows; ++r) rss[r % N] += r_ols[r] * r_ols[r], n[r % N] += fit[r];
+  const VectorXd sigma = joint_noise_std(rss, n, P);
+  VectorXd w(rows);
+  for (Index r = 0; r < rows; ++r) w[r] = fit[r] / sigma[r % N];
+  const MatrixXd K = d.W.array().colwise() * w.array();
+  const VectorXd y = d.y.cwiseProduct(w);
+  VectorXd phi = K.colPivHouseholderQr().solve(y);
+  const Eigen::LLT<MatrixXd> gram(K.transpose() * K);
+  if (gram.info() != Eigen::Success) throw InputError("--method iv: the weighted regressor is rank deficient");
+  const MatrixXd R = gram.matrixU();
+  res.condition_number = [&] {
+    const VectorXd sv = Eigen::JacobiSVD<MatrixXd>(R).singularValues();
+    return sv[0] / sv[sv.size() - 1];
+  }();
+
+  // Each iterate's plant: consistent inertials nearest it in the data's metric, the prior deciding
+  // what the data do not see; friction at least 0.
+  const CompiledRobot& compiled = compiled_robot_for(robot);
+  ConsistentProblem plant_problem;
+  plant_problem.R = R;
+  plant_problem.num_base = d.num_base;
+  plant_problem.K = base_map(compiled);
+  plant_problem.prior = Eigen::Map<const VectorXd>(compiled.nominal_standard.data(), compiled.num_standard);
+  plant_problem.prior_relative_std = o.prior_std > 0 ? o.prior_std : kPriorRelativeStd;
+  const VectorXd nominal = plant_problem.prior;
+  MatrixXd Z;
+  int simulations = 0, tripped = 0;
+  bool converged = false, relax = false;
+  double previous_step = INFINITY, last_step_se = INFINITY;
+  VectorXd simulated_from;  // the estimate whose plant gave Z
+  VectorXd estimate;        // the IV estimate of Z: what is reported
+  std::string trip;
+  while (simulations < kIvMaxSimulations && !converged) {
+    // The first plant: robot.json's inertials with the WLS friction (least squares on noisy
+    // positions underestimates the inertias, and a plant lighter than the arm can make the law's
+    // fixed-gain loop unstable); then the consistent plant nearest each iterate.
+    VectorXd standard = nominal, model = phi;
+    if (Z.size() > 0) {
+      plant_problem.z = R * phi;
+      plant_problem.start = phi;
+      const ConsistentSolution plant = consistent_least_squares(plant_problem);
+      standard = plant.standard;
+      model = plant.params;
+    }
+    VectorXd Fc(N), Fv(N);
+    for (int j = 0; j < N; ++j) {
+      Fc[j] = std::max(0.0, model[fc[static_cast<size_t>(j)]]);
+      Fv[j] = std::max(0.0, model[fv[static_cast<size_t>(j)]]);
+    }
+    StackedData sim;
+    try {
+      ++simulations;
+      sim = prepare(o.closed_loop(grid, standard, Fc, Fv));
+    } catch (const InputError& e) {
+      // A plant that trips the drive under the law: back half way towards the last one that did not.
+      if (Z.size() == 0)
+        throw InputError(std::string("--method iv: the first closed-loop simulation failed: ") + e.what());
+      trip = e.what();
+      ++tripped;
+      phi = 0.5 * (phi + simulated_from);
+      continue;
+    }
+    if (sim.W.rows() != rows || sim.W.cols() != P || !sim.t.isApprox(d.t))
+      throw InputError("--method iv: the closed-loop simulation's samples are not the log's");
+    Z = sim.W.array().colwise() * w.array();
+    simulated_from = phi;
+    estimate = iv_solve(K, Z, y, VectorXd::Ones(rows));
+    const VectorXd& next = estimate;
+    if (!next.allFinite()) throw InputError("--method iv: the instrumental estimate is not finite");
+    const double step = (next - phi).norm();
+    last_step_se = step_in_standard_errors(K, Z, y, next, next - phi);
+    converged = last_step_se <= kIvTolerance;
+    // The map from plant to estimate need not contract: once a step fails to halve the previous
+    // one, half steps (Mann iteration) damp a cycle between two plants.
+    if (step > 0.5 * previous_step) relax = true;
+    previous_step = step;
+    phi = relax && !converged ? VectorXd(0.5 * (phi + next)) : next;
+  }
+  phi = estimate;  // the IV estimate of the last instruments (the iterate may be a half step)
+  res.fit_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  // Cross-validation with the final instruments: each fold's IV estimate from the others' rows.
+  VectorXd pred = VectorXd::Constant(rows, std::nan(""));
+  for (int f = 0; f < folds; ++f) {
+    VectorXd train(rows);
+    for (Index r = 0; r < rows; ++r) train[r] = fold[static_cast<size_t>(r / N)] != f ? 1.0 : 0.0;
+    const VectorXd phi_f = iv_solve(K, Z, y, train);
+    for (Index s = 0; s < S; ++s)
+      if (fold[static_cast<size_t>(s)] == f) pred.segment(s * N, N) = d.W.middleRows(s * N, N) * phi_f;
+  }
+  res.joints = torque_metrics(d.y, pred, N, robot.tau_max);
+
+  // Standard deviations: the IV covariance, inflated by the residual's autocorrelation.
+  const VectorXd residual = y - K * phi;
+  const double s2 = residual.squaredNorm() / (static_cast<double>(rows) - static_cast<double>(P));
+  const MatrixXd ZK_inv = (Z.transpose() * K).inverse();
+  const MatrixXd C = s2 * ZK_inv * (Z.transpose() * Z) * ZK_inv.transpose();
+  const std::vector<char> all(static_cast<size_t>(S), 1);
+  const double inflation = autocorrelation_inflation(d, all, d.y - d.W * phi);
+  for (Index i = 0; i < P; ++i)
+    res.params.push_back({d.names[static_cast<size_t>(i)], phi[i], std::sqrt(std::max(0.0, C(i, i)) * inflation)});
+  char line[240];
+  std::snprintf(line, sizeof line,
+                "IDIM-IV: %s after %d closed-loop simulations of the law, last step %.2g standard errors (converged "
+                "at %.2g); instruments from the plant of the last iterate",
+                converged ? "converged" : "not converged", simulations, last_step_se, kIvTolerance);
+  res.notes.push_back(line);
+  if (tripped > 0)
+    res.notes.push_back("IDIM-IV: " + std::to_string(tripped) +
+                        " plant(s) tripped the simulated drive and were replaced by one half way back (last: " + trip +
+                        ")");
+  std::snprintf(line, sizeof line,
+                "parameter std: the IV covariance times %.3g for the residual's autocorrelation (S / n_eff)",
+                std::sqrt(inflation));
+  res.notes.push_back(line);
+}
+
+}  // namespace dyncal::host

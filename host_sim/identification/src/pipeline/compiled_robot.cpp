@@ -1,0 +1,110 @@
+#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
+
+#include <map>
+#include <random>
+
+#include "dyncal_host/common/input_error.hpp"
+
+namespace dyncal::host {
+namespace {
+
+// Function-local static: the robots' static initialisers may run before any other of this file.
+std::map<std::string, CompiledRobot>& registry() {
+  static std::map<std::string, CompiledRobot> robots;
+  return robots;
+}
+
+}  // namespace
+
+bool register_robot(const CompiledRobot& robot) {
+  CompiledRobot& entry = registry()[robot.name];
+  entry.name = robot.name;
+  if (robot.num_joints) {
+    entry.robot_id = robot.robot_id;
+    entry.num_joints = robot.num_joints;
+    entry.num_standard = robot.num_standard;
+    entry.num_base = robot.num_base;
+    entry.nominal_standard = robot.nominal_standard;
+  }
+  for (int i = 0; i < kBuiltTermSets; ++i) {
+    const auto k = static_cast<size_t>(i);
+    const TermSetModel& m = robot.models[k];
+    TermSetModel& e = entry.models[k];
+    const auto kf = m.make_kalman_filter ? m.make_kalman_filter : e.make_kalman_filter;
+    const auto rls = m.make_rls ? m.make_rls : e.make_rls;
+    if (m.regressor) e = m;  // the model's unit; the recursive fits come from the calibration units
+    e.make_kalman_filter = kf;
+    e.make_rls = rls;
+  }
+  if (robot.excitation_regressor) entry.excitation_regressor = robot.excitation_regressor;
+  if (robot.inverse_dynamics) entry.inverse_dynamics = robot.inverse_dynamics;
+  if (robot.standard_to_base) entry.standard_to_base = robot.standard_to_base;
+  if (robot.base_regressor) entry.base_regressor = robot.base_regressor;
+  return true;
+}
+
+std::vector<std::string> compiled_robot_names() {
+  std::vector<std::string> names;
+  for (const auto& [name, robot] : registry()) names.push_back(name);
+  return names;
+}
+
+const CompiledRobot& compiled_robot(const std::string& name) {
+  const auto it = registry().find(name);
+  if (it == registry().end() || it->second.num_joints == 0) {
+    std::string known;
+    for (const std::string& n : compiled_robot_names()) known += (known.empty() ? "" : ", ") + n;
+    throw InputError("robot '" + name + "' has no compiled model in this build (compiled: " + known + "); add robots/" +
+                     name + "/ (docs/robots.md) and build again");
+  }
+  return it->second;
+}
+
+const CompiledRobot& compiled_robot_for(const RobotDescription& robot) {
+  const CompiledRobot& c = compiled_robot(robot.name);
+  if (robot.num_joints != c.num_joints) {
+    throw InputError(robot.directory + "/robot.json lists " + std::to_string(robot.num_joints) +
+                     " joints, its compiled model has " + std::to_string(c.num_joints) + ": build again");
+  }
+  return c;
+}
+
+void derive_tau_max(RobotDescription& robot) {
+  if (robot.tau_max.size() == robot.num_joints) return;
+  const CompiledRobot& c = compiled_robot_for(robot);
+  const int n = robot.num_joints;
+  const Eigen::VectorXd phi = Eigen::Map<const Eigen::VectorXd>(c.nominal_standard.data(), c.num_standard);
+  std::mt19937_64 rng(kDerivedTauMaxSeed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Eigen::VectorXd q(n), qd(n), qdd(n), peak = Eigen::VectorXd::Zero(n);
+  for (int s = 0; s < kDerivedTauMaxSamples; ++s) {
+    for (int j = 0; j < n; ++j) {
+      q[j] = robot.q_min[j] + u(rng) * (robot.q_max[j] - robot.q_min[j]);
+      qd[j] = (2 * u(rng) - 1) * robot.qd_max[j];
+      qdd[j] = (2 * u(rng) - 1) * robot.qdd_max[j];
+    }
+    peak = peak.cwiseMax(c.inverse_dynamics(q, qd, qdd, phi).cwiseAbs());
+  }
+  for (int j = 0; j < n; ++j) {
+    if (!(peak[j] > 0))
+      throw InputError(robot.directory + "/robot.json: limits.tau_max missing and joint " + std::to_string(j + 1) +
+                       " carries no torque in the nominal model: state limits.tau_max");
+  }
+  robot.tau_max = peak;
+  robot.tau_max_derived = true;
+}
+
+const TermSetModel& term_set_model(const CompiledRobot& robot, unsigned terms) {
+  const TermSetModel& m = robot.models[static_cast<size_t>(built_term_set_index(terms))];
+  if (!m.regressor) throw InputError("robot '" + robot.name + "' has no identification model compiled: build again");
+  return m;
+}
+
+Eigen::MatrixXd base_map(const CompiledRobot& robot) {
+  Eigen::MatrixXd K(robot.num_base, robot.num_standard);
+  for (int i = 0; i < robot.num_standard; ++i)
+    K.col(i) = robot.standard_to_base(Eigen::VectorXd::Unit(robot.num_standard, i));
+  return K;
+}
+
+}  // namespace dyncal::host

@@ -1,0 +1,582 @@
+#include "dyncal_host/identification/pipeline/identify_pipeline.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+
+#include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/identification/methods/effect_model.hpp"
+#include "dyncal_host/identification/methods/instrumental_variables.hpp"
+#include "dyncal_host/identification/methods/sign_constrained.hpp"
+#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
+#include "dyncal_host/identification/pipeline/signal.hpp"
+#include "dyncal_host/identification/reports/prediction.hpp"
+
+namespace dyncal::host {
+
+namespace {
+
+using FilteredTerm = IdentifyPipeline::FilteredTerm;
+
+void check(UpdateStatus s) {
+  if (s != UpdateStatus::ok) throw InputError(std::string("estimator rejected the data: ") + to_string(s));
+}
+
+/// The standstill band of motor m's velocity T.row(m) qd [rad/s]: the joints' bands `band`
+/// combined as independent noise through the row.
+double motor_band(const Eigen::MatrixXd& motor, int m, const Eigen::Ref<const Eigen::VectorXd>& band) {
+  return std::sqrt((motor.row(m).transpose().cwiseProduct(band)).squaredNorm());
+}
+
+/// Sample s's regressor rows from the kept signals: the generated regressor at the filtered q,
+/// qd, qdd (qdd = 0 with load), the filtered sign columns, and a coupled motor's terms at its
+/// velocity v_m = T.row(m) qd through the transmission's transpose (its sign from the unfiltered
+/// motor velocity with the band of its noise).
+void regressor_at(const StackedData& d, Eigen::Index s, bool load, const TermSetModel& model,
+                  const Eigen::MatrixXd& motor, const std::vector<int>& coupled,
+                  const std::vector<FilteredTerm>& filtered, Eigen::MatrixXd& K) {
+  const int N = model.num_joints;
+  const Eigen::VectorXd q = d.q.row(s).transpose(), qd = d.qd.row(s).transpose();
+  const Eigen::VectorXd qdd = load ? Eigen::VectorXd::Zero(N).eval() : Eigen::VectorXd(d.qdd.row(s).transpose());
+  K.resize(N, model.num_params);
+  model.regressor(q.data(), qd.data(), qdd.data(), K.data());
+  for (size_t i = 0; i < filtered.size(); ++i) {
+    const FilteredTerm& f = filtered[i];
+    const double value = d.filtered_terms(s, static_cast<Eigen::Index>(i));
+    if (!f.coupled) {
+      K(f.m, f.col) = value;
+    } else {
+      for (int j = 0; j < N; ++j) K(j, f.col) = motor(f.m, j) * value;
+    }
+  }
+  for (size_t c = 0; c < coupled.size(); ++c) {
+    const int m = coupled[c];
+    const double sign =
+        friction_sign(d.motor_qd_raw(s, static_cast<Eigen::Index>(c)), motor_band(motor, m, d.standstill_band));
+    const double vm = sign == 0.0 ? 0.0 : motor.row(m).dot(qd), am = motor.row(m).dot(qdd);
+    for (const unsigned t : {term::viscous, term::rotor_inertia}) {
+      const int col = model.column(t, m);
+      if (col < 0) continue;
+      const double value = term_column(t, vm, am, 0.0);
+      for (int j = 0; j < N; ++j) K(j, col) = motor(m, j) * value;
+    }
+  }
+}
+
+void run_recursive(RecursiveFit& f, const StackedData& data, const std::vector<char>& train, int N,
+                   const Eigen::VectorXd& noise) {
+  Eigen::MatrixXd K;
+  Eigen::VectorXd tau(N);
+  for (Eigen::Index s = 0; s < data.t.size(); ++s) {
+    if (!train[static_cast<size_t>(s)]) continue;
+    data.regressor(s, K);
+    tau = data.y.segment(s * N, N);
+    for (int j = 0; j < N; ++j) {  // an excluded row carries no information: zero it
+      if (data.fit_row[static_cast<size_t>(s * N + j)]) continue;
+      K.row(j).setZero();
+      tau[j] = 0.0;
+    }
+    check(f.update(K.data(), tau.data(), noise.data()));
+  }
+}
+
+// cond(W) = cond(R): the triangular factor has the singular values of the stacked regressor.
+double condition_number(const LeastSquaresFit& ls) {
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd(ls.r_factor());
+  const auto& sv = svd.singularValues();
+  return sv[0] / sv[sv.size() - 1];
+}
+
+// Estimate and sqrt(diag P) of a recursive filter; cond(W) from the OLS factor of the same data.
+void recursive_result(const RecursiveFit& f, const LeastSquaresFit& ls, Eigen::VectorXd& phi, Eigen::VectorXd& stdev,
+                      double* cond) {
+  phi = f.estimate();
+  stdev = f.covariance_diagonal();
+  if (cond) *cond = condition_number(ls);
+}
+
+// Parameter standard deviations sigma^2 diag((W^T W)^-1), sigma^2 = RSS / (rows - P), and cond(W).
+void ls_statistics(const LeastSquaresFit& ls, int P, Eigen::VectorXd& stdev, double* cond) {
+  Eigen::VectorXd g;
+  if (ls.inverse_gram_diagonal(g) != UpdateStatus::ok) throw InputError("regressor rank deficient");
+  const double sigma2 = ls.residual_sum_of_squares() / std::max(1.0, static_cast<double>(ls.rows() - P));
+  stdev = (g * sigma2).cwiseSqrt();
+  if (cond) *cond = condition_number(ls);
+}
+
+}  // namespace
+
+IdentifyPipeline::IdentifyPipeline(const RobotDescription& robot, const IdentifyOptions& options,
+                                   const TermSetModel& model)
+    : robot_(robot),
+      opt_(options),
+      model_(model),
+      N(model.num_joints),
+      P(model.num_params),
+      motor_(motor_velocity_map(robot, !options.friction_per_joint, options.motors)),
+      robot_coupled_(!motor_velocity_map(robot, !options.friction_per_joint, {}).isDiagonal(0.0)) {
+  for (int m = 0; m < N; ++m) {
+    for (int j = 0; j < N; ++j) {
+      if (j != m && motor_(m, j) != 0.0) {
+        coupled_.push_back(m);
+        break;
+      }
+    }
+  }
+  for (int m = 0; m < N; ++m) {
+    const bool coupled = std::find(coupled_.begin(), coupled_.end(), m) != coupled_.end();
+    for (const unsigned t : {term::coulomb, term::power}) {
+      const int col = model_.column(t, m);
+      if (col >= 0) filtered_.push_back({t, m, col, coupled});
+    }
+  }
+}
+
+StackedData IdentifyPipeline::prepare(JointLog&& log, bool dense, const Eigen::VectorXd* band_override) const {
+  const double fs = 1.0 / log.sample_period();
+  const ButterworthLowPass filter(opt_.filter_order, opt_.cutoff_hz, fs);
+  int d = opt_.decimate > 0 ? opt_.decimate : static_cast<int>(std::floor(fs / (25.0 * opt_.cutoff_hz)));
+  d = std::max(d, 1);
+  const KeptSamples keep{log.segments(), static_cast<Eigen::Index>(std::ceil(fs / opt_.cutoff_hz)), d};
+  const Eigen::VectorXd band = band_override ? *band_override : standstill_band(log, keep.segments);
+  StackedData out;
+  out.rate_hz = fs / d;
+  out.cutoff_hz = opt_.cutoff_hz;
+  out.num_base = model_.num_base;
+  out.names = model_.names;
+  const Eigen::Index kept = keep.count();
+  long short_segments = 0;
+  for (const auto& [a, b] : keep.segments) short_segments += keep.count(a, b) == 0;
+  if (kept * N <= 2 * P) {
+    throw InputError("too few samples (" + std::to_string(log.samples()) + ", " + std::to_string(kept) +
+                     " after filtering and decimation) for " + std::to_string(P) + " parameters");
+  }
+  if (short_segments > 0)
+    out.notes.push_back(std::to_string(short_segments) + " segment(s) not longer than two cut-off periods (" +
+                        std::to_string(2 * keep.edge) + " samples) left out: filtering would only see their ends");
+  // The torques first, filtered in place; then their memory goes back before the rest is built.
+  out.y.resize(kept * N);
+  for (const auto& [a, b] : keep.segments) {
+    if (keep.count(a, b) == 0) continue;
+    for (int j = 0; j < N; ++j) filter.filtfilt(log.tau.col(j).segment(a, b - a));
+  }
+  keep.for_each([&](Eigen::Index row, Eigen::Index k) { out.y.segment(k * N, N) = log.tau.row(row).transpose(); });
+  log.tau = Eigen::MatrixXd();
+  out.E.resize(kept * N, effect_column_count(opt_.effects));
+  out.qd.resize(kept, N);
+  out.qdd.resize(kept, N);
+  // The unfiltered velocity is read by the consumers of dense data (the diagnosis' friction
+  // candidates); otherwise it is not kept. A coupled motor's unfiltered velocity is.
+  out.qd_raw.resize(dense ? kept : 0, N);
+  out.motor_qd_raw.resize(kept, static_cast<Eigen::Index>(coupled_.size()));
+  out.filtered_terms.resize(kept, static_cast<Eigen::Index>(filtered_.size()));
+  out.standstill_band = band;
+  Eigen::Index k = 0;
+  for (const auto& [a, b] : keep.segments) {
+    if (keep.count(a, b) == 0) continue;
+    process_segment(log, a, b, filter, band, keep, k, out);
+    k += keep.count(a, b);
+  }
+  // process_segment left the filtered positions in the log: they and the times become the kept q, t.
+  keep_rows_in_place(log.q, keep);
+  out.q = std::move(log.q);
+  keep_rows_in_place(log.t, keep);
+  out.t = std::move(log.t);
+  out.regressor_rows = [model = model_, motor = motor_, coupled = coupled_, filtered = filtered_](
+                           const StackedData& data, Eigen::Index s, bool load, Eigen::MatrixXd& K) {
+    regressor_at(data, s, load, model, motor, coupled, filtered, K);
+  };
+  if (dense) {
+    Eigen::MatrixXd K;
+    out.W.resize(kept * N, P);
+    if (opt_.load_regressor) out.W_load.resize(kept * N, P);
+    for (Eigen::Index s = 0; s < kept; ++s) {
+      out.regressor(s, K);
+      out.W.middleRows(s * N, N) = K;
+      if (!opt_.load_regressor) continue;
+      out.regressor(s, K, true);
+      out.W_load.middleRows(s * N, N) = K;
+    }
+  }
+  // Rows of a joint moving slower than min_speed_fraction of its top speed stay out of the fit:
+  // there a real joint sticks and Coulomb friction takes any value in [-Fc, Fc], which sgn(qd)
+  // cannot represent. They still count in the validation metrics.
+  const Eigen::VectorXd threshold = out.qd.cwiseAbs().colwise().maxCoeff().transpose() * opt_.min_speed_fraction;
+  out.fit_row.assign(static_cast<size_t>(kept * N), 1);
+  for (Eigen::Index r = 0; r < kept; ++r) {
+    for (int j = 0; j < N; ++j) {
+      if (std::abs(out.qd(r, j)) < threshold[j]) out.fit_row[static_cast<size_t>(r * N + j)] = 0;
+    }
+  }
+  std::string line = "standstill: an unfiltered |qd| below " + std::to_string(kStandstillQuantile).substr(0, 4) +
+                     " x its own noise counts as rest (friction sign 0); dead band [rad/s]";
+  char v[32];
+  for (int j = 0; j < N; ++j) {
+    std::snprintf(v, sizeof v, " %.3g", band[j]);
+    line += v;
+  }
+  const double at_rest = static_cast<double>((out.qd.array() == 0.0).count()) / static_cast<double>(kept * N);
+  std::snprintf(v, sizeof v, "; %.3g %%", 100.0 * at_rest);
+  out.notes.push_back(line + v + " of the joint samples at rest");
+  for (const int m : coupled_) {
+    const bool declared =
+        std::none_of(opt_.motors.begin(), opt_.motors.end(), [m](const CoupledMotor& c) { return c.motor == m; });
+    std::string t = std::string(declared ? "transmission (robot.json)" : "coupled motor (model)") + ": motor " +
+                    std::to_string(m + 1) + " turns with";
+    std::string on;
+    for (int j = 0; j < N; ++j) {
+      if (motor_(m, j) == 0.0) continue;
+      std::snprintf(v, sizeof v, " %+.4g q%d", motor_(m, j), j + 1);
+      t += v;
+      on += (on.empty() ? "" : ", ") + std::to_string(j + 1);
+    }
+    out.notes.push_back(t + "; its friction and rotor inertia terms (joint " + std::to_string(m + 1) +
+                        "'s columns) act on joints " + on + " through the transmission's transpose");
+  }
+  return out;
+}
+
+void IdentifyPipeline::fit(const StackedData& data, const std::vector<char>& train, Eigen::VectorXd& phi,
+                           Eigen::VectorXd& stdev, double* cond, ConsistentSolution* consistent, std::vector<int>* held,
+                           double* inflation) const {
+  const Eigen::Index S = data.t.size();
+  std::unique_ptr<LeastSquaresFit> ls = model_.make_least_squares();
+  Eigen::MatrixXd K;
+  Eigen::VectorXd row(P);
+  // Every fitted row of the training samples, its weight from `weight` (joint).
+  auto add_rows = [&](auto weight) {
+    for (Eigen::Index s = 0; s < S; ++s) {
+      if (!train[static_cast<size_t>(s)]) continue;
+      data.regressor(s, K);
+      for (int j = 0; j < N; ++j) {
+        if (!data.fit_row[static_cast<size_t>(s * N + j)]) continue;
+        row = K.row(j).transpose();
+        check(ls->add_row(row.data(), data.y[s * N + j], weight(j)));
+      }
+    }
+  };
+  add_rows([](int) { return 1.0; });
+  if (ls->solve(phi) != UpdateStatus::ok) {
+    throw InputError("the data do not excite every parameter of the model (regressor rank deficient): " +
+                     std::string("use richer excitation or a smaller model"));
+  }
+  // Per-joint residual variance of the OLS fit (Gautier's WLS weights; KF/RLS noise).
+  Eigen::VectorXd ss = Eigen::VectorXd::Zero(N), n = Eigen::VectorXd::Zero(N);
+  for (Eigen::Index s = 0; s < S; ++s) {
+    if (!train[static_cast<size_t>(s)]) continue;
+    data.regressor(s, K);
+    for (int j = 0; j < N; ++j) {
+      if (!data.fit_row[static_cast<size_t>(s * N + j)]) continue;
+      const double e = data.y[s * N + j] - K.row(j).dot(phi);
+      ss[j] += e * e;
+      n[j] += 1;
+    }
+  }
+  const Eigen::VectorXd sigma = joint_noise_std(ss, n, P);
+  const std::string& m = opt_.method;
+  if (m == "ols") {
+    ls_statistics(*ls, P, stdev, cond);
+    if (opt_.sign_constraints) constrain_signs(*ls, phi, stdev, held);
+  } else if (m == "wls" || m == "pcls" || is_search_method(m)) {
+    ls->reset();
+    add_rows([&](int j) { return 1.0 / sigma[j]; });
+    if (ls->solve(phi) != UpdateStatus::ok) throw InputError("weighted regressor rank deficient");
+    if (m == "wls") {
+      ls_statistics(*ls, P, stdev, cond);
+      if (opt_.sign_constraints) constrain_signs(*ls, phi, stdev, held);
+    } else {  // the WLS solution starts the consistent fit of the same weighted data
+      const CompiledRobot& compiled = compiled_robot_for(robot_);
+      ConsistentProblem p;
+      p.R = ls->r_factor().triangularView<Eigen::Upper>();
+      p.z = ls->rotated_rhs();
+      p.num_base = model_.num_base;
+      p.K = base_map(compiled);
+      p.prior = Eigen::Map<const Eigen::VectorXd>(compiled.nominal_standard.data(), compiled.num_standard);
+      p.sigma2 = ls->residual_sum_of_squares() / std::max(1.0, static_cast<double>(ls->rows() - P));
+      p.start = phi;
+      p.prior_relative_std = opt_.prior_std;
+      ConsistentSolution sol;
+      if (m == "pcls") {
+        sol = consistent_least_squares(p);
+        stdev = sol.params_std;
+        if (cond) *cond = condition_number(*ls);
+      } else {
+        // The optimisers: the model is linear, so the parameters' spread is least squares' (the
+        // Fisher information does not depend on where the search ends). The particle filter's
+        // likelihood takes the residual's autocorrelation into account (S / n_eff).
+        p.sigma2 *= streamed_autocorrelation_inflation(data, train, phi);
+        sol = search_consistent(p, search_method(m), search_settings(opt_));
+        ls_statistics(*ls, P, stdev, cond);
+      }
+      phi = sol.params;
+      if (consistent) *consistent = std::move(sol);
+    }
+  } else if (m == "kf" || m == "rls") {
+    auto make_kf = model_.make_kalman_filter;
+    auto make_rls = model_.make_rls;
+    if (!make_kf || !make_rls)
+      throw InputError("identify --method " + m + ": not compiled for this robot: build again");
+    UpdateStatus status = UpdateStatus::ok;
+    std::unique_ptr<RecursiveFit> f = m == "kf" ? make_kf(opt_.p0, &status) : make_rls(opt_.p0, opt_.rls_mu, &status);
+    check(status);
+    // KF: the measurement variance sigma^2; RLS: the weight 1 / sigma.
+    const Eigen::VectorXd noise =
+        m == "kf" ? Eigen::VectorXd(sigma.cwiseAbs2()) : Eigen::VectorXd(sigma.cwiseInverse());
+    run_recursive(*f, data, train, N, noise);
+    recursive_result(*f, *ls, phi, stdev, cond);
+  } else {
+    throw InputError("unknown method '" + m + "' (expected wls, ols, kf, rls, pcls, gd, ga or pf)");
+  }
+  if (!inflation) return;
+  *inflation = streamed_autocorrelation_inflation(data, train, phi);
+  stdev *= std::sqrt(*inflation);
+}
+
+void IdentifyPipeline::process_segment(JointLog& log, Eigen::Index a, Eigen::Index b, const ButterworthLowPass& filter,
+                                       const Eigen::VectorXd& band, const KeptSamples& kept, Eigen::Index k0,
+                                       StackedData& out) const {
+  const Eigen::Index S = b - a, n = kept.count(a, b);
+  const double dt = log.sample_period();
+  const bool effects = !opt_.effects.empty();
+  auto keep = [&](const Eigen::Ref<const Eigen::VectorXd>& x, Eigen::MatrixXd& to, Eigen::Index col) {
+    for (Eigen::Index i = 0; i < n; ++i) to(k0 + i, col) = x[kept.edge + i * kept.step];
+  };
+  // Effect columns are computed from every joint's signals at the log's rate.
+  Eigen::MatrixXd all_q, all_qd, all_qdd, all_v;
+  if (effects) {
+    all_q.resize(S, N), all_qd.resize(S, N), all_qdd.resize(S, N), all_v.resize(S, N);
+  }
+  const Eigen::Index C = static_cast<Eigen::Index>(coupled_.size());
+  Eigen::MatrixXd motor_raw = Eigen::MatrixXd::Zero(S, C), motor_qd = Eigen::MatrixXd::Zero(S, C);
+  // One joint at a time; v, once kept, holds each sign column in turn (filtered in place).
+  Eigen::VectorXd xd(S), xdd(S), v(S);
+  Eigen::VectorXd& series = v;
+  auto filter_and_keep = [&](size_t i) {
+    filter.filtfilt(series);
+    keep(series, out.filtered_terms, static_cast<Eigen::Index>(i));
+  };
+  for (int j = 0; j < N; ++j) {
+    // Friction sign from the unfiltered velocity (central differences of q, or the measured qd):
+    // sgn is discontinuous, and of a filtered velocity it would switch up to a cut-off period
+    // after a stop; filtering the sign column in parallel averages the noise. Inside the noise
+    // band the joint is at rest: sign 0, and its filtered velocity 0.
+    if (log.has_qd) {
+      v = log.qd.col(j).segment(a, S);
+    } else {
+      v = central_difference(log.q.col(j).segment(a, S), dt);
+    }
+    auto x = log.q.col(j).segment(a, S);  // filtered in place
+    filter.filtfilt(x);
+    if (log.has_qd) {
+      xd = log.qd.col(j).segment(a, S);
+      filter.filtfilt(xd);
+    } else {
+      xd = smooth_derivative(x, dt);
+    }
+    if (log.has_qdd) {
+      xdd = log.qdd.col(j).segment(a, S);
+      filter.filtfilt(xdd);
+    } else {
+      xdd = smooth_derivative(xd, dt);
+    }
+    for (Eigen::Index s = 0; s < S; ++s) {
+      if (std::abs(v[s]) < band[j]) xd[s] = 0.0;
+    }
+    for (Eigen::Index c = 0; c < C; ++c) {
+      const double r = motor_(coupled_[static_cast<size_t>(c)], j);
+      if (r == 0.0) continue;
+      motor_raw.col(c) += r * v;
+      motor_qd.col(c) += r * xd;
+    }
+    keep(xd, out.qd, j);
+    keep(xdd, out.qdd, j);
+    if (out.qd_raw.rows() > 0) keep(v, out.qd_raw, j);
+    if (effects) all_q.col(j) = x, all_qd.col(j) = xd, all_qdd.col(j) = xdd, all_v.col(j) = v;
+    for (size_t i = 0; i < filtered_.size(); ++i) {
+      const FilteredTerm& f = filtered_[i];
+      if (f.m != j || f.coupled) continue;
+      for (Eigen::Index s = 0; s < S; ++s) {  // series is v: the Coulomb column (first) reads v in place
+        series[s] = f.t == term::coulomb ? friction_sign(v[s], band[j]) : term_column(f.t, xd[s], 0.0, 0.0);
+      }
+      filter_and_keep(i);
+    }
+  }
+  // Coupled motors: sign and velocity v_m = T.row(m) qd of the motor, its noise band from the
+  // joints' bands.
+  for (Eigen::Index c = 0; c < C; ++c) {
+    const int m = coupled_[static_cast<size_t>(c)];
+    const double band_m = motor_band(motor_, m, band);
+    keep(motor_raw.col(c), out.motor_qd_raw, c);
+    for (size_t i = 0; i < filtered_.size(); ++i) {
+      const FilteredTerm& f = filtered_[i];
+      if (f.m != m) continue;
+      for (Eigen::Index s = 0; s < S; ++s) {
+        const double sign = friction_sign(motor_raw(s, c), band_m);
+        series[s] = f.t == term::coulomb ? sign : term_column(f.t, sign == 0.0 ? 0.0 : motor_qd(s, c), 0.0, 0.0);
+      }
+      filter_and_keep(i);
+    }
+  }
+  if (effects) {
+    Eigen::MatrixXd Et = effect_columns_over_time(opt_.effects, all_q, all_qd, all_qdd, all_v, band);
+    const std::vector<bool> discontinuous = effect_columns_with_sign(opt_.effects);
+    const Eigen::Index m = static_cast<Eigen::Index>(discontinuous.size());
+    for (Eigen::Index c = 0; c < Et.cols(); ++c)
+      if (discontinuous[static_cast<size_t>(c % m)]) filter.filtfilt(Et.col(c));
+    for (Eigen::Index i = 0; i < n; ++i) {
+      for (int j = 0; j < N; ++j) out.E.row((k0 + i) * N + j) = Et.row(kept.edge + i * kept.step).segment(j * m, m);
+    }
+  }
+}
+
+/// Per joint, kStandstillQuantile x the standard deviation of the unfiltered velocity's noise:
+/// the white noise of the measured signal (white_noise_std of q, or of qd when measured) times the
+/// noise gain of central differences, 1 / (dt sqrt(2)), for q.
+Eigen::VectorXd IdentifyPipeline::standstill_band(
+    const JointLog& log, const std::vector<std::pair<Eigen::Index, Eigen::Index>>& segments) const {
+  const Eigen::VectorXd sigma = white_noise_std(log.has_qd ? log.qd : log.q, segments);
+  const double gain = log.has_qd ? 1.0 : 1.0 / (log.sample_period() * std::sqrt(2.0));
+  return sigma * (kStandstillQuantile * gain);
+}
+
+/// IdentifyOptions::sign_constraints on a least-squares fit: the dissipative and inertial terms
+/// the drive's table check requires >= 0 (Coulomb, viscous, rotor inertia) held there when the
+/// unconstrained phi has them negative; stdev of the free ones from the reduced problem (sigma^2
+/// from the constrained residual), 0 on the held ones.
+void IdentifyPipeline::constrain_signs(const LeastSquaresFit& ls, Eigen::VectorXd& phi, Eigen::VectorXd& stdev,
+                                       std::vector<int>* held) const {
+  std::vector<int> nonnegative;
+  for (int i = 0; i < P; ++i) {
+    const ParamInfo& info = model_.info[static_cast<size_t>(i)];
+    if (info.kind == ParamKind::term &&
+        (info.term == term::coulomb || info.term == term::viscous || info.term == term::rotor_inertia))
+      nonnegative.push_back(i);
+  }
+  const Eigen::MatrixXd R = ls.r_factor().triangularView<Eigen::Upper>();
+  const SignConstrainedSolution sol = sign_constrained_least_squares(R, ls.rotated_rhs(), nonnegative, phi);
+  if (held) *held = sol.held;
+  if (sol.held.empty()) return;
+  phi = sol.x;
+  const double dof = std::max(1.0, static_cast<double>(ls.rows() - P + static_cast<long>(sol.held.size())));
+  const double sigma2 = (ls.residual_sum_of_squares() + sol.residual_increase) / dof;
+  stdev = (sol.inverse_gram_diag * sigma2).cwiseSqrt();
+}
+
+IdentifyResult run_identify(const RobotDescription& robot, const TermSetModel& model, JointLog&& log,
+                            const IdentifyOptions& opt) {
+  const int N = model.num_joints, P = model.num_params;
+  if (log.joints() != N)
+    throw InputError("log has " + std::to_string(log.joints()) + " joints, robot " + robot.name + " has " +
+                     std::to_string(N));
+  IdentifyPipeline pipe(robot, opt, model);
+  // Effect terms are fitted on the dense [W E], IDIM-IV on the dense W and its simulated twin; the
+  // declared model streams the regressor's rows.
+  const bool iv = opt.method == "iv";
+  JointLog grid;  // IDIM-IV's simulations run on the log's grid
+  if (iv) grid.t = log.t, grid.segment_starts = log.segment_starts, grid.period = log.period;
+  IdentifyResult res;
+  res.data_source = log.source;
+  res.sample_rate_hz = 1.0 / log.sample_period();
+  const StackedData data = pipe.prepare(std::move(log), !opt.effects.empty() || iv);  // consumes the log
+  res.notes = data.notes;
+  const Eigen::Index S = data.t.size();
+  res.robot = robot.name;
+  res.method = opt.method;
+  res.model = model_spec_name({model.terms, opt.effects, opt.motors});
+  res.friction_per_motor = pipe.models_coupled_motors();
+  res.decimated_rate_hz = data.rate_hz;
+  res.cutoff_hz = opt.cutoff_hz;
+  res.samples_used = static_cast<long>(S);
+
+  // Validation assignment: fold index per sample (-1: training only).
+  std::vector<int> fold(static_cast<size_t>(S));
+  int folds = opt.folds;
+  if (opt.validate_last > 0.0) {
+    if (!(opt.validate_last < 1.0)) throw InputError("--validate-last must lie in (0, 1)");
+    const Eigen::Index first =
+        static_cast<Eigen::Index>(std::floor((1.0 - opt.validate_last) * static_cast<double>(S)));
+    for (Eigen::Index s = 0; s < S; ++s) fold[static_cast<size_t>(s)] = s >= first ? 0 : -1;
+    folds = 1;
+    res.validation =
+        "time split: last " + std::to_string(static_cast<int>(std::lround(opt.validate_last * 100))) + "% validates";
+  } else {
+    if (folds < 2) throw InputError("--folds must be >= 2");
+    const Eigen::Index block = std::max<Eigen::Index>(1, std::lround(opt.block_seconds * data.rate_hz));
+    if (S < block * folds)
+      throw InputError("too few samples for " + std::to_string(folds) + " folds of " +
+                       std::to_string(opt.block_seconds) + " s blocks");
+    for (Eigen::Index s = 0; s < S; ++s) fold[static_cast<size_t>(s)] = static_cast<int>((s / block) % folds);
+    res.validation = "blocked " + std::to_string(folds) + "-fold cross-validation, " +
+                     std::to_string(opt.block_seconds).substr(0, 4) + " s blocks";
+  }
+  if (iv) {
+    const PrepareLog prepare = [&pipe, &data](JointLog&& l) {
+      return pipe.prepare(std::move(l), true, &data.standstill_band);
+    };
+    fit_instrumental(data, grid, fold, folds, robot, opt, prepare, res);
+  } else if (!opt.effects.empty()) {
+    // Effect terms (model_effects.hpp): [W E] fitted at run time, validated the same way.
+    fit_effect_model(data, opt.effects, fold, folds, robot, opt, res);
+    res.model = model_spec_name({model.terms, opt.effects, opt.motors});
+  } else {
+    Eigen::VectorXd phi, stdev;
+    std::vector<Eigen::VectorXd> fold_phi(static_cast<size_t>(folds));
+    for (int f = 0; f < folds; ++f) {
+      std::vector<char> train(static_cast<size_t>(S));
+      for (Eigen::Index s = 0; s < S; ++s) train[static_cast<size_t>(s)] = fold[static_cast<size_t>(s)] != f;
+      pipe.fit(data, train, fold_phi[static_cast<size_t>(f)], stdev);
+    }
+    // Metrics from the pooled out-of-fold residuals, each sample predicted by the fit without its
+    // fold (made sample by sample: no stored prediction).
+    Eigen::MatrixXd K;
+    Eigen::VectorXd tau_hat(N);
+    res.joints = torque_metrics(
+        data.y, N, robot.tau_max, [&](Eigen::Index s, int) { return fold[static_cast<size_t>(s)] >= 0; },
+        [&](Eigen::Index s) {
+          data.regressor(s, K);
+          tau_hat = K * fold_phi[static_cast<size_t>(fold[static_cast<size_t>(s)])];
+          return tau_hat.data();
+        });
+    // Final fit on all data: reported parameters.
+    std::vector<char> all(static_cast<size_t>(S), 1);
+    const auto t0 = std::chrono::steady_clock::now();
+    ConsistentSolution consistent;
+    std::vector<int> held;
+    double inflation = 1;
+    pipe.fit(data, all, phi, stdev, &res.condition_number, &consistent, &held, &inflation);
+    res.fit_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    for (int i = 0; i < P; ++i) res.params.push_back({model.names[static_cast<size_t>(i)], phi[i], stdev[i]});
+    {
+      char line[200];
+      std::snprintf(line, sizeof line,
+                    "parameter std: the white-noise figures times %.3g for the residual's autocorrelation (S / n_eff)",
+                    std::sqrt(inflation));
+      res.notes.push_back(line);
+    }
+    report_consistent(consistent, opt, res);
+    if (!held.empty()) {
+      std::string names;
+      for (int i : held) names += (names.empty() ? "" : ", ") + model.names[static_cast<size_t>(i)];
+      res.notes.push_back("sign constraints: " + names +
+                          " held at 0 (negative without the constraint: friction and rotor inertia cannot be)");
+    }
+  }
+  for (int j = 0; j < N; ++j) {
+    if (!(model.terms & term::rotor_inertia) || model.rotor_inertia_separate[static_cast<size_t>(j)]) continue;
+    const int into = model.rotor_inertia_absorbed_into[static_cast<size_t>(j)];
+    if (into < 0) {  // robot.json: "rotor_inertia": false
+      res.notes.push_back("Ia" + std::to_string(j + 1) +
+                          ": the robot file declares no rotor inertia, so none is modelled (set \"rotor_inertia\": "
+                          "true in robot.json and build again to add it)");
+    } else {
+      res.notes.push_back("Ia" + std::to_string(j + 1) + " is not separable from the rigid body: it is included in " +
+                          model.names[static_cast<size_t>(into)]);
+    }
+  }
+  return res;
+}
+
+}  // namespace dyncal::host

@@ -1,0 +1,132 @@
+#include "dyncal_host/identification/reports/identify_report.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+namespace dyncal::host {
+namespace {
+
+std::string format(const char* fmt, double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, fmt, v);
+  return buf;
+}
+
+/// The per-joint validation table of identify and predict.
+void print_joint_table(std::ostream& out, const std::vector<JointMetrics>& joints) {
+  out << "joint   RMS [Nm]   rel. RMS      R^2       e_T    e_T_Std   RMS tau [Nm]\n";
+  for (const auto& j : joints) {
+    char line[160];
+    std::snprintf(line, sizeof line, "%5d %10.4f %10.4f %8.4f %9.5f %10.5f %14.4f\n", j.joint, j.rms, j.relative_rms,
+                  j.r2, j.e_T, j.e_T_std, j.rms_tau);
+    out << line;
+  }
+}
+
+}  // namespace
+
+void print_identify_report(std::ostream& out, const IdentifyResult& r) {
+  out << "dyncal identify: robot " << r.robot << ", method " << r.method << ", model " << r.model << "\n";
+  out << "data: " << r.data_source << ", " << r.samples_used << " samples used at "
+      << format("%.0f", r.decimated_rate_hz) << " Hz (from " << format("%.0f", r.sample_rate_hz)
+      << " Hz; zero-phase Butterworth " << format("%g", r.cutoff_hz) << " Hz, parallel decimation)\n";
+  out << "validation: " << r.validation << " (every sample predicted by a fit that did not see it)\n\n";
+  print_joint_table(out, r.joints);
+  out << "\nregressor condition number cond(W): " << format("%.4g", r.condition_number) << "; full-data fit in "
+      << format("%.3f", r.fit_seconds) << " s\n";
+  out << "\nparameter                   value        std    std %\n";
+  for (const auto& p : r.params) {
+    char line[160];
+    const double rel = p.value != 0.0 ? 100.0 * p.std / std::abs(p.value) : INFINITY;
+    std::snprintf(line, sizeof line, "%-20s %12.5g %10.3g %8.1f\n", p.name.c_str(), p.value, p.std, rel);
+    out << line;
+  }
+  if (!r.links.empty()) {
+    out << "\nconsistent inertials per link (link frame; inertia about the centre of mass), pseudo-inertia's "
+           "smallest eigenvalue\n";
+    out << "link   mass [kg]   com x y z [m]                    I11 I12 I13 I22 I23 I33 [kg m^2]"
+           "                                  lambda_min\n";
+    for (const auto& l : r.links) {
+      char line[320];
+      std::snprintf(line, sizeof line,
+                    "%4d %11.4g   %9.4g %9.4g %9.4g   %10.4g %10.4g %10.4g %10.4g %10.4g %10.4g   %10.3g\n", l.link,
+                    l.mass, l.com[0], l.com[1], l.com[2], l.inertia[0], l.inertia[1], l.inertia[2], l.inertia[3],
+                    l.inertia[4], l.inertia[5], l.min_eigenvalue);
+      out << line;
+    }
+  }
+  for (const auto& o : r.other_logs) print_log_prediction(out, o);
+  for (const auto& n : r.notes) out << "note: " << n << "\n";
+}
+
+void print_log_prediction(std::ostream& out, const LogPrediction& p) {
+  out << "\nprediction of another log (no sample of it fitted): " << p.source << ", " << p.samples << " samples\n";
+  print_joint_table(out, p.joints);
+  for (const auto& n : p.notes) out << "note (" << p.source << "): " << n << "\n";
+}
+
+nlohmann::json joint_metrics_json(const std::vector<JointMetrics>& joints) {
+  nlohmann::json a = nlohmann::json::array();
+  for (const auto& m : joints) {
+    a.push_back({{"joint", m.joint},
+                 {"rms_validation", m.rms},
+                 {"relative_rms_validation", m.relative_rms},
+                 {"r2_validation", m.r2},
+                 {"e_T", m.e_T},
+                 {"e_T_Std", m.e_T_std},
+                 {"rms_tau", m.rms_tau}});
+  }
+  return a;
+}
+
+nlohmann::json log_prediction_json(const LogPrediction& p) {
+  return {{"data", p.source}, {"samples", p.samples}, {"joints", joint_metrics_json(p.joints)}, {"notes", p.notes}};
+}
+
+nlohmann::json identify_report_json(const IdentifyResult& r) {
+  nlohmann::json j;
+  j["robot"] = r.robot;
+  j["method"] = r.method;
+  j["model"] = r.model;
+  j["validation"] = r.validation;
+  j["data"] = r.data_source;
+  j["sample_rate_hz"] = r.sample_rate_hz;
+  j["decimated_rate_hz"] = r.decimated_rate_hz;
+  j["cutoff_hz"] = r.cutoff_hz;
+  j["samples"] = r.samples_used;
+  j["condition_number"] = r.condition_number;
+  j["fit_seconds"] = r.fit_seconds;
+  j["joints"] = joint_metrics_json(r.joints);
+  j["params"] = nlohmann::json::array();
+  for (const auto& p : r.params) j["params"].push_back({{"name", p.name}, {"value", p.value}, {"std", p.std}});
+  j["notes"] = r.notes;
+  j["links"] = nlohmann::json::array();
+  for (const auto& l : r.links)
+    j["links"].push_back({{"link", l.link},
+                          {"mass", l.mass},
+                          {"com", l.com},
+                          {"inertia_about_com", l.inertia},
+                          {"pseudo_inertia_min_eigenvalue", l.min_eigenvalue}});
+  j["other_logs"] = nlohmann::json::array();
+  for (const auto& o : r.other_logs) j["other_logs"].push_back(log_prediction_json(o));
+  return j;
+}
+
+nlohmann::json parameter_table_json(const IdentifyResult& r) {
+  nlohmann::json j;
+  j["format"] = "dyncal-parameters";
+  j["version"] = 1;
+  j["robot"] = r.robot;
+  j["model"] = r.model;
+  j["method"] = r.method;
+  // "motor": a coupled motor's friction and rotor inertia act on every joint that turns it (the
+  // drive's feed-forward cannot apply that yet); "joint": per joint, as the drive applies them.
+  j["friction_per"] = r.friction_per_motor ? "motor" : "joint";
+  j["params"] = nlohmann::json::array();
+  for (const auto& p : r.params) j["params"].push_back({{"name", p.name}, {"value", p.value}});
+  return j;
+}
+
+}  // namespace dyncal::host

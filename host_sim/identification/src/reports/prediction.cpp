@@ -1,0 +1,168 @@
+#include "dyncal_host/identification/reports/prediction.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+#include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/common/json_file.hpp"
+#include "dyncal_host/identification/methods/effect_model.hpp"
+#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
+#include "dyncal_host/identification/pipeline/stacked_data.hpp"
+
+namespace dyncal::host {
+
+ParameterSet read_parameter_file(const std::string& path) {
+  const nlohmann::json j = read_json_file(path);
+  if (!j.is_object() || j.value("format", "") != "dyncal-parameters")
+    throw InputError(path + ": not a dyncal parameter file (\"format\": \"dyncal-parameters\")");
+  if (!j.contains("robot") || !j["robot"].is_string()) throw InputError(path + ": 'robot' missing");
+  if (!j.contains("model") || !j["model"].is_string()) throw InputError(path + ": 'model' missing");
+  ParameterSet p;
+  p.source = path;
+  p.robot = j["robot"].get<std::string>();
+  p.model = j["model"].get<std::string>();
+  const std::string per =
+      j.contains("friction_per") && j["friction_per"].is_string() ? j["friction_per"].get<std::string>() : "joint";
+  if (per != "joint" && per != "motor")
+    throw InputError(path + ": 'friction_per' is '" + per + "', expected 'joint' or 'motor'");
+  p.friction_per_motor = per == "motor";
+  const CompiledRobot& compiled = compiled_robot(p.robot);
+  try {
+    const ModelSpec spec = parse_model_spec(p.model, compiled.num_joints);
+    p.terms = spec.terms;
+    p.effects = spec.effects;
+    p.motors = spec.motors;
+  } catch (const InputError& e) {
+    throw InputError(path + ": " + e.what());
+  }
+  p.names = term_set_model(compiled, p.terms).names;
+  for (const ModelEffect& e : p.effects)
+    for (const std::string& n : effect_param_names(e)) p.names.push_back(n);
+  // Checked by name, so that a file edited by hand or written for another model cannot give
+  // shifted values.
+  if (!j.contains("params") || !j["params"].is_array()) throw InputError(path + ": 'params' missing");
+  const auto& list = j["params"];
+  if (list.size() != p.names.size())
+    throw InputError(path + ": " + std::to_string(list.size()) + " params, robot '" + p.robot + "' with model '" +
+                     p.model + "' has " + std::to_string(p.names.size()));
+  p.values.resize(static_cast<Eigen::Index>(list.size()));
+  for (size_t i = 0; i < list.size(); ++i) {
+    const auto& v = list[i];
+    const std::string where = path + ": params[" + std::to_string(i + 1) + "]";
+    if (!v.is_object() || !v.contains("value") || !v["value"].is_number())
+      throw InputError(where + ": expected an object with a number 'value'");
+    if (!v.contains("name") || !v["name"].is_string()) throw InputError(where + ": 'name' missing");
+    if (v["name"].get<std::string>() != p.names[i])
+      throw InputError(where + " is '" + v["name"].get<std::string>() + "', parameter " + std::to_string(i + 1) +
+                       " of robot '" + p.robot + "' with model '" + p.model + "' is '" + p.names[i] + "'");
+    const double value = v["value"].get<double>();
+    if (!std::isfinite(value)) throw InputError(where + " '" + p.names[i] + "': value is not finite");
+    p.values[static_cast<Eigen::Index>(i)] = value;
+  }
+  return p;
+}
+
+ParameterSet parameter_set(const IdentifyResult& r) {
+  ParameterSet p;
+  p.robot = r.robot;
+  p.model = r.model;
+  const ModelSpec spec = parse_model_spec(r.model, static_cast<int>(r.joints.size()));
+  p.terms = spec.terms;
+  p.effects = spec.effects;
+  p.motors = spec.motors;
+  p.friction_per_motor = r.friction_per_motor;
+  p.source = "identify";
+  p.values.resize(static_cast<Eigen::Index>(r.params.size()));
+  for (size_t i = 0; i < r.params.size(); ++i) {
+    p.names.push_back(r.params[i].name);
+    p.values[static_cast<Eigen::Index>(i)] = r.params[i].value;
+  }
+  return p;
+}
+
+std::vector<JointMetrics> torque_metrics(const Eigen::VectorXd& y, const Eigen::VectorXd& pred, int N,
+                                         const Eigen::VectorXd& tau_max) {
+  return torque_metrics(
+      y, N, tau_max, [&](Eigen::Index s, int j) { return !std::isnan(pred[s * N + j]); },
+      [&](Eigen::Index s) { return pred.data() + s * N; });
+}
+
+std::vector<JointMetrics> torque_metrics(const Eigen::VectorXd& y, int N, const Eigen::VectorXd& tau_max,
+                                         const std::function<bool(Eigen::Index s, int j)>& predicted,
+                                         const std::function<const double*(Eigen::Index s)>& prediction) {
+  const Eigen::Index S = y.size() / N;
+  // Per joint, sums over its predicted rows in sample order (first the torque's mean, then the errors).
+  Eigen::VectorXd sum_tau = Eigen::VectorXd::Zero(N), se = sum_tau, st = sum_tau, sum_abs = sum_tau, sum_abs2 = sum_tau;
+  std::vector<long> n(static_cast<size_t>(N), 0);
+  for (Eigen::Index s = 0; s < S; ++s) {
+    for (int j = 0; j < N; ++j) {
+      if (!predicted(s, j)) continue;
+      sum_tau[j] += y[s * N + j];
+      ++n[static_cast<size_t>(j)];
+    }
+  }
+  Eigen::VectorXd mean_tau(N);
+  for (int j = 0; j < N; ++j)
+    mean_tau[j] = n[static_cast<size_t>(j)] > 0 ? sum_tau[j] / static_cast<double>(n[static_cast<size_t>(j)]) : 0.0;
+  for (Eigen::Index s = 0; s < S; ++s) {
+    const double* p = nullptr;
+    for (int j = 0; j < N; ++j) {
+      if (!predicted(s, j)) continue;
+      if (!p) p = prediction(s);
+      const double v = y[s * N + j];
+      const double e = v - p[j];
+      se[j] += e * e;
+      st[j] += (v - mean_tau[j]) * (v - mean_tau[j]);
+      const double a = std::abs(e) / tau_max[j];
+      sum_abs[j] += a;
+      sum_abs2[j] += a * a;
+    }
+  }
+  std::vector<JointMetrics> out;
+  for (int j = 0; j < N; ++j) {
+    JointMetrics m;
+    m.joint = j + 1;
+    const long count = n[static_cast<size_t>(j)];
+    if (count > 0) {
+      const double dn = static_cast<double>(count);
+      m.rms = std::sqrt(se[j] / dn);
+      m.rms_tau = std::sqrt((st[j] + dn * mean_tau[j] * mean_tau[j]) / dn);
+      m.relative_rms = m.rms / m.rms_tau;
+      m.r2 = 1.0 - se[j] / st[j];
+      m.e_T = sum_abs[j] / dn;
+      m.e_T_std = std::sqrt(std::max(0.0, sum_abs2[j] / dn - m.e_T * m.e_T));
+    }
+    out.push_back(m);
+  }
+  return out;
+}
+
+LogPrediction predict(const RobotDescription& robot, const JointLog& log, IdentifyOptions options,
+                      const ParameterSet& params) {
+  if (params.robot != robot.name)
+    throw InputError(params.source + ": parameters are for robot '" + params.robot + "', not '" + robot.name + "'");
+  options.terms = params.terms;
+  options.effects = params.effects;
+  options.motors = params.motors;
+  options.friction_per_joint = !params.friction_per_motor;
+  options.load_regressor = false;
+  const StackedData d = prepare_stacked(robot, log, options);
+  std::vector<std::string> names = d.names;
+  for (const ModelEffect& e : params.effects)
+    for (const std::string& n : effect_param_names(e)) names.push_back(n);
+  if (names != params.names)
+    throw InputError(params.source + ": parameter names differ from robot '" + robot.name + "' with model '" +
+                     params.model + "'");
+  LogPrediction p;
+  p.source = log.source;
+  p.samples = static_cast<long>(d.t.size());
+  p.notes = d.notes;
+  const Eigen::VectorXd tau_hat = params.effects.empty()
+                                      ? Eigen::VectorXd(d.W * params.values)
+                                      : Eigen::VectorXd(model_design(d, params.effects, params.values) * params.values);
+  p.joints = torque_metrics(d.y, tau_hat, robot.num_joints, robot.tau_max);
+  return p;
+}
+
+}  // namespace dyncal::host
