@@ -54,7 +54,7 @@ int run_import(const RobotSettings& s) {
   if (s.force) args.push_back("--force");
   const int rc = run_importer(args);
   if (rc != 0) return rc;
-  std::cout << s.name << ": next, build (compiles its model; docs/robots.md): cmake --build --preset release\n";
+  std::cout << s.name << ": next, build (compiles its model; docs/robots.md): scripts/build dyncal\n";
   return 0;
 }
 
