@@ -97,14 +97,14 @@ bool register_robot_model(const double (&nominal_standard)[Robot::kNumStandard])
   return register_robot(c);
 }
 
-/// Registers the identification models (TermSetModel) of the built term sets First..First+3: the
-/// generated regressor and the lib/ estimators of each model's size, the only per-robot code of
-/// identify (one translation unit per half, so that a robot's code compiles on two cores).
-template <class Robot, int First, int... I>
+/// Registers the identification models (TermSetModel) of every built term set: layout, generated
+/// regressor and lib/ least squares of each model's size, the only per-robot code of identify (its
+/// KF and RLS: recursive_fits_of.hpp, in the calibration units).
+template <class Robot, int... I>
 bool register_identification(std::integer_sequence<int, I...>) {
   CompiledRobot c;
   c.name = Robot::kName;
-  ((c.models[First + I] = term_set_model_of<Robot, built_term_set(First + I)>()), ...);
+  ((c.models[I] = term_set_model_of<Robot, built_term_set(I)>()), ...);
   return register_robot(c);
 }
 
