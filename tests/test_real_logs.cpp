@@ -61,7 +61,14 @@ TEST_P(RealLogs, JitterAndMissingSamplesGiveTheCleanParameters) {
   for (Eigen::Index k = 0; k < clean.log.samples(); ++k)
     shares.add(clean.log.q.row(k).transpose(), clean.log.qd.row(k).transpose(), clean.log.qdd.row(k).transpose());
   double worst = 0, worst_z = 0;
+  int differ = 0;
   for (size_t i = 0; i < a.params.size(); ++i) {
+    // What the clean log does not determine is dropped (held at 0) there; the jittered log decides
+    // the same, but a parameter at the boundary of the decision may fall either side.
+    const bool dropped_a = a.params[i].verdict == Verdict::not_determined;
+    const bool dropped_b = b.params[i].verdict == Verdict::not_determined;
+    differ += dropped_a != dropped_b;
+    if (dropped_a || dropped_b) continue;
     const double share = shares.share(static_cast<int>(i), b.params[i].value - a.params[i].value);
     SCOPED_TRACE(a.params[i].name);
     EXPECT_LE(share, 0.01);
@@ -75,12 +82,15 @@ TEST_P(RealLogs, JitterAndMissingSamplesGiveTheCleanParameters) {
     EXPECT_LE(z, 4 * std::sqrt(2.0));
     worst_z = std::max(worst_z, z);
   }
+  EXPECT_LE(differ, 1);
   for (int j = 0; j < robot.num_joints; ++j) {
     SCOPED_TRACE("joint " + std::to_string(j + 1));
     EXPECT_LT(b.joints[static_cast<size_t>(j)].rms, 1.15 * clean.sigma[j]);
   }
-  std::printf("%s: largest parameter difference, clean vs jittered, %.4f of a joint's RMS torque, %.3f of its std\n",
-              GetParam(), worst, worst_z);
+  std::printf(
+      "%s: largest parameter difference, clean vs jittered, %.4f of a joint's RMS torque, %.3f of its std; %d "
+      "parameters determined by one log only\n",
+      GetParam(), worst, worst_z, differ);
 }
 
 /// Residual y - W phi of identify's final parameters on the stacked data.

@@ -194,6 +194,9 @@ void add_identify_command(CLI::App& app, Action& run) {
   cmd->add_flag("--sign-constraints", opt.sign_constraints,
                 "wls, ols: Coulomb, viscous friction and rotor inertia held >= 0 (Lawson-Hanson), as a drive table "
                 "must have them");
+  cmd->add_flag("--strict", opt.strict,
+                "refuse (exit 2) a log that does not determine every parameter of the model, instead of dropping "
+                "those it does not determine with a note (docs/accuracy.md \"Real arms\")");
   cmd->add_flag("--friction-per-joint", opt.friction_per_joint,
                 "friction and rotor inertia per joint, ignoring a coupling robot.json's transmission declares");
   cmd->add_option("--report", s->report, "write the report as JSON");

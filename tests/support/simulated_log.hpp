@@ -64,9 +64,11 @@ struct SimulatedLog {
 /// Samples at times `times` of the designed excitation played on `clock`: tau = ID + Fc sgn(qd) +
 /// Fv qd + noise (Fc 2 %, Fv qd_max 1 %, noise 0.5 % of tau_max); q read by kEncoderStep encoders.
 /// extra: an effect's torque added before the noise (none if empty). encoder_step: 0 for exact q.
+/// held: joints (0-based) held still at the trajectory's start position (a log that leaves their
+/// friction and the inertials only they move undetermined).
 inline SimulatedLog simulate(const RobotDescription& robot, const std::vector<double>& times, const MotionClock& clock,
                              unsigned seed, unsigned trajectory_seed = 3, const ExtraTorque& extra = {},
-                             double encoder_step = kEncoderStep) {
+                             double encoder_step = kEncoderStep, const std::vector<int>& held = {}) {
   const host::CompiledRobot& c = host::compiled_robot_for(robot);
   host::ExciteOptions xo;
   xo.seed = trajectory_seed;
@@ -110,7 +112,12 @@ inline SimulatedLog simulate(const RobotDescription& robot, const std::vector<do
     clock.speed(t, w, wd);
     Eigen::Matrix<double, 7, 1> q7, qd7, qdd7;
     traj.evaluate(u, q7, qd7, qdd7);
-    const Eigen::VectorXd q = q7.head(n), qd = w * qd7.head(n), qdd = w * w * qdd7.head(n) + wd * qd7.head(n);
+    Eigen::VectorXd q = q7.head(n), qd = w * qd7.head(n), qdd = w * w * qdd7.head(n) + wd * qd7.head(n);
+    for (int j : held) {
+      Eigen::Matrix<double, 7, 1> q0, qd0, qdd0;
+      traj.evaluate(0.0, q0, qd0, qdd0);
+      q[j] = q0[j], qd[j] = 0.0, qdd[j] = 0.0;
+    }
     s.at_rest[static_cast<size_t>(k)] = w == 0.0;
     Eigen::VectorXd tau = c.inverse_dynamics(q, qd, qdd, phi_std);
     if (extra) extra(q, qd, qdd, tau);

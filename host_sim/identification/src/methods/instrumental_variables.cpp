@@ -49,7 +49,7 @@ int param_index(const StackedData& d, const std::string& name) {
 
 void fit_instrumental(const StackedData& d, const JointLog& grid, const std::vector<int>& fold, int folds,
                       const RobotDescription& robot, const IdentifyOptions& o, const PrepareLog& prepare,
-                      IdentifyResult& res) {
+                      const std::vector<int>& dropped, IdentifyResult& res) {
   if (!o.closed_loop)
     throw InputError("--method iv needs --law FILE: the drive's control law the run was recorded under");
   const auto t0 = std::chrono::steady_clock::now();
@@ -75,14 +75,32 @@ void fit_instrumental(const StackedData& d, const JointLog& grid, const std::vec
   for (Index r = 0; r < rows; ++r) w[r] = fit[r] / sigma[r % N];
   const MatrixXd K = d.W.array().colwise() * w.array();
   const VectorXd y = d.y.cwiseProduct(w);
-  VectorXd phi = K.colPivHouseholderQr().solve(y);
-  const Eigen::LLT<MatrixXd> gram(K.transpose() * K);
-  if (gram.info() != Eigen::Success) throw InputError("--method iv: the weighted regressor is rank deficient");
-  const MatrixXd R = gram.matrixU();
+  // The weighted data's triangular factor R (R^T R = K^T K).
+  const Eigen::HouseholderQR<MatrixXd> qr(K);
+  const MatrixXd R = qr.matrixQR().topRows(P).triangularView<Eigen::Upper>();
   res.condition_number = [&] {
     const VectorXd sv = Eigen::JacobiSVD<MatrixXd>(R).singularValues();
     return sv[0] / sv[sv.size() - 1];
   }();
+  // The iteration runs on the whole model (its plants need every parameter: one held at 0 would
+  // pull the plant away from what the data say at the white-noise level); the reported IV estimate
+  // drops the parameters the log does not determine (held at 0), with the final instruments.
+  VectorXd phi = K.colPivHouseholderQr().solve(y);
+  std::vector<Index> kept;
+  for (Index i = 0; i < P; ++i)
+    if (std::find(dropped.begin(), dropped.end(), static_cast<int>(i)) == dropped.end()) kept.push_back(i);
+  const auto Pk = static_cast<Index>(kept.size());
+  auto kept_columns = [&](const MatrixXd& A) {
+    MatrixXd B(A.rows(), Pk);
+    for (Index k = 0; k < Pk; ++k) B.col(k) = A.col(kept[static_cast<size_t>(k)]);
+    return B;
+  };
+  auto full = [&](const VectorXd& x) {
+    VectorXd v = VectorXd::Zero(P);
+    for (Index k = 0; k < Pk; ++k) v[kept[static_cast<size_t>(k)]] = x[k];
+    return v;
+  };
+  const MatrixXd Kk = kept_columns(K);
 
   // Each iterate's plant: consistent inertials nearest it in the data's metric, the prior deciding
   // what the data do not see; friction at least 0.
@@ -147,7 +165,11 @@ void fit_instrumental(const StackedData& d, const JointLog& grid, const std::vec
     previous_step = step;
     phi = relax && !converged ? VectorXd(0.5 * (phi + next)) : next;
   }
-  phi = estimate;  // the IV estimate of the last instruments (the iterate may be a half step)
+  // The IV estimate of the last instruments (the iterate may be a half step), of the parameters the
+  // log determines.
+  Z = kept_columns(Z);
+  phi = full(iv_solve(Kk, Z, y, VectorXd::Ones(rows)));
+  if (!phi.allFinite()) throw InputError("--method iv: the instrumental estimate is not finite");
   res.fit_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   // Cross-validation with the final instruments: each fold's IV estimate from the others' rows.
@@ -155,7 +177,7 @@ void fit_instrumental(const StackedData& d, const JointLog& grid, const std::vec
   for (int f = 0; f < folds; ++f) {
     VectorXd train(rows);
     for (Index r = 0; r < rows; ++r) train[r] = fold[static_cast<size_t>(r / N)] != f ? 1.0 : 0.0;
-    const VectorXd phi_f = iv_solve(K, Z, y, train);
+    const VectorXd phi_f = full(iv_solve(Kk, Z, y, train));
     for (Index s = 0; s < S; ++s)
       if (fold[static_cast<size_t>(s)] == f) pred.segment(s * N, N) = d.W.middleRows(s * N, N) * phi_f;
   }
@@ -163,13 +185,14 @@ void fit_instrumental(const StackedData& d, const JointLog& grid, const std::vec
 
   // Standard deviations: the IV covariance, inflated by the residual's autocorrelation.
   const VectorXd residual = y - K * phi;
-  const double s2 = residual.squaredNorm() / (static_cast<double>(rows) - static_cast<double>(P));
-  const MatrixXd ZK_inv = (Z.transpose() * K).inverse();
+  const double s2 = residual.squaredNorm() / (static_cast<double>(rows) - static_cast<double>(Pk));
+  const MatrixXd ZK_inv = (Z.transpose() * Kk).inverse();
   const MatrixXd C = s2 * ZK_inv * (Z.transpose() * Z) * ZK_inv.transpose();
   const std::vector<char> all(static_cast<size_t>(S), 1);
   const double inflation = autocorrelation_inflation(d, all, d.y - d.W * phi);
-  for (Index i = 0; i < P; ++i)
-    res.params.push_back({d.names[static_cast<size_t>(i)], phi[i], std::sqrt(std::max(0.0, C(i, i)) * inflation)});
+  VectorXd stdev = VectorXd::Constant(P, std::nan(""));
+  for (Index k = 0; k < Pk; ++k) stdev[kept[static_cast<size_t>(k)]] = std::sqrt(std::max(0.0, C(k, k)) * inflation);
+  for (Index i = 0; i < P; ++i) res.params.push_back({d.names[static_cast<size_t>(i)], phi[i], stdev[i]});
   char line[240];
   std::snprintf(line, sizeof line,
                 "IDIM-IV: %s after %d closed-loop simulations of the law, last step %.2g standard errors (converged "

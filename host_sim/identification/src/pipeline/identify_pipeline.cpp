@@ -12,6 +12,7 @@
 #include "dyncal_host/identification/methods/instrumental_variables.hpp"
 #include "dyncal_host/identification/methods/sign_constrained.hpp"
 #include "dyncal_host/identification/pipeline/compiled_robot.hpp"
+#include "dyncal_host/identification/pipeline/parameter_scales.hpp"
 #include "dyncal_host/identification/pipeline/signal.hpp"
 #include "dyncal_host/identification/reports/prediction.hpp"
 
@@ -98,13 +99,49 @@ void recursive_result(const RecursiveFit& f, const LeastSquaresFit& ls, Eigen::V
   if (cond) *cond = condition_number(ls);
 }
 
-// Parameter standard deviations sigma^2 diag((W^T W)^-1), sigma^2 = RSS / (rows - P), and cond(W).
-void ls_statistics(const LeastSquaresFit& ls, int P, Eigen::VectorXd& stdev, double* cond) {
-  Eigen::VectorXd g;
-  if (ls.inverse_gram_diagonal(g) != UpdateStatus::ok) throw InputError("regressor rank deficient");
-  const double sigma2 = ls.residual_sum_of_squares() / std::max(1.0, static_cast<double>(ls.rows() - P));
-  stdev = (g * sigma2).cwiseSqrt();
-  if (cond) *cond = condition_number(ls);
+/// Each parameter's physical scale and verdict (identifiability.hpp) into res.params, and a note
+/// naming the parameters the log does not determine and what their values rest on; with --strict,
+/// InputError naming them instead.
+void judge_parameters(const Eigen::VectorXd& scale, const IdentifyPipeline::FitDetails& fit, const IdentifyOptions& opt,
+                      const std::vector<std::string>& names, IdentifyResult& res) {
+  const std::string& m = opt.method;
+  const bool consistent = m == "pcls" || is_search_method(m);
+  const char* basis = consistent                  ? (m == "pcls" ? "prior" : "search")
+                      : (m == "kf" || m == "rls") ? "start"
+                                                  : "held at 0";
+  std::string undetermined;
+  for (size_t i = 0; i < res.params.size() && i < static_cast<size_t>(scale.size()); ++i) {
+    ParamEstimate& p = res.params[i];
+    const auto ii = static_cast<Eigen::Index>(i);
+    p.scale = scale[ii];
+    const bool dropped = std::find(fit.decision.dropped.begin(), fit.decision.dropped.end(), static_cast<int>(i)) !=
+                         fit.decision.dropped.end();
+    const double data_std = fit.data_stdev.size() > ii ? fit.data_stdev[ii] : p.std;
+    p.verdict = dropped ? Verdict::not_determined : verdict_of(data_std, p.scale);
+    if (p.verdict != Verdict::not_determined) continue;
+    p.basis = basis;
+    if (!dropped) undetermined += (undetermined.empty() ? "" : ", ") + p.name;
+  }
+  std::string named = dropped_parameters_text(fit.decision, names);
+  if (!undetermined.empty()) named += (named.empty() ? "" : ", ") + undetermined;
+  if (named.empty()) return;
+  if (opt.strict)
+    throw InputError("--strict: the log does not determine " + named +
+                     " (95 % interval wider than the parameter's physical scale; docs/accuracy.md \"Real arms\")");
+  std::string rests;
+  if (std::string(basis) == "held at 0")
+    rests = "held at 0, the fit keeps the combination the log determines";
+  else if (std::string(basis) == "prior")
+    rests = opt.prior_std > 0 ? "their values rest on the prior (robot.json's inertials, --prior-std)"
+                              : "their values rest on the consistency constraints alone (no prior)";
+  else if (std::string(basis) == "search")
+    rests = "their values rest on the search's start and range (robot.json's inertials, --range-width)";
+  else
+    rests = "their values are the filter's start, not estimates";
+  res.notes.push_back(
+      "not determined by this log (95 % interval wider than the parameter's physical scale, "
+      "docs/accuracy.md \"Real arms\"): " +
+      named + "; " + rests + " (--strict: refuse instead)");
 }
 
 }  // namespace
@@ -117,7 +154,8 @@ IdentifyPipeline::IdentifyPipeline(const RobotDescription& robot, const Identify
       N(model.num_joints),
       P(model.num_params),
       motor_(motor_velocity_map(robot, !options.friction_per_joint, options.motors)),
-      robot_coupled_(!motor_velocity_map(robot, !options.friction_per_joint, {}).isDiagonal(0.0)) {
+      robot_coupled_(!motor_velocity_map(robot, !options.friction_per_joint, {}).isDiagonal(0.0)),
+      scale_(parameter_scales(robot, model)) {
   for (int m = 0; m < N; ++m) {
     for (int j = 0; j < N; ++j) {
       if (j != m && motor_(m, j) != 0.0) {
@@ -240,8 +278,7 @@ StackedData IdentifyPipeline::prepare(JointLog&& log, bool dense, const Eigen::V
 }
 
 void IdentifyPipeline::fit(const StackedData& data, const std::vector<char>& train, Eigen::VectorXd& phi,
-                           Eigen::VectorXd& stdev, double* cond, ConsistentSolution* consistent, std::vector<int>* held,
-                           double* inflation) const {
+                           Eigen::VectorXd& stdev, FitDetails* details, const std::vector<int>* dropped) const {
   const Eigen::Index S = data.t.size();
   std::unique_ptr<LeastSquaresFit> ls = model_.make_least_squares();
   Eigen::MatrixXd K;
@@ -259,10 +296,9 @@ void IdentifyPipeline::fit(const StackedData& data, const std::vector<char>& tra
     }
   };
   add_rows([](int) { return 1.0; });
-  if (ls->solve(phi) != UpdateStatus::ok) {
-    throw InputError("the data do not excite every parameter of the model (regressor rank deficient): " +
-                     std::string("use richer excitation or a smaller model"));
-  }
+  // OLS of the parameters the data determine (white noise: the weights need only a fit).
+  Eigen::VectorXd ols_std;
+  least_squares(*ls, dropped, 1.0, false, phi, ols_std, nullptr, nullptr, nullptr);
   // Per-joint residual variance of the OLS fit (Gautier's WLS weights; KF/RLS noise).
   Eigen::VectorXd ss = Eigen::VectorXd::Zero(N), n = Eigen::VectorXd::Zero(N);
   for (Eigen::Index s = 0; s < S; ++s) {
@@ -276,18 +312,23 @@ void IdentifyPipeline::fit(const StackedData& data, const std::vector<char>& tra
     }
   }
   const Eigen::VectorXd sigma = joint_noise_std(ss, n, P);
+  // The final fit decides with the residual's autocorrelation (the std it reports are inflated so).
+  const double decision_inflation = details && !dropped ? streamed_autocorrelation_inflation(data, train, phi) : 1.0;
+  double* cond = details ? &details->cond : nullptr;
+  std::vector<int>* held = details ? &details->held : nullptr;
+  DeterminedFit* decision = details ? &details->decision : nullptr;
   const std::string& m = opt_.method;
   if (m == "ols") {
-    ls_statistics(*ls, P, stdev, cond);
-    if (opt_.sign_constraints) constrain_signs(*ls, phi, stdev, held);
-  } else if (m == "wls" || m == "pcls" || is_search_method(m)) {
+    least_squares(*ls, dropped, decision_inflation, opt_.sign_constraints, phi, stdev, cond, held, decision);
+  } else if (m == "wls" || m == "iv" || m == "pcls" || is_search_method(m)) {
     ls->reset();
     add_rows([&](int j) { return 1.0 / sigma[j]; });
-    if (ls->solve(phi) != UpdateStatus::ok) throw InputError("weighted regressor rank deficient");
-    if (m == "wls") {
-      ls_statistics(*ls, P, stdev, cond);
-      if (opt_.sign_constraints) constrain_signs(*ls, phi, stdev, held);
+    if (m == "wls" || m == "iv") {  // iv: its start (fit_instrumental)
+      least_squares(*ls, dropped, decision_inflation, opt_.sign_constraints, phi, stdev, cond, held, decision);
     } else {  // the WLS solution starts the consistent fit of the same weighted data
+      DeterminedFit d;
+      Eigen::VectorXd data_std;
+      least_squares(*ls, dropped, decision_inflation, false, phi, data_std, cond, nullptr, &d);
       const CompiledRobot& compiled = compiled_robot_for(robot_);
       ConsistentProblem p;
       p.R = ls->r_factor().triangularView<Eigen::Upper>();
@@ -295,24 +336,28 @@ void IdentifyPipeline::fit(const StackedData& data, const std::vector<char>& tra
       p.num_base = model_.num_base;
       p.K = base_map(compiled);
       p.prior = Eigen::Map<const Eigen::VectorXd>(compiled.nominal_standard.data(), compiled.num_standard);
-      p.sigma2 = ls->residual_sum_of_squares() / std::max(1.0, static_cast<double>(ls->rows() - P));
+      p.sigma2 = d.dropped.empty() ? ls->residual_sum_of_squares() / std::max(1.0, static_cast<double>(ls->rows() - P))
+                                   : d.sigma2;
       p.start = phi;
       p.prior_relative_std = opt_.prior_std;
       ConsistentSolution sol;
       if (m == "pcls") {
         sol = consistent_least_squares(p);
         stdev = sol.params_std;
-        if (cond) *cond = condition_number(*ls);
       } else {
         // The optimisers: the model is linear, so the parameters' spread is least squares' (the
         // Fisher information does not depend on where the search ends). The particle filter's
         // likelihood takes the residual's autocorrelation into account (S / n_eff).
         p.sigma2 *= streamed_autocorrelation_inflation(data, train, phi);
         sol = search_consistent(p, search_method(m), search_settings(opt_));
-        ls_statistics(*ls, P, stdev, cond);
+        stdev = data_std;
       }
       phi = sol.params;
-      if (consistent) *consistent = std::move(sol);
+      if (details) {
+        details->consistent = std::move(sol);
+        details->data_stdev = data_std;
+        details->decision = std::move(d);
+      }
     }
   } else if (m == "kf" || m == "rls") {
     auto make_kf = model_.make_kalman_filter;
@@ -330,9 +375,39 @@ void IdentifyPipeline::fit(const StackedData& data, const std::vector<char>& tra
   } else {
     throw InputError("unknown method '" + m + "' (expected wls, ols, kf, rls, pcls, gd, ga or pf)");
   }
-  if (!inflation) return;
-  *inflation = streamed_autocorrelation_inflation(data, train, phi);
-  stdev *= std::sqrt(*inflation);
+  if (!details) return;
+  details->inflation = streamed_autocorrelation_inflation(data, train, phi);
+  stdev *= std::sqrt(details->inflation);
+  if (details->data_stdev.size() > 0) details->data_stdev *= std::sqrt(details->inflation);
+}
+
+/// The least-squares estimate of `ls`'s data with the parameters the data do not determine held at
+/// 0: decided here (determined_least_squares, its sigma2 times `inflation`) unless `forced` names
+/// them. When none is dropped: lib/'s solution and statistics, bit for bit those of a fit without
+/// the decision. stdev: white-noise figures, NaN on the dropped parameters; with `constrain`, the
+/// sign constraints (constrain_signs) on the kept ones.
+void IdentifyPipeline::least_squares(const LeastSquaresFit& ls, const std::vector<int>* forced, double inflation,
+                                     bool constrain, Eigen::VectorXd& phi, Eigen::VectorXd& stdev, double* cond,
+                                     std::vector<int>* held, DeterminedFit* decision) const {
+  const std::vector<int> none;
+  auto decide = [&](const std::vector<int>* f) {
+    return determined_least_squares(ls.r_factor().triangularView<Eigen::Upper>(), ls.rotated_rhs(),
+                                    ls.residual_sum_of_squares(), ls.rows(), scale_, inflation, f);
+  };
+  DeterminedFit d;
+  if (!(forced && forced->empty())) d = decide(forced);
+  Eigen::VectorXd g;
+  if (d.dropped.empty() && ls.solve(phi) == UpdateStatus::ok && ls.inverse_gram_diagonal(g) == UpdateStatus::ok) {
+    const double sigma2 = ls.residual_sum_of_squares() / std::max(1.0, static_cast<double>(ls.rows() - P));
+    stdev = (g * sigma2).cwiseSqrt();
+  } else {
+    if (d.phi.size() == 0) d = decide(&none);  // lib/'s rank test refused what the decision keeps
+    phi = d.phi;
+    stdev = (d.gram_diag * d.sigma2).cwiseSqrt();
+  }
+  if (cond) *cond = condition_number(ls);
+  if (constrain) constrain_signs(ls, d.dropped, phi, stdev, held);
+  if (decision) *decision = std::move(d);
 }
 
 void IdentifyPipeline::process_segment(JointLog& log, Eigen::Index a, Eigen::Index b, const ButterworthLowPass& filter,
@@ -442,27 +517,42 @@ Eigen::VectorXd IdentifyPipeline::standstill_band(
   return sigma * (kStandstillQuantile * gain);
 }
 
-/// IdentifyOptions::sign_constraints on a least-squares fit: the dissipative and inertial terms
-/// the drive's table check requires >= 0 (Coulomb, viscous, rotor inertia) held there when the
-/// unconstrained phi has them negative; stdev of the free ones from the reduced problem (sigma^2
-/// from the constrained residual), 0 on the held ones.
-void IdentifyPipeline::constrain_signs(const LeastSquaresFit& ls, Eigen::VectorXd& phi, Eigen::VectorXd& stdev,
-                                       std::vector<int>* held) const {
-  std::vector<int> nonnegative;
+/// IdentifyOptions::sign_constraints on a least-squares fit of the kept parameters (not in
+/// `dropped`): the dissipative and inertial terms the drive's table check requires >= 0 (Coulomb,
+/// viscous, rotor inertia) held there when the unconstrained phi has them negative; stdev of the free
+/// ones from the reduced problem (sigma^2 from the constrained residual), 0 on the held ones.
+void IdentifyPipeline::constrain_signs(const LeastSquaresFit& ls, const std::vector<int>& dropped, Eigen::VectorXd& phi,
+                                       Eigen::VectorXd& stdev, std::vector<int>* held) const {
+  std::vector<int> kept, nonnegative;
   for (int i = 0; i < P; ++i) {
+    if (std::find(dropped.begin(), dropped.end(), i) != dropped.end()) continue;
     const ParamInfo& info = model_.info[static_cast<size_t>(i)];
     if (info.kind == ParamKind::term &&
         (info.term == term::coulomb || info.term == term::viscous || info.term == term::rotor_inertia))
-      nonnegative.push_back(i);
+      nonnegative.push_back(static_cast<int>(kept.size()));
+    kept.push_back(i);
   }
-  const Eigen::MatrixXd R = ls.r_factor().triangularView<Eigen::Upper>();
-  const SignConstrainedSolution sol = sign_constrained_least_squares(R, ls.rotated_rhs(), nonnegative, phi);
-  if (held) *held = sol.held;
+  const auto Kn = static_cast<Eigen::Index>(kept.size());
+  const Eigen::MatrixXd Rf = ls.r_factor().triangularView<Eigen::Upper>();
+  Eigen::MatrixXd R(P, Kn);
+  Eigen::VectorXd start(Kn);
+  for (Eigen::Index k = 0; k < Kn; ++k) {
+    R.col(k) = Rf.col(kept[static_cast<size_t>(k)]);
+    start[k] = phi[kept[static_cast<size_t>(k)]];
+  }
+  const SignConstrainedSolution sol = sign_constrained_least_squares(R, ls.rotated_rhs(), nonnegative, start);
+  if (held) {
+    held->clear();
+    for (int h : sol.held) held->push_back(kept[static_cast<size_t>(h)]);
+  }
   if (sol.held.empty()) return;
-  phi = sol.x;
-  const double dof = std::max(1.0, static_cast<double>(ls.rows() - P + static_cast<long>(sol.held.size())));
-  const double sigma2 = (ls.residual_sum_of_squares() + sol.residual_increase) / dof;
-  stdev = (sol.inverse_gram_diag * sigma2).cwiseSqrt();
+  for (Eigen::Index k = 0; k < Kn; ++k) phi[kept[static_cast<size_t>(k)]] = sol.x[k];
+  // Without dropped parameters the unconstrained residual is the full model's (rss) to rounding.
+  const double reduced = dropped.empty() ? 0.0 : (R * start - ls.rotated_rhs()).squaredNorm();
+  const double dof = std::max(1.0, static_cast<double>(ls.rows() - Kn + static_cast<long>(sol.held.size())));
+  const double sigma2 = (ls.residual_sum_of_squares() + reduced + sol.residual_increase) / dof;
+  for (Eigen::Index k = 0; k < Kn; ++k)
+    stdev[kept[static_cast<size_t>(k)]] = std::sqrt(sol.inverse_gram_diag[k] * sigma2);
 }
 
 IdentifyResult run_identify(const RobotDescription& robot, const TermSetModel& model, JointLog&& log,
@@ -516,18 +606,33 @@ IdentifyResult run_identify(const RobotDescription& robot, const TermSetModel& m
     const PrepareLog prepare = [&pipe, &data](JointLog&& l) {
       return pipe.prepare(std::move(l), true, &data.standstill_band);
     };
-    fit_instrumental(data, grid, fold, folds, robot, opt, prepare, res);
+    // The parameters the log determines: the WLS fit's decision (fit() fits iv's start by WLS).
+    IdentifyPipeline::FitDetails details;
+    Eigen::VectorXd wls_phi, wls_std;
+    pipe.fit(data, std::vector<char>(static_cast<size_t>(data.t.size()), 1), wls_phi, wls_std, &details);
+    fit_instrumental(data, grid, fold, folds, robot, opt, prepare, details.decision.dropped, res);
+    judge_parameters(pipe.scales(), details, opt, model.names, res);
   } else if (!opt.effects.empty()) {
     // Effect terms (model_effects.hpp): [W E] fitted at run time, validated the same way.
     fit_effect_model(data, opt.effects, fold, folds, robot, opt, res);
+    judge_parameters(pipe.scales(), IdentifyPipeline::FitDetails{}, opt, model.names, res);
     res.model = model_spec_name({model.terms, opt.effects, opt.motors});
   } else {
+    // Final fit on all data first: the reported parameters, and the decision of which parameters the
+    // log determines, which the folds' fits then share (the validated model is the reported one).
     Eigen::VectorXd phi, stdev;
+    std::vector<char> all(static_cast<size_t>(S), 1);
+    const auto t0 = std::chrono::steady_clock::now();
+    IdentifyPipeline::FitDetails final_fit;
+    pipe.fit(data, all, phi, stdev, &final_fit);
+    res.fit_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    res.condition_number = final_fit.cond;
     std::vector<Eigen::VectorXd> fold_phi(static_cast<size_t>(folds));
     for (int f = 0; f < folds; ++f) {
       std::vector<char> train(static_cast<size_t>(S));
       for (Eigen::Index s = 0; s < S; ++s) train[static_cast<size_t>(s)] = fold[static_cast<size_t>(s)] != f;
-      pipe.fit(data, train, fold_phi[static_cast<size_t>(f)], stdev);
+      Eigen::VectorXd fold_std;
+      pipe.fit(data, train, fold_phi[static_cast<size_t>(f)], fold_std, nullptr, &final_fit.decision.dropped);
     }
     // Metrics from the pooled out-of-fold residuals, each sample predicted by the fit without its
     // fold (made sample by sample: no stored prediction).
@@ -540,26 +645,19 @@ IdentifyResult run_identify(const RobotDescription& robot, const TermSetModel& m
           tau_hat = K * fold_phi[static_cast<size_t>(fold[static_cast<size_t>(s)])];
           return tau_hat.data();
         });
-    // Final fit on all data: reported parameters.
-    std::vector<char> all(static_cast<size_t>(S), 1);
-    const auto t0 = std::chrono::steady_clock::now();
-    ConsistentSolution consistent;
-    std::vector<int> held;
-    double inflation = 1;
-    pipe.fit(data, all, phi, stdev, &res.condition_number, &consistent, &held, &inflation);
-    res.fit_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     for (int i = 0; i < P; ++i) res.params.push_back({model.names[static_cast<size_t>(i)], phi[i], stdev[i]});
+    judge_parameters(pipe.scales(), final_fit, opt, model.names, res);
     {
       char line[200];
       std::snprintf(line, sizeof line,
                     "parameter std: the white-noise figures times %.3g for the residual's autocorrelation (S / n_eff)",
-                    std::sqrt(inflation));
+                    std::sqrt(final_fit.inflation));
       res.notes.push_back(line);
     }
-    report_consistent(consistent, opt, res);
-    if (!held.empty()) {
+    report_consistent(final_fit.consistent, opt, res);
+    if (!final_fit.held.empty()) {
       std::string names;
-      for (int i : held) names += (names.empty() ? "" : ", ") + model.names[static_cast<size_t>(i)];
+      for (int i : final_fit.held) names += (names.empty() ? "" : ", ") + model.names[static_cast<size_t>(i)];
       res.notes.push_back("sign constraints: " + names +
                           " held at 0 (negative without the constraint: friction and rotor inertia cannot be)");
     }

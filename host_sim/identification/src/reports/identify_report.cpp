@@ -36,11 +36,22 @@ void print_identify_report(std::ostream& out, const IdentifyResult& r) {
   print_joint_table(out, r.joints);
   out << "\nregressor condition number cond(W): " << format("%.4g", r.condition_number) << "; full-data fit in "
       << format("%.3f", r.fit_seconds) << " s\n";
-  out << "\nparameter                   value        std    std %\n";
+  out << "\nparameter                   value        std    std %      scale  verdict (95 % interval against the "
+         "scale: docs/accuracy.md \"Real arms\")\n";
   for (const auto& p : r.params) {
-    char line[160];
-    const double rel = p.value != 0.0 ? 100.0 * p.std / std::abs(p.value) : INFINITY;
-    std::snprintf(line, sizeof line, "%-20s %12.5g %10.3g %8.1f\n", p.name.c_str(), p.value, p.std, rel);
+    char line[240];
+    if (p.verdict == Verdict::not_determined) {
+      // Never a free number: what the value rests on instead.
+      std::snprintf(line, sizeof line, "%-20s %12s %10.3g %8s %10.3g  not determined (%s)\n", p.name.c_str(),
+                    p.basis == "held at 0" ? "0" : "-", p.std, "-", p.scale, p.basis.c_str());
+    } else {
+      const double rel = p.value != 0.0 ? 100.0 * p.std / std::abs(p.value) : INFINITY;
+      // A value its own 95 % interval does not tell from 0 says so.
+      const bool zero_within = std::abs(p.value) <= kVerdictZ * p.std;
+      std::snprintf(line, sizeof line, "%-20s %12.5g %10.3g %8.1f %10.3g  %s%s\n", p.name.c_str(), p.value, p.std, rel,
+                    p.scale, p.scale > 0.0 ? to_string(p.verdict) : "not judged",
+                    zero_within ? ", 0 within its 95 % interval" : "");
+    }
     out << line;
   }
   if (!r.links.empty()) {
@@ -100,7 +111,17 @@ nlohmann::json identify_report_json(const IdentifyResult& r) {
   j["fit_seconds"] = r.fit_seconds;
   j["joints"] = joint_metrics_json(r.joints);
   j["params"] = nlohmann::json::array();
-  for (const auto& p : r.params) j["params"].push_back({{"name", p.name}, {"value", p.value}, {"std", p.std}});
+  for (const auto& p : r.params) {
+    nlohmann::json e = {{"name", p.name}, {"value", p.value}, {"std", p.std}};  // a NaN std (dropped) is null
+    if (p.value != 0.0 && std::isfinite(p.std)) e["relative_std"] = p.std / std::abs(p.value);
+    if (std::isfinite(p.std)) e["zero_within_95"] = std::abs(p.value) <= kVerdictZ * p.std;
+    if (p.scale > 0.0) {
+      e["scale"] = p.scale;
+      e["verdict"] = to_string(p.verdict);
+    }
+    if (!p.basis.empty()) e["basis"] = p.basis;
+    j["params"].push_back(e);
+  }
   j["notes"] = r.notes;
   j["links"] = nlohmann::json::array();
   for (const auto& l : r.links)

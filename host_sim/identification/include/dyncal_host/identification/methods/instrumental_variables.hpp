@@ -34,10 +34,13 @@ inline constexpr double kIvTolerance = 0.1;
 /// validation (`fold`, `folds`) refits the IV estimate with the final instruments on each training
 /// part. Parameter std: the IV covariance s^2 (Z^T K)^-1 Z^T Z (K^T Z)^-1 inflated by the residual's
 /// autocorrelation. Fills res (joints, params, condition number, notes: simulations run, converged
-/// or not, last step in standard errors). Throws InputError: no closed loop, a term set other than
-/// Eq. 7, a coupled motor's friction (use --friction-per-joint), a simulation that trips the drive.
+/// or not, last step in standard errors). `dropped`: the parameters the log does not determine (the
+/// WLS fit's decision, identifiability.hpp): the iteration's plants come from the whole model, the
+/// reported estimate and its cross-validation hold these at 0 (std NaN). Throws InputError: no
+/// closed loop, a term set other than Eq. 7, a coupled motor's friction (use --friction-per-joint),
+/// a simulation that trips the drive.
 void fit_instrumental(const StackedData& d, const JointLog& grid, const std::vector<int>& fold, int folds,
                       const RobotDescription& robot, const IdentifyOptions& options, const PrepareLog& prepare,
-                      IdentifyResult& res);
+                      const std::vector<int>& dropped, IdentifyResult& res);
 
 }  // namespace dyncal::host

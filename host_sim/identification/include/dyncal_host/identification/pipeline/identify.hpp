@@ -4,12 +4,14 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "dyncal_host/common/model_effects.hpp"
 #include "dyncal_host/common/model_terms.hpp"
 #include "dyncal_host/common/robot_description.hpp"
 #include "dyncal_host/identification/logs/joint_log.hpp"
+#include "dyncal_host/identification/methods/identifiability.hpp"
 
 namespace dyncal::host {
 
@@ -47,6 +49,9 @@ struct IdentifyOptions {
   /// Lawson-Hanson on the weighted data's triangular factor), what a drive's table must hold
   /// (lib/ table_check.hpp); a parameter held at 0 is named in the notes, its std 0.
   bool sign_constraints = false;
+  /// Refuse (InputError, exit 2) a log that leaves a parameter of the model not determined
+  /// (identifiability.hpp) instead of dropping it with a note.
+  bool strict = false;
   /// iv: the closed-loop simulation of the logged run under the drive's known control law (identify
   /// --law; drive_law.hpp): the log's grid (t, segments, period) with q the plant's positions at its
   /// samples (tau 0), the plant's standard parameters phi_standard (10 N, generated order) and
@@ -67,9 +72,22 @@ struct JointMetrics {
 };
 
 struct ParamEstimate {
+  ParamEstimate() = default;
+  ParamEstimate(std::string name_, double value_, double std_) : name(std::move(name_)), value(value_), std(std_) {}
   std::string name;
   double value = 0;
-  double std = 0;  ///< standard deviation (OLS/WLS: sigma^2 (W^T W)^-1; KF/RLS: sqrt(diag P))
+  double std = 0;  ///< standard deviation (OLS/WLS: sigma^2 (W^T W)^-1; KF/RLS: sqrt(diag P)); NaN: dropped
+  /// Physical scale (parameter_scales.hpp) the verdict compares the std with; 0: not judged (the
+  /// effect terms' parameters of a model with effects).
+  double scale = 0;
+  /// From the data's std (for pcls, gd, ga, pf: the weighted least-squares std, not the prior's):
+  /// identifiability.hpp.
+  Verdict verdict = Verdict::determined;
+  /// What a not-determined parameter's value rests on: "held at 0" (dropped from the least-squares
+  /// fit: its effect is in the combination the log determines), "prior" (pcls: robot.json's
+  /// inertials), "search" (gd, ga, pf: the search's start and range), "start" (kf, rls: the filter's
+  /// initial 0); empty when the data determine it.
+  std::string basis;
 };
 
 /// A model's prediction of a log it was not fitted to (identify --validate-on, dyncal predict).

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "dyncal_host/identification/methods/consistent_least_squares.hpp"
+#include "dyncal_host/identification/methods/identifiability.hpp"
 #include "dyncal_host/identification/pipeline/butterworth.hpp"
 #include "dyncal_host/identification/pipeline/identify.hpp"
 #include "dyncal_host/identification/pipeline/kept_samples.hpp"
@@ -47,15 +48,31 @@ class IdentifyPipeline {
   /// are in its model string.
   bool models_coupled_motors() const { return robot_coupled_; }
 
-  /// Fits on the samples with train[s] true. Writes phi and parameter standard deviations (P): with
-  /// `inflation` given, the white-noise figures times the square root of the residual's
-  /// autocorrelation factor S / n_eff (streamed_autocorrelation_inflation, N passes over the data),
-  /// which is also written there; without it, the white-noise figures (a fold's fit needs only phi).
-  /// With pcls, the consistent solution into *consistent if given; with sign constraints, the
-  /// indices held at 0 into *held if given. Throws InputError.
+  /// What the final fit reports besides phi and stdev.
+  struct FitDetails {
+    double cond = 0;                ///< cond(W) of the full stacked (weighted) regressor
+    ConsistentSolution consistent;  ///< pcls, gd, ga, pf
+    std::vector<int> held;          ///< sign constraints: indices held at 0
+    double inflation = 1;           ///< the residual's autocorrelation factor S / n_eff
+    DeterminedFit decision;         ///< the parameters the log does not determine (identifiability.hpp)
+    Eigen::VectorXd data_stdev;     ///< pcls, gd, ga, pf: the weighted least-squares std (the data alone)
+  };
+
+  /// Fits on the samples with train[s] true. Writes phi and parameter standard deviations (P).
+  /// Final fit (`details` given): decides which parameters the data determine
+  /// (determined_least_squares, with the residual's autocorrelation factor of the OLS fit) and drops
+  /// the others from the least-squares fits (held at 0, std NaN); the std are the white-noise figures
+  /// times the square root of the autocorrelation factor S / n_eff of the final residual
+  /// (streamed_autocorrelation_inflation, N passes over the data), written into details->inflation.
+  /// A fold's fit (`dropped` given: the final fit's decision) drops the same parameters and writes
+  /// the white-noise figures. pcls, gd, ga, pf start from the weighted least-squares fit with the
+  /// dropped parameters at 0 and fit every parameter (the prior or the search range holds those).
+  /// Throws InputError.
   void fit(const StackedData& data, const std::vector<char>& train, Eigen::VectorXd& phi, Eigen::VectorXd& stdev,
-           double* cond = nullptr, ConsistentSolution* consistent = nullptr, std::vector<int>* held = nullptr,
-           double* inflation = nullptr) const;
+           FitDetails* details, const std::vector<int>* dropped = nullptr) const;
+
+  /// Physical scale of each parameter (parameter_scales.hpp).
+  const Eigen::VectorXd& scales() const { return scale_; }
 
   const TermSetModel& model() const { return model_; }
 
@@ -75,8 +92,11 @@ class IdentifyPipeline {
                        const Eigen::VectorXd& band, const KeptSamples& kept, Eigen::Index k0, StackedData& out) const;
   Eigen::VectorXd standstill_band(const JointLog& log,
                                   const std::vector<std::pair<Eigen::Index, Eigen::Index>>& segments) const;
-  void constrain_signs(const LeastSquaresFit& ls, Eigen::VectorXd& phi, Eigen::VectorXd& stdev,
-                       std::vector<int>* held) const;
+  void least_squares(const LeastSquaresFit& ls, const std::vector<int>* forced, double inflation, bool constrain,
+                     Eigen::VectorXd& phi, Eigen::VectorXd& stdev, double* cond, std::vector<int>* held,
+                     DeterminedFit* decision) const;
+  void constrain_signs(const LeastSquaresFit& ls, const std::vector<int>& dropped, Eigen::VectorXd& phi,
+                       Eigen::VectorXd& stdev, std::vector<int>* held) const;
 
   const RobotDescription& robot_;
   const IdentifyOptions& opt_;
@@ -86,6 +106,7 @@ class IdentifyPipeline {
   bool robot_coupled_;                  ///< robot.json's coupling is in motor_
   std::vector<int> coupled_;            ///< motors turning with more than their own joint (0-based)
   std::vector<FilteredTerm> filtered_;  ///< StackedData::filtered_terms' columns
+  Eigen::VectorXd scale_;               ///< parameter_scales(robot_, model_)
 };
 
 /// Runs the whole `identify` job for one robot and term set; preparing the data consumes the log.
