@@ -154,4 +154,22 @@ inline std::vector<double> logger_times(double fs, double seconds, double jitter
   return t;
 }
 
+/// A PC logger that stamps samples on arrival: the robot samples on its own regular clock (period
+/// 1 / fs, a fraction `drop` of the samples lost on the way), and each stamp is off its sampling
+/// instant by a uniform error in [-half_width, half_width] periods. Returns the sampling instants
+/// (simulate() at these) and writes the stamps (the log's t) into `stamps`.
+inline std::vector<double> arrival_stamped_times(double fs, double seconds, double half_width, double drop,
+                                                 unsigned seed, std::vector<double>& stamps) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-half_width, half_width), keep(0, 1);
+  std::vector<double> t;
+  stamps.clear();
+  for (long k = 0; k < std::lround(seconds * fs); ++k) {
+    if (k > 0 && keep(rng) < drop) continue;
+    t.push_back(static_cast<double>(k) / fs);
+    stamps.push_back((static_cast<double>(k) + u(rng)) / fs);
+  }
+  return t;
+}
+
 }  // namespace dyncal::test

@@ -7,6 +7,7 @@
 
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/number_text.hpp"
+#include "dyncal_host/identification/logs/sample_clock.hpp"
 
 namespace dyncal::host {
 namespace {
@@ -82,6 +83,67 @@ Eigen::MatrixXd columns_of(const JointLog& log, Index a, Index b) {
   if (log.has_qdd) put(log.qdd);
   put(log.tau);
   return m;
+}
+
+/// The rows [first, end) of each segment of `log`.
+std::vector<std::pair<Index, Index>> pieces_of(const JointLog& log) {
+  return log.segments();
+}
+
+/// Each piece of `raw` ([first, end) rows, at least 3 samples spanning 3 grid samples; shorter ones
+/// dropped) sampled at times[first] + k T by a natural cubic spline through (times, the raw
+/// columns): q only with q_only. The pieces kept into kept_pieces (grid rows), the grid samples
+/// beyond the raw ones into missing.
+JointLog resample(const JointLog& raw, const Eigen::VectorXd& times, double T,
+                  const std::vector<std::pair<Index, Index>>& pieces, bool q_only,
+                  std::vector<std::pair<Index, Index>>& kept_pieces, long& missing) {
+  std::vector<Eigen::VectorXd> grids;
+  std::vector<std::pair<Index, Index>> kept;
+  Index total = 0;
+  missing = 0;
+  for (const auto& [a, b] : pieces) {
+    const Index n = static_cast<Index>(std::floor((times[b - 1] - times[a]) / T * (1 + 1e-12))) + 1;
+    if (n < 3 || b - a < 3) continue;
+    grids.push_back(times[a] + T * Eigen::VectorXd::LinSpaced(n, 0.0, static_cast<double>(n - 1)).array());
+    kept.emplace_back(a, b);
+    total += n;
+    missing += std::max<long>(0, static_cast<long>(n - (b - a)));
+  }
+  JointLog out;
+  out.source = raw.source;
+  out.has_qd = raw.has_qd && !q_only;
+  out.has_qdd = raw.has_qdd && !q_only;
+  out.period = T;
+  const int nj = raw.joints();
+  out.t.resize(total);
+  out.q.resize(total, nj);
+  if (!q_only) out.tau.resize(total, nj);
+  if (out.has_qd) out.qd.resize(total, nj);
+  if (out.has_qdd) out.qdd.resize(total, nj);
+  kept_pieces.clear();
+  Index row = 0;
+  for (size_t k = 0; k < kept.size(); ++k) {
+    const auto [a, b] = kept[k];
+    const Eigen::VectorXd& g = grids[k];
+    if (row > 0) out.segment_starts.push_back(row);
+    kept_pieces.emplace_back(row, row + g.size());
+    const Eigen::VectorXd x = times.segment(a, b - a);
+    const Eigen::MatrixXd y = q_only ? Eigen::MatrixXd(raw.q.middleRows(a, b - a)) : columns_of(raw, a, b);
+    Eigen::MatrixXd v(g.size(), y.cols());
+    NaturalCubicSpline(x, y).evaluate(g, v);
+    out.t.segment(row, g.size()) = g;
+    int c = 0;
+    auto take = [&](Eigen::MatrixXd& to) {
+      to.middleRows(row, g.size()) = v.middleCols(c, nj);
+      c += nj;
+    };
+    take(out.q);
+    if (out.has_qd) take(out.qd);
+    if (out.has_qdd) take(out.qdd);
+    if (!q_only) take(out.tau);
+    row += g.size();
+  }
+  return out;
 }
 
 }  // namespace
@@ -171,53 +233,38 @@ JointLog to_uniform_grid(JointLog raw, double max_gap, SamplingReport& report) {
     return raw;  // moved: a uniform log is not copied
   }
   report.resampled = true;
-  // Grid of each piece; pieces shorter than 3 grid samples are dropped.
-  std::vector<Eigen::VectorXd> grids;
-  std::vector<std::pair<Index, Index>> kept;
-  Index total = 0;
-  for (const auto& [a, b] : pieces) {
-    const Index n = static_cast<Index>(std::floor((raw.t[b - 1] - raw.t[a]) / T * (1 + 1e-12))) + 1;
-    if (n < 3 || b - a < 3) continue;
-    grids.push_back(raw.t[a] + T * Eigen::VectorXd::LinSpaced(n, 0.0, static_cast<double>(n - 1)).array());
-    kept.emplace_back(a, b);
-    total += n;
-    report.missing += std::max<long>(0, static_cast<long>(n - (b - a)));
+  // The sampling instants: the stamps, or the logger's regular clock estimated from them
+  // (sample_clock.hpp), whichever puts the positions on the grid more smoothly (third-difference
+  // power, geometric mean over the joints that move): a stamp error dt adds qd dt of white noise.
+  const SampleClock clock = estimate_sample_clock(raw.t, input_segments, T);
+  report.stamp_jitter = clock.stamp_jitter;
+  report.clock_missing = clock.missing;
+  std::vector<std::pair<Index, Index>> grid_pieces;
+  long missing = 0;
+  const JointLog on_stamps = resample(raw, raw.t, T, pieces, true, grid_pieces, missing);
+  const JointLog on_clock = resample(raw, clock.t, clock.period, pieces, true, grid_pieces, missing);
+  const Eigen::VectorXd r_stamps = third_difference_power(on_stamps.q, pieces_of(on_stamps));
+  const Eigen::VectorXd r_clock = third_difference_power(on_clock.q, pieces_of(on_clock));
+  double log_ratio = 0;
+  int moving = 0;
+  for (Index j = 0; j < r_stamps.size(); ++j) {
+    if (!(r_stamps[j] > 0.0) || !(r_clock[j] > 0.0)) continue;
+    log_ratio += std::log(r_clock[j] / r_stamps[j]);
+    ++moving;
   }
-  if (total == 0) throw InputError(raw.source + ": no stretch of at least 3 samples without a gap");
-  JointLog out;
-  out.source = raw.source;
-  out.has_qd = raw.has_qd;
-  out.has_qdd = raw.has_qdd;
-  out.period = T;
-  const int nj = raw.joints();
-  out.t.resize(total);
-  out.q.resize(total, nj);
-  out.tau.resize(total, nj);
-  if (out.has_qd) out.qd.resize(total, nj);
-  if (out.has_qdd) out.qdd.resize(total, nj);
-  Index row = 0;
-  for (size_t k = 0; k < kept.size(); ++k) {
-    const auto [a, b] = kept[k];
-    const Eigen::VectorXd& g = grids[k];
-    if (row > 0) out.segment_starts.push_back(row);
-    const Eigen::VectorXd x = raw.t.segment(a, b - a);
-    const Eigen::MatrixXd y = columns_of(raw, a, b);
-    Eigen::MatrixXd v(g.size(), y.cols());
-    NaturalCubicSpline(x, y).evaluate(g, v);
-    out.t.segment(row, g.size()) = g;
-    int c = 0;
-    auto take = [&](Eigen::MatrixXd& to) {
-      to.middleRows(row, g.size()) = v.middleCols(c, nj);
-      c += nj;
-    };
-    take(out.q);
-    if (out.has_qd) take(out.qd);
-    if (out.has_qdd) take(out.qdd);
-    take(out.tau);
-    row += g.size();
+  report.roughness_ratio = moving > 0 ? std::exp(log_ratio / moving) : 1.0;
+  report.clock_used = report.roughness_ratio < 1.0;
+  if (report.clock_used) {
+    raw.t = clock.t;
+    T = clock.period;
+    report.period = T;
+    report.raw_rate_hz = 1.0 / T;
   }
-  report.grid_samples = static_cast<long>(total);
-  report.segments = static_cast<int>(kept.size());
+  JointLog out = resample(raw, raw.t, T, pieces, false, grid_pieces, missing);
+  if (out.t.size() == 0) throw InputError(raw.source + ": no stretch of at least 3 samples without a gap");
+  report.missing = missing;
+  report.grid_samples = static_cast<long>(out.t.size());
+  report.segments = static_cast<int>(grid_pieces.size());
   return out;
 }
 
@@ -236,7 +283,14 @@ std::string describe(const SamplingReport& r, double max_gap) {
       r.raw_rate_hz, 1e3 * r.period, 100.0 * r.jitter_rms, r.raw_samples, r.grid_samples, r.missing,
       100.0 * static_cast<double>(r.missing) / static_cast<double>(std::max(1L, r.grid_samples)), r.gaps,
       r.gaps == 1 ? "" : "s", 1e3 * max_gap, r.gap_seconds, r.segments, r.segments == 1 ? "" : "s");
-  return line;
+  char clock[400];
+  std::snprintf(clock, sizeof clock,
+                "; sampling instants: %s (the stamps lie %.3g %% of the period RMS off a regular clock with %ld "
+                "ticks missing; positions on the grid %.3g times as rough through the clock as through the "
+                "stamps)",
+                r.clock_used ? "the logger's regular clock estimated from the stamps" : "the time stamps",
+                100.0 * r.stamp_jitter, r.clock_missing, r.roughness_ratio);
+  return std::string(line) + clock;
 }
 
 JointLog stack_logs(std::vector<JointLog> logs) {

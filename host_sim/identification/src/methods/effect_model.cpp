@@ -318,6 +318,9 @@ void fit_effect_model(const StackedData& d, const std::vector<ModelEffect>& effe
     for (Index s = 0; s < S; ++s)
       if (fold[static_cast<size_t>(s)] == f) pred.segment(s * N, N) = X.middleRows(s * N, N) * fit.phi;
   }
+  // Rows --min-speed leaves out of the fit are left out of the scores too.
+  for (Index r = 0; r < pred.size(); ++r)
+    if (!d.fit_row.empty() && !d.fit_row[static_cast<size_t>(r)]) pred[r] = std::nan("");
   res.joints = torque_metrics(d.y, pred, N, robot.tau_max);
   const auto t0 = std::chrono::steady_clock::now();
   ConsistentSolution consistent;

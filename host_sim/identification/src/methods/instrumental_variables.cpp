@@ -181,6 +181,9 @@ void fit_instrumental(const StackedData& d, const JointLog& grid, const std::vec
     for (Index s = 0; s < S; ++s)
       if (fold[static_cast<size_t>(s)] == f) pred.segment(s * N, N) = d.W.middleRows(s * N, N) * phi_f;
   }
+  // Rows --min-speed leaves out of the fit are left out of the scores too.
+  for (Index r = 0; r < pred.size(); ++r)
+    if (!d.fit_row.empty() && !d.fit_row[static_cast<size_t>(r)]) pred[r] = std::nan("");
   res.joints = torque_metrics(d.y, pred, N, robot.tau_max);
 
   // Standard deviations: the IV covariance, inflated by the residual's autocorrelation.

@@ -192,6 +192,11 @@ StackedData IdentifyPipeline::prepare(JointLog&& log, bool dense, const Eigen::V
     throw InputError("too few samples (" + std::to_string(log.samples()) + ", " + std::to_string(kept) +
                      " after filtering and decimation) for " + std::to_string(P) + " parameters");
   }
+  out.notes.push_back(log.has_qd
+                          ? std::string("states: the log's measured qd (filtered), ") +
+                                (log.has_qdd ? "its measured qdd" : "qdd differentiated from it") + "; q filtered"
+                          : "states: qd and qdd differentiated from the filtered q (no measured velocity in "
+                            "the log)");
   if (short_segments > 0)
     out.notes.push_back(std::to_string(short_segments) + " segment(s) not longer than two cut-off periods (" +
                         std::to_string(2 * keep.edge) + " samples) left out: filtering would only see their ends");
@@ -241,13 +246,22 @@ StackedData IdentifyPipeline::prepare(JointLog&& log, bool dense, const Eigen::V
   }
   // Rows of a joint moving slower than min_speed_fraction of its top speed stay out of the fit:
   // there a real joint sticks and Coulomb friction takes any value in [-Fc, Fc], which sgn(qd)
-  // cannot represent. They still count in the validation metrics.
+  // cannot represent. They are left out of the validation metrics too.
   const Eigen::VectorXd threshold = out.qd.cwiseAbs().colwise().maxCoeff().transpose() * opt_.min_speed_fraction;
   out.fit_row.assign(static_cast<size_t>(kept * N), 1);
   for (Eigen::Index r = 0; r < kept; ++r) {
     for (int j = 0; j < N; ++j) {
       if (std::abs(out.qd(r, j)) < threshold[j]) out.fit_row[static_cast<size_t>(r * N + j)] = 0;
     }
+  }
+  if (opt_.min_speed_fraction > 0.0) {
+    const auto slow = std::count(out.fit_row.begin(), out.fit_row.end(), 0);
+    char m[200];
+    std::snprintf(m, sizeof m,
+                  "--min-speed %g: %.3g %% of the joint rows (slower than that fraction of the joint's top speed) "
+                  "left out of the fit and of the validation metrics",
+                  opt_.min_speed_fraction, 100.0 * static_cast<double>(slow) / static_cast<double>(kept * N));
+    out.notes.push_back(m);
   }
   std::string line = "standstill: an unfiltered |qd| below " + std::to_string(kStandstillQuantile).substr(0, 4) +
                      " x its own noise counts as rest (friction sign 0); dead band [rad/s]";
@@ -639,7 +653,11 @@ IdentifyResult run_identify(const RobotDescription& robot, const TermSetModel& m
     Eigen::MatrixXd K;
     Eigen::VectorXd tau_hat(N);
     res.joints = torque_metrics(
-        data.y, N, robot.tau_max, [&](Eigen::Index s, int) { return fold[static_cast<size_t>(s)] >= 0; },
+        data.y, N, robot.tau_max,
+        // Rows --min-speed leaves out of the fit are left out of the scores too.
+        [&](Eigen::Index s, int j) {
+          return fold[static_cast<size_t>(s)] >= 0 && data.fit_row[static_cast<size_t>(s * N + j)];
+        },
         [&](Eigen::Index s) {
           data.regressor(s, K);
           tau_hat = K * fold_phi[static_cast<size_t>(fold[static_cast<size_t>(s)])];

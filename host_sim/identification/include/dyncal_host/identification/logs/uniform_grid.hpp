@@ -22,6 +22,14 @@ struct SamplingReport {
   int gaps = 0;            ///< splits at steps longer than max_gap
   double gap_seconds = 0;  ///< total duration of those gaps [s]
   bool resampled = false;  ///< false: the raw log was already uniform (within 1e-6 of the period) and is kept as is
+  /// Resampled logs: the stamps' RMS distance to the regular clock estimated from them
+  /// (sample_clock.hpp), / period, and that clock's ticks without a sample.
+  double stamp_jitter = 0;
+  long clock_missing = 0;
+  /// Third-difference power of the positions on the grid through the clock over that through the
+  /// stamps (geometric mean over the joints that move); < 1: the clock is used (clock_used).
+  double roughness_ratio = 1;
+  bool clock_used = false;
 };
 
 /// Relative deviation of every step from the median step under which a log counts as uniform and is
@@ -43,7 +51,10 @@ inline double bridgeable_gap(double cutoff_hz) {
 /// density, since the spline reads the raw time stamps). In each segment, the steps longer than max_gap [s] split it,
 /// and every piece is sampled at t0 + k T (t0 its first time stamp, up to its last) by a natural cubic spline through
 /// the raw samples of each column (q, measured qd and qdd, tau; error O(h^4) for smooth signals, and exact at the raw
-/// samples). A piece shorter than three grid samples is dropped (counted in the report). A log already uniform (every
+/// samples). The spline's abscissae are the stamps or, when it puts the positions on the grid more smoothly (the stamps
+/// were taken on arrival, the samples on the logger's clock), the regular clock estimated from the stamps
+/// (sample_clock.hpp; report.clock_used). A piece shorter than three grid samples is dropped (counted in the report). A
+/// log already uniform (every
 /// step within kUniformStepTolerance T of T, no gap) is returned unchanged (report.resampled false). Throws InputError:
 /// fewer than 3 samples, time not increasing (with the row), input segments of different rates (median steps more than
 /// 1 % apart), nothing left.
