@@ -191,6 +191,38 @@ INSTANTIATE_TEST_SUITE_P(SimulatedDrive, DiagnoseEffect, ::testing::Range(0, 6),
                            return std::string(effect_cases()[i.param].name);
                          });
 
+// A coupled motor whose ratio lies beyond the searched 1/5..5 (motor 6 turning with q6 + 8 q5): the
+// data do not bound the ratio inside the search, so no coupling or coupled motor is reported with a
+// ratio at the end of its interval, a note names it unbounded, and whatever is found has
+// non-negative friction (and a joint's rotor inertia positive).
+TEST(Diagnose, ARatioTheSearchCannotBoundIsNotReportedAsAnEffect) {
+  const auto robot = load_robot(default_robots_dir(), "er20");
+  Scenario s = default_scenario(robot);
+  s.motor_map[5][4] = 8.0;
+  const auto r = diagnose(robot, simulated_log(s, robot, 20), sim_options());
+  print_diagnose_report(std::cout, r);
+  // Named as unbounded.
+  EXPECT_TRUE(std::any_of(r.notes.begin(), r.notes.end(), [](const std::string& n) {
+    return n.find("its ratio is not bounded by the data") != std::string::npos;
+  }));
+  for (const DiagnosedEffect& e : r.effects) {
+    SCOPED_TRACE(e.explanation);
+    if (e.kind == Effect::coupling || e.kind == Effect::coupled_motor) {
+      EXPECT_GT(e.shape_interval.second, e.shape * (1 + 1e-9));
+      EXPECT_LT(e.shape_interval.first, e.shape * (1 - 1e-9));
+      EXPECT_LT(e.shape_interval.second, 5.0 * (1 - 1e-9));
+    }
+    for (size_t k = 0; k < e.params.size(); ++k) {
+      const std::string& n = e.param_names[k];
+      const bool friction = n.rfind("Fc", 0) == 0 || n.rfind("Fv", 0) == 0;
+      const bool coupled = e.kind == Effect::coupling || e.kind == Effect::coupled_motor;
+      if (e.kind == Effect::rotor_inertia || (coupled && friction)) {
+        EXPECT_GE(e.params[k], 0.0) << n;
+      }
+    }
+  }
+}
+
 TEST(Diagnose, AddsNothingWithoutAnUndeclaredEffectOverSeeds) {
   const auto robot = load_robot(default_robots_dir(), "er20");
   int runs_with_effects = 0;

@@ -243,6 +243,7 @@ void coupling(const CandidateContext& c, int i, int j, std::vector<Candidate>& o
   const std::string tag = J(i) + (r > 0 ? "+" : "-") + J(j);
   Candidate cand =
       table_candidate(c, Effect::coupling, EffectKind::coupling, {i, j}, {"Fc" + tag, "Fv" + tag, "Ia" + tag}, 0.0, r);
+  cand.unbounded = best.unbounded;
   cand.sign = r > 0 ? 1.0 : -1.0;
   cand.shape = std::abs(r);
   cand.shape_interval = {std::exp(best.lo_log), std::exp(best.hi_log)};
@@ -353,6 +354,7 @@ void coupled_motor_of(const CandidateContext& c, int k, int l, std::vector<Candi
   cand.columns = std::move(kept);
   cand.names = std::move(names);
   cand.replaces = std::move(replaced);
+  cand.unbounded = best.unbounded;
   cand.sign = r > 0 ? 1.0 : -1.0;
   cand.shape = std::abs(r);
   cand.shape_interval = {std::exp(best.lo_log), std::exp(best.hi_log)};
@@ -399,7 +401,9 @@ bool any_sign(const VectorXd&) {
 bool first_positive(const VectorXd& added) {
   return added[0] > 0;
 }
-/// A coupled motor's friction opposes motion (its inertia may be about 0).
+/// A coupled motor's friction opposes motion. Its inertia is not held to a sign: a coupling of
+/// friction alone (inertia 0) fits a slightly negative one half the time, and refusing it there
+/// rejected the true coupling for a wrong one (docs/diagnose.md).
 bool friction_non_negative(const VectorXd& added) {
   return added[0] >= 0 && added[1] >= 0;
 }

@@ -30,6 +30,10 @@ struct Candidate {
   double sign = 1;   ///< coupling: the motor turns with q_i + sign shape q_j
   std::pair<double, double> shape_interval{0, 0};  ///< 95 % interval of shape where searched (coupling ratio)
   std::vector<std::string> replaces;  ///< the model's parameters (columns) it takes the place of (coupled_motor)
+  /// A ratio the data do not bound (coupling, coupled_motor): its 95 % interval reaches the end of
+  /// the searched range, or the estimate is an end of its own interval (the physical signs cut the
+  /// profile there: the likelihood's maximum lies beyond). Never selected; reported as unbounded.
+  bool unbounded = false;
 
   /// Parameters it adds to the model: its columns less those it replaces.
   Eigen::Index added_parameters() const { return columns.cols() - static_cast<Eigen::Index>(replaces.size()); }

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
+#include <set>
 #include <sstream>
 #include <utility>
 
@@ -63,6 +64,7 @@ struct Evidence {
   double gain = 0;       ///< relative drop of those joints' validation RSS
   bool physical = true;  ///< its fitted parameters have physical signs
   bool collinear = false;
+  bool unbounded = false;  ///< Candidate::unbounded: its ratio is not determined
 };
 
 /// The model so far: its design, names, fit and validation / training RSS per joint.
@@ -117,12 +119,13 @@ Evidence weigh(const CrossValidator& cv, const Candidate& c, const Model& m, con
   e.delta_bic += 2.0 * std::log(static_cast<double>(c.searched));
   e.gain = v0 > 0 ? (v0 - v1 - harm) / v0 : 0;
   e.physical = detail::effect_spec(c.effect).physical(phi_c.tail(c.columns.cols()));
+  e.unbounded = c.unbounded;
   return e;
 }
 
 /// Whether a candidate passes every check of the selection.
 bool qualifies(const Evidence& e, const DiagnoseOptions& o) {
-  return e.physical && !e.collinear && e.delta_bic < -o.bic_threshold && e.gain >= o.min_gain;
+  return e.physical && !e.unbounded && !e.collinear && e.delta_bic < -o.bic_threshold && e.gain >= o.min_gain;
 }
 
 /// Parsimony: among the qualifying candidates on the same joints as `best` that add fewer
@@ -178,7 +181,7 @@ std::vector<std::string> indistinguishable(const std::vector<Candidate>& cands, 
   for (size_t k = 0; k < cands.size(); ++k) {
     const Candidate& a = cands[k];
     if (static_cast<int>(k) == chosen || a.effect == c.effect || !same_joints(a, c)) continue;
-    if (!ev[k].physical || ev[k].collinear) continue;
+    if (!ev[k].physical || ev[k].unbounded || ev[k].collinear) continue;
     const bool close = std::abs(ev[k].delta_bic - e.delta_bic) < 2.0;
     const bool nested = !close && c.replaces.empty() && a.replaces.empty() && a.columns.cols() > c.columns.cols() &&
                         ev[k].gain >= e.gain - 0.01 && unexplained_fraction(c, a, X, N) < 1.0 / n_min;
@@ -209,6 +212,9 @@ std::vector<RejectedCandidate> strongest_rejected(const std::vector<Candidate>& 
     why << std::setprecision(3);
     if (!e.physical)
       why << "unphysical sign of its parameter (BIC change " << rc.delta_bic << ")";
+    else if (e.unbounded)
+      why << "ratio unbounded: " << c.detail
+          << " reaches the end of the searched 1/5..5 or ends at the estimate (BIC change " << rc.delta_bic << ")";
     else if (rc.delta_bic >= -bic_threshold)
       why << "BIC change " << rc.delta_bic << " (needs < " << -bic_threshold << ")";
     else
@@ -385,6 +391,7 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
       a = s + 1;
     }
 
+  std::set<std::string> unbounded_noted;  // one note per unbounded candidate (kind and joints)
   for (int step = 0; step < o.max_effects; ++step) {
     library.model_names = m.names;
     library.residual = d.y - m.X * m.phi;
@@ -407,6 +414,28 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
         best_score = e.gain;
         best = static_cast<int>(c);
       }
+    }
+    // A candidate that would be chosen but for a ratio the data do not bound is named, not added.
+    int unbounded = -1;
+    for (size_t c = 0; c < cands.size(); ++c) {
+      Evidence e = ev[c];
+      if (!e.unbounded) continue;
+      e.unbounded = false;
+      if (qualifies(e, o) && e.gain > best_score && (unbounded < 0 || e.gain > ev[static_cast<size_t>(unbounded)].gain))
+        unbounded = static_cast<int>(c);
+    }
+    if (unbounded >= 0) {
+      const Candidate& u = cands[static_cast<size_t>(unbounded)];
+      std::ostringstream note;
+      note << std::setprecision(3) << effect_name(u.effect) << " on joints " << u.joints[0] + 1 << " and "
+           << u.joints[1] + 1 << " would explain the most (validation RSS -"
+           << 100 * ev[static_cast<size_t>(unbounded)].gain << " %), but its ratio is not bounded by the data ("
+           << u.detail
+           << ": the interval reaches the end of the searched 1/5..5 or ends at the estimate): not added; what is "
+              "added after it may be standing in for it";
+      const std::string key =
+          std::string(effect_name(u.effect)) + " " + std::to_string(u.joints[0]) + " " + std::to_string(u.joints[1]);
+      if (unbounded_noted.insert(key).second) res.notes.push_back(note.str());
     }
     if (best < 0) {
       res.rejected = strongest_rejected(cands, ev, o.bic_threshold);

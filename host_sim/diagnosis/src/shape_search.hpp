@@ -248,6 +248,10 @@ double full_replacement_gain(const CandidateContext& c, const FullReplacement& f
 /// A shape found by profile search: log of its value, the gain there, and the 95 % interval.
 struct ShapeFit {
   double log_value = 0, gain = -1, lo_log = 0, hi_log = 0;
+  /// The interval reaches an end of the searched range, or the estimate is an end of its own
+  /// interval (no value beyond it on that side fits as well: the gain stops there, as where the
+  /// physical signs cut it): the data do not bound the value.
+  bool unbounded = false;
 };
 
 /// The weighted RSS of `joints`' residual (the profile's reference) and its effective samples (the
@@ -310,6 +314,7 @@ ShapeFit profile_search(Gain gain, double lo_log, double hi_log, int points, dou
   };
   f.lo_log = bound(-1);
   f.hi_log = bound(+1);
+  f.unbounded = f.lo_log <= lo_log || f.hi_log >= hi_log || f.lo_log == f.log_value || f.hi_log == f.log_value;
   return f;
 }
 
