@@ -13,6 +13,7 @@
 
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/identification/methods/identifiability.hpp"
+#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
 #include "dyncal_host/identification/pipeline/identify.hpp"
 #include "dyncal_host/identification/reports/identify_report.hpp"
 #include "support/simulated_log.hpp"
@@ -176,6 +177,52 @@ TEST(Identifiability, KalmanFilterAndPclsNameWhatTheirValuesRestOn) {
     EXPECT_EQ(fc3.verdict, Verdict::not_determined);
     EXPECT_EQ(fc3.basis, std::string(method) == "kf" ? "start" : "prior");
   }
+}
+
+// pcls on a log that leaves inertials undetermined (arm3, joint 3 held): every link mass within a
+// factor 1.5 of robot.json's (the prior; the simulated arm's truth), the validation within 5 % of
+// WLS per joint, no warning. On a log whose last link is twice as heavy as robot.json says, a
+// warning names that link.
+TEST(Identifiability, PclsKeepsUndeterminedMassesAtThePriorAndWarnsOfALinkTheDataMove) {
+  const RobotDescription robot = test_robot("arm3");
+  const auto& c = dyncal::host::compiled_robot_for(robot);
+  const auto still = dyncal::test::simulate(robot, uniform_times(500.0, 40.0), MotionClock{}, 5, 3, {},
+                                            dyncal::test::kEncoderStep, {2});
+  IdentifyOptions o = wls_eq7();
+  const IdentifyResult wls = identify(robot, still.log, o);
+  o.method = "pcls";
+  const IdentifyResult pcls = identify(robot, still.log, o);
+  ASSERT_EQ(pcls.links.size(), 3u);
+  for (size_t l = 0; l < 3; ++l) {
+    const double prior = c.nominal_standard[10 * l + 9];
+    std::printf("link %zu: mass %.4g kg, prior %.4g kg\n", l + 1, pcls.links[l].mass, prior);
+    EXPECT_LT(pcls.links[l].mass, 1.5 * prior);
+    EXPECT_GT(pcls.links[l].mass, prior / 1.5);
+  }
+  for (size_t j = 0; j < 2; ++j) {  // joint 3 does not move: its rows are friction-free gravity only
+    std::printf("joint %zu: validation RMS pcls %.4g, wls %.4g Nm\n", j + 1, pcls.joints[j].rms, wls.joints[j].rms);
+    EXPECT_LE(pcls.joints[j].rms, 1.05 * wls.joints[j].rms);
+  }
+  for (const auto& n : pcls.notes) EXPECT_EQ(n.find("warning: pcls moved link"), std::string::npos) << n;
+
+  // The last link twice as heavy (every standard parameter of it doubled: a consistent body).
+  Eigen::VectorXd nominal = Eigen::Map<const Eigen::VectorXd>(c.nominal_standard.data(), c.num_standard);
+  Eigen::VectorXd heavy = nominal;
+  heavy.tail(10) *= 2.0;
+  const auto extra = [&](const Eigen::VectorXd& q, const Eigen::VectorXd& qd, const Eigen::VectorXd& qdd,
+                         Eigen::VectorXd& tau) {
+    tau += c.inverse_dynamics(q, qd, qdd, heavy) - c.inverse_dynamics(q, qd, qdd, nominal);
+  };
+  const auto loaded = dyncal::test::simulate(robot, uniform_times(500.0, 40.0), MotionClock{}, 5, 3, extra);
+  const IdentifyResult moved = identify(robot, loaded.log, o);
+  bool warned = false;
+  for (const auto& n : moved.notes) {
+    if (n.find("warning: pcls moved link 3's mass") != std::string::npos) warned = true;
+    if (n.find("warning") != std::string::npos) std::printf("%s\n", n.c_str());
+  }
+  EXPECT_TRUE(warned);
+  std::printf("heavier link 3: pcls mass %.4g kg (robot.json %.4g, true %.4g)\n", moved.links[2].mass, nominal[29],
+              heavy[29]);
 }
 
 }  // namespace

@@ -174,6 +174,16 @@ void report_consistent(const ConsistentSolution& s, const IdentifyOptions& o, Id
     res.links.push_back(
         {static_cast<int>(l) + 1, v[0], {v[1], v[2], v[3]}, {v[4], v[5], v[6], v[7], v[8], v[9]}, s.min_eigenvalue[l]});
   }
+  for (size_t l = 0; l < s.prior_mass.size() && l < res.links.size(); ++l) {
+    const double prior = s.prior_mass[l], mass = res.links[l].mass;
+    if (!(std::abs(mass - prior) > o.prior_std * prior)) continue;
+    char line[300];
+    std::snprintf(line, sizeof line,
+                  "warning: pcls moved link %zu's mass from robot.json's %.4g kg to %.4g kg, beyond the prior's "
+                  "+-%.3g %%: the data, an effect the model lacks, a load or a wrong URDF put it there",
+                  l + 1, prior, mass, 100.0 * o.prior_std);
+    res.notes.push_back(line);
+  }
 }
 
 ConsistentSolution search_consistent(const ConsistentProblem& p, SearchMethod method, OptimiserSettings options) {

@@ -14,7 +14,8 @@ namespace {
 
 using Mat10 = Eigen::Matrix<double, 10, 10>;
 
-/// r = [R [K phi(theta); x] - z ; (phi(theta) - prior) / s ; 0] over v = [theta (10 L) | x (P - num_base)].
+/// r = [(R [K phi(theta); x(y)] - z) / sqrt(sigma2) ; (phi(theta) - prior) / s ; 0] over
+/// v = [theta (10 L) | y (P - num_base)], x_i = y_i^2 for the non-negative parameters, y_i otherwise.
 /// Without a prior there are fewer data rows (P) than unknowns (10 L + P - num_base), which Eigen's
 /// Levenberg-Marquardt refuses: zero rows pad r to the unknowns' count (they change nothing).
 struct Residuals : Eigen::DenseFunctor<double> {
@@ -23,6 +24,8 @@ struct Residuals : Eigen::DenseFunctor<double> {
   Eigen::VectorXd inv_s;
   int L = 0, nx = 0;
   bool with_prior = false;
+  double wd = 1;              // 1 / sqrt(sigma2): the data rows in units of their effective noise
+  std::vector<char> squared;  // per x: held >= 0 as y^2
 
   Residuals(const ConsistentProblem& problem, int links, const Eigen::VectorXd& inv_std)
       : Eigen::DenseFunctor<double>(10 * links + static_cast<int>(problem.R.cols()) - problem.num_base,
@@ -34,6 +37,17 @@ struct Residuals : Eigen::DenseFunctor<double> {
         nx(static_cast<int>(problem.R.cols()) - problem.num_base),
         with_prior(inv_std.size() > 0) {
     RK = p.R.leftCols(p.num_base) * p.K;
+    wd = 1.0 / std::sqrt(p.sigma2);
+    squared.assign(static_cast<size_t>(nx), 0);
+    for (int i : p.nonnegative) squared[static_cast<size_t>(i - p.num_base)] = 1;
+  }
+
+  /// The model's non-inertial parameters x of v's tail y.
+  Eigen::VectorXd x_of(const Eigen::VectorXd& v) const {
+    Eigen::VectorXd x = v.tail(nx);
+    for (int i = 0; i < nx; ++i)
+      if (squared[static_cast<size_t>(i)]) x[i] *= x[i];
+    return x;
   }
 
   Eigen::VectorXd standard(const Eigen::VectorXd& v, std::vector<Mat10>* jac = nullptr) const {
@@ -48,7 +62,8 @@ struct Residuals : Eigen::DenseFunctor<double> {
     const Eigen::VectorXd phi = standard(v);
     const Eigen::Index n = p.R.rows();
     r.head(n) = RK * phi - p.z;
-    if (nx > 0) r.head(n) += p.R.rightCols(nx) * v.tail(nx);
+    if (nx > 0) r.head(n) += p.R.rightCols(nx) * x_of(v);
+    r.head(n) *= wd;
     if (with_prior) r.segment(n, 10 * L) = (phi - p.prior).cwiseProduct(inv_s);
     r.tail(r.size() - n - (with_prior ? 10 * L : 0)).setZero();
     return 0;
@@ -61,10 +76,13 @@ struct Residuals : Eigen::DenseFunctor<double> {
     const Eigen::Index n = p.R.rows();
     for (int l = 0; l < L; ++l) {
       const Mat10& d = jac[static_cast<size_t>(l)];
-      J.block(0, 10 * l, n, 10) = RK.middleCols(10 * l, 10) * d;
+      J.block(0, 10 * l, n, 10) = wd * RK.middleCols(10 * l, 10) * d;
       if (with_prior) J.block(n + 10 * l, 10 * l, 10, 10) = inv_s.segment(10 * l, 10).asDiagonal() * d;
     }
-    if (nx > 0) J.block(0, 10 * L, n, nx) = p.R.rightCols(nx);
+    for (int i = 0; i < nx; ++i) {
+      const double dx = squared[static_cast<size_t>(i)] ? 2.0 * v[10 * L + i] : 1.0;
+      J.block(0, 10 * L + i, n, 1) = (wd * dx) * p.R.col(p.num_base + i);
+    }
     return 0;
   }
 };
@@ -92,6 +110,17 @@ Eigen::VectorXd prior_std(const Eigen::VectorXd& nominal, double relative_std) {
   return s;
 }
 
+std::vector<int> nonnegative_terms(const std::vector<std::string>& names, int num_base) {
+  std::vector<int> out;
+  for (size_t i = static_cast<size_t>(num_base); i < names.size(); ++i) {
+    const std::string& n = names[i];
+    const bool kind = n.rfind("Fc", 0) == 0 || n.rfind("Fv", 0) == 0 || n.rfind("Ia", 0) == 0;
+    if (kind && n.size() > 2 && std::all_of(n.begin() + 2, n.end(), [](char c) { return c >= '0' && c <= '9'; }))
+      out.push_back(static_cast<int>(i));
+  }
+  return out;
+}
+
 ConsistentSolution consistent_least_squares(const ConsistentProblem& p) {
   const int L = static_cast<int>(p.K.cols() / 10);
   const Eigen::Index P = p.R.cols();
@@ -103,6 +132,9 @@ ConsistentSolution consistent_least_squares(const ConsistentProblem& p) {
   Eigen::VectorXd v = Eigen::VectorXd::Zero(10 * L + nx);
   for (int l = 0; l < L; ++l) theta_from_pseudo_inertia(pseudo_inertia(p.prior.data() + 10 * l), v.data() + 10 * l);
   if (nx > 0 && p.start.size() == P) v.tail(nx) = p.start.tail(nx);
+  // A non-negative parameter starts at the root of its start's magnitude (0 would stall: dx/dy = 0).
+  for (int i = 0; i < nx; ++i)
+    if (f.squared[static_cast<size_t>(i)]) v[10 * L + i] = std::sqrt(std::abs(v[10 * L + i]));
   Eigen::LevenbergMarquardt<Residuals> lm(f);
   lm.setMaxfev(400);
   lm.setFtol(1e-12);
@@ -116,19 +148,22 @@ ConsistentSolution consistent_least_squares(const ConsistentProblem& p) {
   s.standard = f.standard(v, &jac);
   s.params.resize(P);
   s.params.head(p.num_base) = p.K * s.standard;
-  if (nx > 0) s.params.tail(nx) = v.tail(nx);
+  if (nx > 0) s.params.tail(nx) = f.x_of(v);
   for (int l = 0; l < L; ++l) s.min_eigenvalue.push_back(theta_min_eigenvalue(v.data() + 10 * l));
-  // Covariance of v from the Gauss-Newton matrix (data scaled by sigma2, prior as is), propagated
-  // to the model parameters p = G v, G = [K dphi/dtheta, 0; 0, I].
+  if (f.with_prior)
+    for (int l = 0; l < L; ++l) s.prior_mass.push_back(p.prior[10 * l + 9]);
+  // Covariance of v from the Gauss-Newton matrix (data rows already in units of sigma2, prior as
+  // is), propagated to the model parameters p = G v, G = [K dphi/dtheta, 0; 0, dx/dy].
   Eigen::MatrixXd J(f.values(), f.inputs());
   f.df(v, J);
   const Eigen::Index n = p.R.rows();
-  Eigen::MatrixXd H = J.topRows(n).transpose() * J.topRows(n) / p.sigma2;
+  Eigen::MatrixXd H = J.topRows(n).transpose() * J.topRows(n);
   if (f.with_prior) H += J.middleRows(n, 10 * L).transpose() * J.middleRows(n, 10 * L);
   Eigen::MatrixXd G = Eigen::MatrixXd::Zero(P, f.inputs());
   for (int l = 0; l < L; ++l)
     G.block(0, 10 * l, p.num_base, 10) = p.K.middleCols(10 * l, 10) * jac[static_cast<size_t>(l)];
-  if (nx > 0) G.block(p.num_base, 10 * L, nx, nx).setIdentity();
+  for (int i = 0; i < nx; ++i)
+    G(p.num_base + i, 10 * L + i) = f.squared[static_cast<size_t>(i)] ? 2.0 * v[10 * L + i] : 1.0;
   const Eigen::MatrixXd cov = G * H.completeOrthogonalDecomposition().pseudoInverse() * G.transpose();
   s.params_std = cov.diagonal().cwiseMax(0.0).cwiseSqrt();
   return s;

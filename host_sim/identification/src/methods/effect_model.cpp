@@ -152,8 +152,9 @@ ConsistentSolution make_consistent(const StackedData& d, const MatrixXd& X, cons
   p.K = base_map(compiled);
   p.prior = Eigen::Map<const VectorXd>(compiled.nominal_standard.data(), compiled.num_standard);
   p.prior_relative_std = o.prior_std;
-  p.sigma2 = f.sigma2;
   p.start = f.phi;
+  p.nonnegative = nonnegative_terms(d.names, d.num_base);
+  p.sigma2 = f.sigma2;
   ConsistentSolution s;
   if (o.method == "pcls") {
     s = consistent_least_squares(p);

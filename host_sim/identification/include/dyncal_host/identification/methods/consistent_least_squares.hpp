@@ -27,7 +27,11 @@ struct ConsistentProblem {
   Eigen::MatrixXd K;      ///< num_base x 10 L: base parameters of the standard ones (Gautier)
   Eigen::VectorXd prior;  ///< 10 L nominal standard parameters (robot.json inertials)
   double prior_relative_std = kPriorRelativeStd;  ///< <= 0: no prior (consistency alone)
-  double sigma2 = 1;      ///< variance of the weighted residual, for the parameters' standard deviations
+  /// Variance of the weighted residual per row: the data rows weigh 1 / sigma2 against the prior
+  /// and set the parameters' standard deviations (identify: the WLS residual's variance).
+  double sigma2 = 1;
+  /// Indices (>= num_base) of parameters held >= 0 (friction, rotor inertia): fitted as squares.
+  std::vector<int> nonnegative;
   Eigen::VectorXd start;  ///< P: start of the non-inertial parameters (e.g. the WLS solution); empty: 0
 };
 
@@ -36,6 +40,9 @@ struct ConsistentSolution {
   Eigen::VectorXd params_std;          ///< their standard deviations (Gauss-Newton at the solution, sigma2)
   Eigen::VectorXd standard;            ///< 10 L consistent standard parameters
   std::vector<double> min_eigenvalue;  ///< per link, of its pseudo-inertia (> 0: consistent)
+  /// consistent_least_squares with a prior: per link, the prior's mass [kg] (robot.json's), which
+  /// report_consistent compares the fitted mass with.
+  std::vector<double> prior_mass;
   int iterations = 0;
   /// search_consistent: standard parameters that end at an end of their range (within 1e-6 of its
   /// width) that binds: moving that parameter alone outwards to where the cost is least along it
@@ -45,6 +52,11 @@ struct ConsistentSolution {
   /// minimum (chi-square units).
   double cost_excess = 0;
 };
+
+/// The parameters among names[num_base..] that physics keeps >= 0 in a consistent fit: each
+/// motor's Coulomb and viscous friction and rotor inertia (Fc<j>, Fv<j>, Ia<j>, as identify names
+/// them); not effect terms (an asymmetric difference Fc+<j> has either sign).
+std::vector<int> nonnegative_terms(const std::vector<std::string>& names, int num_base);
 
 /// Solves `p`. Throws InputError when Levenberg-Marquardt fails or ends non-finite.
 ConsistentSolution consistent_least_squares(const ConsistentProblem& p);
@@ -81,7 +93,9 @@ struct IdentifyResult;
 /// identify's settings of search_consistent: --range-width, --seed, --evaluations (IdentifyOptions).
 OptimiserSettings search_settings(const IdentifyOptions& options);
 /// identify's report of a consistent fit (pcls, gd, ga, pf) into res: each link's inertials
-/// (res.links: mass, centre of mass, inertia about it, smallest pseudo-inertia eigenvalue); for a
+/// (res.links: mass, centre of mass, inertia about it, smallest pseudo-inertia eigenvalue); for pcls
+/// a warning per link whose mass the fit moved beyond the prior's standard deviation (--prior-std
+/// of robot.json's mass: the data, an effect the model lacks, a load or a wrong URDF put it there); for a
 /// search, a note with the cost above least squares' minimum and the parameters the search range
 /// limited; for pcls without a prior, a note that only base combinations are identified.
 void report_consistent(const ConsistentSolution& s, const IdentifyOptions& options, IdentifyResult& res);

@@ -56,6 +56,7 @@ class IdentifyPipeline {
     double inflation = 1;           ///< the residual's autocorrelation factor S / n_eff
     DeterminedFit decision;         ///< the parameters the log does not determine (identifiability.hpp)
     Eigen::VectorXd data_stdev;     ///< pcls, gd, ga, pf: the weighted least-squares std (the data alone)
+    double decision_inflation = 1;  ///< the OLS residual's autocorrelation factor the decision and pcls use
   };
 
   /// Fits on the samples with train[s] true. Writes phi and parameter standard deviations (P).
@@ -64,12 +65,12 @@ class IdentifyPipeline {
   /// the others from the least-squares fits (held at 0, std NaN); the std are the white-noise figures
   /// times the square root of the autocorrelation factor S / n_eff of the final residual
   /// (streamed_autocorrelation_inflation, N passes over the data), written into details->inflation.
-  /// A fold's fit (`dropped` given: the final fit's decision) drops the same parameters and writes
-  /// the white-noise figures. pcls, gd, ga, pf start from the weighted least-squares fit with the
-  /// dropped parameters at 0 and fit every parameter (the prior or the search range holds those).
-  /// Throws InputError.
+  /// A fold's fit (`decided` given: the final fit's details) drops the same parameters, weighs pcls's
+  /// data by the same autocorrelation factor and writes the white-noise figures. pcls, gd, ga, pf start from the
+  /// weighted least-squares fit with the dropped parameters at 0 and fit every parameter (the prior or the search range
+  /// holds those). Throws InputError.
   void fit(const StackedData& data, const std::vector<char>& train, Eigen::VectorXd& phi, Eigen::VectorXd& stdev,
-           FitDetails* details, const std::vector<int>* dropped = nullptr) const;
+           FitDetails* details, const FitDetails* decided = nullptr) const;
 
   /// Physical scale of each parameter (parameter_scales.hpp).
   const Eigen::VectorXd& scales() const { return scale_; }
