@@ -92,6 +92,18 @@ def do_import(args):
         raise urdf_import.ImportError_(
             f"internal: the normalised chain differs from the URDF in KDL (frames {frame_error:.3g}, "
             f"torques {torque_error}); nothing written")
+    # Inertials no link of this arm can have are refused before anything is written.
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as tmp:
+        probe = os.path.join(tmp, "probe.urdf")
+        with open(probe, "w") as f:
+            f.write(normalised_urdf(args.name, chain, os.path.basename(args.urdf)))
+        try:
+            for w in description.check_inertials(description.load_urdf(probe)):
+                print(f"{args.name}: warning: {w}")
+        except description.DescriptionError as e:
+            raise urdf_import.ImportError_(f"{args.urdf}: {e}; nothing written") from None
     limits = limits_of(chain)
     robot_dir = os.path.join(args.robots_dir, args.name)
     if os.path.exists(os.path.join(robot_dir, "robot.json")) and not args.force:
@@ -103,7 +115,9 @@ def do_import(args):
         "source": {"file": "source.urdf", "base": chain.base, "tip": chain.tip,
                    "joints": [j["name"] for j in chain.joints]},
         "gravity": gravity,
-        "rotor_inertia": False,
+        # Rotor inertia in the generated model (its columns where separable): the default model
+        # (identify, calibrate) asks for it, and a URDF says nothing of the motors.
+        "rotor_inertia": True,
         "limits": limits,
     }
     os.makedirs(robot_dir, exist_ok=True)
@@ -126,13 +140,12 @@ def do_import(args):
 def do_check(args):
     robot_dir = os.path.join(args.robots_dir, args.name)
     path = os.path.join(robot_dir, "robot.json")
+    if not os.path.exists(path):
+        raise urdf_import.ImportError_(f"unknown robot '{args.name}' (no {path})")
     try:
-        with open(path) as f:
-            desc = json.load(f)
-    except OSError:
-        raise urdf_import.ImportError_(f"unknown robot '{args.name}' (no {path})") from None
-    except json.JSONDecodeError as e:
-        raise urdf_import.ImportError_(f"{path}: invalid JSON: {e}") from None
+        desc = description.read_json(path)
+    except description.DescriptionError as e:
+        raise urdf_import.ImportError_(str(e)) from None
     try:
         n = schema.validate(desc, robot_dir)
         joints = description.load_description(robot_dir, desc)
@@ -141,6 +154,8 @@ def do_check(args):
     if len(joints) != n:
         raise urdf_import.ImportError_(f"{path}: limits list {n} joints, the kinematics {len(joints)}")
     msg = f"{args.name}: robot.json valid, {n} joints"
+    for w in description.check_inertials(joints):
+        print(f"{args.name}: warning: {w}")
     src = desc.get("source")
     if isinstance(src, dict) and "file" in src:
         source = os.path.join(robot_dir, src["file"])
@@ -148,6 +163,22 @@ def do_check(args):
         _, chain = urdf_import.normalise(source, src.get("base"), src.get("tip"))
         from dyncal_codegen import kdl_check
 
+        # The folder's URDF copy is what import writes from the source: an edit shows here.
+        kin = desc.get("kinematics", {})
+        if kin.get("format") == "urdf":
+            copy = os.path.join(robot_dir, kin["file"])
+            with open(copy, encoding="utf-8", errors="replace") as f:
+                have = f.read().splitlines()
+            want = normalised_urdf(args.name, chain, src["file"]).splitlines()
+            for k in range(max(len(have), len(want))):
+                if k == 1:
+                    continue  # the comment naming the file imported from
+                a = have[k].strip() if k < len(have) else "(end of file)"
+                b = want[k].strip() if k < len(want) else "(end of file)"
+                if a != b:
+                    raise urdf_import.ImportError_(
+                        f"{copy} line {k + 1} differs from what {src['file']} gives ('{a[:80]}' instead of "
+                        f"'{b[:80]}'): the copy was edited; correct the URDF and re-import it (robot import --force)")
         fe, te = kdl_check.check(links, ujoints, chain, desc.get("gravity", [0, 0, -9.81]))
         if fe > kdl_check.TOLERANCE or (te is not None and te > kdl_check.TOLERANCE):
             raise urdf_import.ImportError_(f"{args.name}: the model differs from {src['file']} in KDL "
@@ -210,6 +241,13 @@ def main():
     except urdf_import.ImportError_ as e:
         print(f"dyncal robot {args.command}: {e}", file=sys.stderr)
         return 2
+    except (description.DescriptionError, UnicodeDecodeError, RecursionError, ValueError) as e:
+        print(f"dyncal robot {args.command}: {type(e).__name__}: {e}".splitlines()[0], file=sys.stderr)
+        return 2
+    except Exception as e:  # a defect of this tool: still one line, never a traceback
+        print(f"dyncal robot {args.command}: internal error: {type(e).__name__}: {e}".splitlines()[0],
+              file=sys.stderr)
+        return 1
 
 
 if __name__ == "__main__":

@@ -18,14 +18,15 @@ failures = []
 
 
 def run(args):
-    p = subprocess.run([DYNCAL] + args, capture_output=True, text=True)
+    p = subprocess.run([DYNCAL] + args, capture_output=True, text=True, errors="replace")
     return p.returncode, p.stdout, p.stderr
 
 
 def expect_one_line(case, args, needle):
     rc, out, err = run(args)
     lines = [line for line in err.splitlines() if line.strip()]
-    ok = rc == 2 and len(lines) == 1 and "Traceback" not in err and needle in err
+    ok = rc == 2 and len(lines) == 1 and "Traceback" not in err and needle in err and "\ufffd" not in err and \
+        all(c.isprintable() for c in err.strip())
     print(f"{'ok  ' if ok else 'FAIL'} {case}: exit {rc}: {err.strip()}")
     if not ok:
         failures.append(f"{case}: expected exit 2 and one line containing {needle!r}; got exit {rc}, stderr {err!r}")
@@ -105,6 +106,8 @@ def robot_json_cases(good):
         ("friction_not_object", edit(lambda d: d.__setitem__("friction", [1, 2, 3])), "friction[1]"),
         ("too_many_joints", edit(lambda d: [d["limits"][k].extend([1.0] * 5) for k in d["limits"]]),
          "limits"),
+        ("nested_too_deeply", lambda d: "[" * 100000, "invalid JSON"),
+        ("utf16", lambda d: json.dumps(d).encode("utf-16"), "robot.json"),
     ]
 
 
@@ -152,12 +155,25 @@ def main():
             d = os.path.join(tmp, "json_" + case)
             shutil.copytree(os.path.join(robots, "arm3"), os.path.join(d, "arm3"))
             desc = mutate(base)
-            with open(os.path.join(d, "arm3", "robot.json"), "w") as f:
-                f.write(desc if isinstance(desc, str) else json.dumps(desc))
+            with open(os.path.join(d, "arm3", "robot.json"), "wb") as f:
+                f.write(desc if isinstance(desc, bytes) else (desc if isinstance(desc, str) else json.dumps(desc)).encode())
             expect_one_line("robot.json " + case + " (check)", ["robot", "check", "arm3", "--robots-dir", d], needle)
             expect_one_line("robot.json " + case + " (C++ loader)",
                             ["excite", "--robot", "arm3", "--robots-dir", d, "--out", os.path.join(d, "t.json")],
                             needle)
+        # The folder's URDF copy: an edited inertial, and one no link of the arm can have (issue 43).
+        copy_text = open(os.path.join(robots, "arm3", "arm3.urdf")).read()
+        for case, text, needle in [
+                ("edited_mass", copy_text.replace('<mass value="5.0"/>', '<mass value="2.5"/>', 1), "was edited"),
+                ("huge_inertia", copy_text.replace('ixx="', 'ixx="1e308" old="', 1), "twice the arm's extent")]:
+            d = os.path.join(tmp, "urdf_copy_" + case)
+            shutil.copytree(os.path.join(robots, "arm3"), os.path.join(d, "arm3"))
+            assert text != copy_text, case
+            with open(os.path.join(d, "arm3", "arm3.urdf"), "w") as f:
+                f.write(text)
+            expect_one_line("URDF copy " + case + " (check)", ["robot", "check", "arm3", "--robots-dir", d], needle)
+        huge = ARM3.replace('ixx="', 'ixx="1e308" old="', 1)
+        urdf_case(tmp, "huge_inertia", huge, "twice the arm's extent")
         d = os.path.join(tmp, "json_directory")
         os.makedirs(os.path.join(d, "arm3", "robot.json"))
         expect_one_line("robot.json is a directory (C++ loader)", ["excite", "--robot", "arm3", "--robots-dir", d,

@@ -172,6 +172,22 @@ def load_urdf(path):
     return joints
 
 
+def read_json(path):
+    """The JSON object of file `path` (UTF-8). Raises DescriptionError with one line: unreadable, not
+    UTF-8, invalid JSON, nested too deeply."""
+    try:
+        with open(path, encoding="utf-8") as f:
+            return json.load(f)
+    except OSError as e:
+        raise DescriptionError(f"{path}: cannot be read ({e.strerror})") from None
+    except UnicodeDecodeError as e:
+        raise DescriptionError(f"{path}: not UTF-8 text (byte {e.start})") from None
+    except json.JSONDecodeError as e:
+        raise DescriptionError(f"{path}: invalid JSON: {e}") from None
+    except RecursionError:
+        raise DescriptionError(f"{path}: invalid JSON: nested too deeply") from None
+
+
 def load(robot_dir):
     """Load robots/<name>/robot.json, validate it (schema.py, docs/robots.md) and load its
     kinematics. Returns (description dict, joints); "gravity" defaults to [0, 0, -9.81].
@@ -179,13 +195,7 @@ def load(robot_dir):
     from dyncal_codegen import schema
 
     path = os.path.join(robot_dir, "robot.json")
-    try:
-        with open(path) as f:
-            desc = json.load(f)
-    except OSError as e:
-        raise DescriptionError(f"{path}: cannot be read ({e.strerror})") from None
-    except json.JSONDecodeError as e:
-        raise DescriptionError(f"{path}: invalid JSON: {e}") from None
+    desc = read_json(path)
     try:
         n = schema.validate(desc, robot_dir)
         joints = load_description(robot_dir, desc)
@@ -197,8 +207,59 @@ def load(robot_dir):
     return desc, joints
 
 
+def check_inertials(joints):
+    """Raises DescriptionError naming the first link whose inertial cannot be a link of this arm: a
+    value that is not finite, a negative mass, an inertia without mass, or a principal moment about
+    the centre of mass above m (2 R)^2, R the arm's extent (sum of the joint offsets and the largest
+    centre-of-mass distance): a body inside the arm's reach cannot be spread wider. Returns one
+    warning per link whose inertia about the centre of mass no rigid body has (a negative principal
+    moment, or I1 + I2 < I3; tolerance 1e-9 of the largest): published parameter sets have them (the
+    survey's er20 link 3), and the tools take them as they are (pcls projects its prior onto the
+    consistent set)."""
+    import numpy as np
+
+    warnings = []
+    with_inertials = [j for j in joints if j.standard is not None]
+    if not with_inertials:
+        return warnings
+    extent = sum(float(np.linalg.norm(np.array(j.p.evalf(), dtype=float))) for j in joints)
+    for k, j in enumerate(joints):
+        if j.standard is None:
+            continue
+        s = np.array([float(x) for x in j.standard], dtype=float)
+        if not np.all(np.isfinite(s)):
+            raise DescriptionError(f"link {k + 1}: an inertial value is not finite")
+        m = s[9]
+        if m < 0:
+            raise DescriptionError(f"link {k + 1}: mass {m:g} kg is negative")
+        if m > 0:
+            extent = max(extent, float(np.linalg.norm(s[6:9] / m)))
+    for k, j in enumerate(joints):
+        if j.standard is None:
+            continue
+        s = np.array([float(x) for x in j.standard], dtype=float)
+        m = s[9]
+        Io = np.array([[s[0], s[1], s[2]], [s[1], s[3], s[4]], [s[2], s[4], s[5]]])
+        c = s[6:9] / m if m > 0 else np.zeros(3)
+        Ic = Io - m * (c @ c * np.eye(3) - np.outer(c, c))
+        if not np.all(np.isfinite(Ic)):
+            raise DescriptionError(f"link {k + 1}: the inertia is not finite")
+        ev = np.linalg.eigvalsh(Ic)
+        tol = 1e-9 * max(1e-12, abs(ev).max())
+        if m == 0 and abs(ev).max() > 0:
+            raise DescriptionError(f"link {k + 1}: an inertia without mass")
+        if extent > 0 and ev[2] > m * (2 * extent) ** 2 * (1 + 1e-9):
+            raise DescriptionError(f"link {k + 1}: principal moment {ev[2]:.6g} kg m^2 would need its {m:g} kg "
+                                   f"spread beyond {2 * extent:.3g} m, twice the arm's extent")
+        if ev[0] < -tol or ev[0] + ev[1] < ev[2] - tol:
+            warnings.append(f"link {k + 1}: principal moments {ev[0]:.6g}, {ev[1]:.6g}, {ev[2]:.6g} kg m^2 about the "
+                            "centre of mass: no rigid body has them (negative, or I1 + I2 < I3)")
+    return warnings
+
+
 def load_description(robot_dir, desc):
-    """Joints of the description's "kinematics" entry (MDH with "links", or a URDF file)."""
+    """Joints of the description's "kinematics" entry (MDH with "links", or a URDF file), their
+    inertials checked (check_inertials)."""
     kin = desc["kinematics"]
     if kin["format"] == "mdh":
         joints = load_mdh(desc)
@@ -206,4 +267,5 @@ def load_description(robot_dir, desc):
         joints = load_urdf(os.path.join(robot_dir, kin["file"]))
     else:
         raise DescriptionError(f"unknown kinematics format '{kin['format']}'")
+    check_inertials(joints)  # raises on what cannot be a link; its warnings are robot check's
     return joints

@@ -96,8 +96,8 @@ def validate(desc, robot_dir):
     _vector(lim, "tau_max", n, "limits", positive=True, required=False)
     tr = _object(desc, "transmission", "", required=False)
     if tr is not None:
-        gear = _vector(tr, "gear_ratios", n, "transmission")
-        for i, g in enumerate(gear):
+        gear = _vector(tr, "gear_ratios", n, "transmission", required=False)  # default 1 (docs/robots.md)
+        for i, g in enumerate(gear or []):
             if g == 0:
                 raise SchemaError(f"transmission.gear_ratios[{i + 1}]: is 0")
         _vector(tr, "joint_offsets", n, "transmission", required=False)

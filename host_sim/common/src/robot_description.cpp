@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/common/json_file.hpp"
 
 namespace dyncal::host {
 namespace {
@@ -75,7 +76,7 @@ json read_json(const std::string& name, const std::string& path) {
     in >> j;
     return j;
   } catch (const json::exception& e) {
-    throw InputError(path + ": invalid JSON: " + e.what());
+    throw InputError(path + ": invalid JSON: " + printable_message(e.what()));
   }
 }
 
@@ -105,7 +106,9 @@ void read_transmission(const Reader& rd, const json& j, RobotDescription& r) {
   r.joint_offsets = Eigen::VectorXd::Zero(n);
   const json* tr = rd.object(j, "transmission", "transmission", false);
   if (tr) {
-    r.gear_ratios = rd.vector(*tr, "gear_ratios", n, "transmission.gear_ratios", true);
+    // Optional (docs/robots.md: default 1): a current-logging arm may give only its torque constants.
+    const Eigen::VectorXd gear = rd.vector(*tr, "gear_ratios", n, "transmission.gear_ratios", false);
+    if (gear.size() > 0) r.gear_ratios = gear;
     for (int i = 0; i < n; ++i)
       if (r.gear_ratios[i] == 0) rd.fail("transmission.gear_ratios[" + std::to_string(i + 1) + "]", "is 0");
     const Eigen::VectorXd off = rd.vector(*tr, "joint_offsets", n, "transmission.joint_offsets", false);
