@@ -85,11 +85,6 @@ Eigen::MatrixXd columns_of(const JointLog& log, Index a, Index b) {
   return m;
 }
 
-/// The rows [first, end) of each segment of `log`.
-std::vector<std::pair<Index, Index>> pieces_of(const JointLog& log) {
-  return log.segments();
-}
-
 /// Each piece of `raw` ([first, end) rows, at least 3 samples spanning 3 grid samples; shorter ones
 /// dropped) sampled at times[first] + k T by a natural cubic spline through (times, the raw
 /// columns): q only with q_only. The pieces kept into kept_pieces (grid rows), the grid samples
@@ -243,8 +238,8 @@ JointLog to_uniform_grid(JointLog raw, double max_gap, SamplingReport& report) {
   long missing = 0;
   const JointLog on_stamps = resample(raw, raw.t, T, pieces, true, grid_pieces, missing);
   const JointLog on_clock = resample(raw, clock.t, clock.period, pieces, true, grid_pieces, missing);
-  const Eigen::VectorXd r_stamps = third_difference_power(on_stamps.q, pieces_of(on_stamps));
-  const Eigen::VectorXd r_clock = third_difference_power(on_clock.q, pieces_of(on_clock));
+  const Eigen::VectorXd r_stamps = third_difference_power(on_stamps.q, on_stamps.segments());
+  const Eigen::VectorXd r_clock = third_difference_power(on_clock.q, on_clock.segments());
   double log_ratio = 0;
   int moving = 0;
   for (Index j = 0; j < r_stamps.size(); ++j) {

@@ -104,11 +104,21 @@ void recursive_result(const RecursiveFit& f, const LeastSquaresFit& ls, Eigen::V
 /// InputError naming them instead.
 void judge_parameters(const Eigen::VectorXd& scale, const IdentifyPipeline::FitDetails& fit, const IdentifyOptions& opt,
                       const std::vector<std::string>& names, IdentifyResult& res) {
+  // What a not-determined parameter's value rests on, per method, and the note's words for it.
   const std::string& m = opt.method;
-  const bool consistent = m == "pcls" || is_search_method(m);
-  const char* basis = consistent                  ? (m == "pcls" ? "prior" : "search")
-                      : (m == "kf" || m == "rls") ? "start"
-                                                  : "held at 0";
+  const char* basis = "held at 0";
+  std::string rests = "held at 0, the fit keeps the combination the log determines";
+  if (m == "pcls") {
+    basis = "prior";
+    rests = opt.prior_std > 0 ? "their values rest on the prior (robot.json's inertials, --prior-std)"
+                              : "their values rest on the consistency constraints alone (no prior)";
+  } else if (is_search_method(m)) {
+    basis = "search";
+    rests = "their values rest on the search's start and range (robot.json's inertials, --range-width)";
+  } else if (m == "kf" || m == "rls") {
+    basis = "start";
+    rests = "their values are the filter's start, not estimates";
+  }
   std::string undetermined;
   for (size_t i = 0; i < res.params.size() && i < static_cast<size_t>(scale.size()); ++i) {
     ParamEstimate& p = res.params[i];
@@ -128,16 +138,6 @@ void judge_parameters(const Eigen::VectorXd& scale, const IdentifyPipeline::FitD
   if (opt.strict)
     throw InputError("--strict: the log does not determine " + named +
                      " (95 % interval wider than the parameter's physical scale; docs/accuracy.md \"Real arms\")");
-  std::string rests;
-  if (std::string(basis) == "held at 0")
-    rests = "held at 0, the fit keeps the combination the log determines";
-  else if (std::string(basis) == "prior")
-    rests = opt.prior_std > 0 ? "their values rest on the prior (robot.json's inertials, --prior-std)"
-                              : "their values rest on the consistency constraints alone (no prior)";
-  else if (std::string(basis) == "search")
-    rests = "their values rest on the search's start and range (robot.json's inertials, --range-width)";
-  else
-    rests = "their values are the filter's start, not estimates";
   res.notes.push_back(
       "not determined by this log (95 % interval wider than the parameter's physical scale, "
       "docs/accuracy.md \"Real arms\"): " +
@@ -546,12 +546,11 @@ Eigen::VectorXd IdentifyPipeline::standstill_band(
 /// ones from the reduced problem (sigma^2 from the constrained residual), 0 on the held ones.
 void IdentifyPipeline::constrain_signs(const LeastSquaresFit& ls, const std::vector<int>& dropped, Eigen::VectorXd& phi,
                                        Eigen::VectorXd& stdev, std::vector<int>* held) const {
+  const std::vector<int> signed_terms = nonnegative_terms(model_.names, model_.num_base);
   std::vector<int> kept, nonnegative;
   for (int i = 0; i < P; ++i) {
     if (std::find(dropped.begin(), dropped.end(), i) != dropped.end()) continue;
-    const ParamInfo& info = model_.info[static_cast<size_t>(i)];
-    if (info.kind == ParamKind::term &&
-        (info.term == term::coulomb || info.term == term::viscous || info.term == term::rotor_inertia))
+    if (std::find(signed_terms.begin(), signed_terms.end(), i) != signed_terms.end())
       nonnegative.push_back(static_cast<int>(kept.size()));
     kept.push_back(i);
   }
