@@ -14,6 +14,7 @@
 #include "dyncal/extended_kalman_filter.hpp"
 #include "dyncal/friction_tracker.hpp"
 #include "dyncal/kalman_filter.hpp"
+#include "dyncal/payload_estimator.hpp"
 #include "dyncal/rls_forgetting.hpp"
 #include "dyncal/streaming_least_squares.hpp"
 #include "dyncal/table_check.hpp"
@@ -77,6 +78,7 @@ struct Workspace {
   Eigen::Matrix<Scalar, 6, 6> M;
   Eigen::Matrix<Scalar, P, 1> phi, diag;
   dyncal::CausalDifferentiator<Scalar, 6> diff;
+  dyncal::PayloadEstimator<Er20, Scalar> payload;
   dyncal::ParameterTable table;
   std::uint8_t table_bytes[dyncal::kTableMaxBytes];
 };
@@ -98,6 +100,8 @@ void run_updaters(Workspace<Scalar>& w) {
   ASSERT_EQ(w.tracker.reset(Tracker::ParamVector::Constant(Scalar(0.2)), Scalar(1e4), Scalar(0.99)),
             dyncal::UpdateStatus::ok);
   ASSERT_EQ(w.diff.reset(Scalar(0.01), Scalar(20)), dyncal::UpdateStatus::ok);
+  using Payload = dyncal::PayloadEstimator<Er20, Scalar>;
+  ASSERT_EQ(w.payload.reset(Payload::ParamVector::Constant(Scalar(1e2))), dyncal::UpdateStatus::ok);
   JointVec qd_, q_, qdd_;
   for (int i = 0; i < 300; ++i) {
     dyncal::test::fourier_state(0.01 * i, q_, qd_, qdd_);
@@ -115,6 +119,7 @@ void run_updaters(Workspace<Scalar>& w) {
     ASSERT_EQ(w.kf_ud.update(w.K, tau, V::Ones()), dyncal::UpdateStatus::ok);
     ASSERT_EQ(w.ekf.update(q, qd, qdd, tau, V::Constant(Scalar(100))), dyncal::UpdateStatus::ok);
     ASSERT_EQ(w.tracker.update(qd, zero, tau, V::Ones()), dyncal::UpdateStatus::ok);
+    ASSERT_EQ(w.payload.update(q, qd, qdd, Scalar(0.01) * tau, V::Ones()), dyncal::UpdateStatus::ok);
     V fq, fqd, fqdd, ftau;
     const auto ds = w.diff.update(q, tau, fq, fqd, fqdd, ftau);
     ASSERT_TRUE(ds == dyncal::UpdateStatus::ok || ds == dyncal::UpdateStatus::not_ready);

@@ -30,6 +30,7 @@ void add_flash_command(CLI::App& app, Action& run);
 void add_registers_command(CLI::App& app, Action& run);
 void add_robot_command(CLI::App& app, Action& run);
 void add_predict_command(CLI::App& app, Action& run);
+void add_payload_command(CLI::App& app, Action& run);
 
 using host::read_json_file;  ///< json_file.hpp: one-line errors naming the file
 /// Writes `j` (indented) to `path`. Throws InputError when the file cannot be written.

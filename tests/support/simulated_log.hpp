@@ -33,12 +33,14 @@ using ExtraTorque = std::function<void(const Eigen::VectorXd& q, const Eigen::Ve
 /// The arm's motion clock: u(t) = t without rests; with rests, the designed trajectory is played
 /// for `move` seconds, then held still for `rest` seconds, repeatedly, with ramps of constant
 /// deceleration and acceleration of the clock (0.4 s) between, as a robot stops and starts.
+/// rate: the trajectory's speed without rests (0.1: a tenth of the designed speed, a slow log).
 struct MotionClock {
   bool rests = false;
   double move = 3.0, rest = 1.5, ramp = 0.4;
+  double rate = 1.0;
   /// Speed w(t) = du/dt and its derivative.
   void speed(double t, double& w, double& wd) const {
-    w = 1, wd = 0;
+    w = rate, wd = 0;
     if (!rests) return;
     const double cycle = move + rest, x = std::fmod(t, cycle);
     if (x < move - ramp) return;

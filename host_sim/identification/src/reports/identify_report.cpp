@@ -146,7 +146,8 @@ nlohmann::json parameter_table_json(const IdentifyResult& r) {
   // drive's feed-forward cannot apply that yet); "joint": per joint, as the drive applies them.
   j["friction_per"] = r.friction_per_motor ? "motor" : "joint";
   j["params"] = nlohmann::json::array();
-  for (const auto& p : r.params) j["params"].push_back({{"name", p.name}, {"value", p.value}});
+  // The std lets a later step (payload) carry the parameters' uncertainty; null where not determined.
+  for (const auto& p : r.params) j["params"].push_back({{"name", p.name}, {"value", p.value}, {"std", p.std}});
   return j;
 }
 

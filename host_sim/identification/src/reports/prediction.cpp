@@ -47,6 +47,7 @@ ParameterSet read_parameter_file(const std::string& path) {
     throw InputError(path + ": " + std::to_string(list.size()) + " params, robot '" + p.robot + "' with model '" +
                      p.model + "' has " + std::to_string(p.names.size()));
   p.values.resize(static_cast<Eigen::Index>(list.size()));
+  p.stdev = Eigen::VectorXd::Constant(p.values.size(), std::nan(""));
   for (size_t i = 0; i < list.size(); ++i) {
     const auto& v = list[i];
     const std::string where = path + ": params[" + std::to_string(i + 1) + "]";
@@ -59,6 +60,9 @@ ParameterSet read_parameter_file(const std::string& path) {
     const double value = v["value"].get<double>();
     if (!std::isfinite(value)) throw InputError(where + " '" + p.names[i] + "': value is not finite");
     p.values[static_cast<Eigen::Index>(i)] = value;
+    if (v.contains("std") && v["std"].is_number() && std::isfinite(v["std"].get<double>()) &&
+        v["std"].get<double>() >= 0)
+      p.stdev[static_cast<Eigen::Index>(i)] = v["std"].get<double>();
   }
   return p;
 }
@@ -74,9 +78,11 @@ ParameterSet parameter_set(const IdentifyResult& r) {
   p.friction_per_motor = r.friction_per_motor;
   p.source = "identify";
   p.values.resize(static_cast<Eigen::Index>(r.params.size()));
+  p.stdev.resize(p.values.size());
   for (size_t i = 0; i < r.params.size(); ++i) {
     p.names.push_back(r.params[i].name);
     p.values[static_cast<Eigen::Index>(i)] = r.params[i].value;
+    p.stdev[static_cast<Eigen::Index>(i)] = r.params[i].std;
   }
   return p;
 }
@@ -138,8 +144,7 @@ std::vector<JointMetrics> torque_metrics(const Eigen::VectorXd& y, int N, const 
   return out;
 }
 
-LogPrediction predict(const RobotDescription& robot, const JointLog& log, IdentifyOptions options,
-                      const ParameterSet& params) {
+IdentifyOptions prediction_options(const RobotDescription& robot, IdentifyOptions options, const ParameterSet& params) {
   if (params.robot != robot.name)
     throw InputError(params.source + ": parameters are for robot '" + params.robot + "', not '" + robot.name + "'");
   options.terms = params.terms;
@@ -147,21 +152,28 @@ LogPrediction predict(const RobotDescription& robot, const JointLog& log, Identi
   options.motors = params.motors;
   options.friction_per_joint = !params.friction_per_motor;
   options.load_regressor = false;
-  const StackedData d = prepare_stacked(robot, log, options);
+  return options;
+}
+
+Eigen::VectorXd predicted_torque(const StackedData& d, const ParameterSet& params) {
   std::vector<std::string> names = d.names;
   for (const ModelEffect& e : params.effects)
     for (const std::string& n : effect_param_names(e)) names.push_back(n);
   if (names != params.names)
-    throw InputError(params.source + ": parameter names differ from robot '" + robot.name + "' with model '" +
+    throw InputError(params.source + ": parameter names differ from robot '" + params.robot + "' with model '" +
                      params.model + "'");
+  return params.effects.empty() ? Eigen::VectorXd(d.W * params.values)
+                                : Eigen::VectorXd(model_design(d, params.effects, params.values) * params.values);
+}
+
+LogPrediction predict(const RobotDescription& robot, const JointLog& log, IdentifyOptions options,
+                      const ParameterSet& params) {
+  const StackedData d = prepare_stacked(robot, log, prediction_options(robot, std::move(options), params));
   LogPrediction p;
   p.source = log.source;
   p.samples = static_cast<long>(d.t.size());
   p.notes = d.notes;
-  const Eigen::VectorXd tau_hat = params.effects.empty()
-                                      ? Eigen::VectorXd(d.W * params.values)
-                                      : Eigen::VectorXd(model_design(d, params.effects, params.values) * params.values);
-  p.joints = torque_metrics(d.y, tau_hat, robot.num_joints, robot.tau_max);
+  p.joints = torque_metrics(d.y, predicted_torque(d, params), robot.num_joints, robot.tau_max);
   return p;
 }
 

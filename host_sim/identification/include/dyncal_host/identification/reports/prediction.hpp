@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "dyncal_host/identification/pipeline/identify.hpp"
+#include "dyncal_host/identification/pipeline/stacked_data.hpp"
 
 namespace dyncal::host {
 
@@ -21,6 +22,9 @@ struct ParameterSet {
   bool friction_per_motor = false;   ///< "friction_per": "motor" (robot.json's coupling modelled) or "joint"
   std::vector<std::string> names;    ///< the compiled robot's parameter names for the terms, then the effects'
   Eigen::VectorXd values;
+  /// Standard deviation of each value as identify reported it (NaN where the file gives none or the
+  /// parameter was not determined); empty when the values are not an identification's.
+  Eigen::VectorXd stdev;
 };
 
 /// Reads a `dyncal identify --params` file (docs/cli.md). Throws InputError with the file and what
@@ -44,6 +48,14 @@ std::vector<JointMetrics> torque_metrics(const Eigen::VectorXd& y, const Eigen::
 std::vector<JointMetrics> torque_metrics(const Eigen::VectorXd& y, int N, const Eigen::VectorXd& tau_max,
                                          const std::function<bool(Eigen::Index s, int j)>& predicted,
                                          const std::function<const double*(Eigen::Index s)>& prediction);
+
+/// `options` for preparing a log that `params` predict (prepare_stacked): the set's terms, effects,
+/// coupled motors and friction per motor or per joint. Throws InputError: params for another robot.
+IdentifyOptions prediction_options(const RobotDescription& robot, IdentifyOptions options, const ParameterSet& params);
+
+/// The torque (S N) [Nm] `params` predict on data prepared with prediction_options: W phi, or
+/// [W E] phi with effect terms. Throws InputError if the data's parameters are not the set's.
+Eigen::VectorXd predicted_torque(const StackedData& d, const ParameterSet& params);
 
 /// The torque of `log` predicted by `params` (every sample, none fitted): log prepared as identify
 /// prepares it with `options` (filter, cut-off, decimation; terms and friction per motor or per joint
