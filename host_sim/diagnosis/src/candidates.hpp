@@ -34,6 +34,11 @@ struct Candidate {
   /// the searched range, or the estimate is an end of its own interval (the physical signs cut the
   /// profile there: the likelihood's maximum lies beyond). Never selected; reported as unbounded.
   bool unbounded = false;
+  /// The column of a motor's rotor inertia (coupling, coupled_motor; -1: none). Held >= 0 in the
+  /// selection: where the whole model's fit makes it negative the column is dropped (held at 0) and
+  /// inertia_held set (drop_inertia). The ratio search fits it freely.
+  int inertia = -1;
+  bool inertia_held = false;
 
   /// Parameters it adds to the model: its columns less those it replaces.
   Eigen::Index added_parameters() const { return columns.cols() - static_cast<Eigen::Index>(replaces.size()); }
@@ -83,6 +88,10 @@ struct EffectSpec {
   /// What a found effect means, with its fitted parameters.
   std::string (*explain)(const Candidate& c, const std::vector<double>& params);
 };
+
+/// The candidate with its rotor-inertia column (c.inertia) dropped: the motor's inertia held at 0,
+/// the optimum of the least-squares fit under the bound inertia >= 0 when the free fit is negative.
+Candidate drop_inertia(Candidate c);
 
 /// The table, in report order (stribeck, asymmetric_friction, velocity_power, load_friction,
 /// rotor_inertia, offset, position_periodic, coupling, coupled_motor, drift).

@@ -90,11 +90,18 @@ bool same_joints(const Candidate& a, const Candidate& b) {
   return x == y;
 }
 
-Evidence weigh(const CrossValidator& cv, const Candidate& c, const Model& m, const VectorXd& n_eff,
+/// The candidate's evidence against the model so far. A motor's rotor inertia (coupling, coupled
+/// motor) is held >= 0: where the free fit makes it negative the candidate loses that column
+/// (drop_inertia: held at 0, the bounded least-squares optimum) and is weighed without it.
+Evidence weigh(const CrossValidator& cv, Candidate& c, const Model& m, const VectorXd& n_eff,
                const VectorXd& val_before) {
   VectorXd val, train, phi_c;
   double novelty = 1;
   cv.evaluate(c.columns, val, train, &phi_c, &novelty, replaced_columns(c, m));
+  if (c.inertia >= 0 && phi_c[phi_c.size() - c.columns.cols() + c.inertia] < 0) {
+    c = detail::drop_inertia(std::move(c));
+    cv.evaluate(c.columns, val, train, &phi_c, &novelty, replaced_columns(c, m));
+  }
   Evidence e;
   e.collinear = novelty < 1e-6;
   // BIC over every joint: the joints share the rigid-body parameters, so a candidate that helps its
@@ -399,7 +406,7 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
     library.model_X = &m.X;
     library.model_phi = &m.phi;
     library.column_joints = detail::column_joint_masks(m.X, N);
-    const std::vector<Candidate> cands = detail::candidate_library(library);
+    std::vector<Candidate> cands = detail::candidate_library(library);
     const VectorXd n_eff = effective_samples_per_joint(library.residual, N);
     if (step == 0) res.effective_samples_per_joint = n_eff.mean();
     // Selection on validation error only: the largest relative validation gain among candidates
@@ -463,6 +470,7 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
     e.kind = c.effect;
     for (int j : c.joints) e.joints.push_back(j + 1);
     e.param_names = c.names;
+    e.inertia_held = c.inertia_held;
     for (Index k = 0; k < c.columns.cols(); ++k) e.params.push_back(m.phi[m.X.cols() - c.columns.cols() + k]);
     e.delta_bic = ev[static_cast<size_t>(best)].delta_bic;
     e.shape = c.shape;

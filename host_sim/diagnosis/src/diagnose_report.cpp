@@ -88,6 +88,7 @@ ParameterSet diagnosed_parameter_set(const ParameterSet& declared, const Diagnos
     p.model += "," + effect_item(*m);
   }
   p.values = Eigen::Map<const Eigen::VectorXd>(values.data(), static_cast<Eigen::Index>(values.size()));
+  p.stdev.resize(0);  // the diagnosis's values, not the declared fit's
   p.source = declared.source + " with the diagnosis";
   return p;
 }
@@ -119,6 +120,7 @@ nlohmann::json diagnose_report_json(const DiagnoseResult& r) {
                             {"item", item},
                             {"parameters", p},
                             {"evidence", {{"delta_bic", e.delta_bic}, {"validation_gain", e.validation_gain}}},
+                            {"inertia_held_at_zero", e.inertia_held},
                             {"explanation", e.explanation},
                             {"indistinguishable_from", e.alternatives}});
   }

@@ -55,6 +55,9 @@ struct DiagnosedEffect {
   double validation_gain = 0;  ///< relative drop of the affected joints' validation RSS
   std::string explanation;
   std::vector<std::string> alternatives;  ///< kinds on the same joints the data cannot tell from this one
+  /// coupling, coupled_motor: the motor's rotor inertia is held at 0 (its free fit is negative; not
+  /// among param_names, 0 in the drive table's coupling term)
+  bool inertia_held = false;
 };
 
 struct RejectedCandidate {
