@@ -11,6 +11,7 @@
 #include "dyncal/generated/er20/robot.hpp"
 #include "dyncal/identification_model.hpp"
 #include "dyncal/kalman_filter.hpp"
+#include "dyncal/payload_estimator.hpp"
 #include "dyncal/rls_forgetting.hpp"
 #include "dyncal/streaming_least_squares.hpp"
 
@@ -181,6 +182,27 @@ void BM_RlsUpdate(benchmark::State& state) {
   run_filter<decltype(*rls), double>(state, *rls);
 }
 BENCHMARK(BM_RlsUpdate);
+
+// The payload estimator of a drive: the payload regressor Y_b K_N at the state and the UD Kalman
+// update of the load's 10 parameters (what one control-rate sample costs while it runs).
+template <typename Scalar>
+void BM_PayloadEstimatorUpdate(benchmark::State& state) {
+  using Estimator = dyncal::PayloadEstimator<Robot, Scalar>;
+  using V = typename Estimator::JointVector;
+  auto est = std::make_unique<Estimator>();
+  est->reset(Estimator::ParamVector::Constant(Scalar(1e3)));
+  const V r = V::Constant(Scalar(0.01));
+  long i = 0, rejected = 0;
+  for (auto _ : state) {
+    const V q = kStates.q[i & 63].cast<Scalar>(), qd = kStates.qd[i & 63].cast<Scalar>(),
+            qdd = kStates.qdd[i & 63].cast<Scalar>();
+    if (est->update(q, qd, qdd, Scalar(0.01) * qdd, r) != dyncal::UpdateStatus::ok) ++rejected;
+    ++i;
+  }
+  state.counters["rejected"] = static_cast<double>(rejected);
+}
+BENCHMARK_TEMPLATE(BM_PayloadEstimatorUpdate, double);
+BENCHMARK_TEMPLATE(BM_PayloadEstimatorUpdate, float);
 
 // The friction tracker of a calibrated drive (Eq. 4 amplitudes, qds fixed), friction torque given.
 template <typename Scalar>
