@@ -302,22 +302,14 @@ ParameterSet with_payload(const ParameterSet& arm, const RobotDescription& robot
   const CompiledRobot& compiled = compiled_robot_for(robot);
   ParameterSet p = arm;
   p.values.head(compiled.num_base) += last_link_base_map(compiled) * payload_standard;
+  p.stdev.resize(0);  // the arm's std no longer describes the loaded base parameters
   p.source = arm.source + " with a payload on link " + std::to_string(robot.num_joints);
   return p;
 }
 
 nlohmann::json loaded_parameter_file_json(const ParameterSet& loaded, const PayloadResult& r) {
-  nlohmann::json j;
-  j["format"] = "dyncal-parameters";
-  j["version"] = 1;
-  j["robot"] = loaded.robot;
-  j["model"] = loaded.model;
-  j["method"] = "payload";
-  j["friction_per"] = loaded.friction_per_motor ? "motor" : "joint";
+  nlohmann::json j = parameter_file_json(loaded, "payload");
   j["source"] = loaded.source;
-  j["params"] = nlohmann::json::array();
-  for (Eigen::Index i = 0; i < loaded.values.size(); ++i)
-    j["params"].push_back({{"name", loaded.names[static_cast<size_t>(i)]}, {"value", loaded.values[i]}});
   j["payload"] = payload_report_json(r);
   return j;
 }

@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include "dyncal_host/identification/reports/prediction.hpp"
+
 namespace dyncal::host {
 namespace {
 
@@ -136,19 +138,7 @@ nlohmann::json identify_report_json(const IdentifyResult& r) {
 }
 
 nlohmann::json parameter_table_json(const IdentifyResult& r) {
-  nlohmann::json j;
-  j["format"] = "dyncal-parameters";
-  j["version"] = 1;
-  j["robot"] = r.robot;
-  j["model"] = r.model;
-  j["method"] = r.method;
-  // "motor": a coupled motor's friction and rotor inertia act on every joint that turns it (the
-  // drive's feed-forward cannot apply that yet); "joint": per joint, as the drive applies them.
-  j["friction_per"] = r.friction_per_motor ? "motor" : "joint";
-  j["params"] = nlohmann::json::array();
-  // The std lets a later step (payload) carry the parameters' uncertainty; null where not determined.
-  for (const auto& p : r.params) j["params"].push_back({{"name", p.name}, {"value", p.value}, {"std", p.std}});
-  return j;
+  return parameter_file_json(parameter_set(r), r.method);
 }
 
 }  // namespace dyncal::host

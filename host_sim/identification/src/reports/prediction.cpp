@@ -67,6 +67,27 @@ ParameterSet read_parameter_file(const std::string& path) {
   return p;
 }
 
+nlohmann::json parameter_file_json(const ParameterSet& p, const std::string& method) {
+  nlohmann::json j;
+  j["format"] = "dyncal-parameters";
+  j["version"] = 1;
+  j["robot"] = p.robot;
+  j["model"] = p.model;
+  j["method"] = method;
+  // "motor": a coupled motor's friction and rotor inertia act on every joint that turns it (the
+  // drive's feed-forward cannot apply that yet); "joint": per joint, as the drive applies them.
+  j["friction_per"] = p.friction_per_motor ? "motor" : "joint";
+  j["params"] = nlohmann::json::array();
+  // The std lets a later step (payload) carry the parameters' uncertainty; null where not determined.
+  const bool with_std = p.stdev.size() == p.values.size();
+  for (Eigen::Index i = 0; i < p.values.size(); ++i) {
+    nlohmann::json e = {{"name", p.names[static_cast<size_t>(i)]}, {"value", p.values[i]}};
+    if (with_std) e["std"] = p.stdev[i];
+    j["params"].push_back(e);
+  }
+  return j;
+}
+
 ParameterSet parameter_set(const IdentifyResult& r) {
   ParameterSet p;
   p.robot = r.robot;

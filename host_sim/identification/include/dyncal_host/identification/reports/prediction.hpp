@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 #include <functional>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -32,6 +33,11 @@ struct ParameterSet {
 /// this build, a model not built, a wrong parameter count, a name that is not the model's parameter
 /// at that place, a value that is not a finite number.
 ParameterSet read_parameter_file(const std::string& path);
+
+/// The parameter file of `p` (docs/cli.md "--params schema"; read_parameter_file reads it): format,
+/// version, robot, model, `method`, friction_per, params [{name, value, std}] (std only when the set
+/// has them; null where not determined).
+nlohmann::json parameter_file_json(const ParameterSet& p, const std::string& method);
 
 /// The parameters identify reports (IdentifyResult::params) as a set.
 ParameterSet parameter_set(const IdentifyResult& r);
