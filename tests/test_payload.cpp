@@ -18,7 +18,7 @@
 #include "dyncal_host/identification/pipeline/compiled_robot.hpp"
 #include "dyncal_host/identification/reports/prediction.hpp"
 #include "support/dyncal_cli.hpp"
-#include "support/random_physical.hpp"
+#include "support/payload_load.hpp"
 #include "support/simulated_log.hpp"
 
 namespace {
@@ -26,38 +26,6 @@ namespace {
 using namespace dyncal::host;
 using namespace dyncal::test;
 using Vec10 = Eigen::Matrix<double, 10, 1>;
-
-/// The arm's total mass from robot.json's inertials [kg].
-double arm_mass(const CompiledRobot& c) {
-  double m = 0;
-  for (int l = 0; l < c.num_joints; ++l) m += c.nominal_standard[static_cast<size_t>(10 * l + 9)];
-  return m;
-}
-
-/// A load: `fraction` of the arm's mass, its centre of mass uniform in a 0.2 m cube around the last
-/// link's origin, a box-like inertia (principal moments of a body 2-12 cm across, random axes).
-Body random_load(std::mt19937& rng, double mass) {
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  Body b;
-  b.m = mass;
-  b.c = Eigen::Vector3d(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5) * 0.2;
-  // Second moments about the centre of mass of a box of half sides h: m h^2 / 3 each.
-  const Eigen::Vector3d h(0.01 + 0.05 * u(rng), 0.01 + 0.05 * u(rng), 0.01 + 0.05 * u(rng));
-  const Eigen::Vector3d j = mass * h.cwiseAbs2() / 3.0;
-  const Eigen::Matrix3d principal = (Eigen::Vector3d::Constant(j.sum()) - j).asDiagonal();
-  const Eigen::Matrix3d R =
-      Eigen::Quaterniond(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5).normalized().toRotationMatrix();
-  b.Ic = R * principal * R.transpose();
-  return b;
-}
-
-/// The load's torque: inverse dynamics of its standard parameters on the last link alone.
-ExtraTorque load_torque(const CompiledRobot& c, const Vec10& load) {
-  Eigen::VectorXd phi = Eigen::VectorXd::Zero(c.num_standard);
-  phi.tail(10) = load;
-  return [&c, phi](const Eigen::VectorXd& q, const Eigen::VectorXd& qd, const Eigen::VectorXd& qdd,
-                   Eigen::VectorXd& tau) { tau += c.inverse_dynamics(q, qd, qdd, phi); };
-}
 
 class Payload : public ::testing::TestWithParam<const char*> {};
 

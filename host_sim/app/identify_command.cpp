@@ -1,6 +1,7 @@
 // dyncal identify: base parameters and friction from a measured log, cross-validated.
 #include <algorithm>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <utility>
 
@@ -10,6 +11,7 @@
 #include "dyncal_host/drive/scenario.hpp"
 #include "dyncal_host/identification/logs/drive_law.hpp"
 #include "dyncal_host/identification/methods/friction_comparison.hpp"
+#include "dyncal_host/identification/payload/torque_constants.hpp"
 #include "dyncal_host/identification/pipeline/identify.hpp"
 #include "dyncal_host/identification/pipeline/stacked_data.hpp"
 #include "dyncal_host/identification/reports/identify_report.hpp"
@@ -24,7 +26,45 @@ struct IdentifySettings {
   std::string model = "eq7,rotor_inertia,offset", report, params, effects, law;
   std::vector<std::string> validate_on;
   bool compare_friction = false;
+  std::vector<std::string> loaded;  ///< --loaded-data: the known-load run of a current-logging arm
+  double load_mass = 0;
+  std::vector<double> load_com;
 };
+
+/// --loaded-data: each motor's Kt from the loaded and unloaded current logs (torque_constants.hpp),
+/// printed (and kept for the report); returns the robot with them in place of robot.json's.
+host::RobotDescription torque_constants_from_load(const IdentifySettings& s, const host::RobotDescription& robot,
+                                                  nlohmann::json* report) {
+  if (s.log.torque_from != "current")
+    throw host::InputError("--loaded-data identifies the motors' torque constants: it needs --torque-from current");
+  if (!(s.load_mass > 0)) throw host::InputError("--loaded-data needs --load-mass (the load's mass [kg], > 0)");
+  host::KnownLoad load;
+  load.mass = s.load_mass;
+  if (!s.load_com.empty()) {
+    load.com_known = true;
+    load.com = Eigen::Vector3d(s.load_com[0], s.load_com[1], s.load_com[2]);
+  }
+  // The currents through the transmission (every Kt 1); they have no rating to be checked against
+  // before Kt is known (the unloaded log is checked again with the identified Kt below).
+  host::RobotDescription unit = robot;
+  unit.torque_constants = Eigen::VectorXd::Ones(robot.num_joints);
+  unit.tau_max = Eigen::VectorXd::Constant(robot.num_joints, std::numeric_limits<double>::infinity());
+  const host::JointLog unloaded = s.log.load_log(unit);
+  const host::JointLog loaded = s.log.load_logs(unit, s.loaded);
+  const host::TorqueConstantFit fit = host::identify_torque_constants(robot, unloaded, loaded, load, s.options);
+  host::print_torque_constants(std::cout, fit);
+  if (!fit.all_determined())
+    throw host::InputError(
+        "--loaded-data: the pair does not determine every motor's Kt (table above): load the "
+        "arm so that each joint carries the load's weight or inertia, or declare those Kt in "
+        "robot.json");
+  std::cout << "identify goes on with these Kt; put them into " << robot.directory
+            << "/robot.json's transmission.torque_constants to keep them\n\n";
+  *report = host::torque_constants_json(fit);
+  host::RobotDescription out = robot;
+  out.torque_constants = fit.kt;
+  return out;
+}
 
 /// IDIM-IV's closed loop (IdentifyOptions::closed_loop): the law's run on the simulated drive of
 /// `robot` with the iterate's plant, noise-free (no torque noise, no encoder quantisation: the
@@ -75,7 +115,7 @@ host::JointLog simulate_law(const host::RobotDescription& robot, const host::Dri
 }
 
 int run_identify(IdentifySettings& s) {
-  const auto robot = s.log.load_robot();
+  auto robot = s.log.load_robot();
   std::vector<std::string> dropped;
   host::ModelSpec spec = host::parse_model_spec(s.model, robot.num_joints);
   if (!s.effects.empty()) {
@@ -107,6 +147,8 @@ int run_identify(IdentifySettings& s) {
       return simulate_law(robot, *law, grid, phi, Fc, Fv);
     };
   }
+  nlohmann::json torque_constants;
+  if (!s.loaded.empty()) robot = torque_constants_from_load(s, robot, &torque_constants);
   auto log = s.log.load_log(robot, &dropped);
   if (s.compare_friction) {
     if (!s.options.effects.empty())
@@ -126,7 +168,11 @@ int run_identify(IdentifySettings& s) {
   const host::ParameterSet fitted = host::parameter_set(result);
   for (const auto& other : others) result.other_logs.push_back(host::predict(robot, other, s.options, fitted));
   host::print_identify_report(std::cout, result);
-  if (!s.report.empty()) write_json_file(s.report, host::identify_report_json(result));
+  if (!s.report.empty()) {
+    nlohmann::json report = host::identify_report_json(result);
+    if (!torque_constants.is_null()) report["torque_constants"] = torque_constants;
+    write_json_file(s.report, report);
+  }
   if (!s.params.empty()) write_json_file(s.params, host::parameter_table_json(result));
   return 0;
 }
@@ -199,6 +245,16 @@ void add_identify_command(CLI::App& app, Action& run) {
                 "those it does not determine with a note (docs/accuracy.md \"Real arms\")");
   cmd->add_flag("--friction-per-joint", opt.friction_per_joint,
                 "friction and rotor inertia per joint, ignoring a coupling robot.json's transmission declares");
+  cmd->add_option("--loaded-data", s->loaded,
+                  "--torque-from current: a log of the same arm with a load of known mass on the last link; "
+                  "identifies each motor's Kt from the pair (--data the unloaded log) before the fit, in place of "
+                  "robot.json's (docs/robots.md); repeat to stack several")
+      ->take_all();
+  cmd->add_option("--load-mass", s->load_mass, "--loaded-data: the load's mass [kg]");
+  cmd->add_option("--load-com", s->load_com,
+                  "--loaded-data: the load's centre of mass x y z [m] in the last link's frame (robot.json's), if "
+                  "known; else fitted")
+      ->expected(3);
   cmd->add_option("--report", s->report, "write the report as JSON");
   cmd->add_option("--params", s->params, "write the identified parameter table as JSON");
   cmd->add_flag("--compare-friction", s->compare_friction,
