@@ -4,12 +4,15 @@
 Usage:
   import_urdf.py import ARM.urdf --name NAME [--base LINK] [--tip LINK] [--robots-dir DIR] [--force]
   import_urdf.py check NAME [--robots-dir DIR]
+  import_urdf.py export NAME --robots-dir DIR --input MODEL.json --out ARM.urdf
 
 import: writes DIR/NAME/source.urdf (the input, unchanged), DIR/NAME/NAME.urdf (the normalised
 chain: fixed joints merged, every joint about +z) and DIR/NAME/robot.json, after checking the
 normalised chain against the input with orocos-kdl (frames and torques to 1e-9). Nothing is written
 when a check fails. check: validates robots/NAME/robot.json and, for an imported robot, repeats the
-KDL comparison. Errors: one line on stderr, exit 2.
+KDL comparison. export (dyncal export urdf): the source URDF with the identified model written in
+(urdf_export.py), after KDL reproduces dyncal's torques on the written file. Errors: one line on
+stderr, exit 2.
 """
 import argparse
 import json
@@ -212,6 +215,62 @@ def do_samples(args):
     return 0
 
 
+def do_export(args):
+    """The URDF the robot was imported from with the identified model (urdf_export.py), written only
+    when KDL's inverse dynamics of the written file reproduces the torques dyncal computed at the
+    given states (its rigid-body model with the identified inertials) to kdl_check.TOLERANCE."""
+    import tempfile
+
+    from dyncal_codegen import kdl_check, urdf_export
+
+    robot_dir = os.path.join(args.robots_dir, args.name)
+    try:
+        desc = description.read_json(os.path.join(robot_dir, "robot.json"))
+    except description.DescriptionError as e:
+        raise urdf_import.ImportError_(str(e)) from None
+    src = desc.get("source")
+    if not (isinstance(src, dict) and "file" in src):
+        raise urdf_import.ImportError_(
+            f"{args.name}: robots/{args.name}/robot.json names no URDF it was imported from ('source'): export urdf "
+            "writes the model into that URDF (robot import creates the folder from one)")
+    source = os.path.join(robot_dir, src["file"])
+    with open(args.input) as f:
+        inp = json.load(f)
+    tree, chain = urdf_export.export(source, src.get("base"), src.get("tip"), src.get("joints", []), inp["links"],
+                                     inp["terms"], inp["provenance"])
+    gravity = desc.get("gravity", [0.0, 0.0, -9.81])
+    out_dir = os.path.dirname(os.path.abspath(args.out))
+    fd, tmp = tempfile.mkstemp(suffix=".urdf", dir=out_dir)
+    os.close(fd)
+    try:
+        with open(tmp, "w", encoding="utf-8") as f:
+            f.write(urdf_export.to_text(source, tree, inp["provenance"]))
+        _, links, ujoints = urdf_import.parse(tmp)
+        _, written = urdf_import.normalise(tmp, src.get("base"), src.get("tip"))
+        taus = kdl_check.torques_at(links, ujoints, written, gravity, inp["samples"])
+        if taus is None:
+            check = "KDL check not applicable (mass off the chain below the first joint, as at import)"
+        else:
+            err = 0.0
+            for s, tau in zip(inp["samples"], taus):
+                for a, b in zip(tau, s["tau"]):
+                    err = max(err, abs(a - b) / max(1.0, abs(b)))
+            if err > kdl_check.TOLERANCE:
+                raise urdf_import.ImportError_(
+                    f"internal: KDL's inverse dynamics of the written URDF differs from dyncal's model by {err:.3g} "
+                    f"(relative; tolerance {kdl_check.TOLERANCE}); nothing written")
+            check = (f"KDL inverse dynamics of the written file matches dyncal's rigid-body model to {err:.1e} "
+                     f"(relative, {len(taus)} random states)")
+        os.replace(tmp, args.out)
+    finally:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+    merged = sum(len(b["merged"]) for b in urdf_export.lumped_links(source, src.get("base"), src.get("tip")))
+    print(f"{args.name}: wrote {args.out} from {src['file']}: {len(chain.joints)} links' inertials replaced"
+          + (f" ({merged} links merged into them emptied)" if merged else "") + f"; {check}")
+    return 0
+
+
 def main():
     parser = argparse.ArgumentParser(prog="dyncal robot", description="import or check a robot description")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -229,7 +288,13 @@ def main():
     smp.add_argument("name")
     smp.add_argument("--robots-dir", required=True)
     smp.add_argument("--out", required=True)
+    exp = sub.add_parser("export", help="write the identified model into the URDF the robot was imported from")
+    exp.add_argument("name")
+    exp.add_argument("--robots-dir", required=True)
+    exp.add_argument("--input", required=True)
+    exp.add_argument("--out", required=True)
     args = parser.parse_args()
+    prog = "dyncal export urdf" if args.command == "export" else f"dyncal robot {args.command}"
     try:
         if args.command == "import":
             if not args.name.replace("_", "a").isalnum() or not args.name[0].isalpha():
@@ -237,15 +302,17 @@ def main():
             return do_import(args)
         if args.command == "samples":
             return do_samples(args)
+        if args.command == "export":
+            return do_export(args)
         return do_check(args)
     except urdf_import.ImportError_ as e:
-        print(f"dyncal robot {args.command}: {e}", file=sys.stderr)
+        print(f"{prog}: {e}", file=sys.stderr)
         return 2
     except (description.DescriptionError, UnicodeDecodeError, RecursionError, ValueError) as e:
-        print(f"dyncal robot {args.command}: {type(e).__name__}: {e}".splitlines()[0], file=sys.stderr)
+        print(f"{prog}: {type(e).__name__}: {e}".splitlines()[0], file=sys.stderr)
         return 2
     except Exception as e:  # a defect of this tool: still one line, never a traceback
-        print(f"dyncal robot {args.command}: internal error: {type(e).__name__}: {e}".splitlines()[0],
+        print(f"{prog}: internal error: {type(e).__name__}: {e}".splitlines()[0],
               file=sys.stderr)
         return 1
 

@@ -132,25 +132,39 @@ def check(links, joints, chain, gravity, trials=20, seed=1):
     return frame_error, (None if off_path_mass else torque_error)
 
 
-def torque_samples(links, joints, chain, gravity, count=200, seed=7):
-    """KDL's recursive Newton-Euler on the URDF's own chain (as check() builds it) at `count` seeded
-    random states: a list of {"q", "qd", "qdd", "tau"} (joint order of `chain`; rad, rad/s, rad/s^2,
-    Nm), or None when mass hangs off the chain below the first joint (then the chain alone is not the
-    URDF's dynamics). The oracle `dyncal robot check` runs the compiled model against."""
+def torques_at(links, joints, chain, gravity, states):
+    """KDL's recursive Newton-Euler on the URDF's own chain (as check() builds it) at `states`
+    ({"q", "qd", "qdd"}, joint order of `chain`): the torque lists, or None when mass hangs off the
+    chain below the first joint (then the chain alone is not the URDF's dynamics)."""
     path_joints, off_path_mass = _urdf_path(links, joints, chain)
     if off_path_mass:
         return None
     original, _ = urdf_chain(links, path_joints)
     solver = kdl.ChainIdSolver_RNE(original, kdl.Vector(*gravity))
     n = len(chain.joints)
-    rng = random.Random(seed)
     out = []
-    for _ in range(count):
-        q = [rng.uniform(-math.pi, math.pi) for _ in range(n)]
-        qd = [rng.uniform(-2, 2) for _ in range(n)]
-        qdd = [rng.uniform(-5, 5) for _ in range(n)]
+    for s in states:
         tau = kdl.JntArray(n)
-        solver.CartToJnt(_array(q), _array(qd), _array(qdd), [kdl.Wrench() for _ in range(original.getNrOfSegments())],
-                         tau)
-        out.append({"q": q, "qd": qd, "qdd": qdd, "tau": [tau[i] for i in range(n)]})
+        solver.CartToJnt(_array(s["q"]), _array(s["qd"]), _array(s["qdd"]),
+                         [kdl.Wrench() for _ in range(original.getNrOfSegments())], tau)
+        out.append([tau[i] for i in range(n)])
     return out
+
+
+def torque_samples(links, joints, chain, gravity, count=200, seed=7):
+    """torques_at `count` seeded random states: a list of {"q", "qd", "qdd", "tau"} (rad, rad/s,
+    rad/s^2, Nm), or None (torques_at). The oracle `dyncal robot check` runs the compiled model
+    against."""
+    n = len(chain.joints)
+    rng = random.Random(seed)
+    states = []
+    for _ in range(count):
+        states.append({"q": [rng.uniform(-math.pi, math.pi) for _ in range(n)],
+                       "qd": [rng.uniform(-2, 2) for _ in range(n)],
+                       "qdd": [rng.uniform(-5, 5) for _ in range(n)]})
+    taus = torques_at(links, joints, chain, gravity, states)
+    if taus is None:
+        return None
+    for s, tau in zip(states, taus):
+        s["tau"] = tau
+    return states

@@ -31,6 +31,12 @@ void add_registers_command(CLI::App& app, Action& run);
 void add_robot_command(CLI::App& app, Action& run);
 void add_predict_command(CLI::App& app, Action& run);
 void add_payload_command(CLI::App& app, Action& run);
+void add_export_command(CLI::App& app, Action& run);
+
+/// Runs codegen/import_urdf.py (the URDF work: import, check, export; orocos-kdl checks) with `args`
+/// under the Debian python3; its messages go straight to our stdout/stderr. Returns its exit code;
+/// throws InputError when it cannot be run.
+int run_urdf_tool(const std::vector<std::string>& args);
 
 using host::read_json_file;  ///< json_file.hpp: one-line errors naming the file
 /// Writes `j` (indented) to `path`. Throws InputError when the file cannot be written.

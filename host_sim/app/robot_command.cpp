@@ -2,8 +2,6 @@
 // The URDF work (parsing, merging fixed joints, re-expressing axes, the orocos-kdl check) is done by
 // codegen/import_urdf.py with the Debian python3; this file runs it and adds the C++ side of `check`:
 // the same robot.json through the tools' loader, and whether this build has compiled the robot.
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <Eigen/Core>
@@ -17,8 +15,6 @@
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/identification/pipeline/compiled_robot.hpp"
 
-extern char** environ;
-
 namespace dyncal::app {
 namespace {
 
@@ -31,28 +27,12 @@ struct RobotSettings {
   bool force = false;
 };
 
-/// Runs codegen/import_urdf.py with `args`; its messages go straight to our stdout/stderr.
-int run_importer(const std::vector<std::string>& args) {
-  const std::string python = "/usr/bin/python3";
-  std::vector<std::string> all{python, std::string(DYNCAL_SOURCE_DIR) + "/codegen/import_urdf.py"};
-  all.insert(all.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  for (std::string& a : all) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  if (posix_spawn(&pid, python.c_str(), nullptr, nullptr, argv.data(), environ) != 0)
-    throw InputError("cannot run " + python + " (scripts/setup installs it)");
-  int status = 0;
-  if (waitpid(pid, &status, 0) < 0 || !WIFEXITED(status)) throw InputError("the URDF importer did not finish");
-  return WEXITSTATUS(status);
-}
-
 int run_import(const RobotSettings& s) {
   std::vector<std::string> args{"import", s.urdf, "--name", s.name, "--robots-dir", s.robots_dir};
   if (!s.base.empty()) args.insert(args.end(), {"--base", s.base});
   if (!s.tip.empty()) args.insert(args.end(), {"--tip", s.tip});
   if (s.force) args.push_back("--force");
-  const int rc = run_importer(args);
+  const int rc = run_urdf_tool(args);
   if (rc != 0) return rc;
   std::cout << s.name << ": next, build (compiles its model; docs/robots.md): scripts/build dyncal\n";
   return 0;
@@ -66,7 +46,7 @@ bool compare_with_kdl(const RobotSettings& s, const host::CompiledRobot& c) {
   const std::string file =
       (std::filesystem::temp_directory_path() / ("dyncal-kdl-" + s.name + "-" + std::to_string(getpid()) + ".json"))
           .string();
-  const int rc = run_importer({"samples", s.name, "--robots-dir", s.robots_dir, "--out", file});
+  const int rc = run_urdf_tool({"samples", s.name, "--robots-dir", s.robots_dir, "--out", file});
   if (rc != 0) throw InputError("the KDL reference of " + s.name + " could not be computed");
   nlohmann::json j;
   try {
@@ -102,7 +82,7 @@ bool compare_with_kdl(const RobotSettings& s, const host::CompiledRobot& c) {
 }
 
 int run_check(const RobotSettings& s) {
-  const int rc = run_importer({"check", s.name, "--robots-dir", s.robots_dir});
+  const int rc = run_urdf_tool({"check", s.name, "--robots-dir", s.robots_dir});
   if (rc != 0) return rc;
   host::RobotDescription robot = host::load_robot(s.robots_dir, s.name);
   std::cout << s.name << ": the tools read robot.json (" << robot.num_joints << " joints)";

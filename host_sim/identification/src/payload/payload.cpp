@@ -303,6 +303,7 @@ ParameterSet with_payload(const ParameterSet& arm, const RobotDescription& robot
   ParameterSet p = arm;
   p.values.head(compiled.num_base) += last_link_base_map(compiled) * payload_standard;
   p.stdev.resize(0);  // the arm's std no longer describes the loaded base parameters
+  p.links.clear();    // nor its links' inertials the last link (a payload part may be undetermined)
   p.source = arm.source + " with a payload on link " + std::to_string(robot.num_joints);
   return p;
 }

@@ -11,6 +11,40 @@
 #include "dyncal_host/identification/pipeline/stacked_data.hpp"
 
 namespace dyncal::host {
+namespace {
+
+/// The file's "links" (one per joint, in order): finite numbers, mass > 0. Throws InputError.
+std::vector<LinkInertial> read_links(const nlohmann::json& list, const std::string& path, int joints) {
+  if (!list.is_array() || static_cast<int>(list.size()) != joints)
+    throw InputError(path + ": 'links' must list the " + std::to_string(joints) + " links");
+  std::vector<LinkInertial> out;
+  for (size_t k = 0; k < list.size(); ++k) {
+    const auto& e = list[k];
+    const std::string where = path + ": links[" + std::to_string(k + 1) + "]";
+    auto number = [&](const nlohmann::json& v, const std::string& what) {
+      if (!v.is_number() || !std::isfinite(v.get<double>()))
+        throw InputError(where + ": '" + what + "' is not a finite number");
+      return v.get<double>();
+    };
+    if (!e.is_object() || !e.contains("mass") || !e.contains("com") || !e.contains("inertia_about_com") ||
+        !e["com"].is_array() || e["com"].size() != 3 || !e["inertia_about_com"].is_array() ||
+        e["inertia_about_com"].size() != 6)
+      throw InputError(where + ": expected {mass, com[3], inertia_about_com[6]}");
+    LinkInertial l;
+    l.link = static_cast<int>(k) + 1;
+    l.mass = number(e["mass"], "mass");
+    if (!(l.mass > 0)) throw InputError(where + ": mass must be > 0");
+    for (int i = 0; i < 3; ++i) l.com[static_cast<size_t>(i)] = number(e["com"][static_cast<size_t>(i)], "com");
+    for (int i = 0; i < 6; ++i)
+      l.inertia[static_cast<size_t>(i)] = number(e["inertia_about_com"][static_cast<size_t>(i)], "inertia_about_com");
+    if (e.contains("pseudo_inertia_min_eigenvalue") && e["pseudo_inertia_min_eigenvalue"].is_number())
+      l.min_eigenvalue = e["pseudo_inertia_min_eigenvalue"].get<double>();
+    out.push_back(l);
+  }
+  return out;
+}
+
+}  // namespace
 
 ParameterSet read_parameter_file(const std::string& path) {
   const nlohmann::json j = read_json_file(path);
@@ -64,6 +98,7 @@ ParameterSet read_parameter_file(const std::string& path) {
         v["std"].get<double>() >= 0)
       p.stdev[static_cast<Eigen::Index>(i)] = v["std"].get<double>();
   }
+  if (j.contains("links")) p.links = read_links(j["links"], path, compiled.num_joints);
   return p;
 }
 
@@ -85,6 +120,15 @@ nlohmann::json parameter_file_json(const ParameterSet& p, const std::string& met
     if (with_std) e["std"] = p.stdev[i];
     j["params"].push_back(e);
   }
+  if (!p.links.empty()) {
+    j["links"] = nlohmann::json::array();
+    for (const auto& l : p.links)
+      j["links"].push_back({{"link", l.link},
+                            {"mass", l.mass},
+                            {"com", l.com},
+                            {"inertia_about_com", l.inertia},
+                            {"pseudo_inertia_min_eigenvalue", l.min_eigenvalue}});
+  }
   return j;
 }
 
@@ -105,6 +149,7 @@ ParameterSet parameter_set(const IdentifyResult& r) {
     p.values[static_cast<Eigen::Index>(i)] = r.params[i].value;
     p.stdev[static_cast<Eigen::Index>(i)] = r.params[i].std;
   }
+  p.links = r.links;
   return p;
 }
 

@@ -26,6 +26,9 @@ struct ParameterSet {
   /// Standard deviation of each value as identify reported it (NaN where the file gives none or the
   /// parameter was not determined); empty when the values are not an identification's.
   Eigen::VectorXd stdev;
+  /// Each link's consistent inertials (identify --method pcls; file key "links"), empty when the set
+  /// has none (other methods: the base parameters do not determine them).
+  std::vector<LinkInertial> links;
 };
 
 /// Reads a `dyncal identify --params` file (docs/cli.md). Throws InputError with the file and what
@@ -36,7 +39,7 @@ ParameterSet read_parameter_file(const std::string& path);
 
 /// The parameter file of `p` (docs/cli.md "--params schema"; read_parameter_file reads it): format,
 /// version, robot, model, `method`, friction_per, params [{name, value, std}] (std only when the set
-/// has them; null where not determined).
+/// has them; null where not determined), links [{link, mass, com, inertia_about_com}] when it has them.
 nlohmann::json parameter_file_json(const ParameterSet& p, const std::string& method);
 
 /// The parameters identify reports (IdentifyResult::params) as a set.
