@@ -41,7 +41,7 @@ TEST_P(ExportUrdf, RoundTripsThroughKdlAndRobotImport) {
   const std::string robots = " --robots-dir " + (dir / "robots").string();
   const RobotDescription robot = test_robot(name);
   write_csv_log((dir / "log.csv").string(), simulate(robot, uniform_times(500.0, 40.0), MotionClock{}, 31, 3).log);
-  ASSERT_EQ(run_dyncal("identify --robot " + name + robots + " --model eq7 --method pcls --data " +
+  ASSERT_EQ(run_dyncal("identify --robot " + name + robots + " --method pcls --data " +
                        (dir / "log.csv").string() + " --params " + (dir / "p.json").string()),
             0);
   const std::filesystem::path out = dir / (name + "_identified.urdf");
@@ -49,6 +49,7 @@ TEST_P(ExportUrdf, RoundTripsThroughKdlAndRobotImport) {
   const std::string text = read_text(out);
   EXPECT_NE(text.find("<dynamics damping="), std::string::npos);
   EXPECT_NE(text.find("<dyncal "), std::string::npos);
+  EXPECT_NE(text.find("offset=\""), std::string::npos);  // the default model's offsets, in <dyncal>
 
   // Re-import the written file as a new robot: its merged chain must pass the importer's KDL check.
   ASSERT_EQ(run_dyncal("robot import " + out.string() + " --name roundtrip" + robots), 0);
