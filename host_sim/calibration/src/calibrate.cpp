@@ -101,7 +101,8 @@ JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory
   if (drive.write_trajectory(trajectory, run.periods, run.sample_rate_hz) != port::PortStatus::ok)
     throw InputError("drive: " + drive.error());
   const auto t0 = SteadyClock::now();
-  if (drive.start() != port::PortStatus::ok) throw InputError("drive: " + drive.error());
+  if ((run.identify_payload ? drive.identify_payload() : drive.start()) != port::PortStatus::ok)
+    throw InputError("drive: " + drive.error());
   const long expected = std::lround(run.periods * trajectory.period() * run.sample_rate_hz);
   std::vector<port::DriveSample> samples;
   samples.reserve(static_cast<size_t>(expected));

@@ -42,6 +42,11 @@ void refresh_inputs(const SimulatedDrive& d, std::uint16_t* in, long& table_gene
     mm::set_f32(in + mm::kGainKpReg + 2 * j, static_cast<float>(kp[j]));
     mm::set_f32(in + mm::kGainKdReg + 2 * j, static_cast<float>(kd[j]));
   }
+  in[mm::kPayloadStateReg] = static_cast<std::uint16_t>(d.payload_state());
+  for (int i = 0; i < 10; ++i) {
+    mm::set_f32(in + mm::kPayloadReg + 2 * i, static_cast<float>(d.payload_value()[static_cast<size_t>(i)]));
+    mm::set_f32(in + mm::kPayloadStdReg + 2 * i, static_cast<float>(d.payload_std()[static_cast<size_t>(i)]));
+  }
   // The table registers change only with the table: copy them when it changed.
   if (table_generation != static_cast<long>(d.table_generation())) {
     const auto& bytes = d.active_table_bytes();
@@ -110,11 +115,14 @@ int check_holding(const SimulatedDrive& d, const std::uint16_t* h, int address, 
   };
   if (overlaps(address, count, mm::kCommandReg, 1)) {
     const std::uint16_t c = h[mm::kCommandReg];
-    if (c > static_cast<std::uint16_t>(mm::Command::reset)) return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
-    if (c == static_cast<std::uint16_t>(mm::Command::commit_table)) {
+    if (c > static_cast<std::uint16_t>(mm::Command::identify_payload)) return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+    // identify_payload writes the active table at the run's end: a staging session's right.
+    if (c == static_cast<std::uint16_t>(mm::Command::commit_table) ||
+        c == static_cast<std::uint16_t>(mm::Command::identify_payload)) {
       if (const int e = staging_rule()) return e;
     }
-    if (c == static_cast<std::uint16_t>(mm::Command::start)) {
+    if (c == static_cast<std::uint16_t>(mm::Command::start) ||
+        c == static_cast<std::uint16_t>(mm::Command::identify_payload)) {
       if (playing) return MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY;   // would jump the arm back to the start pose
       if (fault) return MODBUS_EXCEPTION_SLAVE_OR_SERVER_FAILURE;  // only reset clears a fault
       if (!(mm::run_samples(h[mm::kPeriodsReg], mm::get_f32(h + mm::kOmegaFReg), mm::get_f32(h + mm::kSampleRateReg)) <=
@@ -350,6 +358,13 @@ void ModbusRequestHandler::apply_write(int address, int count) {
     case mm::Command::start:
       load_trajectory(drive_, h);
       drive_.start();
+      started_ = Clock::now();
+      mm::set_u32(h + mm::kAckReg, 0);
+      break;
+    case mm::Command::identify_payload:
+      session_client_ = kNoClient;  // the table write it ends with uses the session
+      load_trajectory(drive_, h);
+      drive_.start_payload();
       started_ = Clock::now();
       mm::set_u32(h + mm::kAckReg, 0);
       break;

@@ -174,6 +174,26 @@ Scenario load_scenario(const std::string& path, const RobotDescription& robot) {
       s.couplings.push_back(cf);
     }
   }
+  if (j.contains("payload")) {
+    const json& pl = j["payload"];
+    const std::string where = w + ": payload";
+    if (!pl.is_object()) throw InputError(where + " must be an object {mass, com, inertia_about_com}");
+    s.payload.mass = number(pl, "mass", 0.0, where);
+    if (!(s.payload.mass >= 0) || !std::isfinite(s.payload.mass)) throw InputError(where + ".mass must be >= 0");
+    auto list = [&](const char* key, double* out, size_t n) {
+      if (!pl.contains(key)) return;
+      const json& a = pl[key];
+      if (!a.is_array() || a.size() != n)
+        throw InputError(where + "." + key + " must be " + std::to_string(n) + " numbers");
+      for (size_t k = 0; k < n; ++k) {
+        if (!a[k].is_number() || !std::isfinite(a[k].get<double>()))
+          throw InputError(where + "." + key + " must be " + std::to_string(n) + " numbers");
+        out[k] = a[k].get<double>();
+      }
+    };
+    list("com", s.payload.com.data(), 3);
+    list("inertia_about_com", s.payload.inertia.data(), 6);
+  }
   if (j.contains("joints")) {
     const json& js = j["joints"];
     if (!js.is_array() || static_cast<int>(js.size()) != s.num_joints)

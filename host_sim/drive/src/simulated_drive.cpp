@@ -90,8 +90,43 @@ void SimulatedDrive::start() {
   state_ = modbus_map::DriveState::playing;
 }
 
+void SimulatedDrive::start_payload() {
+  start();
+  plant_->begin_payload();
+  payload_state_ = modbus_map::PayloadState::running;
+  payload_value_.fill(std::numeric_limits<double>::quiet_NaN());
+  payload_std_.fill(std::numeric_limits<double>::quiet_NaN());
+}
+
+bool SimulatedDrive::publish_payload() {
+  // The verdict rule of the host's identifiability.hpp: 95 % half-width 1.96 std; the mass must be
+  // determined (at most a tenth of itself) and positive; every other parameter is kept unless its
+  // half-width exceeds its scale (not determined: held at 0 in the table, NaN here).
+  constexpr double kZ = 1.959963984540054, kDeterminedFraction = 0.1;
+  const PayloadFit f = plant_->payload_fit();
+  const bool mass = f.updates > 0 && f.value[9] > 0 && kZ * f.std[9] <= kDeterminedFraction * f.value[9];
+  for (size_t i = 0; i < 10; ++i) {
+    const bool kept = mass && std::isfinite(f.std[i]) && kZ * f.std[i] <= f.scale[i];
+    payload_value_[i] = kept ? f.value[i] : std::numeric_limits<double>::quiet_NaN();
+    payload_std_[i] = kept ? f.std[i] : std::numeric_limits<double>::quiet_NaN();
+  }
+  return mass;
+}
+
+void SimulatedDrive::finish_payload() {
+  if (payload_state_ != modbus_map::PayloadState::running) return;
+  payload_state_ = modbus_map::PayloadState::not_written;
+  if (!publish_payload()) return;
+  std::array<double, 10> dphi{};
+  for (size_t i = 0; i < 10; ++i) dphi[i] = std::isfinite(payload_value_[i]) ? payload_value_[i] : 0.0;
+  const std::vector<std::uint8_t> bytes = encoded_table(plant_->loaded_table(active_, dphi));
+  if (commit(bytes.data(), static_cast<int>(bytes.size())) == TableStatus::ok)
+    payload_state_ = modbus_map::PayloadState::written;
+}
+
 void SimulatedDrive::trip(modbus_map::DriveFault fault, double value) {
   if (state_ != modbus_map::DriveState::playing) return;
+  if (payload_state_ == modbus_map::PayloadState::running) payload_state_ = modbus_map::PayloadState::not_written;
   state_ = modbus_map::DriveState::fault;
   fault_ = fault;
   fault_joint_ = 0;
@@ -107,19 +142,26 @@ void SimulatedDrive::reset() {
 }
 
 void SimulatedDrive::stop() {
-  if (state_ == modbus_map::DriveState::playing) state_ = modbus_map::DriveState::finished;
+  if (state_ != modbus_map::DriveState::playing) return;
+  state_ = modbus_map::DriveState::finished;
+  if (payload_state_ == modbus_map::PayloadState::running) {
+    publish_payload();  // the estimate so far stays readable; the table is not touched
+    payload_state_ = modbus_map::PayloadState::not_written;
+  }
 }
 
 void SimulatedDrive::step() {
   if (state_ != modbus_map::DriveState::playing) return;
   if (steps_ >= total_steps_) {
     state_ = modbus_map::DriveState::finished;
+    finish_payload();
     return;
   }
   const double dt = control_period();
   const PlantStep p = plant_->step(trajectory, scenario_, active_, time_, clock_, dt);
   if (p.trip.fault != modbus_map::DriveFault::none) {
     state_ = modbus_map::DriveState::fault;
+    if (payload_state_ == modbus_map::PayloadState::running) payload_state_ = modbus_map::PayloadState::not_written;
     fault_ = p.trip.fault;
     fault_joint_ = p.trip.joint + 1;
     fault_value_ = p.trip.value;
@@ -129,22 +171,28 @@ void SimulatedDrive::step() {
   for (int j = 0; j < n; ++j) error_sq_[j] += (p.tau_cmd[j] - p.tau_ff[j]) * (p.tau_cmd[j] - p.tau_ff[j]);
   ++error_n_;
   // Record.
+  const bool payload = payload_state_ == modbus_map::PayloadState::running;
   if (steps_ % steps_per_sample_ == 0) {
+    JointArray tau_measured{}, r{};
     port::DriveSample sample{};
     sample.seq = produced_++;
     PlantSample exact;
     exact.t = time_;
     for (int j = 0; j < n; ++j) {
-      const double tau_measured = p.tau_cmd[j] + scenario_.tau_noise_std[j] * normal_(rng_);
+      tau_measured[j] = p.tau_cmd[j] + scenario_.tau_noise_std[j] * normal_(rng_);
+      // The sensor's variance (drive.json tau_noise_std); its float32 register's resolution at least.
+      const double resolution = 6e-8 * std::max(1.0, std::fabs(tau_measured[j]));
+      r[j] = std::max(scenario_.tau_noise_std[j] * scenario_.tau_noise_std[j], resolution * resolution);
       sample.q[j] = static_cast<float>(p.q_meas[j]);
       sample.qd[j] = static_cast<float>(p.qd_meas[j]);
-      sample.tau[j] = static_cast<float>(tau_measured);
+      sample.tau[j] = static_cast<float>(tau_measured[j]);
       exact.q[j] = p.q[j];
       exact.qd[j] = p.qd[j];
       exact.qdd[j] = p.qdd[j];
       exact.tau_cmd[j] = p.tau_cmd[j];
-      exact.tau_measured[j] = tau_measured;
+      exact.tau_measured[j] = tau_measured[j];
     }
+    if (payload) plant_->update_payload(p, tau_measured, r);
     if (plant_log) plant_log->push_back(exact);
     if (ring_full()) {
       ++overruns_;  // the host sees the gap in seq

@@ -29,8 +29,9 @@ inline constexpr int kMaxJoints = 7;  ///< dyncal::kMaxRobotJoints (dyncal/robot
 inline constexpr int kMaxHarmonics = 8;
 /// 4: up to 7 joints (model error and coefficients sized for 7; ring samples packed for the
 /// drive's num_joints, as many per block as fit). 5: the `unlock` register and the `reset`
-/// command (access and state rules, docs/modbus.md "Access and states").
-inline constexpr std::uint16_t kMapVersion = 6;
+/// command (access and state rules, docs/modbus.md "Access and states"). 7: the identify_payload
+/// command and the payload registers (docs/payload.md "On the drive").
+inline constexpr std::uint16_t kMapVersion = 7;
 
 /// Key that, written to `unlock`, opens a staging session for the writing connection.
 inline constexpr std::uint16_t kUnlockKey = 0xCA1B;
@@ -109,6 +110,18 @@ enum class Command : std::uint16_t {
   stop = 2,          ///< stop playing and hold the current position
   commit_table = 3,  ///< check the staging table and make it active (see docs/modbus.md)
   reset = 4,         ///< clear a fault: the drive becomes idle (no-op in any other state)
+  /// play the trajectory from its start as `start`, identifying the payload on the last link with
+  /// the active table fixed; at the run's end the active table takes it (docs/payload.md)
+  identify_payload = 5,
+};
+
+/// The drive's payload identification (input register `payload_state`).
+enum class PayloadState : std::uint16_t {
+  none = 0,     ///< no identify_payload since the drive started
+  running = 1,  ///< the run plays (the estimate registers hold NaN until it ends)
+  written = 2,  ///< the run ended, the mass was determined: the active table holds the loaded model
+  /// the run ended without a determined positive mass, or was stopped or tripped: the table unchanged
+  not_written = 3,
 };
 
 // --- input registers (function code 04), read-only
@@ -144,7 +157,10 @@ constexpr int sample_words(int joints) noexcept {
 constexpr int samples_per_block(int joints) noexcept {
   return (kRingWords - 3) / sample_words(joints);
 }
-inline constexpr std::uint16_t kInputWords = kRingReg + kRingWords;
+inline constexpr std::uint16_t kPayloadStateReg = kRingReg + kRingWords;  // u16 PayloadState
+inline constexpr std::uint16_t kPayloadReg = kPayloadStateReg + 1;        // f32[10] XX..M, NaN: not determined
+inline constexpr std::uint16_t kPayloadStdReg = kPayloadReg + 20;         // f32[10] their std
+inline constexpr std::uint16_t kInputWords = kPayloadStdReg + 20;
 
 // --- holding registers (function codes 03, 06, 16, 23)
 inline constexpr std::uint16_t kCommandReg = 0;        // u16 Command
@@ -171,7 +187,7 @@ static_assert(kRingWords <= 125, "one ring block must fit one Modbus read");
 static_assert(samples_per_block(kMaxJoints) >= 2, "a block carries at least two samples");
 
 inline constexpr Field kRegisterMap[] = {
-    {"map_version", Bank::input, kMapVersionReg, 1, Type::u16, "-", "register map version (6)"},
+    {"map_version", Bank::input, kMapVersionReg, 1, Type::u16, "-", "register map version (7)"},
     {"num_joints", Bank::input, kNumJointsReg, 1, Type::u16, "-", "joints of the arm"},
     {"robot_id", Bank::input, kRobotIdReg, 2, Type::u32, "-", "generated kRobotId of the drive's robot"},
     {"active_model_id", Bank::input, kActiveModelIdReg, 2, Type::u32, "-", "model id of the active table"},
@@ -202,8 +218,15 @@ inline constexpr Field kRegisterMap[] = {
     {"ring", Bank::input, kRingReg, kRingWords, Type::bytes, "-",
      "u32 first seq, u16 count n <= 120 / (2 + 6 N), then n samples of N = num_joints: u32 seq, "
      "f32 q[N] rad, qd[N] rad/s, tau[N] Nm"},
+    {"payload_state", Bank::input, kPayloadStateReg, 1, Type::u16, "-",
+     "payload identification: 0 none, 1 running, 2 written into the active table, 3 not written"},
+    {"payload", Bank::input, kPayloadReg, 20, Type::f32, "kg m^2, kg m, kg",
+     "the last link's payload, standard parameters XX XY XZ YY YZ ZZ MX MY MZ M (link frame, about its "
+     "origin); NaN where the run does not determine it"},
+    {"payload_std", Bank::input, kPayloadStdReg, 20, Type::f32, "as payload",
+     "standard deviation of each payload parameter (NaN where not determined)"},
     {"command", Bank::holding, kCommandReg, 1, Type::u16, "-",
-     "1 start, 2 stop, 3 commit table, 4 reset a fault; reads 0"},
+     "1 start, 2 stop, 3 commit table, 4 reset a fault, 5 start and identify the payload; reads 0"},
     {"unlock", Bank::holding, kUnlockReg, 1, Type::u16, "-",
      "0xCA1B opens a staging session for this connection (10 s, until commit or disconnect); reads 0"},
     {"ack", Bank::holding, kAckReg, 2, Type::u32, "-", "samples with seq < ack are consumed and freed"},

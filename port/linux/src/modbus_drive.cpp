@@ -208,6 +208,27 @@ port::PortStatus ModbusDrive::start() {
   return write_holding(mm::kCommandReg, 1, &cmd);
 }
 
+port::PortStatus ModbusDrive::identify_payload() {
+  const std::uint16_t key = mm::kUnlockKey;
+  if (const auto st = write_holding(mm::kUnlockReg, 1, &key); st != port::PortStatus::ok) return st;
+  const std::uint16_t cmd = static_cast<std::uint16_t>(mm::Command::identify_payload);
+  next_seq_ = 0;
+  lost_ = 0;
+  return write_holding(mm::kCommandReg, 1, &cmd);
+}
+
+port::PortStatus ModbusDrive::read_payload(DrivePayload& payload) {
+  constexpr int kWords = mm::kInputWords - mm::kPayloadStateReg;
+  std::uint16_t r[kWords];
+  if (const auto st = read_input(mm::kPayloadStateReg, kWords, r); st != port::PortStatus::ok) return st;
+  payload.state = static_cast<mm::PayloadState>(r[0]);
+  for (int i = 0; i < 10; ++i) {
+    payload.value[static_cast<size_t>(i)] = mm::get_f32(r + (mm::kPayloadReg - mm::kPayloadStateReg) + 2 * i);
+    payload.std[static_cast<size_t>(i)] = mm::get_f32(r + (mm::kPayloadStdReg - mm::kPayloadStateReg) + 2 * i);
+  }
+  return port::PortStatus::ok;
+}
+
 port::PortStatus ModbusDrive::reset() {
   const std::uint16_t cmd = static_cast<std::uint16_t>(mm::Command::reset);
   return write_holding(mm::kCommandReg, 1, &cmd);

@@ -43,6 +43,15 @@ struct DriveControlLaw {
   std::array<double, modbus_map::kMaxJoints> kd{};  ///< [Nm s/rad]
 };
 
+/// The drive's payload identification (registers payload_state, payload, payload_std).
+struct DrivePayload {
+  modbus_map::PayloadState state = modbus_map::PayloadState::none;
+  /// The last link's payload [XX XY XZ YY YZ ZZ (kg m^2) MX MY MZ (kg m) M (kg)], link frame, about
+  /// its origin; NaN where the run does not determine it.
+  std::array<double, 10> value{};
+  std::array<double, 10> std{};
+};
+
 /// The drive's fault in words: "joint 2 velocity limit: qd = 3.51 rad/s at t = 1.234 s".
 std::string describe_fault(const DriveInfo& info);
 
@@ -78,6 +87,13 @@ class ModbusDrive final : public port::SampleSource, public port::ParameterStore
   /// Starts the written trajectory from its beginning (clears the ring and the statistics).
   /// Errors: transport_error, rejected (the drive is playing already, or in fault: reset() first).
   port::PortStatus start();
+  /// Starts the written trajectory as start() does and has the drive identify the payload on the
+  /// last link while it plays (opens a staging session first: the drive writes the loaded model
+  /// into its active table at the run's end; docs/payload.md "On the drive"). Errors:
+  /// transport_error, rejected (playing, in fault, or the run too long).
+  port::PortStatus identify_payload();
+  /// Reads the payload registers. Errors: transport_error, rejected.
+  port::PortStatus read_payload(DrivePayload& payload);
   /// Clears a drive fault (the only way to): the drive becomes idle. A no-op in any other state.
   /// Errors: transport_error, rejected.
   port::PortStatus reset();

@@ -122,6 +122,9 @@ struct StreamRun {
   int periods = 1;
   double sample_rate_hz = 1000;
   std::string fault_dir = ".";
+  /// Start the run with the identify_payload command instead of start (the drive identifies the
+  /// payload on the last link while it plays; docs/payload.md "On the drive").
+  bool identify_payload = false;
 };
 
 /// Streams one run of `trajectory` from the drive into a log (q and tau; t from seq), handing each

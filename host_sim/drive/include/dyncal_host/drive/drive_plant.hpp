@@ -36,10 +36,28 @@ struct Trip {
 
 /// One control period's numbers (SI units, joint side).
 struct PlantStep {
-  Trip trip;                       ///< a trip stops the period before the control law; the rest is then unset
-  JointArray q_meas{}, qd_meas{};  ///< quantised encoder position, its backward difference
-  JointArray tau_ff{}, tau_cmd{};  ///< feed-forward of the active table; commanded torque (+ PD)
-  JointArray q{}, qd{}, qdd{};     ///< the exact plant state at the period's start
+  Trip trip;                          ///< a trip stops the period before the control law; the rest is then unset
+  JointArray q_meas{}, qd_meas{};     ///< quantised encoder position, its backward difference
+  JointArray tau_ff{}, tau_cmd{};     ///< feed-forward of the active table; commanded torque (+ PD)
+  JointArray q{}, qd{}, qdd{};        ///< the exact plant state at the period's start
+  JointArray q_d{}, qd_d{}, qdd_d{};  ///< the trajectory's state the feed-forward was computed at
+  /// While the payload is identified: the active table's torque at the measured position with the
+  /// trajectory's velocity and acceleration (the arm model where the arm is, not where it should be)
+  JointArray tau_model{};
+};
+
+/// The drive's payload estimate (docs/payload.md "On the drive"): the last link's 10 standard
+/// parameters dphi [XX XY XZ YY YZ ZZ (kg m^2) MX MY MZ (kg m) M (kg)], link frame, about its origin.
+struct PayloadFit {
+  std::array<double, 10> value{};  ///< the Kalman filter's estimate (least squares: diffuse prior)
+  /// Standard deviations: the filter's, times the residuals' RMS over their assumed std (the
+  /// measurement variance r covers the sensor's noise only, the residual also the model's error).
+  std::array<double, 10> std{};
+  /// The size each parameter's verdict compares 1.96 std with (payload.hpp's scales): the mass
+  /// against itself, a first moment against m l, an inertia against m l^2, l = max(|c|, the last
+  /// link's own centre-of-mass distance in the robot file).
+  std::array<double, 10> scale{};
+  long updates = 0;
 };
 
 class DrivePlant {
@@ -68,6 +86,18 @@ class DrivePlant {
   /// for warm-up effects): measure, check limits, control law, then integrate the plant by dt.
   virtual PlantStep step(const DriveTrajectory& trajectory, const Scenario& scenario, const ParameterTable& active,
                          double time, double clock, double dt) = 0;
+  /// Starts the payload estimator for a run (no load, diffuse prior).
+  virtual void begin_payload() = 0;
+  /// One recorded sample of the run: the state q_meas, qd_d, qdd_d of p and the measured torque
+  /// [Nm]; the residual tau_measured - p.tau_model is the payload's torque (at the measured
+  /// position: the PD loop lets a load pull the arm off the trajectory, and the arm's gravity there
+  /// differs from the feed-forward's by about G' e, a bias of G' / kp on the payload); r: the torque
+  /// measurement's variance per joint [Nm^2] (> 0). A sample the filter refuses is skipped.
+  virtual void update_payload(const PlantStep& p, const JointArray& tau_measured, const JointArray& r) = 0;
+  virtual PayloadFit payload_fit() const = 0;
+  /// `active` with the payload dphi on the last link: its base parameters moved by K_N dphi
+  /// (Gautier's base map of link N), every other value kept.
+  virtual ParameterTable loaded_table(const ParameterTable& active, const std::array<double, 10>& dphi) const = 0;
   virtual void fix_gains(const JointArray& kp, const JointArray& kd) = 0;
   virtual JointArray kp() const = 0;
   virtual JointArray kd() const = 0;

@@ -11,6 +11,7 @@
 
 #include "dyncal/effect_terms.hpp"
 #include "dyncal/identification_model.hpp"
+#include "dyncal/payload_estimator.hpp"
 #include "dyncal/table_check.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/model_terms.hpp"
@@ -87,6 +88,20 @@ class DrivePlantOf final : public DrivePlant {
     // coupled motors).
     rotor_.setZero();
     for (int m = 0; m < N; ++m) rotor_ += scenario.effects[m].rotor_inertia * motor_.row(m).transpose() * motor_.row(m);
+    // The scenario's payload on the last link: its standard parameters about the link origin
+    // (first moments m c; inertia by the parallel-axis theorem) added to the nominal ones.
+    for (int i = 0; i < Robot::kNumStandard; ++i) phi_true_[i] = data_.nominal_standard[i];
+    const auto& pl = scenario.payload;
+    if (pl.mass > 0) {
+      const Eigen::Vector3d c(pl.com[0], pl.com[1], pl.com[2]);
+      Eigen::Matrix3d I;
+      I << pl.inertia[0], pl.inertia[1], pl.inertia[2], pl.inertia[1], pl.inertia[3], pl.inertia[4], pl.inertia[2],
+          pl.inertia[4], pl.inertia[5];
+      const Eigen::Matrix3d Io = I + pl.mass * (c.squaredNorm() * Eigen::Matrix3d::Identity() - c * c.transpose());
+      const double d[10] = {Io(0, 0), Io(0, 1),       Io(0, 2),       Io(1, 1),       Io(1, 2),
+                            Io(2, 2), pl.mass * c[0], pl.mass * c[1], pl.mass * c[2], pl.mass};
+      for (int i = 0; i < 10; ++i) phi_true_[Robot::kNumStandard - 10 + i] += d[i];
+    }
   }
 
   void set_plant_parameters(const std::vector<double>& phi_standard) override {
@@ -99,6 +114,7 @@ class DrivePlantOf final : public DrivePlant {
   void set_active(const ParameterTable& table) override { ops_ = *find_ops(table.model_id); }
 
   void begin(const DriveTrajectory& trajectory, const Scenario& scenario, bool gains_fixed, double dt) override {
+    payload_running_ = false;  // begin_payload() after begin() turns it on for the run
     Vec q_d, qd_d, qdd_d;
     trajectory.evaluate(0.0, q_d, qd_d, qdd_d);  // the simulation starts on the trajectory
     q_ = q_d;
@@ -159,9 +175,75 @@ class DrivePlantOf final : public DrivePlant {
       out.tau_cmd[j] = tau_cmd[j];
       out.q[j] = q_[j];
       out.qd[j] = qd_[j];
+      out.q_d[j] = q_d[j];
+      out.qd_d[j] = qd_d[j];
+      out.qdd_d[j] = qdd_d[j];
+    }
+    if (payload_running_) {
+      Vec tau_model;
+      ops_.feedforward(active, q_meas, qd_d, qdd_d, tau_model);
+      for (int j = 0; j < N; ++j) out.tau_model[j] = tau_model[j];
     }
     integrate(scenario, tau_cmd, clock, dt, out.qdd);
     return out;
+  }
+
+  void begin_payload() override {
+    // A diffuse prior: 1e6 in the parameters' units makes the estimate least squares'.
+    payload_.reset(Payload::ParamVector::Constant(1e6));
+    innovation_sq_ = Vec::Zero();
+    payload_updates_ = 0;
+    payload_running_ = true;
+  }
+
+  void update_payload(const PlantStep& p, const JointArray& tau_measured, const JointArray& r) override {
+    Vec q, qd, qdd, residual, var;
+    for (int j = 0; j < N; ++j) {
+      q[j] = p.q_meas[j];
+      qd[j] = p.qd_d[j];
+      qdd[j] = p.qdd_d[j];
+      residual[j] = tau_measured[j] - p.tau_model[j];
+      var[j] = r[j];
+    }
+    if (payload_.update(q, qd, qdd, residual, var) != UpdateStatus::ok) return;
+    typename Payload::Regressor Y;
+    payload_.regressor(q, qd, qdd, Y);
+    const Vec after = residual - Y * payload_.estimate();  // a posteriori: the fit's residual
+    innovation_sq_ += after.cwiseAbs2().cwiseQuotient(var);
+    ++payload_updates_;
+  }
+
+  PayloadFit payload_fit() const override {
+    PayloadFit f;
+    f.updates = payload_updates_;
+    typename Payload::ParamVector var;
+    payload_.variance(var);
+    // The residuals' mean square over r (the worst joint): 1 when r is their variance; above 1 they
+    // hold more than the sensor's noise (the arm model's error), and the std grows with them.
+    const double inflation =
+        payload_updates_ > 0 ? std::max(1.0, innovation_sq_.maxCoeff() / static_cast<double>(payload_updates_)) : 1.0;
+    const typename Payload::ParamVector& x = payload_.estimate();
+    const double m = std::abs(x[9]);
+    const Eigen::Vector3d c = m > 0 ? Eigen::Vector3d(x.template segment<3>(6) / x[9]) : Eigen::Vector3d::Zero();
+    const double* link = data_.nominal_standard + Robot::kNumStandard - 10;
+    const double c_link = link[9] > 0 ? Eigen::Vector3d(link[6], link[7], link[8]).norm() / link[9] : 0.0;
+    const double lever = std::max(c.norm(), c_link);
+    for (int i = 0; i < 10; ++i) {
+      f.value[static_cast<size_t>(i)] = x[i];
+      f.std[static_cast<size_t>(i)] = std::sqrt(std::max(0.0, var[i]) * inflation);
+      f.scale[static_cast<size_t>(i)] = i < 6 ? m * lever * lever : i < 9 ? m * lever : m;
+    }
+    return f;
+  }
+
+  ParameterTable loaded_table(const ParameterTable& active, const std::array<double, 10>& dphi) const override {
+    StdVec phi = StdVec::Zero();
+    for (int i = 0; i < 10; ++i) phi[Robot::kNumStandard - 10 + i] = dphi[static_cast<size_t>(i)];
+    Eigen::Matrix<double, Robot::kNumBase, 1> delta;
+    Robot::standard_to_base(phi, delta);
+    ParameterTable t = active;
+    for (int i = 0; i < Robot::kNumBase; ++i) t.values[i] = static_cast<float>(t.values[i] + delta[i]);
+    return t;
   }
 
   void fix_gains(const JointArray& kp, const JointArray& kd) override {
@@ -248,8 +330,14 @@ class DrivePlantOf final : public DrivePlant {
     return a;
   }
 
+  using Payload = PayloadEstimator<Robot, double>;
+
   GeneratedRobotData data_;
   StdVec phi_true_;
+  Payload payload_;
+  Vec innovation_sq_ = Vec::Zero();
+  long payload_updates_ = 0;
+  bool payload_running_ = false;
   Mat motor_ = Mat::Identity();             // Scenario::motor_map: motor velocities v = T qd
   Mat rotor_ = Mat::Zero();                 // the motors' rotor inertia on the joints: sum_m Ia_m T_m^T T_m
   Vec q_ = Vec::Zero(), qd_ = Vec::Zero();  // plant state

@@ -76,6 +76,14 @@ struct Scenario {
   std::array<JointEffects, kMaxDriveJoints> effects{};
   std::vector<CoupledFriction> couplings;
   MotorMap motor_map = identity_motor_map();  ///< T: robot.json's transmission (motor_velocity_map)
+  /// A load rigidly fixed to the last link of the plant (not of any table): mass [kg], centre of
+  /// mass [m] and inertia about it [kg m^2, ixx ixy ixz iyy iyz izz] in the last link's frame;
+  /// mass 0: none. Added to the plant's standard parameters (docs/payload.md "On the drive").
+  struct Payload {
+    double mass = 0;
+    std::array<double, 3> com{};
+    std::array<double, 6> inertia{};
+  } payload;
 };
 
 /// The default scenario for `robot`: robot.json's transmission as the motor map (a coupled motor,

@@ -4,6 +4,7 @@
 // 3), friction and effects from the scenario, measurement (encoder quantisation, torque noise), recording into a ring
 // buffer, and the parameter table (checked, persisted atomically).
 
+#include <array>
 #include <cstdint>
 #include <deque>
 #include <memory>
@@ -39,6 +40,18 @@ class SimulatedDrive {
   double sample_rate_hz = 1000;
 
   void start();
+  /// start(), identifying the payload on the last link while the run plays (the active table fixed,
+  /// the estimator of lib/ payload_estimator.hpp on every recorded sample). At the run's end, when
+  /// the run determines a positive mass, the active table takes the payload (its determined
+  /// parameters; the others held at 0) through commit(): payload_state() written; otherwise, or
+  /// when the run is stopped or trips, not_written and the table unchanged (docs/payload.md "On
+  /// the drive").
+  void start_payload();
+  modbus_map::PayloadState payload_state() const { return payload_state_; }
+  /// The estimate when the run ended or was stopped (NaN before): values, NaN where the run does
+  /// not determine the parameter (1.96 std beyond its scale, or the mass not determined), and std.
+  const std::array<double, 10>& payload_value() const { return payload_value_; }
+  const std::array<double, 10>& payload_std() const { return payload_std_; }
   void stop();
   /// Stops a playing trajectory with `fault` (no joint; `value` in its unit), as a trip does: the
   /// arm holds, no further sample is recorded. No-op unless playing.
@@ -132,6 +145,11 @@ class SimulatedDrive {
   long error_n_ = 0;
   std::mt19937_64 rng_;
   std::normal_distribution<double> normal_{0.0, 1.0};
+  modbus_map::PayloadState payload_state_ = modbus_map::PayloadState::none;
+  std::array<double, 10> payload_value_{}, payload_std_{};
+  /// Publishes the plant's payload fit with the verdicts; returns whether the mass is determined.
+  bool publish_payload();
+  void finish_payload();
 };
 
 /// The table of robot `robot`'s nominal (CAD) base parameters with Eq. 7 friction Fc [Nm], beta
