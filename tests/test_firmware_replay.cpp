@@ -18,6 +18,7 @@ namespace data = dyncal::replay::data;
 template <Updater U>
 void replay_matches_reference(const double* reference, double& residual, int& rejected) {
   auto est = std::make_unique<dyncal::replay::Estimator<double, U>>();
+  if constexpr (U == Updater::payload) est->set_arm(data::kReferenceKf);
   auto diff = std::make_unique<dyncal::CausalDifferentiator<double, 6>>();
   ASSERT_EQ(est->reset(), dyncal::UpdateStatus::ok);
   const auto c =
@@ -38,6 +39,11 @@ TEST(FirmwareReplay, HostDoubleRunReproducesTheCommittedReference) {
   replay_matches_reference<Updater::rls>(data::kReferenceRls, r_rls, x_rls);
   replay_matches_reference<Updater::ekf>(data::kReferenceEkf, r_ekf, x_ekf);
   replay_matches_reference<Updater::friction>(data::kReferenceFriction, r_friction, x_friction);
+  double r_payload = 0;
+  int x_payload = 0;
+  replay_matches_reference<Updater::payload>(data::kReferencePayload, r_payload, x_payload);
+  // The payload's columns on top of the KF's arm model can only reduce its residual (least squares).
+  EXPECT_LE(r_payload, r_kf * (1 + 1e-9));
   std::cout << "relative residual KF " << r_kf << " RLS " << r_rls << " EKF " << r_ekf << " friction tracker "
             << r_friction << "; rejected " << x_kf << " " << x_rls << " " << x_ekf << " " << x_friction << "\n";
   EXPECT_LT(r_ekf, r_kf);

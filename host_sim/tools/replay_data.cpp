@@ -1,11 +1,13 @@
 // Writes port/replay/er20_replay_data.hpp: a block of simulated er20 drive samples (the simulated
 // drive of host_sim with Eq. 4 Stribeck friction and the survey's Table 7 torque noise, recorded at
 // 100 Hz over two periods of the default excitation) and the host's double-precision replay of
-// the KF, RLS, EKF and friction tracker over them (the reference the firmware images compare against).
-// The samples are a recording, not regenerated when the simulated drive changes (the firmware's
-// figures stay comparable from one commit to the next); tests/test_firmware_replay.cpp checks that
-// the references are the replay of the committed samples.
-// Usage: dyncal_replay_data OUT.hpp   (CMake target `replay-data`).
+// the KF, RLS, EKF, friction tracker and payload estimator over them (the reference the firmware images compare
+// against). The samples are a recording, not regenerated when the simulated drive changes (the firmware's figures stay
+// comparable from one commit to the next); tests/test_firmware_replay.cpp checks that the references are the replay of
+// the committed samples. Usage: dyncal_replay_data OUT.hpp   (CMake target `replay-data`: records anew).
+//        dyncal_replay_data --references DATA.hpp: the committed recording's references computed
+//        again from its own samples (an updater added or changed), the samples kept (CMake target
+//        `replay-references`).
 //        dyncal_replay_data --ratings OUT.hpp: port/replay/er20_ratings.hpp, the er20's ratings from
 //        robots/er20/robot.json for the firmware parameter store's table plausibility (same target;
 //        CTest replay_ratings_up_to_date regenerates it and fails on any difference).
@@ -24,6 +26,7 @@
 #include "dyncal_host/drive/simulated_drive.hpp"
 #include "dyncal_host/identification/excitation/excitation.hpp"
 #include "dyncal_host/identification/pipeline/compiled_robot.hpp"
+#include "er20_replay_data.hpp"
 #include "replay.hpp"
 
 namespace {
@@ -33,10 +36,12 @@ using dyncal::replay::Updater;
 constexpr std::uint64_t kSeed = 2026;
 constexpr double kRate = 100.0;
 
+/// `arm`: the payload estimator's arm parameters (the KF's reference), ignored by the others.
 template <Updater U>
 std::vector<double> reference(const std::vector<std::array<float, 12>>& samples, const double* sigma,
-                              dyncal::replay::Counts& c) {
+                              dyncal::replay::Counts& c, const double* arm = nullptr) {
   auto est = std::make_unique<dyncal::replay::Estimator<double, U>>();
+  if constexpr (U == Updater::payload) est->set_arm(arm);
   auto diff = std::make_unique<dyncal::CausalDifferentiator<double, 6>>();
   if (est->reset() != dyncal::UpdateStatus::ok) throw std::runtime_error("reset failed");
   c = dyncal::replay::run(*est, *diff, reinterpret_cast<const float(*)[12]>(samples.data()),
@@ -48,6 +53,59 @@ void write_array(std::ostream& o, const char* name, const std::vector<double>& v
   o << "inline constexpr double " << name << "[" << v.size() << "] = {";
   for (size_t i = 0; i < v.size(); ++i) o << (i % 4 == 0 ? "\n    " : " ") << std::setprecision(17) << v[i] << ",";
   o << "};\n";
+}
+
+/// Every updater's double replay of `samples`: the header's comment line on the accepted updates
+/// and its reference arrays (from "/// Host double-precision" to the end of the file).
+struct References {
+  std::string accepted_line, arrays;
+};
+
+References references(const std::vector<std::array<float, 12>>& samples, const double* sigma) {
+  dyncal::replay::Counts ck, cr, ce, cf, cp;
+  const auto kf = reference<Updater::kf>(samples, sigma, ck);
+  const auto rls = reference<Updater::rls>(samples, sigma, cr);
+  const auto ekf = reference<Updater::ekf>(samples, sigma, ce);
+  const auto friction = reference<Updater::friction>(samples, sigma, cf);
+  const auto payload = reference<Updater::payload>(samples, sigma, cp, kf.data());
+  References r;
+  std::ostringstream a, o;
+  a << "// (accepted updates: KF " << ck.accepted << ", RLS " << cr.accepted << ", EKF " << ce.accepted
+    << ", friction tracker " << cf.accepted << ", payload " << cp.accepted << ").\n";
+  r.accepted_line = a.str();
+  o << "/// Host double-precision estimates after the replay (parameter order of replay.hpp).\n";
+  write_array(o, "kReferenceKf", kf);
+  write_array(o, "kReferenceRls", rls);
+  write_array(o, "kReferenceEkf", ekf);
+  write_array(o, "kReferenceFriction", friction);
+  write_array(o, "kReferencePayload", payload);
+  o << "\n}  // namespace dyncal::replay::data\n// clang-format on\n";
+  r.arrays = o.str();
+  return r;
+}
+
+/// --references: the committed recording's references computed again (a new updater, a changed
+/// one), its samples and comments kept: the header at `path` rewritten from its accepted-updates
+/// line on.
+void rewrite_references(const char* path) {
+  std::vector<std::array<float, 12>> samples(static_cast<size_t>(dyncal::replay::data::kCount));
+  for (int k = 0; k < dyncal::replay::data::kCount; ++k)
+    for (int i = 0; i < 12; ++i)
+      samples[static_cast<size_t>(k)][static_cast<size_t>(i)] = dyncal::replay::data::kSamples[k][i];
+  const References r = references(samples, dyncal::replay::data::kSigma);
+  std::ifstream in(path);
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string s = text.str();
+  const size_t line = s.find("// (accepted updates:");
+  const size_t arrays = s.find("/// Host double-precision estimates");
+  if (!in || line == std::string::npos || arrays == std::string::npos)
+    throw std::runtime_error(std::string(path) + " is not a replay recording");
+  s = s.substr(0, line) + r.accepted_line + s.substr(s.find('\n', line) + 1, arrays - s.find('\n', line) - 1) +
+      r.arrays;
+  std::ofstream f(path);
+  f << s;
+  if (!f) throw std::runtime_error(std::string("cannot write ") + path);
 }
 
 /// The er20's ratings (robot.json's limits, tau_max derived when the file gives none) as float arrays.
@@ -89,8 +147,17 @@ int main(int argc, char** argv) {
       return 1;
     }
   }
+  if (argc == 3 && std::string(argv[1]) == "--references") {
+    try {
+      rewrite_references(argv[2]);
+      return 0;
+    } catch (const std::exception& e) {
+      std::cerr << "dyncal_replay_data: " << e.what() << "\n";
+      return 1;
+    }
+  }
   if (argc != 2) {
-    std::cerr << "usage: dyncal_replay_data OUT.hpp | --ratings OUT.hpp\n";
+    std::cerr << "usage: dyncal_replay_data OUT.hpp | --ratings OUT.hpp | --references DATA.hpp\n";
     return 2;
   }
   try {
@@ -139,11 +206,7 @@ int main(int argc, char** argv) {
       return 1;
     }
     const double* sigma = scenario.tau_noise_std.data();
-    dyncal::replay::Counts ck, cr, ce, cf;
-    const auto kf = reference<Updater::kf>(samples, sigma, ck);
-    const auto rls = reference<Updater::rls>(samples, sigma, cr);
-    const auto ekf = reference<Updater::ekf>(samples, sigma, ce);
-    const auto friction = reference<Updater::friction>(samples, sigma, cf);
+    const References refs = references(samples, sigma);
 
     std::ostringstream o;
     o << "// GENERATED FILE - DO NOT EDIT.\n"
@@ -154,10 +217,8 @@ int main(int argc, char** argv) {
       << "// Inputs: robots/er20, the simulated drive (seed " << kSeed << ", Eq. 4 friction from robot.json, survey\n"
       << "// Table 7 torque noise, encoder quantisation), default excitation (cond(K) " << std::setprecision(4) << cond
       << "), " << kRate << " Hz, 2 periods.\n"
-      << "// Reference estimates: port/replay/replay.hpp run in double on the host\n// (accepted updates: KF "
-      << ck.accepted << ", RLS " << cr.accepted << ", EKF " << ce.accepted << ", friction tracker " << cf.accepted
-      << ").\n"
-      << "#pragma once\n\n// clang-format off\nnamespace dyncal::replay::data {\n\n"
+      << "// Reference estimates: port/replay/replay.hpp run in double on the host\n"
+      << refs.accepted_line << "#pragma once\n\n// clang-format off\nnamespace dyncal::replay::data {\n\n"
       << "inline constexpr double kSamplePeriod = " << 1.0 / kRate << ";  // [s]\n"
       << "/// Torque noise standard deviation per joint [Nm] (survey Table 7): R = sigma^2.\n"
       << "inline constexpr double kSigma[6] = {";
@@ -169,17 +230,11 @@ int main(int argc, char** argv) {
       o << "    {";
       for (int i = 0; i < 12; ++i) o << std::setprecision(9) << row[i] << "f" << (i < 11 ? ", " : "},\n");
     }
-    o << "};\n\n/// Host double-precision estimates after the replay (parameter order of replay.hpp).\n";
-    write_array(o, "kReferenceKf", kf);
-    write_array(o, "kReferenceRls", rls);
-    write_array(o, "kReferenceEkf", ekf);
-    write_array(o, "kReferenceFriction", friction);
-    o << "\n}  // namespace dyncal::replay::data\n// clang-format on\n";
+    o << "};\n\n" << refs.arrays;
     std::ofstream f(argv[1]);
     f << o.str();
     if (!f) throw std::runtime_error(std::string("cannot write ") + argv[1]);
-    std::cerr << "wrote " << argv[1] << ": " << samples.size() << " samples; accepted KF " << ck.accepted << " RLS "
-              << cr.accepted << " EKF " << ce.accepted << " friction tracker " << cf.accepted << "\n";
+    std::cerr << "wrote " << argv[1] << ": " << samples.size() << " samples; " << refs.accepted_line;
     return 0;
   } catch (const std::exception& e) {
     std::cerr << "dyncal_replay_data: " << e.what() << "\n";

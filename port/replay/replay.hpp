@@ -4,8 +4,9 @@
 // one updater — the Kalman filter (Eq. 19) or RLS with forgetting (Eq. 23) on the base parameters
 // + Eq. 7 friction, the EKF (Eq. 21) on the base parameters + Eq. 4 (Stribeck) friction, or the
 // friction tracker of a calibrated drive (FrictionTracker: Eq. 4 amplitudes with forgetting on top
-// of a fixed rigid-body calibration) — exactly as a drive would run them online. Templated on the scalar: float on the
-// M4F, double on the M7 and on the host (the reference). Static storage only; no heap.
+// of a fixed rigid-body calibration), or the payload estimator (PayloadEstimator: the last link's 10
+// parameters with the arm's model fixed) — exactly as a drive would run them online. Templated on the scalar: float on
+// the M4F, double on the M7 and on the host (the reference). Static storage only; no heap.
 #include <cstdint>
 
 #include "dyncal/causal_differentiator.hpp"
@@ -14,6 +15,7 @@
 #include "dyncal/generated/er20/robot.hpp"
 #include "dyncal/identification_model.hpp"
 #include "dyncal/kalman_filter.hpp"
+#include "dyncal/payload_estimator.hpp"
 #include "dyncal/rls_forgetting.hpp"
 
 namespace dyncal::replay {
@@ -21,7 +23,7 @@ namespace dyncal::replay {
 using Robot = dyncal::generated::er20::Robot;
 using LinearModel = IdentificationModel<Robot, kFrictionEq7>;
 
-enum class Updater { kf, rls, ekf, friction };
+enum class Updater { kf, rls, ekf, friction, payload };
 
 constexpr const char* name(Updater u) {
   switch (u) {
@@ -31,6 +33,8 @@ constexpr const char* name(Updater u) {
       return "RLS";
     case Updater::ekf:
       return "EKF";
+    case Updater::payload:
+      return "payload estimator";
     default:
       return "friction tracker";
   }
@@ -163,6 +167,42 @@ struct Estimator<Scalar, Updater::friction> {
           NonlinearFriction<NonlinearFrictionModel::eq4>::torque(theta + 4 * j, qd[j], static_cast<Scalar*>(nullptr));
   }
   const typename Tracker::ParamVector& estimate() const { return tracker.parameters(); }
+};
+
+/// The payload on the last link with the arm's model fixed (PayloadEstimator, docs/payload.md): the
+/// arm is the KF replay's estimate (the linear model, set_arm before reset: what a calibrated drive
+/// has in its table), the input the torque it does not explain. The er20 recording carries no load:
+/// the estimate is the arm model's error seen through the last link's columns; what the replay
+/// measures is the update's cost and float against double. Parameters: dphi of payload_estimator.hpp.
+template <typename Scalar>
+struct Estimator<Scalar, Updater::payload> {
+  using Payload = PayloadEstimator<Robot, Scalar>;
+  static constexpr int kNumParams = Payload::kParams;
+  Payload payload;
+  typename LinearModel::template ParamVector<Scalar> phi_arm;
+  typename LinearModel::template Regressor<Scalar> K;
+  typename Payload::Regressor Y;
+  /// The arm's parameters (LinearModel::kNumParams, the KF replay's reference estimate).
+  void set_arm(const double* phi) {
+    for (int i = 0; i < LinearModel::kNumParams; ++i) phi_arm[i] = Scalar(phi[i]);
+  }
+  UpdateStatus reset() { return payload.reset(Payload::ParamVector::Constant(Scalar(Settings::kPrior))); }
+  /// One regressor evaluation: the arm's torque K phi_arm and, from its base columns, the payload's.
+  template <class V>
+  UpdateStatus update(const V& q, const V& qd, const V& qdd, const V& tau, const V& r) {
+    if (!all_finite(q) || !all_finite(qd) || !all_finite(qdd)) return UpdateStatus::rejected_non_finite;
+    LinearModel::regressor(q, qd, qdd, V::Zero().eval(), K);
+    const V residual = tau - K * phi_arm;
+    return payload.update_base(K.template leftCols<Robot::kNumBase>(), residual, r);
+  }
+  /// tau = K phi_arm + Y_b K_N dphi for payload parameters dphi (kNumParams).
+  template <class V>
+  void predict(const Scalar* dphi, const V& q, const V& qd, const V& qdd, V& tau) {
+    LinearModel::regressor(q, qd, qdd, V::Zero().eval(), K);
+    payload.regressor_from_base(K.template leftCols<Robot::kNumBase>(), Y);
+    tau.noalias() = K * phi_arm + Y * Eigen::Map<const typename Payload::ParamVector>(dphi);
+  }
+  const typename Payload::ParamVector& estimate() const { return payload.estimate(); }
 };
 
 /// Counts of one replay.

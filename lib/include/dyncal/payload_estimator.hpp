@@ -68,21 +68,35 @@ class PayloadEstimator {
   void regressor(const JointVector& q, const JointVector& qd, const JointVector& qdd, Regressor& Y) const noexcept {
     Eigen::Matrix<Scalar, kJoints, kBase> Yb;
     Robot::base_regressor(q, qd, qdd, Yb);
-    Y.noalias() = Yb * link_map_;
+    regressor_from_base(Yb, Y);
   }
-
+  /// The same from the base regressor Y_b (N x kBase) already evaluated at the state (a drive that
+  /// has it for its feed-forward, the first kBase columns of IdentificationModel's regressor).
+  template <class Derived>
+  void regressor_from_base(const Eigen::MatrixBase<Derived>& Yb, Regressor& Y) const noexcept {
+    Y.noalias() = Yb.lazyProduct(link_map_);  // coefficient-wise: no GEMM blocking buffers on the stack
+  }
   /// One sample: the state and the torque the arm's model does not explain, residual = tau_measured
   /// - tau_arm [Nm] (N), with measurement variances r [Nm^2] (all > 0). rejected_non_finite,
   /// not_positive_definite and the filter's statuses leave the estimate unchanged.
   UpdateStatus update(const JointVector& q, const JointVector& qd, const JointVector& qdd, const JointVector& residual,
                       const JointVector& r) noexcept {
-    if (!all_finite(q) || !all_finite(qd) || !all_finite(qdd) || !all_finite(residual) || !all_finite(r))
-      return UpdateStatus::rejected_non_finite;
+    if (!all_finite(q) || !all_finite(qd) || !all_finite(qdd)) return UpdateStatus::rejected_non_finite;
+    Eigen::Matrix<Scalar, kJoints, kBase> Yb;
+    Robot::base_regressor(q, qd, qdd, Yb);
+    return update_base(Yb, residual, r);
+  }
+  /// update() from the base regressor Y_b at the state (N x kBase; see regressor_from_base): one
+  /// regressor evaluation serves the feed-forward and the estimator, and no N x kBase copy is made.
+  template <class Derived>
+  UpdateStatus update_base(const Eigen::MatrixBase<Derived>& Yb, const JointVector& residual,
+                           const JointVector& r) noexcept {
+    if (!all_finite(residual) || !all_finite(r)) return UpdateStatus::rejected_non_finite;
     Regressor Y;
-    regressor(q, qd, qdd, Y);
+    regressor_from_base(Yb, Y);
+    if (!all_finite(Y)) return UpdateStatus::rejected_non_finite;
     return kf_.update(Y, residual, r);
   }
-
   /// dphi [XX XY XZ YY YZ ZZ (kg m^2) MX MY MZ (kg m) M (kg)].
   const ParamVector& estimate() const noexcept { return kf_.estimate(); }
   /// The filter's variance of each parameter (its P's diagonal).

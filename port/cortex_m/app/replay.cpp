@@ -1,7 +1,7 @@
 // Firmware application: replays the recorded er20 drive samples (port/replay/er20_replay_data.hpp,
 // const data in flash) through the causal differentiator, the generated regressor and one updater
 // (DYNCAL_FW_UPDATER: 0 KF, 1 RLS with forgetting, 2 EKF with Eq. 4 friction, 3 the friction
-// tracker of a calibrated drive) — the same lib/ code
+// tracker of a calibrated drive, 4 the payload estimator) — the same lib/ code
 // as the host — in float on the Cortex-M4F and double on the M7. Prints the instructions per update
 // and the estimate's agreement with the host's double run, writes the KF/RLS estimate to the flash
 // parameter store and reads it back, and exits 0 only when everything holds.
@@ -58,15 +58,24 @@ const double* reference() {
       return data::kReferenceRls;
     case dyncal::replay::Updater::ekf:
       return data::kReferenceEkf;
+    case dyncal::replay::Updater::payload:
+      return data::kReferencePayload;
     default:
       return data::kReferenceFriction;
   }
 }
 
+// The payload estimator's arm model: the KF replay's reference (what a calibrated drive's table holds).
+template <class E>
+void set_arm(E& est) {
+  if constexpr (kUpdater == dyncal::replay::Updater::payload) est.set_arm(data::kReferenceKf);
+}
+
 // Parameter store round trip (the linear models have a table layout; the Eq. 4 parameters of the
-// EKF and the friction tracker are not a table model and are not stored).
+// EKF and the friction tracker are not a table model and are not stored, nor is a payload).
 bool store_round_trip() {
-  if constexpr (kUpdater == dyncal::replay::Updater::ekf || kUpdater == dyncal::replay::Updater::friction) {
+  if constexpr (kUpdater == dyncal::replay::Updater::ekf || kUpdater == dyncal::replay::Updater::friction ||
+                kUpdater == dyncal::replay::Updater::payload) {
     return true;
   } else {
     static dyncal::ParameterTable table;  // one table: RAM is the budget
@@ -184,6 +193,7 @@ bool refusal_check() {
 
 int main() {
   sh::StackUsage::paint();
+  set_arm(g_est);
   if (g_est.reset() != dyncal::UpdateStatus::ok) return 2;
   for (int i = 0; i < Estimator::kNumParams; ++i) g_reference[i] = Scalar(reference()[i]);
   Counter::start();
@@ -229,6 +239,8 @@ int main() {
   sh::write_int(sh::StackUsage::reserved_bytes());
   sh::write(" reserved\n");
   const bool refusals = refusal_check();
-  const bool ok = difference < tolerance(residual) && c.accepted > data::kCount * 9 / 10 && stored && refusals;
+  // residual > 0: a run whose predictions are all zero (a corrupted state) must not pass as agreeing.
+  const bool ok =
+      difference < tolerance(residual) && residual > 0 && c.accepted > data::kCount * 9 / 10 && stored && refusals;
   return ok ? 0 : 1;
 }
