@@ -125,13 +125,7 @@ nlohmann::json identify_report_json(const IdentifyResult& r) {
     j["params"].push_back(e);
   }
   j["notes"] = r.notes;
-  j["links"] = nlohmann::json::array();
-  for (const auto& l : r.links)
-    j["links"].push_back({{"link", l.link},
-                          {"mass", l.mass},
-                          {"com", l.com},
-                          {"inertia_about_com", l.inertia},
-                          {"pseudo_inertia_min_eigenvalue", l.min_eigenvalue}});
+  j["links"] = link_inertials_json(r.links);
   j["other_logs"] = nlohmann::json::array();
   for (const auto& o : r.other_logs) j["other_logs"].push_back(log_prediction_json(o));
   return j;

@@ -120,16 +120,19 @@ nlohmann::json parameter_file_json(const ParameterSet& p, const std::string& met
     if (with_std) e["std"] = p.stdev[i];
     j["params"].push_back(e);
   }
-  if (!p.links.empty()) {
-    j["links"] = nlohmann::json::array();
-    for (const auto& l : p.links)
-      j["links"].push_back({{"link", l.link},
-                            {"mass", l.mass},
-                            {"com", l.com},
-                            {"inertia_about_com", l.inertia},
-                            {"pseudo_inertia_min_eigenvalue", l.min_eigenvalue}});
-  }
+  if (!p.links.empty()) j["links"] = link_inertials_json(p.links);
   return j;
+}
+
+nlohmann::json link_inertials_json(const std::vector<LinkInertial>& links) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& l : links)
+    out.push_back({{"link", l.link},
+                   {"mass", l.mass},
+                   {"com", l.com},
+                   {"inertia_about_com", l.inertia},
+                   {"pseudo_inertia_min_eigenvalue", l.min_eigenvalue}});
+  return out;
 }
 
 ParameterSet parameter_set(const IdentifyResult& r) {

@@ -42,6 +42,10 @@ ParameterSet read_parameter_file(const std::string& path);
 /// has them; null where not determined), links [{link, mass, com, inertia_about_com}] when it has them.
 nlohmann::json parameter_file_json(const ParameterSet& p, const std::string& method);
 
+/// [{link, mass, com, inertia_about_com, pseudo_inertia_min_eigenvalue}]: the "links" of a report
+/// and of a parameter file (read_parameter_file reads the latter back).
+nlohmann::json link_inertials_json(const std::vector<LinkInertial>& links);
+
 /// The parameters identify reports (IdentifyResult::params) as a set.
 ParameterSet parameter_set(const IdentifyResult& r);
 
