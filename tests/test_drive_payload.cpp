@@ -22,6 +22,7 @@
 #include "dyncal_host/identification/pipeline/compiled_robot.hpp"
 #include "dyncal_port/modbus_drive.hpp"
 #include "support/drive_uri.hpp"
+#include "support/dyncal_cli.hpp"
 #include "support/payload_load.hpp"
 #include "support/simulated_log.hpp"
 
@@ -150,6 +151,40 @@ TEST(DrivePayload, TheDriveIdentifiesTheLoadAndWritesItIntoItsTable) {
                  b2 = std::pow(before.model_error_rms[j], 2);
     EXPECT_TRUE(after.model_error_rms[j] <= 1.10 * true_effort[j] || a2 - t2 <= 0.01 * (b2 - t2)) << "joint " << j + 1;
   }
+}
+
+// dyncal payload --drive on the same fixture: with the arm's table the drive writes the load (exit
+// 0, mass within 3 %); run again, its table now explains the load, the run shows none: exit 2 and
+// "not written" (the table left as it is).
+TEST(DrivePayloadCli, PayloadOnTheDriveFromTheCommandLine) {
+  const std::string uri = fixture_drive_uri("DYNCAL_DRIVE_PAYLOAD_READY");
+  ASSERT_FALSE(uri.empty()) << "DYNCAL_DRIVE_PAYLOAD_READY not set or empty: run through ctest";
+  std::string error;
+  auto drive = ModbusDrive::connect(uri, &error);
+  ASSERT_TRUE(drive) << error;
+  const RobotDescription robot = dyncal::test::test_robot("cobot7");
+  const Scenario sc =
+      load_scenario(std::string(DYNCAL_SOURCE_DIR) + "/tests/data/scenarios/cobot7_payload.json", robot);
+  JointArray Fc{}, beta{};
+  for (int j = 0; j < robot.num_joints; ++j) {
+    Fc[j] = sc.friction[j].Fc;
+    beta[j] = sc.friction[j].beta;
+  }
+  dyncal::TableStatus reason = dyncal::TableStatus::ok;
+  ASSERT_EQ(drive->write(nominal_table(robot.name, Fc, beta), &reason), dyncal::port::PortStatus::ok)
+      << drive->error();
+  drive.reset();  // this connection closed before the command line's
+  const auto dir = std::filesystem::temp_directory_path() / ("dyncal_payload_cli_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string base = "payload --robot cobot7 --robots-dir " + std::string(DYNCAL_SOURCE_DIR) +
+                           "/tests/robots --drive " + uri + " --report ";
+  ASSERT_EQ(dyncal::test::run_dyncal(base + (dir / "first.json").string()), 0);
+  const nlohmann::json first = dyncal::test::read_json(dir / "first.json");
+  EXPECT_EQ(first["state"], "written");
+  EXPECT_LE(std::abs(first["standard"][9]["value"].get<double>() / sc.payload.mass - 1), 0.03);
+  EXPECT_EQ(dyncal::test::run_dyncal(base + (dir / "second.json").string()), 2);
+  EXPECT_EQ(dyncal::test::read_json(dir / "second.json")["state"], "not written");
+  std::filesystem::remove_all(dir);
 }
 
 /// One identify_payload run of `drive` (in process), its recorded samples as a log (t from seq).

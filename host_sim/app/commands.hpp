@@ -62,8 +62,9 @@ struct LogOption {
   std::string torque_from = "torque";  ///< csv logs: "torque" (tau1..tauN [Nm]) or "current" (i1..iN [A])
   std::vector<std::string> data;       ///< one or more logs (--data A --data B): stacked as segments
   bool drop_outliers = false;
-  /// Adds --format, --torque-from, --data, --drop-outliers and the robot options to `cmd`.
-  void add_to(CLI::App* cmd);
+  /// Adds --format, --torque-from, --data, --drop-outliers and the robot options to `cmd`; returns
+  /// --data's option (required unless `data_required` is false: the command checks it then).
+  CLI::Option* add_to(CLI::App* cmd, bool data_required = true);
   /// The robot (--robot, or tx40 for --format tx40). Throws InputError (no --robot for csv, ...).
   host::RobotDescription load_robot() const;
   /// The log on the joint side (TX40 files through the robot's transmission), checked for physical

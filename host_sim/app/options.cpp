@@ -59,7 +59,7 @@ host::RobotDescription RobotOption::load() const {
   return r;
 }
 
-void LogOption::add_to(CLI::App* cmd) {
+CLI::Option* LogOption::add_to(CLI::App* cmd, bool data_required) {
   robot.add_to(cmd, "robot name (robots/<name>/); tx40 by default with --format tx40");
   cmd->add_option("--format", format, "log format: csv (t,q1..qN,[qd..],[qdd..],tau1..tauN) or tx40")
       ->check(CLI::IsMember({"csv", "tx40"}));
@@ -68,13 +68,15 @@ void LogOption::add_to(CLI::App* cmd) {
                   "current [A]; tau = N^T diag(Kt) i with robot.json's transmission.torque_constants and gear "
                   "ratios)")
       ->check(CLI::IsMember({"torque", "current"}));
-  cmd->add_option("--data", data,
-                  "CSV log file (time-stamped; jitter and missing samples allowed), or the folder of the TX40 "
-                  "files; repeat to stack several logs as segments")
-      ->required();
+  CLI::Option* data_option =
+      cmd->add_option("--data", data,
+                      "CSV log file (time-stamped; jitter and missing samples allowed), or the folder of the TX40 "
+                      "files; repeat to stack several logs as segments");
+  if (data_required) data_option->required();
   cmd->add_flag("--drop-outliers", drop_outliers,
                 "replace physically implausible values (beyond the robot's limits by a wide margin, docs/cli.md) by "
                 "interpolation and report each, instead of refusing the log");
+  return data_option;
 }
 
 host::RobotDescription LogOption::load_robot() const {
