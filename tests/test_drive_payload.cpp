@@ -11,6 +11,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <memory>
 #include <random>
 
 #include "dyncal/modbus_map.hpp"
@@ -46,142 +47,200 @@ ParameterSet parameter_set_of(const RobotDescription& robot, const dyncal::Param
   return p;
 }
 
-TEST(DrivePayload, TheDriveIdentifiesTheLoadAndWritesItIntoItsTable) {
-  const std::string uri = fixture_drive_uri("DYNCAL_DRIVE_PAYLOAD_READY");
-  ASSERT_FALSE(uri.empty()) << "DYNCAL_DRIVE_PAYLOAD_READY not set or empty: run through ctest";
-  std::string error;
-  auto drive = ModbusDrive::connect(uri, &error);
-  ASSERT_TRUE(drive) << error;
-  const RobotDescription robot = dyncal::test::test_robot("cobot7");
-  const Scenario sc =
-      load_scenario(std::string(DYNCAL_SOURCE_DIR) + "/tests/data/scenarios/cobot7_payload.json", robot);
-  // The arm's calibrated model: the robot file's rigid body and the scenario's friction.
+/// The arm's calibrated model: the robot file's rigid body and the scenario's Eq. 7 friction.
+dyncal::ParameterTable arm_table(const RobotDescription& robot, const Scenario& sc) {
   JointArray Fc{}, beta{};
   for (int j = 0; j < robot.num_joints; ++j) {
     Fc[j] = sc.friction[j].Fc;
     beta[j] = sc.friction[j].beta;
   }
-  const dyncal::ParameterTable arm = nominal_table(robot.name, Fc, beta);
-  dyncal::TableStatus reason = dyncal::TableStatus::ok;
-  ASSERT_EQ(drive->write(arm, &reason), dyncal::port::PortStatus::ok) << drive->error();
+  return nominal_table(robot.name, Fc, beta);
+}
 
-  const auto trajectory = default_excitation(robot, 0.1, 5, 20, 1, nullptr);
+/// The scenario's payload as a body (mass, centre of mass, inertia about it).
+dyncal::test::Body scenario_load(const Scenario& sc) {
+  const auto& pl = sc.payload;
+  dyncal::test::Body b;
+  b.m = pl.mass;
+  b.c = Eigen::Vector3d(pl.com[0], pl.com[1], pl.com[2]);
+  const auto& I = pl.inertia;
+  b.Ic << I[0], I[1], I[2], I[1], I[3], I[4], I[2], I[4], I[5];
+  return b;
+}
+
+/// `load` in the scenario (the plant's payload).
+void set_scenario_load(Scenario& sc, const dyncal::test::Body& load) {
+  sc.payload.mass = load.m;
+  for (int k = 0; k < 3; ++k) sc.payload.com[static_cast<size_t>(k)] = load.c[k];
+  const double I[6] = {load.Ic(0, 0), load.Ic(0, 1), load.Ic(0, 2), load.Ic(1, 1), load.Ic(1, 2), load.Ic(2, 2)};
+  for (int k = 0; k < 6; ++k) sc.payload.inertia[static_cast<size_t>(k)] = I[k];
+}
+
+/// The true loaded model: `arm` with `load`'s standard parameters on the last link (K_N dphi).
+dyncal::ParameterTable loaded_table(const CompiledRobot& c, dyncal::ParameterTable arm,
+                                    const dyncal::test::Body& load) {
+  Eigen::VectorXd phi = Eigen::VectorXd::Zero(c.num_standard);
+  phi.tail(10) = dyncal::test::standard_parameters(load);
+  const Eigen::VectorXd delta = c.standard_to_base(phi);
+  for (int i = 0; i < c.num_base; ++i) arm.values[i] = static_cast<float>(arm.values[i] + delta[i]);
+  return arm;
+}
+
+/// An in-process drive of `sc` (the SimulatedDrive the Modbus server runs) holding `table`, set to
+/// play `trajectory` twice, recorded at 500 Hz; its flash at `flash`.
+std::unique_ptr<SimulatedDrive> drive_with_table(const RobotDescription& robot, const Scenario& sc,
+                                                 const std::string& flash, const dyncal::ParameterTable& table,
+                                                 const DriveTrajectory& trajectory) {
+  std::filesystem::remove(flash);
+  auto drive = std::make_unique<SimulatedDrive>(robot, sc, flash);
+  const auto bytes = encoded_table(table);
+  EXPECT_EQ(drive->commit(bytes.data(), static_cast<int>(bytes.size())), dyncal::TableStatus::ok);
+  drive->trajectory = trajectory;
+  drive->periods = 2;
+  drive->sample_rate_hz = 500.0;
+  return drive;
+}
+
+/// PD effort (model_error_rms) of a plain run of `drive` with the table it holds.
+JointArray plain_run_effort(SimulatedDrive& drive) {
+  drive.start();
+  while (drive.state() == mm::DriveState::playing) {
+    drive.step();
+    if (!drive.ring().empty()) drive.ack(drive.ring().back().seq + 1);
+  }
+  return drive.model_error_rms();
+}
+
+/// The PD effort of an in-process run of `sc` with `table` (its flash removed after).
+JointArray effort_with_table(const RobotDescription& robot, const Scenario& sc, const std::string& flash,
+                             const dyncal::ParameterTable& table, const DriveTrajectory& trajectory) {
+  const JointArray e = plain_run_effort(*drive_with_table(robot, sc, flash, table, trajectory));
+  std::filesystem::remove(flash);
+  return e;
+}
+
+/// Every parameter both determine: the drive's estimate within 2.58 of its std of the host's on the
+/// same samples. Returns how many were compared.
+int expect_drive_agrees_with_host(const std::array<double, 10>& value, const std::array<double, 10>& std_,
+                                  const PayloadResult& host) {
+  int compared = 0;
+  for (int i = 0; i < 10; ++i) {
+    if (!std::isfinite(value[i]) || !std::isfinite(host.standard_std[i])) continue;
+    ++compared;
+    std::printf("parameter %d: drive %.5g (std %.2g), host %.5g (std %.2g)\n", i + 1, value[i], std_[i],
+                host.standard[i], host.standard_std[i]);
+    EXPECT_LE(std::abs(value[i] - host.standard[i]), 2.58 * std_[i]) << "parameter " << i + 1;
+  }
+  return compared;
+}
+
+/// Per joint, the PD effort with the drive's loaded table (`after`) within 10 % of the true loaded
+/// model's; or, where the effort left is that small that the payload's least-determined parameters
+/// (its inertia, on a wrist joint) dominate it, the load's torque explained but for at most 1 % of
+/// its power: (after^2 - true^2) / (before^2 - true^2), `before` the arm's table's.
+void expect_effort_of_the_true_model(const JointArray& after, const JointArray& truth, const JointArray& before,
+                                     int joints) {
+  for (int j = 0; j < joints; ++j) {
+    std::printf("  joint %d: PD effort %.4g Nm (arm's table %.4g, true loaded model %.4g)\n", j + 1, after[j],
+                before[j], truth[j]);
+    const double a2 = after[j] * after[j], t2 = truth[j] * truth[j], b2 = before[j] * before[j];
+    EXPECT_TRUE(after[j] <= 1.10 * truth[j] || a2 - t2 <= 0.01 * (b2 - t2)) << "joint " << j + 1;
+  }
+}
+
+/// cobot7's payload drive of the CTest fixture, connected, and its scenario.
+class DrivePayloadFixture : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    uri_ = fixture_drive_uri("DYNCAL_DRIVE_PAYLOAD_READY");
+    ASSERT_FALSE(uri_.empty()) << "DYNCAL_DRIVE_PAYLOAD_READY not set or empty: run through ctest";
+    std::string error;
+    drive_ = ModbusDrive::connect(uri_, &error);
+    ASSERT_TRUE(drive_) << error;
+    sc_ = load_scenario(std::string(DYNCAL_SOURCE_DIR) + "/tests/data/scenarios/cobot7_payload.json", robot_);
+  }
+  const RobotDescription robot_ = dyncal::test::test_robot("cobot7");
+  std::string uri_;
+  std::unique_ptr<ModbusDrive> drive_;
+  Scenario sc_;
+};
+
+using DrivePayload = DrivePayloadFixture;
+
+TEST_F(DrivePayload, TheDriveIdentifiesTheLoadAndWritesItIntoItsTable) {
+  const dyncal::ParameterTable arm = arm_table(robot_, sc_);
+  dyncal::TableStatus reason = dyncal::TableStatus::ok;
+  ASSERT_EQ(drive_->write(arm, &reason), dyncal::port::PortStatus::ok) << drive_->error();
+
+  const auto trajectory = default_excitation(robot_, 0.1, 5, 20, 1, nullptr);
   const std::string dir = std::filesystem::temp_directory_path().string();
   StreamRun run{"payload", 2, 500.0, dir, true};
-  const JointLog log = stream_run(*drive, trajectory, run, nullptr, nullptr, nullptr, {});
+  const JointLog log = stream_run(*drive_, trajectory, run, nullptr, nullptr, nullptr, {});
   dyncal::linux_port::DriveInfo before;
-  ASSERT_EQ(drive->read_info(before), dyncal::port::PortStatus::ok);
+  ASSERT_EQ(drive_->read_info(before), dyncal::port::PortStatus::ok);
   dyncal::linux_port::DrivePayload p;
-  ASSERT_EQ(drive->read_payload(p), dyncal::port::PortStatus::ok) << drive->error();
+  ASSERT_EQ(drive_->read_payload(p), dyncal::port::PortStatus::ok) << drive_->error();
   ASSERT_EQ(p.state, mm::PayloadState::written);
 
   // The load against the scenario's.
-  const double m = sc.payload.mass;
+  const double m = sc_.payload.mass;
   std::printf("drive: mass %.5g kg (true %.5g, %+.2f %%), std %.2g\n", p.value[9], m, 100 * (p.value[9] / m - 1),
               p.std[9]);
   EXPECT_LE(std::abs(p.value[9] / m - 1), 0.03);
   for (int k = 0; k < 3; ++k) {
     const double c = p.value[6 + k] / p.value[9];
-    std::printf("drive: com %d %.4g m (true %.4g, %+.2f mm)\n", k + 1, c, sc.payload.com[k],
-                1000 * (c - sc.payload.com[k]));
-    EXPECT_LE(std::abs(c - sc.payload.com[k]), 0.005);
+    std::printf("drive: com %d %.4g m (true %.4g, %+.2f mm)\n", k + 1, c, sc_.payload.com[k],
+                1000 * (c - sc_.payload.com[k]));
+    EXPECT_LE(std::abs(c - sc_.payload.com[k]), 0.005);
   }
 
   // The host's payload identification on the streamed samples, with the same arm model.
   IdentifyOptions o;
   o.terms = dyncal::kFrictionEq7;
-  const PayloadResult host = identify_payload(robot, log, parameter_set_of(robot, arm), o);
-  int compared = 0;
-  for (int i = 0; i < 10; ++i) {
-    if (!std::isfinite(p.value[i]) || !std::isfinite(host.standard_std[i])) continue;
-    ++compared;
-    std::printf("parameter %d: drive %.5g (std %.2g), host %.5g (std %.2g)\n", i + 1, p.value[i], p.std[i],
-                host.standard[i], host.standard_std[i]);
-    EXPECT_LE(std::abs(p.value[i] - host.standard[i]), 2.58 * p.std[i]) << "parameter " << i + 1;
-  }
-  EXPECT_GE(compared, 4);  // at least the mass and the first moments
+  const PayloadResult host = identify_payload(robot_, log, parameter_set_of(robot_, arm), o);
+  EXPECT_GE(expect_drive_agrees_with_host(p.value, p.std, host), 4);  // at least the mass and the first moments
 
   // The reference: the same loaded arm run with the true loaded model in its table (in process;
   // the loaded plant's PD gains, from its own mass matrix, are the same in both runs).
-  const CompiledRobot& c = compiled_robot_for(robot);
-  Eigen::VectorXd load = Eigen::VectorXd::Zero(c.num_standard);
-  {
-    const Eigen::Vector3d com(sc.payload.com[0], sc.payload.com[1], sc.payload.com[2]);
-    const auto& I = sc.payload.inertia;
-    Eigen::Matrix3d Ic;
-    Ic << I[0], I[1], I[2], I[1], I[3], I[4], I[2], I[4], I[5];
-    const Eigen::Matrix3d Io = Ic + m * (com.squaredNorm() * Eigen::Matrix3d::Identity() - com * com.transpose());
-    load.tail(10) << Io(0, 0), Io(0, 1), Io(0, 2), Io(1, 1), Io(1, 2), Io(2, 2), m * com;
-    load[c.num_standard - 1] = m;
-  }
-  const Eigen::VectorXd delta = c.standard_to_base(load);
-  dyncal::ParameterTable truth = arm;
-  for (int i = 0; i < c.num_base; ++i) truth.values[i] = static_cast<float>(truth.values[i] + delta[i]);
-  const std::string flash = dir + "/dyncal_payload_ref_" + std::to_string(::getpid()) + ".table";
-  SimulatedDrive reference(robot, sc, flash);
-  const auto bytes = encoded_table(truth);
-  ASSERT_EQ(reference.commit(bytes.data(), static_cast<int>(bytes.size())), dyncal::TableStatus::ok);
-  reference.trajectory = trajectory;
-  reference.periods = 2;
-  reference.sample_rate_hz = 500.0;
-  reference.start();
-  while (reference.state() == mm::DriveState::playing) reference.step();
-  std::filesystem::remove(flash);
-  const JointArray true_effort = reference.model_error_rms();
+  const JointArray true_effort =
+      effort_with_table(robot_, sc_, dir + "/dyncal_payload_ref_" + std::to_string(::getpid()) + ".table",
+                        loaded_table(compiled_robot_for(robot_), arm, scenario_load(sc_)), trajectory);
 
   // The active table holds the loaded model: a fresh run needs the PD effort of the true loaded
-  // model (within 10 %), not the load's.
+  // model, not the load's.
   dyncal::ParameterTable now;
-  ASSERT_EQ(drive->read(now, &reason), dyncal::port::PortStatus::ok);
+  ASSERT_EQ(drive_->read(now, &reason), dyncal::port::PortStatus::ok);
   bool changed = false;
   for (int i = 0; i < now.count; ++i) changed = changed || now.values[i] != arm.values[i];
   EXPECT_TRUE(changed);
-  stream_run(*drive, trajectory, {"after", 2, 500.0, dir, false}, nullptr, nullptr, nullptr, {});
+  stream_run(*drive_, trajectory, {"after", 2, 500.0, dir, false}, nullptr, nullptr, nullptr, {});
   dyncal::linux_port::DriveInfo after;
-  ASSERT_EQ(drive->read_info(after), dyncal::port::PortStatus::ok);
-  for (int j = 0; j < robot.num_joints; ++j) {
-    std::printf(
-        "joint %d: PD effort RMS %.4g Nm with the arm's table, %.4g with the drive's loaded one, %.4g with the "
-        "true loaded one\n",
-        j + 1, before.model_error_rms[j], after.model_error_rms[j], true_effort[j]);
-    // Within 10 % of the true model's effort; or, where the effort left is that small that the
-    // payload's least-determined parameters (its inertia, on a wrist joint) dominate it, the load's
-    // torque explained but for at most 1 % of its power: (after^2 - true^2) / (before^2 - true^2).
-    const double a2 = std::pow(after.model_error_rms[j], 2), t2 = std::pow(true_effort[j], 2),
-                 b2 = std::pow(before.model_error_rms[j], 2);
-    EXPECT_TRUE(after.model_error_rms[j] <= 1.10 * true_effort[j] || a2 - t2 <= 0.01 * (b2 - t2)) << "joint " << j + 1;
+  ASSERT_EQ(drive_->read_info(after), dyncal::port::PortStatus::ok);
+  JointArray before_effort{}, after_effort{};
+  for (int j = 0; j < robot_.num_joints; ++j) {
+    before_effort[j] = before.model_error_rms[j];
+    after_effort[j] = after.model_error_rms[j];
   }
+  expect_effort_of_the_true_model(after_effort, true_effort, before_effort, robot_.num_joints);
 }
+
+using DrivePayloadCli = DrivePayloadFixture;
 
 // dyncal payload --drive on the same fixture: with the arm's table the drive writes the load (exit
 // 0, mass within 3 %); run again, its table now explains the load, the run shows none: exit 2 and
 // "not written" (the table left as it is).
-TEST(DrivePayloadCli, PayloadOnTheDriveFromTheCommandLine) {
-  const std::string uri = fixture_drive_uri("DYNCAL_DRIVE_PAYLOAD_READY");
-  ASSERT_FALSE(uri.empty()) << "DYNCAL_DRIVE_PAYLOAD_READY not set or empty: run through ctest";
-  std::string error;
-  auto drive = ModbusDrive::connect(uri, &error);
-  ASSERT_TRUE(drive) << error;
-  const RobotDescription robot = dyncal::test::test_robot("cobot7");
-  const Scenario sc =
-      load_scenario(std::string(DYNCAL_SOURCE_DIR) + "/tests/data/scenarios/cobot7_payload.json", robot);
-  JointArray Fc{}, beta{};
-  for (int j = 0; j < robot.num_joints; ++j) {
-    Fc[j] = sc.friction[j].Fc;
-    beta[j] = sc.friction[j].beta;
-  }
+TEST_F(DrivePayloadCli, PayloadOnTheDriveFromTheCommandLine) {
   dyncal::TableStatus reason = dyncal::TableStatus::ok;
-  ASSERT_EQ(drive->write(nominal_table(robot.name, Fc, beta), &reason), dyncal::port::PortStatus::ok)
-      << drive->error();
-  drive.reset();  // this connection closed before the command line's
+  ASSERT_EQ(drive_->write(arm_table(robot_, sc_), &reason), dyncal::port::PortStatus::ok) << drive_->error();
+  drive_.reset();  // this connection closed before the command line's
   const auto dir = std::filesystem::temp_directory_path() / ("dyncal_payload_cli_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   const std::string base = "payload --robot cobot7 --robots-dir " + std::string(DYNCAL_SOURCE_DIR) +
-                           "/tests/robots --drive " + uri + " --report ";
+                           "/tests/robots --drive " + uri_ + " --report ";
   ASSERT_EQ(dyncal::test::run_dyncal(base + (dir / "first.json").string()), 0);
   const nlohmann::json first = dyncal::test::read_json(dir / "first.json");
   EXPECT_EQ(first["state"], "written");
-  EXPECT_LE(std::abs(first["standard"][9]["value"].get<double>() / sc.payload.mass - 1), 0.03);
+  EXPECT_LE(std::abs(first["standard"][9]["value"].get<double>() / sc_.payload.mass - 1), 0.03);
   EXPECT_EQ(dyncal::test::run_dyncal(base + (dir / "second.json").string()), 2);
   EXPECT_EQ(dyncal::test::read_json(dir / "second.json")["state"], "not written");
   std::filesystem::remove_all(dir);
@@ -213,16 +272,6 @@ JointLog play_payload_run(SimulatedDrive& drive, int joints) {
   return log;
 }
 
-/// PD effort (model_error_rms) of a plain run of `drive` with the table it holds.
-JointArray plain_run_effort(SimulatedDrive& drive) {
-  drive.start();
-  while (drive.state() == mm::DriveState::playing) {
-    drive.step();
-    if (!drive.ring().empty()) drive.ack(drive.ring().back().seq + 1);
-  }
-  return drive.model_error_rms();
-}
-
 class DrivePayloadLoads : public ::testing::TestWithParam<const char*> {};
 
 // Every test robot's simulated drive (in process: the same SimulatedDrive the Modbus server runs)
@@ -247,32 +296,18 @@ TEST_P(DrivePayloadLoads, EveryArmAndLoad) {
     SCOPED_TRACE(robot.name + ": load " + std::to_string(load.m) + " kg");
     Scenario sc = default_scenario(robot);
     sc.encoder_counts = 1048576;  // 20-bit encoders, as the host payload tests' logs and the scenarios
-    sc.payload.mass = load.m;
-    for (int k = 0; k < 3; ++k) sc.payload.com[static_cast<size_t>(k)] = load.c[k];
-    const double I[6] = {load.Ic(0, 0), load.Ic(0, 1), load.Ic(0, 2), load.Ic(1, 1), load.Ic(1, 2), load.Ic(2, 2)};
-    for (int k = 0; k < 6; ++k) sc.payload.inertia[static_cast<size_t>(k)] = I[k];
-    JointArray Fc{}, beta{};
-    for (int j = 0; j < n; ++j) {
-      sc.friction[j].model = dyncal::host::FrictionModel::eq7;
-      Fc[j] = sc.friction[j].Fc;
-      beta[j] = sc.friction[j].beta;
-    }
-    const dyncal::ParameterTable arm = nominal_table(robot.name, Fc, beta);
-    std::filesystem::remove(flash);
-    SimulatedDrive drive(robot, sc, flash);
-    const auto bytes = encoded_table(arm);
-    ASSERT_EQ(drive.commit(bytes.data(), static_cast<int>(bytes.size())), dyncal::TableStatus::ok);
-    drive.trajectory = trajectory;
-    drive.periods = 2;
-    drive.sample_rate_hz = 500.0;
-    const JointLog log = play_payload_run(drive, n);
-    const auto& v = drive.payload_value();
-    const auto& sd = drive.payload_std();
+    set_scenario_load(sc, load);
+    for (int j = 0; j < n; ++j) sc.friction[j].model = dyncal::host::FrictionModel::eq7;
+    const dyncal::ParameterTable arm = arm_table(robot, sc);
+    const auto drive = drive_with_table(robot, sc, flash, arm, trajectory);
+    const JointLog log = play_payload_run(*drive, n);
+    const auto& v = drive->payload_value();
+    const auto& sd = drive->payload_std();
     std::printf("%s, %.1f %% load: payload_state %d, mass %.5g kg (true %.5g), std %.2g\n", robot.name.c_str(),
-                100 * fraction, static_cast<int>(drive.payload_state()), v[9], load.m, sd[9]);
-    if (drive.payload_state() != mm::PayloadState::written) {
+                100 * fraction, static_cast<int>(drive->payload_state()), v[9], load.m, sd[9]);
+    if (drive->payload_state() != mm::PayloadState::written) {
       EXPECT_LT(fraction, 0.02) << "the drive left a load of 2 % or more undetermined";
-      EXPECT_EQ(drive.table_generation(), 1u);  // only the test's own commit
+      EXPECT_EQ(drive->table_generation(), 1u);  // only the test's own commit
       continue;
     }
     EXPECT_LE(std::abs(v[9] - load.m), 2.58 * sd[9]);
@@ -292,44 +327,12 @@ TEST_P(DrivePayloadLoads, EveryArmAndLoad) {
     }
     IdentifyOptions o;
     o.terms = dyncal::kFrictionEq7;
-    const PayloadResult host = identify_payload(robot, log, parameter_set_of(robot, arm), o);
-    for (int i = 0; i < 10; ++i) {
-      if (!std::isfinite(v[i]) || !std::isfinite(host.standard_std[i])) continue;
-      EXPECT_LE(std::abs(v[i] - host.standard[i]), 2.58 * sd[i]) << "parameter " << i + 1;
-    }
+    expect_drive_agrees_with_host(v, sd, identify_payload(robot, log, parameter_set_of(robot, arm), o));
     // The loaded table against the true loaded model, both on the loaded plant.
-    const JointArray with_estimate = plain_run_effort(drive);
-    const JointArray without = [&] {
-      SimulatedDrive other(robot, sc, flash + ".arm");
-      const auto arm_bytes = encoded_table(arm);
-      EXPECT_EQ(other.commit(arm_bytes.data(), static_cast<int>(arm_bytes.size())), dyncal::TableStatus::ok);
-      other.trajectory = trajectory;
-      other.periods = 2;
-      other.sample_rate_hz = 500.0;
-      const JointArray e = plain_run_effort(other);
-      std::filesystem::remove(flash + ".arm");
-      return e;
-    }();
-    Eigen::VectorXd truth_std = Eigen::VectorXd::Zero(c.num_standard);
-    truth_std.tail(10) = dyncal::test::standard_parameters(load);
-    const Eigen::VectorXd delta = c.standard_to_base(truth_std);
-    dyncal::ParameterTable truth = arm;
-    for (int i = 0; i < c.num_base; ++i) truth.values[i] = static_cast<float>(truth.values[i] + delta[i]);
-    SimulatedDrive reference(robot, sc, flash + ".ref");
-    const auto truth_bytes = encoded_table(truth);
-    ASSERT_EQ(reference.commit(truth_bytes.data(), static_cast<int>(truth_bytes.size())), dyncal::TableStatus::ok);
-    reference.trajectory = trajectory;
-    reference.periods = 2;
-    reference.sample_rate_hz = 500.0;
-    const JointArray true_effort = plain_run_effort(reference);
-    std::filesystem::remove(flash + ".ref");
-    for (int j = 0; j < n; ++j) {
-      const double a2 = with_estimate[j] * with_estimate[j], t2 = true_effort[j] * true_effort[j],
-                   b2 = without[j] * without[j];
-      std::printf("  joint %d: PD effort %.4g Nm (arm's table %.4g, true loaded model %.4g)\n", j + 1, with_estimate[j],
-                  without[j], true_effort[j]);
-      EXPECT_TRUE(with_estimate[j] <= 1.10 * true_effort[j] || a2 - t2 <= 0.01 * (b2 - t2)) << "joint " << j + 1;
-    }
+    const JointArray with_estimate = plain_run_effort(*drive);
+    const JointArray without = effort_with_table(robot, sc, flash + ".arm", arm, trajectory);
+    const JointArray true_effort = effort_with_table(robot, sc, flash + ".ref", loaded_table(c, arm, load), trajectory);
+    expect_effort_of_the_true_model(with_estimate, true_effort, without, n);
   }
   std::filesystem::remove(flash);
 }

@@ -41,8 +41,8 @@ TEST_P(ExportUrdf, RoundTripsThroughKdlAndRobotImport) {
   const std::string robots = " --robots-dir " + (dir / "robots").string();
   const RobotDescription robot = test_robot(name);
   write_csv_log((dir / "log.csv").string(), simulate(robot, uniform_times(500.0, 40.0), MotionClock{}, 31, 3).log);
-  ASSERT_EQ(run_dyncal("identify --robot " + name + robots + " --method pcls --data " +
-                       (dir / "log.csv").string() + " --params " + (dir / "p.json").string()),
+  ASSERT_EQ(run_dyncal("identify --robot " + name + robots + " --method pcls --data " + (dir / "log.csv").string() +
+                       " --params " + (dir / "p.json").string()),
             0);
   const std::filesystem::path out = dir / (name + "_identified.urdf");
   ASSERT_EQ(run_dyncal("export urdf --params " + (dir / "p.json").string() + " --out " + out.string() + robots), 0);

@@ -63,7 +63,8 @@ PayloadResult identify_payload(const RobotDescription& robot, const JointLog& lo
 
 /// The arm's parameters with the payload's standard parameters (10, link N frame) added to link N:
 /// the base parameters move by K_N dphi; terms, effects and friction are the arm's. Its source says
-/// so; it carries no std (the arm's no longer describes the loaded base parameters). Throws InputError if the set's robot is not compiled.
+/// so; it carries no std (the arm's no longer describes the loaded base parameters). Throws InputError if the set's
+/// robot is not compiled.
 ParameterSet with_payload(const ParameterSet& arm, const RobotDescription& robot,
                           const Eigen::Matrix<double, 10, 1>& payload_standard);
 
