@@ -118,6 +118,20 @@ CompressedRows compress(const std::vector<const CurrentRows*>& runs, const std::
   return out;
 }
 
+/// Column-pivoting QR of X with its columns scaled to unit norm (a zero column kept as it is), rank
+/// by kRankThreshold; solve() gives the unscaled least-squares solution.
+struct ScaledQr {
+  VectorXd norm;
+  Eigen::ColPivHouseholderQR<MatrixXd> qr;
+  explicit ScaledQr(const MatrixXd& X) : norm(X.colwise().norm().transpose()) {
+    for (Index col = 0; col < norm.size(); ++col)
+      if (!(norm[col] > 0)) norm[col] = 1;
+    qr.compute(X * norm.cwiseInverse().asDiagonal());
+    qr.setThreshold(kRankThreshold);
+  }
+  VectorXd solve(const VectorXd& b) const { return qr.solve(b).cwiseQuotient(norm); }
+};
+
 /// The weighted nuisance design for 1 / Kt = s, its QR (columns scaled to unit norm, rank by
 /// kRankThreshold), the fitted nuisance parameters and what Gauss-Newton needs.
 struct Projection {
@@ -137,24 +151,18 @@ Projection project(const CompressedRows& c, const VectorXd& s, const VectorXd& w
     Aw.row(k) = (w[m] * s[m]) * c.A.row(k);
     rw[k] = w[m] * (c.i[k] - s[m] * c.b[k]);
   }
-  VectorXd norm = Aw.colwise().norm().transpose();
-  for (Index col = 0; col < p; ++col)
-    if (!(norm[col] > 0)) norm[col] = 1;
-  Aw = Aw * norm.cwiseInverse().asDiagonal();
-  Eigen::ColPivHouseholderQR<MatrixXd> qr(Aw);
-  qr.setThreshold(kRankThreshold);
+  const ScaledQr sq(Aw);
   Projection out;
-  out.rank = static_cast<int>(qr.rank());
-  const VectorXd scaled = qr.solve(rw);
-  out.theta = scaled.cwiseQuotient(norm);
+  out.rank = static_cast<int>(sq.qr.rank());
+  out.theta = sq.solve(rw);
   MatrixXd J = MatrixXd::Zero(n, N + 1);  // the N derivative columns and the residual
   for (Index k = 0; k < n; ++k) {
     const int m = c.motor[static_cast<size_t>(k)];
     J(k, m) = w[m] * (c.A.row(k).dot(out.theta) + c.b[k]);
   }
-  out.e = rw - Aw * scaled;
+  out.e = rw - Aw * out.theta;
   J.col(N) = out.e;
-  const MatrixXd QtJ = qr.householderQ().adjoint() * J;
+  const MatrixXd QtJ = sq.qr.householderQ().adjoint() * J;
   out.Jp = QtJ.bottomRows(n - out.rank).leftCols(N);
   out.ep = QtJ.bottomRows(n - out.rank).col(N);
   return out;
@@ -217,12 +225,7 @@ TorqueConstantFit identify_torque_constants(const RobotDescription& robot, const
       X(k, c.motor[static_cast<size_t>(k)]) = c.i[k];
       X.row(k).tail(p) = -c.A.row(k);
     }
-    VectorXd norm = X.colwise().norm().transpose();
-    for (Index col = 0; col < norm.size(); ++col)
-      if (!(norm[col] > 0)) norm[col] = 1;
-    Eigen::ColPivHouseholderQR<MatrixXd> qr(X * norm.cwiseInverse().asDiagonal());
-    qr.setThreshold(kRankThreshold);
-    const VectorXd x = qr.solve(c.b).cwiseQuotient(norm);
+    const VectorXd x = ScaledQr(X).solve(c.b);
     std::string bad;
     for (int m = 0; m < N; ++m) {
       if (!(x[m] != 0) || !std::isfinite(x[m])) bad += (bad.empty() ? "" : ", ") + std::to_string(m + 1);
