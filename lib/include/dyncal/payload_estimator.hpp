@@ -1,6 +1,8 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
+#include <cmath>
 
 #include "finite.hpp"
 #include "kalman_filter.hpp"
@@ -30,6 +32,26 @@ namespace dyncal {
 /// (which then reports not_positive_definite). Robot: a generated model (dyncal/robot_model.hpp).
 /// Memory: K_N's 10 b scalars and the filter's (UD: 150 + 10 scalars); no heap, no exceptions. Every call returns a
 /// status and leaves the state unchanged when it is not ok.
+/// The size each payload parameter's verdict compares its 95 % half-width with (docs/payload.md
+/// "Verdicts"): the mass |m| against itself, a first moment against m l, an inertia entry about the
+/// link origin against m l^2, l = max(|c|, |c_N|) the payload's lever: c = [MX MY MZ] / M of
+/// `dphi` (10: XX XY XZ YY YZ ZZ MX MY MZ M), c_N the last link's own centre of mass from its
+/// standard parameters `link` (10, the robot file's: the size of the body the load is fixed to).
+/// Writes `scale` (10) and returns l; a zero mass or lever gives zero scales (no load to judge).
+template <typename Scalar>
+Scalar payload_scales(const Eigen::Matrix<Scalar, 10, 1>& dphi, const Scalar* link,
+                      Eigen::Matrix<Scalar, 10, 1>& scale) noexcept {
+  using std::abs;
+  using std::max;
+  const Scalar m = abs(dphi[9]);
+  const Scalar c = m > Scalar(0) ? Scalar(dphi.template segment<3>(6).norm() / m) : Scalar(0);
+  const Scalar c_link =
+      link[9] > Scalar(0) ? Scalar(Eigen::Matrix<Scalar, 3, 1>(link[6], link[7], link[8]).norm() / link[9]) : Scalar(0);
+  const Scalar lever = max(c, c_link);
+  for (int i = 0; i < 10; ++i) scale[i] = i < 6 ? m * lever * lever : (i < 9 ? m * lever : m);
+  return lever;
+}
+
 template <class Robot, typename Scalar = double, class Covariance = UdCovariance<Scalar, 10>>
 class PayloadEstimator {
   static_assert(is_robot_model_v<Robot>, "Robot must meet dyncal/robot_model.hpp");

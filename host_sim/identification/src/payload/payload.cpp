@@ -8,6 +8,7 @@
 #include <ostream>
 #include <sstream>
 
+#include "dyncal/payload_estimator.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/identification/methods/effect_model.hpp"
 #include "dyncal_host/identification/pipeline/compiled_robot.hpp"
@@ -121,20 +122,15 @@ PayloadResult identify_payload(const RobotDescription& robot, const JointLog& lo
   const VectorXd w = joint_sigma(C, r, first, use, N).cwiseInverse();
   const WeightedSystem sys = weighted_system(C, r, use, w);
   const Vec10 second = solve_kept(sys, {});
-  // The scales (docs/payload.md): the mass against itself, a centre-of-mass coordinate against the
-  // payload's lever l = max(|c|, |c_N|) (c_N: robot.json's last link's own centre of mass, the size
-  // of the body it is fixed to), an inertia entry against m l^2. The first moments and inertia about
-  // the link origin, the parameters the fit decides on, get the same (m l, m l^2).
-  const double m0 = std::abs(second[9]);
-  const Eigen::Vector3d c0 = m0 > 0 ? Eigen::Vector3d(second.segment<3>(6) / second[9]) : Eigen::Vector3d::Zero();
+  // The verdicts' scales (lib/ payload_scales, docs/payload.md): the mass against itself, a first
+  // moment against m l, an inertia entry against m l^2, l the payload's lever.
   const double* nominal = compiled.nominal_standard.data() + 10 * (N - 1);
-  const double c_link = nominal[9] > 0 ? Eigen::Vector3d(nominal[6], nominal[7], nominal[8]).norm() / nominal[9] : 0.0;
-  const double lever = std::max(c0.norm(), c_link);
-  if (!(m0 > 0) || !(lever > 0))
+  Vec10 scale10;
+  const double lever = dyncal::payload_scales(second, nominal, scale10);
+  if (!(std::abs(second[9]) > 0) || !(lever > 0))
     throw InputError("payload: the log shows no load on link " + std::to_string(N) +
                      " (its torque beyond the arm's model has no mass component)");
-  VectorXd scale(10);
-  scale << Eigen::VectorXd::Constant(6, m0 * lever * lever), Eigen::VectorXd::Constant(3, m0 * lever), m0;
+  const VectorXd scale = scale10;
   VectorXd residual = r - C * second;
   std::vector<char> all(static_cast<size_t>(S), 1);
   res.inflation = autocorrelation_inflation(d, all, residual);
@@ -213,7 +209,8 @@ PayloadResult identify_payload(const RobotDescription& robot, const JointLog& lo
   const Mat10 cov_phys = Jinv * cov * Jinv.transpose();
   auto is_dropped = [&](int i) { return std::find(fit.dropped.begin(), fit.dropped.end(), i) != fit.dropped.end(); };
   const double m = phys[0];
-  const double lever_fit = std::max(Eigen::Vector3d(phys[1], phys[2], phys[3]).norm(), c_link);
+  Vec10 fit_scale;  // the quantities' scales use the final fit's lever
+  const double lever_fit = dyncal::payload_scales(Vec10(res.standard), nominal, fit_scale);
   const char* names[10] = {"mass", "com_x", "com_y", "com_z", "I11", "I12", "I13", "I22", "I23", "I33"};
   const char* units[10] = {"kg", "m", "m", "m", "kg m^2", "kg m^2", "kg m^2", "kg m^2", "kg m^2", "kg m^2"};
   const bool mass_kept = !is_dropped(9);

@@ -53,9 +53,7 @@ struct PayloadFit {
   /// Standard deviations: the filter's, times the residuals' RMS over their assumed std (the
   /// measurement variance r covers the sensor's noise only, the residual also the model's error).
   std::array<double, 10> std{};
-  /// The size each parameter's verdict compares 1.96 std with (payload.hpp's scales): the mass
-  /// against itself, a first moment against m l, an inertia against m l^2, l = max(|c|, the last
-  /// link's own centre-of-mass distance in the robot file).
+  /// The size each parameter's verdict compares 1.96 std with (lib/ payload_scales, as the host's).
   std::array<double, 10> scale{};
   long updates = 0;
 };

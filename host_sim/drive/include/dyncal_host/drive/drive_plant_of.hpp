@@ -223,15 +223,12 @@ class DrivePlantOf final : public DrivePlant {
     const double inflation =
         payload_updates_ > 0 ? std::max(1.0, innovation_sq_.maxCoeff() / static_cast<double>(payload_updates_)) : 1.0;
     const typename Payload::ParamVector& x = payload_.estimate();
-    const double m = std::abs(x[9]);
-    const Eigen::Vector3d c = m > 0 ? Eigen::Vector3d(x.template segment<3>(6) / x[9]) : Eigen::Vector3d::Zero();
-    const double* link = data_.nominal_standard + Robot::kNumStandard - 10;
-    const double c_link = link[9] > 0 ? Eigen::Vector3d(link[6], link[7], link[8]).norm() / link[9] : 0.0;
-    const double lever = std::max(c.norm(), c_link);
+    typename Payload::ParamVector scale;
+    payload_scales(x, data_.nominal_standard + Robot::kNumStandard - 10, scale);
     for (int i = 0; i < 10; ++i) {
       f.value[static_cast<size_t>(i)] = x[i];
       f.std[static_cast<size_t>(i)] = std::sqrt(std::max(0.0, var[i]) * inflation);
-      f.scale[static_cast<size_t>(i)] = i < 6 ? m * lever * lever : i < 9 ? m * lever : m;
+      f.scale[static_cast<size_t>(i)] = scale[i];
     }
     return f;
   }
