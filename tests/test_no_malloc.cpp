@@ -11,9 +11,11 @@
 #include <random>
 
 #include "dyncal/causal_differentiator.hpp"
+#include "dyncal/contact_threshold.hpp"
 #include "dyncal/extended_kalman_filter.hpp"
 #include "dyncal/friction_tracker.hpp"
 #include "dyncal/kalman_filter.hpp"
+#include "dyncal/momentum_observer.hpp"
 #include "dyncal/payload_estimator.hpp"
 #include "dyncal/rls_forgetting.hpp"
 #include "dyncal/streaming_least_squares.hpp"
@@ -79,6 +81,7 @@ struct Workspace {
   Eigen::Matrix<Scalar, P, 1> phi, diag;
   dyncal::CausalDifferentiator<Scalar, 6> diff;
   dyncal::PayloadEstimator<Er20, Scalar> payload;
+  dyncal::MomentumObserver<Er20, Scalar> observer;
   dyncal::ParameterTable table;
   std::uint8_t table_bytes[dyncal::kTableMaxBytes];
 };
@@ -130,6 +133,16 @@ void run_updaters(Workspace<Scalar>& w) {
   ASSERT_EQ(dyncal::encode_table(w.table, w.table_bytes, dyncal::kTableMaxBytes, &size), dyncal::TableStatus::ok);
   ASSERT_EQ(dyncal::decode_table(w.table_bytes, size, w.table), dyncal::TableStatus::ok);
   ASSERT_EQ(dyncal::check_table<Model>(w.table), dyncal::TableStatus::ok);
+  // The momentum observer on that table and a contact threshold (what a drive does per sample and
+  // once per commit).
+  ASSERT_EQ(w.observer.configure(w.table, V::Constant(Scalar(100)), Scalar(0.01)), dyncal::UpdateStatus::ok);
+  for (int i = 0; i < 50; ++i) {
+    dyncal::test::fourier_state(0.01 * i, q_, qd_, qdd_);
+    ASSERT_EQ(w.observer.update(q_.cast<Scalar>(), qd_.cast<Scalar>(), V::Constant(Scalar(i))),
+              dyncal::UpdateStatus::ok);
+  }
+  ASSERT_TRUE(
+      std::isfinite(dyncal::contact_threshold(Scalar(1), Scalar(0.5), Scalar(0.001), 6, Scalar(1e-5))));
   ASSERT_EQ(w.ls.solve(w.phi), dyncal::UpdateStatus::ok);
   ASSERT_EQ(w.ls.inverse_gram_diagonal(w.diag), dyncal::UpdateStatus::ok);
   w.kf.covariance().diagonal(w.diag);
