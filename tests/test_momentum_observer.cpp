@@ -227,6 +227,10 @@ TEST(MomentumObserver, BadInputAndConfigurationChangeNothing) {
   ASSERT_EQ(twin.update(q, qd, tau), UpdateStatus::ok);
   ASSERT_EQ(observer.update(q, qd, tau), UpdateStatus::ok);
   EXPECT_EQ(observer.residual(), twin.residual());
+  // The friction velocity overload with qd itself is the plain update.
+  ASSERT_EQ(twin.update(q, qd, qd, tau), UpdateStatus::ok);
+  ASSERT_EQ(observer.update(q, qd, tau), UpdateStatus::ok);
+  EXPECT_EQ(observer.residual(), twin.residual());
 }
 
 /// Up-crossings of |x - mean| over c per hour, x sampled every dt, against the rate c was
@@ -242,8 +246,7 @@ void expect_rate_matches(const std::vector<double>& x, double dt, const char* wh
   for (double per_hour : {200.0, 2000.0}) {
     const double c = dyncal::contact_threshold(s, s_d, dt, 1, per_hour / 3600);
     long crossings = 0;
-    for (size_t k = 1; k < x.size(); ++k)
-      crossings += (std::abs(x[k - 1] - mean) <= c && std::abs(x[k] - mean) > c);
+    for (size_t k = 1; k < x.size(); ++k) crossings += (std::abs(x[k - 1] - mean) <= c && std::abs(x[k] - mean) > c);
     const double expected = per_hour * n * dt / 3600;
     EXPECT_GT(crossings, 0.8 * expected) << what << ", " << per_hour << " per hour";
     EXPECT_LT(crossings, 1.25 * expected) << what << ", " << per_hour << " per hour";

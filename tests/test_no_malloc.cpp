@@ -141,8 +141,7 @@ void run_updaters(Workspace<Scalar>& w) {
     ASSERT_EQ(w.observer.update(q_.cast<Scalar>(), qd_.cast<Scalar>(), V::Constant(Scalar(i))),
               dyncal::UpdateStatus::ok);
   }
-  ASSERT_TRUE(
-      std::isfinite(dyncal::contact_threshold(Scalar(1), Scalar(0.5), Scalar(0.001), 6, Scalar(1e-5))));
+  ASSERT_TRUE(std::isfinite(dyncal::contact_threshold(Scalar(1), Scalar(0.5), Scalar(0.001), 6, Scalar(1e-5))));
   ASSERT_EQ(w.ls.solve(w.phi), dyncal::UpdateStatus::ok);
   ASSERT_EQ(w.ls.inverse_gram_diagonal(w.diag), dyncal::UpdateStatus::ok);
   w.kf.covariance().diagonal(w.diag);

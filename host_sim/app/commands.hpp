@@ -32,6 +32,7 @@ void add_robot_command(CLI::App& app, Action& run);
 void add_predict_command(CLI::App& app, Action& run);
 void add_payload_command(CLI::App& app, Action& run);
 void add_export_command(CLI::App& app, Action& run);
+void add_monitor_command(CLI::App& app, Action& run);
 
 /// Runs codegen/import_urdf.py (the URDF work: import, check, export; orocos-kdl checks) with `args`
 /// under the Debian python3; its messages go straight to our stdout/stderr. Returns its exit code;

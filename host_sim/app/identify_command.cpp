@@ -11,6 +11,7 @@
 #include "dyncal_host/drive/scenario.hpp"
 #include "dyncal_host/identification/logs/drive_law.hpp"
 #include "dyncal_host/identification/methods/friction_comparison.hpp"
+#include "dyncal_host/identification/monitoring/contact_monitor.hpp"
 #include "dyncal_host/identification/payload/torque_constants.hpp"
 #include "dyncal_host/identification/pipeline/identify.hpp"
 #include "dyncal_host/identification/pipeline/stacked_data.hpp"
@@ -173,7 +174,18 @@ int run_identify(IdentifySettings& s) {
     if (!torque_constants.is_null()) report["torque_constants"] = torque_constants;
     write_json_file(s.report, report);
   }
-  if (!s.params.empty()) write_json_file(s.params, host::parameter_table_json(result));
+  if (!s.params.empty()) {
+    nlohmann::json file = host::parameter_table_json(result);
+    // The observer's residual statistics on the fitted log (contact-free: a calibration run), for
+    // dyncal monitor's thresholds (docs/monitor.md); the log is read again (identify consumed it).
+    try {
+      const host::ObserverRun run = host::run_observer(robot, s.log.load_log(robot), fitted);
+      file["monitor"] = host::residual_statistics_json(host::residual_statistics(run, s.log.data.front()));
+    } catch (const host::InputError& e) {
+      std::cout << "note: no contact-detection statistics in " << s.params << ": " << e.what() << "\n";
+    }
+    write_json_file(s.params, file);
+  }
   return 0;
 }
 

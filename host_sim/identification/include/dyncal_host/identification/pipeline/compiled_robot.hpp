@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "dyncal/parameter_table.hpp"
 #include "dyncal_host/common/excitation_trajectory.hpp"
 #include "dyncal_host/common/friction_model.hpp"
 #include "dyncal_host/common/model_terms.hpp"
@@ -44,6 +45,16 @@ struct CompiledRobot {
   using BaseRegressorFn = Eigen::MatrixXd (*)(const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
                                               const Eigen::VectorXd& qdd);
 
+  /// The momentum observer (lib/ momentum_observer.hpp) with `table` as the model and gain K
+  /// [1/s] on every joint, over rows [from, to) of a log sampled every dt [s]: q [rad], qd [rad/s],
+  /// the friction terms' velocity qd_friction [rad/s] and tau [Nm] (S x N); started at row `from`;
+  /// its residual [Nm] into the same rows of r (S x N, sized by the caller). Throws InputError: the
+  /// observer refuses the table or the gain (its status named), or a sample (its row, 1-based).
+  using MomentumResidualFn = void (*)(const ParameterTable& table, double gain, double dt, const Eigen::MatrixXd& q,
+                                      const Eigen::MatrixXd& qd, const Eigen::MatrixXd& qd_friction,
+                                      const Eigen::MatrixXd& tau, Eigen::Index from, Eigen::Index to,
+                                      Eigen::MatrixXd& r);
+
   /// The identification model of each built term set (by built_term_set_index): what the
   /// identification pipeline, compiled once, needs of this robot. Its names are the identified
   /// parameters in table order (base parameters, then the terms'), as identify reports them and a
@@ -53,6 +64,7 @@ struct CompiledRobot {
   InverseDynamicsFn inverse_dynamics = nullptr;
   StandardToBaseFn standard_to_base = nullptr;
   BaseRegressorFn base_regressor = nullptr;
+  MomentumResidualFn momentum_residual = nullptr;
 };
 
 /// Adds (or completes) the entry of `robot.name`: fields that are set in `robot` overwrite the

@@ -3,10 +3,13 @@
 // robot's name (compiled_robot.hpp). Included only by the robots' translation units, which the
 // build generates from host_sim/robots/*.cpp.in for every robots/<name>/ folder.
 
+#include <string>
 #include <utility>
 
 #include "dyncal/identification_model.hpp"
+#include "dyncal/momentum_observer.hpp"
 #include "dyncal/nonlinear_friction.hpp"
+#include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/identification/pipeline/compiled_robot.hpp"
 #include "dyncal_host/identification/pipeline/term_set_model_of.hpp"
 
@@ -79,8 +82,28 @@ Eigen::MatrixXd base_regressor(const Eigen::VectorXd& q, const Eigen::VectorXd& 
   return Yb;
 }
 
+/// CompiledRobot::MomentumResidualFn for `Robot`.
+template <class Robot>
+void momentum_residual(const ParameterTable& table, double gain, double dt, const Eigen::MatrixXd& q,
+                       const Eigen::MatrixXd& qd, const Eigen::MatrixXd& qd_friction, const Eigen::MatrixXd& tau,
+                       Eigen::Index from, Eigen::Index to, Eigen::MatrixXd& r) {
+  using Vec = typename Robot::template JointVector<double>;
+  MomentumObserver<Robot> observer;
+  const UpdateStatus configured = observer.configure(table, Vec::Constant(gain), dt);
+  if (configured != UpdateStatus::ok)
+    throw InputError(std::string("momentum observer: the parameter table or the gain is refused (") +
+                     to_string(configured) + ")");
+  for (Eigen::Index s = from; s < to; ++s) {
+    const UpdateStatus st = observer.update(q.row(s).transpose(), qd.row(s).transpose(), qd_friction.row(s).transpose(),
+                                            tau.row(s).transpose());
+    if (st != UpdateStatus::ok)
+      throw InputError("momentum observer: sample " + std::to_string(s + 1) + " refused (" + to_string(st) + ")");
+    r.row(s) = observer.residual().transpose();
+  }
+}
+
 /// Registers the robot's identity, nominal standard parameters (the generated kNominalStandard),
-/// excitation regressor and inverse dynamics.
+/// excitation regressor, inverse dynamics and momentum observer.
 template <class Robot>
 bool register_robot_model(const double (&nominal_standard)[Robot::kNumStandard]) {
   CompiledRobot c;
@@ -94,6 +117,7 @@ bool register_robot_model(const double (&nominal_standard)[Robot::kNumStandard])
   c.inverse_dynamics = &inverse_dynamics<Robot>;
   c.standard_to_base = &standard_to_base<Robot>;
   c.base_regressor = &base_regressor<Robot>;
+  c.momentum_residual = &momentum_residual<Robot>;
   return register_robot(c);
 }
 

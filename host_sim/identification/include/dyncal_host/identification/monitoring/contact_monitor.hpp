@@ -1,0 +1,101 @@
+#pragma once
+// Contact detection with the calibrated model (docs/monitor.md): lib/'s generalised-momentum
+// observer run over a log, the residual's statistics on contact-free motion (the calibration's own
+// log: identify writes them into the parameter file), per-joint thresholds for a stated false-alarm
+// rate from those statistics (lib/ contact_threshold.hpp), and the contacts found in a log.
+
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "dyncal_host/common/robot_description.hpp"
+#include "dyncal_host/identification/logs/joint_log.hpp"
+#include "dyncal_host/identification/reports/prediction.hpp"
+
+namespace dyncal::host {
+
+/// The detection time the default gain is set for [s]: the observer's time constant 1 / K is a
+/// quarter of it, so a step of external torque shows 98 % of its size after that time.
+inline constexpr double kContactDetectionTime = 0.02;
+
+/// The observer's default gain [1/s] for samples `period` [s] apart: 4 / kContactDetectionTime,
+/// at most 1 / period (the discrete observer needs K dt <= 1).
+double default_observer_gain(double period);
+
+/// The observer's residual over a log.
+struct ObserverRun {
+  double gain = 0;           ///< K [1/s], every joint
+  double period = 0;         ///< sample period of the uniform grid [s]
+  double delay = 0;          ///< how far an online observer runs behind the samples it reports on [s]
+  std::vector<double> band;  ///< per joint, the friction terms' standstill band [rad/s]
+  Eigen::VectorXd t;         ///< [s], S
+  Eigen::MatrixXd r;         ///< residual [Nm], S x N
+  std::vector<std::pair<Eigen::Index, Eigen::Index>> segments;  ///< [first, end) rows, each observed from its start
+  std::vector<std::string> notes;                               ///< the log's sampling, the velocity's source
+};
+
+/// lib/'s momentum observer with `params` as the model (their drive-table form, drive_table.hpp)
+/// over `log` put on a uniform grid (gaps up to pi / K bridged, half the period of the residual's
+/// bandwidth K / 2 pi; longer ones split it), restarted at every segment. qd: the log's when it has
+/// one, else the slope of the least-squares line through the 2D + 1 samples centred on each,
+/// D = 1 / (K dt) (ObserverRun::delay = D dt; the first and last D samples of a segment are not
+/// observed). gain 0: default_observer_gain. The friction terms' standstill band:
+/// `band` when given (N), else identification's rule on this log: kStandstillQuantile times the
+/// velocity's white-noise std (signal.hpp), where a joint at rest reads |qd| above it on 0.1 % of
+/// its samples. Throws InputError: params of another robot, a model the observer cannot take, a gain
+/// with K dt > 1, the log's sampling (uniform_grid.hpp).
+ObserverRun run_observer(const RobotDescription& robot, JointLog log, const ParameterSet& params, double gain = 0,
+                         const std::vector<double>& band = {});
+
+/// The residual's statistics on contact-free motion, per joint: mean, standard deviation and the
+/// standard deviation of its sample-to-sample difference [Nm] (differences within segments), from
+/// the samples after each segment's first 5 / K (the observer's start-up: e^-5 < 1 %).
+struct ResidualStatistics {
+  std::string source;  ///< the log they come from
+  double gain = 0;     ///< K [1/s]
+  double period = 0;   ///< [s]
+  Eigen::Index samples = 0;
+  std::vector<double> band;                       ///< the observer's standstill band [rad/s] (N)
+  std::vector<double> mean, std, difference_std;  ///< N each [Nm]
+  std::vector<double> peak;                       ///< N: the largest |r - mean| on that motion [Nm]
+};
+
+/// Throws InputError when no segment is longer than the start-up.
+ResidualStatistics residual_statistics(const ObserverRun& run, const std::string& source);
+
+/// The parameter file's "monitor" object: {source, gain, period, samples, joints: [{joint, band,
+/// mean, std, difference_std, peak}]}.
+nlohmann::json residual_statistics_json(const ResidualStatistics& s);
+/// Reads it back; throws InputError naming `where` and what is missing or not a positive number.
+ResidualStatistics read_residual_statistics(const nlohmann::json& j, const std::string& where);
+
+/// Per-joint thresholds [Nm] for `alarms_per_hour` false alarms of the whole arm on motion like the
+/// statistics': an alarm when |r_j - mean_j| > threshold_j. gaussian: lib/ contact_threshold (the
+/// rate shared equally by the joints), what the rate holds for if the residual is Gaussian. A
+/// residual whose tails are heavier (a model error at velocity reversals, say) can exceed it on
+/// the calibration's own motion: then the threshold is that motion's peak |r - mean| (peak_bound
+/// true) and the rate is not established for that joint: the log shows only that its own motion
+/// stays below it. Throws InputError for a rate not > 0 or a joint without statistics.
+struct ContactThreshold {
+  double value = 0, gaussian = 0;
+  bool peak_bound = false;
+};
+std::vector<ContactThreshold> contact_thresholds(const ResidualStatistics& s, double alarms_per_hour);
+
+/// One contact: from the first sample where a joint's |r - mean| exceeds its threshold to the first
+/// where every joint is back within it, alarms closer than the observer's time constant 1 / K
+/// merged (its memory: one push seen twice).
+struct Contact {
+  double start = 0, end = 0;  ///< [s], the samples' time
+  double detected = 0;        ///< when an online observer raises it: start + ObserverRun::delay [s]
+  std::vector<int> joints;    ///< 1-based joints that crossed their threshold
+  std::vector<double> peak;   ///< per joint (N), the residual's largest |r - mean| during it [Nm]
+  int first_joint = 0;        ///< 1-based: the joint that crossed first
+};
+
+std::vector<Contact> detect_contacts(const ObserverRun& run, const ResidualStatistics& s,
+                                     const std::vector<ContactThreshold>& thresholds);
+
+}  // namespace dyncal::host

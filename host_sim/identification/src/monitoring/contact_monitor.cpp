@@ -1,0 +1,247 @@
+#include "dyncal_host/identification/monitoring/contact_monitor.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "dyncal/contact_threshold.hpp"
+#include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/identification/logs/uniform_grid.hpp"
+#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
+#include "dyncal_host/identification/pipeline/signal.hpp"
+#include "dyncal_host/identification/reports/drive_table.hpp"
+
+namespace dyncal::host {
+namespace {
+
+/// Samples at the start of a segment that the statistics skip: 5 time constants.
+Eigen::Index start_up(double gain, double period) {
+  return static_cast<Eigen::Index>(std::ceil(5.0 / (gain * period)));
+}
+
+double positive_number(const nlohmann::json& j, const char* key, const std::string& where) {
+  if (!j.contains(key) || !j[key].is_number() || !(j[key].get<double>() > 0.0) || !std::isfinite(j[key].get<double>()))
+    throw InputError(where + ": \"" + key + "\" is missing or not a positive number");
+  return j[key].get<double>();
+}
+
+}  // namespace
+
+double default_observer_gain(double period) {
+  return std::min(4.0 / kContactDetectionTime, 1.0 / period);
+}
+
+ObserverRun run_observer(const RobotDescription& robot, JointLog log, const ParameterSet& params, double gain,
+                         const std::vector<double>& band) {
+  if (params.robot != robot.name)
+    throw InputError("the parameters are for robot '" + params.robot + "', not '" + robot.name + "'");
+  const CompiledRobot& compiled = compiled_robot_for(robot);
+  ObserverRun run;
+  std::vector<std::string> notes;
+  const ParameterTable table = parameter_table(params, robot, &notes);
+  // The grid first (its period sets the default gain), bridging gaps up to pi / K of the default.
+  SamplingReport sampling;
+  const double raw_period = log.sample_period();
+  const double planned = gain > 0 ? gain : default_observer_gain(raw_period);
+  const double max_gap = M_PI / planned;
+  log = to_uniform_grid(std::move(log), max_gap, sampling);
+  run.period = log.sample_period();
+  run.gain = gain > 0 ? gain : default_observer_gain(run.period);
+  run.notes.push_back(describe(sampling, max_gap));
+  run.notes.insert(run.notes.end(), notes.begin(), notes.end());
+  const Eigen::Index S = log.samples();
+  const int N = log.joints();
+  Eigen::MatrixXd qd = log.qd;
+  const std::vector<std::pair<Eigen::Index, Eigen::Index>> segments = log.segments();
+  if (!log.has_qd) {
+    // The velocity at sample m: the slope of the least-squares line through q_{m-D} .. q_{m+D}
+    // (symmetric: q's curvature does not bias it), D = 1 / (K dt) samples, so that the observer
+    // takes q, qd and tau of one instant, D dt after it online. A difference of neighbouring
+    // samples carries the encoder's quantisation straight into p = M qd and the residual (K M a
+    // quantum per period, in sparse impulses on a slow joint: tails far heavier than Gaussian);
+    // over 2D + 1 samples that noise is about (2D + 1)^1.5 / 2 times smaller. Where the
+    // acceleration jumps within the window (a stop without jerk limit) the slope is off by about
+    // the jump times D dt / 4, and the residual with it (docs/monitor.md).
+    const Eigen::Index D = std::max<Eigen::Index>(1, std::lround(1.0 / (run.gain * run.period)));
+    run.delay = static_cast<double>(D) * run.period;
+    const double norm = static_cast<double>(D * (D + 1) * (2 * D + 1)) / 3.0 * run.period;
+    qd = Eigen::MatrixXd::Zero(S, N);
+    for (const auto& [a, b] : segments) {
+      if (b - a < 2 * D + 3) continue;
+      for (Eigen::Index m = a + D; m < b - D; ++m) {
+        Eigen::RowVectorXd slope = Eigen::RowVectorXd::Zero(N);
+        for (Eigen::Index i = -D; i <= D; ++i) slope += static_cast<double>(i) * log.q.row(m + i);
+        qd.row(m) = slope / norm;
+      }
+      run.segments.emplace_back(a + D, b - D);
+    }
+    run.notes.push_back("velocity: the slope of q over " + std::to_string(2 * D + 1) +
+                        " samples (the log has none), centred: an online observer runs " + std::to_string(D) +
+                        " samples (" + std::to_string(run.delay * 1e3) + " ms) behind the log");
+  } else {
+    run.segments = segments;
+    run.notes.push_back("velocity: the log's qd");
+  }
+  if (run.segments.empty()) throw InputError("the log has no segment long enough for the observer");
+  // The friction terms' velocity: qd, 0 inside the standstill band (identification's rule: the
+  // velocity's white-noise std times kStandstillQuantile; a joint at rest reads above it on 0.1 % of
+  // its samples). The sign of a raw difference instead flickers with the encoder's counts at low
+  // speed (tried: 20 times the false alarms on smooth motion).
+  if (!band.empty()) {
+    if (static_cast<int>(band.size()) != N) throw InputError("the standstill band is not one per joint");
+    run.band = band;
+  } else {
+    const Eigen::VectorXd noise = white_noise_std(qd, run.segments);
+    for (int j = 0; j < N; ++j) run.band.push_back(kStandstillQuantile * noise[j]);
+  }
+  Eigen::MatrixXd qd_friction = qd;
+  for (const auto& [a, b] : run.segments)
+    for (Eigen::Index m = a; m < b; ++m)
+      for (int j = 0; j < N; ++j)
+        if (std::abs(qd(m, j)) < run.band[static_cast<size_t>(j)]) qd_friction(m, j) = 0;
+  run.r = Eigen::MatrixXd::Zero(S, N);
+  for (const auto& [a, b] : run.segments)
+    compiled.momentum_residual(table, run.gain, run.period, log.q, qd, qd_friction, log.tau, a, b, run.r);
+  run.t = log.t;
+  return run;
+}
+
+ResidualStatistics residual_statistics(const ObserverRun& run, const std::string& source) {
+  const int N = static_cast<int>(run.r.cols());
+  const Eigen::Index skip = start_up(run.gain, run.period);
+  ResidualStatistics s;
+  s.source = source;
+  s.gain = run.gain;
+  s.period = run.period;
+  s.band = run.band;
+  for (int j = 0; j < N; ++j) {
+    double sum = 0, sq = 0, dsq = 0;
+    Eigen::Index n = 0, differences = 0;
+    for (const auto& [a, b] : run.segments) {
+      for (Eigen::Index k = a + skip; k < b; ++k) {
+        sum += run.r(k, j);
+        sq += run.r(k, j) * run.r(k, j);
+        ++n;
+        if (k > a + skip) {
+          dsq += (run.r(k, j) - run.r(k - 1, j)) * (run.r(k, j) - run.r(k - 1, j));
+          ++differences;
+        }
+      }
+    }
+    if (differences < 2)
+      throw InputError(source + ": no segment is longer than the observer's start-up (" + std::to_string(skip) +
+                       " samples): no residual statistics");
+    const double mean = sum / static_cast<double>(n);
+    s.samples = std::max(s.samples, n);
+    s.mean.push_back(mean);
+    s.std.push_back(std::sqrt(std::max(0.0, sq / static_cast<double>(n) - mean * mean)));
+    s.difference_std.push_back(std::sqrt(dsq / static_cast<double>(differences)));
+    double peak = 0;
+    for (const auto& [a, b] : run.segments)
+      for (Eigen::Index k = a + skip; k < b; ++k) peak = std::max(peak, std::abs(run.r(k, j) - mean));
+    s.peak.push_back(peak);
+  }
+  return s;
+}
+
+nlohmann::json residual_statistics_json(const ResidualStatistics& s) {
+  nlohmann::json joints = nlohmann::json::array();
+  for (size_t j = 0; j < s.mean.size(); ++j)
+    joints.push_back({{"joint", j + 1},
+                      {"band", s.band[j]},
+                      {"mean", s.mean[j]},
+                      {"std", s.std[j]},
+                      {"difference_std", s.difference_std[j]},
+                      {"peak", s.peak[j]}});
+  return {{"source", s.source}, {"gain", s.gain}, {"period", s.period}, {"samples", s.samples}, {"joints", joints}};
+}
+
+ResidualStatistics read_residual_statistics(const nlohmann::json& j, const std::string& where) {
+  if (!j.is_object()) throw InputError(where + ": \"monitor\" is not an object");
+  ResidualStatistics s;
+  s.source = j.value("source", std::string());
+  s.gain = positive_number(j, "gain", where);
+  s.period = positive_number(j, "period", where);
+  s.samples = static_cast<Eigen::Index>(positive_number(j, "samples", where));
+  if (!j.contains("joints") || !j["joints"].is_array() || j["joints"].empty())
+    throw InputError(where + ": \"monitor\" has no \"joints\"");
+  for (const auto& e : j["joints"]) {
+    if (!e.contains("mean") || !e["mean"].is_number() || !std::isfinite(e["mean"].get<double>()))
+      throw InputError(where + ": a joint's \"mean\" is missing or not a number");
+    s.mean.push_back(e["mean"].get<double>());
+    s.std.push_back(positive_number(e, "std", where));
+    s.difference_std.push_back(positive_number(e, "difference_std", where));
+    s.peak.push_back(positive_number(e, "peak", where));
+    if (!e.contains("band") || !e["band"].is_number() || !(e["band"].get<double>() >= 0.0))
+      throw InputError(where + ": a joint's \"band\" is missing or negative");
+    s.band.push_back(e["band"].get<double>());
+  }
+  return s;
+}
+
+std::vector<ContactThreshold> contact_thresholds(const ResidualStatistics& s, double alarms_per_hour) {
+  if (!(alarms_per_hour > 0.0) || !std::isfinite(alarms_per_hour))
+    throw InputError("the false-alarm rate must be a positive number per hour");
+  const int N = static_cast<int>(s.std.size());
+  std::vector<ContactThreshold> c;
+  for (int j = 0; j < N; ++j) {
+    const size_t i = static_cast<size_t>(j);
+    ContactThreshold t;
+    t.gaussian = contact_threshold(s.std[i], s.difference_std[i], s.period, N, alarms_per_hour / 3600.0);
+    if (!std::isfinite(t.gaussian)) throw InputError("joint " + std::to_string(j + 1) + " has no residual statistics");
+    t.peak_bound = s.peak[i] > t.gaussian;
+    t.value = t.peak_bound ? s.peak[i] : t.gaussian;
+    c.push_back(t);
+  }
+  return c;
+}
+
+std::vector<Contact> detect_contacts(const ObserverRun& run, const ResidualStatistics& s,
+                                     const std::vector<ContactThreshold>& thresholds) {
+  const int N = static_cast<int>(run.r.cols());
+  const double memory = 1.0 / run.gain;
+  std::vector<Contact> out;
+  for (const auto& [a, b] : run.segments) {
+    bool open = false;
+    for (Eigen::Index k = a; k < b; ++k) {
+      int first = 0;
+      bool any = false;
+      for (int j = 0; j < N; ++j) {
+        const double e = std::abs(run.r(k, j) - s.mean[static_cast<size_t>(j)]);
+        if (e > thresholds[static_cast<size_t>(j)].value) {
+          if (!any) first = j + 1;
+          any = true;
+        }
+      }
+      if (any && !open) {
+        // A new contact, or the last one again within the observer's memory.
+        const bool merge =
+            !out.empty() && out.back().end >= 0 && run.t[k] - out.back().end < memory && out.back().end >= run.t[a];
+        if (!merge) {
+          Contact c;
+          c.start = run.t[k];
+          c.detected = run.t[k] + run.delay;
+          c.first_joint = first;
+          c.peak.assign(static_cast<size_t>(N), 0.0);
+          out.push_back(c);
+        }
+        open = true;
+      }
+      if (open) {
+        Contact& c = out.back();
+        for (int j = 0; j < N; ++j) {
+          const double e = std::abs(run.r(k, j) - s.mean[static_cast<size_t>(j)]);
+          c.peak[static_cast<size_t>(j)] = std::max(c.peak[static_cast<size_t>(j)], e);
+          if (e > thresholds[static_cast<size_t>(j)].value &&
+              std::find(c.joints.begin(), c.joints.end(), j + 1) == c.joints.end())
+            c.joints.push_back(j + 1);
+        }
+        c.end = run.t[k];
+        if (!any) open = false;
+      }
+    }
+  }
+  for (auto& c : out) std::sort(c.joints.begin(), c.joints.end());
+  return out;
+}
+
+}  // namespace dyncal::host
