@@ -11,9 +11,11 @@
 #include "dyncal/generated/er20/robot.hpp"
 #include "dyncal/identification_model.hpp"
 #include "dyncal/kalman_filter.hpp"
+#include "dyncal/momentum_observer.hpp"
 #include "dyncal/payload_estimator.hpp"
 #include "dyncal/rls_forgetting.hpp"
 #include "dyncal/streaming_least_squares.hpp"
+#include "dyncal/table_check.hpp"
 
 namespace {
 
@@ -203,6 +205,38 @@ void BM_PayloadEstimatorUpdate(benchmark::State& state) {
 }
 BENCHMARK_TEMPLATE(BM_PayloadEstimatorUpdate, double);
 BENCHMARK_TEMPLATE(BM_PayloadEstimatorUpdate, float);
+
+// The generalised-momentum observer on a table of the nominal model (Eq. 7, Ia, offset): one
+// update (mass matrix, inverse dynamics at qdd = 0, friction, the discrete step), what a drive
+// running contact detection pays per control period.
+template <typename Scalar>
+void BM_MomentumObserverUpdate(benchmark::State& state) {
+  using Observer = dyncal::MomentumObserver<Robot, Scalar>;
+  using V = typename Observer::JointVector;
+  Eigen::Matrix<double, Robot::kNumStandard, 1> phi_std;
+  for (int i = 0; i < Robot::kNumStandard; ++i) phi_std[i] = dyncal::generated::er20::kNominalStandard[i];
+  Eigen::Matrix<double, Robot::kNumBase, 1> phi_b;
+  Robot::standard_to_base(phi_std, phi_b);
+  Model::ParamVector<double> phi = Model::ParamVector<double>::Constant(0.1);
+  phi.head<Robot::kNumBase>() = phi_b;
+  dyncal::ParameterTable table;
+  dyncal::make_table<Model>(phi, table);
+  auto observer = std::make_unique<Observer>();
+  if (observer->configure(table, V::Constant(Scalar(200)), Scalar(1e-3)) != dyncal::UpdateStatus::ok) {
+    state.SkipWithError("configure refused the table");
+    return;
+  }
+  long i = 0, rejected = 0;
+  for (auto _ : state) {
+    const V q = kStates.q[i & 63].cast<Scalar>(), qd = kStates.qd[i & 63].cast<Scalar>(),
+            tau = kStates.qdd[i & 63].cast<Scalar>();
+    if (observer->update(q, qd, tau) != dyncal::UpdateStatus::ok) ++rejected;
+    ++i;
+  }
+  state.counters["rejected"] = static_cast<double>(rejected);
+}
+BENCHMARK_TEMPLATE(BM_MomentumObserverUpdate, double);
+BENCHMARK_TEMPLATE(BM_MomentumObserverUpdate, float);
 
 // The friction tracker of a calibrated drive (Eq. 4 amplitudes, qds fixed), friction torque given.
 template <typename Scalar>

@@ -75,9 +75,8 @@ int run_monitor(MonitorSettings& s) {
                               {"gaussian", c.gaussian},
                               {"basis", c.peak_bound ? "calibration peak" : "gaussian"}});
   }
-  std::cout << "note: the rate holds if the residual on this log is distributed as on the calibration's motion "
-               "(Gaussian); on simulated arms, motion the calibration never saw still crosses these thresholds far "
-               "more often (docs/monitor.md, \"Open\")\n";
+  std::cout << "note: the rate holds for motion like the calibration's; where the acceleration jumps (a stop or a "
+               "start without a jerk limit) the residual crosses more often (docs/monitor.md, \"Open\")\n";
   std::cout << "contacts: " << contacts.size() << "\n";
   nlohmann::json list = nlohmann::json::array();
   for (const auto& c : contacts) {

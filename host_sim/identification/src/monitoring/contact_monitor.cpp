@@ -74,6 +74,21 @@ ObserverRun run_observer(const RobotDescription& robot, JointLog log, const Para
       }
       run.segments.emplace_back(a + D, b - D);
     }
+    run.still = Eigen::MatrixXi::Zero(S, N);
+    for (const auto& [a, b] : run.segments) {
+      for (int j = 0; j < N; ++j) {
+        // Steps without a count among the window's 2D: a running count over the segment.
+        Eigen::Index stalled = 0;
+        for (Eigen::Index i = a - D + 1; i <= a + D; ++i) stalled += log.q(i, j) == log.q(i - 1, j);
+        for (Eigen::Index m = a; m < b; ++m) {
+          if (m > a) {
+            stalled += log.q(m + D, j) == log.q(m + D - 1, j);
+            stalled -= log.q(m - D, j) == log.q(m - D - 1, j);
+          }
+          run.still(m, j) = stalled > 0;
+        }
+      }
+    }
     run.notes.push_back("velocity: the slope of q over " + std::to_string(2 * D + 1) +
                         " samples (the log has none), centred: an online observer runs " + std::to_string(D) +
                         " samples (" + std::to_string(run.delay * 1e3) + " ms) behind the log");
@@ -94,10 +109,20 @@ ObserverRun run_observer(const RobotDescription& robot, JointLog log, const Para
     for (int j = 0; j < N; ++j) run.band.push_back(kStandstillQuantile * noise[j]);
   }
   Eigen::MatrixXd qd_friction = qd;
+  if (log.has_qd) run.still = Eigen::MatrixXi::Zero(S, N);
   for (const auto& [a, b] : run.segments)
     for (Eigen::Index m = a; m < b; ++m)
       for (int j = 0; j < N; ++j)
-        if (std::abs(qd(m, j)) < run.band[static_cast<size_t>(j)]) qd_friction(m, j) = 0;
+        if (std::abs(qd(m, j)) < run.band[static_cast<size_t>(j)]) {
+          qd_friction(m, j) = 0;
+          if (log.has_qd) run.still(m, j) = 1;
+        }
+  for (int j = 0; j < N; ++j) {
+    double fc = 0;
+    for (size_t i = 0; i < params.names.size(); ++i)
+      if (params.names[i] == "Fc" + std::to_string(j + 1)) fc = std::abs(params.values[static_cast<Eigen::Index>(i)]);
+    run.static_friction.push_back(fc);
+  }
   run.r = Eigen::MatrixXd::Zero(S, N);
   for (const auto& [a, b] : run.segments)
     compiled.momentum_residual(table, run.gain, run.period, log.q, qd, qd_friction, log.tau, a, b, run.r);
@@ -118,10 +143,11 @@ ResidualStatistics residual_statistics(const ObserverRun& run, const std::string
     Eigen::Index n = 0, differences = 0;
     for (const auto& [a, b] : run.segments) {
       for (Eigen::Index k = a + skip; k < b; ++k) {
+        if (run.still(k, j)) continue;
         sum += run.r(k, j);
         sq += run.r(k, j) * run.r(k, j);
         ++n;
-        if (k > a + skip) {
+        if (k > a + skip && !run.still(k - 1, j)) {
           dsq += (run.r(k, j) - run.r(k - 1, j)) * (run.r(k, j) - run.r(k - 1, j));
           ++differences;
         }
@@ -199,6 +225,10 @@ std::vector<Contact> detect_contacts(const ObserverRun& run, const ResidualStati
                                      const std::vector<ContactThreshold>& thresholds) {
   const int N = static_cast<int>(run.r.cols());
   const double memory = 1.0 / run.gain;
+  const auto limit = [&](Eigen::Index k, int j) {
+    const size_t i = static_cast<size_t>(j);
+    return thresholds[i].value + (run.still(k, j) ? run.static_friction[i] : 0.0);
+  };
   std::vector<Contact> out;
   for (const auto& [a, b] : run.segments) {
     bool open = false;
@@ -207,7 +237,7 @@ std::vector<Contact> detect_contacts(const ObserverRun& run, const ResidualStati
       bool any = false;
       for (int j = 0; j < N; ++j) {
         const double e = std::abs(run.r(k, j) - s.mean[static_cast<size_t>(j)]);
-        if (e > thresholds[static_cast<size_t>(j)].value) {
+        if (e > limit(k, j)) {
           if (!any) first = j + 1;
           any = true;
         }

@@ -32,6 +32,12 @@ struct ObserverRun {
   std::vector<double> band;  ///< per joint, the friction terms' standstill band [rad/s]
   Eigen::VectorXd t;         ///< [s], S
   Eigen::MatrixXd r;         ///< residual [Nm], S x N
+  /// S x N, 1 where the joint is at or near rest: its encoder did not count on a step of the
+  /// velocity's window (a log with qd: |qd| inside the band). Friction there is static, any value
+  /// up to its Coulomb level, which the model cannot know: detection widens that joint's threshold
+  /// by static_friction; the statistics leave these samples out.
+  Eigen::MatrixXi still;
+  std::vector<double> static_friction;  ///< per joint, the model's Coulomb level |Fc_j| [Nm] (0 without one)
   std::vector<std::pair<Eigen::Index, Eigen::Index>> segments;  ///< [first, end) rows, each observed from its start
   std::vector<std::string> notes;                               ///< the log's sampling, the velocity's source
 };
