@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <string>
 
 namespace {
@@ -337,6 +338,39 @@ TEST(CliErrors, MisleadingCsvMessagesAreFixed) {
   expect_error("identify --robot er20 --data " +
                    write_csv("overflow", header(6) + rows(6, 5) + "0.05,1e400,2,3,4,5,6,1,2,3,4,5,6\n"),
                "'1e400' is beyond the range of a double");
+}
+
+TEST(CliErrors, MonitorRefusesBadStatisticsRatesAndGainsWithOneLine) {
+  const auto dir = std::filesystem::temp_directory_path() / ("dyncal_monitor_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string params = (dir / "p.json").string(), data = std::string(" --format tx40 --data ") + DYNCAL_TX40_DATA;
+  ASSERT_EQ(run_dyncal("identify" + data + " --params " + params).exit_code, 0);
+  nlohmann::json file = nlohmann::json::parse(std::ifstream(params));
+  ASSERT_TRUE(file.contains("monitor"));
+  EXPECT_EQ(run_dyncal("monitor" + data + " --params " + params).exit_code, 0);
+  // The file without its statistics, and with a negative std.
+  const std::string bare = (dir / "bare.json").string(), bad = (dir / "bad.json").string();
+  nlohmann::json negative = file;
+  negative["monitor"]["joints"][2]["std"] = -1.0;
+  file.erase("monitor");
+  std::ofstream(bare) << file.dump();
+  std::ofstream(bad) << negative.dump();
+  const struct {
+    std::string args, message;
+  } cases[] = {
+      {"monitor" + data + " --params " + bare, "has no residual statistics"},
+      {"monitor" + data + " --params " + bad, "\"std\" is missing or not a positive number"},
+      {"monitor" + data + " --params " + params + " --alarms-per-hour -1", "false-alarm rate"},
+      {"monitor" + data + " --params " + params + " --reference " + DYNCAL_TX40_DATA + " --gain 6000", "K dt <= 1"},
+      {"monitor" + data + " --params " + params + " --gain 100", "--gain sets the observer of --reference"},
+  };
+  for (const auto& c : cases) {
+    const auto r = run_dyncal(c.args);
+    EXPECT_EQ(r.exit_code, 2) << c.args;
+    EXPECT_NE(r.err.find(c.message), std::string::npos) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

@@ -46,6 +46,10 @@ ObserverRun run_observer(const RobotDescription& robot, JointLog log, const Para
   log = to_uniform_grid(std::move(log), max_gap, sampling);
   run.period = log.sample_period();
   run.gain = gain > 0 ? gain : default_observer_gain(run.period);
+  if (run.gain * run.period > 1.0)
+    throw InputError("observer gain " + std::to_string(run.gain) +
+                     " 1/s: the discrete observer needs K dt <= 1, at most " + std::to_string(1.0 / run.period) +
+                     " 1/s for this log");
   run.notes.push_back(describe(sampling, max_gap));
   run.notes.insert(run.notes.end(), notes.begin(), notes.end());
   const Eigen::Index S = log.samples();
