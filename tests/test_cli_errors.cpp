@@ -347,7 +347,9 @@ TEST(CliErrors, MonitorRefusesBadStatisticsRatesAndGainsWithOneLine) {
   ASSERT_EQ(run_dyncal("identify" + data + " --params " + params).exit_code, 0);
   nlohmann::json file = nlohmann::json::parse(std::ifstream(params));
   ASSERT_TRUE(file.contains("monitor"));
-  EXPECT_EQ(run_dyncal("monitor" + data + " --params " + params).exit_code, 0);
+  EXPECT_EQ(run_dyncal("monitor" + data + " --params " + params + " --plots " + (dir / "plots").string()).exit_code, 0);
+  for (int j = 1; j <= 6; ++j)
+    EXPECT_GT(std::filesystem::file_size(dir / "plots" / ("joint" + std::to_string(j) + "_residual.svg")), 1000u);
   // The file without its statistics, and with a negative std.
   const std::string bare = (dir / "bare.json").string(), bad = (dir / "bad.json").string();
   nlohmann::json negative = file;

@@ -15,7 +15,7 @@ namespace {
 
 struct MonitorSettings {
   LogOption log;
-  std::string params, reference, report;
+  std::string params, reference, report, plots;
   double alarms_per_hour = 0.01;
   double gain = 0;
 };
@@ -88,6 +88,10 @@ int run_monitor(MonitorSettings& s) {
     list.push_back(
         {{"start", c.start}, {"end", c.end}, {"first_joint", c.first_joint}, {"joints", c.joints}, {"peak", c.peak}});
   }
+  if (!s.plots.empty()) {
+    const auto files = host::write_contact_plots(run, stats, thresholds, contacts, s.plots);
+    std::cout << "plots: " << files.size() << " SVG files in " << s.plots << "\n";
+  }
   if (!s.report.empty()) {
     write_json_file(s.report, {{"robot", robot.name},
                                {"data", s.log.data},
@@ -118,6 +122,9 @@ void add_monitor_command(CLI::App& app, Action& run) {
   cmd->add_option("--gain", s->gain,
                   "observer gain K [1/s] with --reference (default: 4 / 20 ms, at most the sample rate)");
   cmd->add_option("--report", s->report, "write thresholds and contacts as JSON");
+  cmd->add_option("--plots", s->plots,
+                  "write SVG plots (gnuplot) of each joint's residual and threshold, contacts shaded, into this "
+                  "directory");
   cmd->callback([s, &run] { run = [s] { return run_monitor(*s); }; });
 }
 

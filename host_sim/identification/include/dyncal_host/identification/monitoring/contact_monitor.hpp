@@ -104,4 +104,11 @@ struct Contact {
 std::vector<Contact> detect_contacts(const ObserverRun& run, const ResidualStatistics& s,
                                      const std::vector<ContactThreshold>& thresholds);
 
+/// dyncal monitor --plots: per joint an SVG of r - mean over time with its threshold (widened where
+/// the joint rests) and the contacts shaded, into `dir` (created), through gnuplot; returns the
+/// files. Throws InputError when the directory cannot be written or gnuplot fails.
+std::vector<std::string> write_contact_plots(const ObserverRun& run, const ResidualStatistics& s,
+                                             const std::vector<ContactThreshold>& thresholds,
+                                             const std::vector<Contact>& contacts, const std::string& dir);
+
 }  // namespace dyncal::host
