@@ -1,8 +1,8 @@
 // dyncal diagnose --plots: SVG plots of the residual and the torque through gnuplot.
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 
+#include "dyncal_host/common/gnuplot.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/diagnosis/diagnose.hpp"
 
@@ -64,10 +64,7 @@ std::vector<std::string> write_diagnose_plots(const DiagnoseResult& r, const std
        << " w l t 'declared model', '' u 1:" << b + 4 << " w l t 'with the effects found'\n";
   }
   gp.close();
-  const std::string cmd = "gnuplot '" + dir + "/plots.gp' 2>'" + dir + "/gnuplot.log'";
-  if (std::system(cmd.c_str()) != 0) {
-    throw InputError("gnuplot failed or is missing (scripts/setup installs gnuplot-nox); see " + dir + "/gnuplot.log");
-  }
+  run_gnuplot(dir);
   return files;
 }
 

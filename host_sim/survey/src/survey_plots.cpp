@@ -2,10 +2,10 @@
 // SVG through gnuplot (as dyncal diagnose --plots).
 #include "dyncal_host/survey/survey_plots.hpp"
 
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 
+#include "dyncal_host/common/gnuplot.hpp"
 #include "dyncal_host/common/input_error.hpp"
 
 namespace dyncal::host::survey {
@@ -126,10 +126,7 @@ std::vector<std::string> write_survey_plots(const nlohmann::json& result, const 
        << "set terminal svg size 900,600 dynamic background rgb 'white' noenhanced\n";
   }
   gp.close();
-  const std::string cmd = "gnuplot '" + dir + "/plots.gp' 2>'" + dir + "/gnuplot.log'";
-  if (std::system(cmd.c_str()) != 0) {
-    throw InputError("gnuplot failed or is missing (scripts/setup installs gnuplot-nox); see " + dir + "/gnuplot.log");
-  }
+  run_gnuplot(dir);
   return files;
 }
 

@@ -58,18 +58,7 @@ class MomentumObserver {
   /// parameters are not a grouping (no standard parameter of their own), K dt outside (0, 1];
   /// rejected_non_finite: a non-finite value. The observer is unchanged unless ok.
   UpdateStatus configure(const ParameterTable& table, const JointVector& gain, Scalar dt) noexcept {
-    return configure(table, gain, dt, JointVector::Zero());
-  }
-  /// As above with a standstill band [rad/s] per joint (all >= 0): the friction terms take qd = 0
-  /// where |qd| is inside it, as identification's friction-sign columns do (a measured velocity's
-  /// sign flickers with its noise at rest, the model's Coulomb torque with it). invalid_argument for
-  /// a negative band.
-  UpdateStatus configure(const ParameterTable& table, const JointVector& gain, Scalar dt,
-                         const JointVector& standstill_band) noexcept {
-    if (!all_finite(gain) || !std::isfinite(dt) || !all_finite(standstill_band))
-      return UpdateStatus::rejected_non_finite;
-    for (int j = 0; j < kJoints; ++j)
-      if (standstill_band[j] < Scalar(0)) return UpdateStatus::invalid_argument;
+    if (!all_finite(gain) || !std::isfinite(dt)) return UpdateStatus::rejected_non_finite;
     for (int j = 0; j < kJoints; ++j) {
       if (!(gain[j] > Scalar(0)) || !(gain[j] * dt <= Scalar(1))) return UpdateStatus::invalid_argument;
     }
@@ -108,7 +97,6 @@ class MomentumObserver {
     phi_ = phi;
     constant_inertia_ = constant_inertia;
     gain_ = gain;
-    band_ = standstill_band;
     dt_ = dt;
     started_ = false;
     residual_.setZero();
@@ -127,9 +115,9 @@ class MomentumObserver {
   UpdateStatus update(const JointVector& q, const JointVector& qd, const JointVector& tau) noexcept {
     return update(q, qd, qd, tau);
   }
-  /// As above with the friction terms at their own velocity qd_friction [rad/s]: a smoothed qd's
-  /// magnitude with a raw velocity's sign, say, whose sign changes when the joint's does (a smoothed
-  /// velocity changes sign up to its window away from a stop or a start).
+  /// As above with the friction terms at their own velocity qd_friction [rad/s]: qd with 0 inside a
+  /// standstill band, say (a measured velocity's sign flickers with its noise at rest, and the
+  /// model's Coulomb torque with it; docs/monitor.md).
   UpdateStatus update(const JointVector& q, const JointVector& qd, const JointVector& qd_friction,
                       const JointVector& tau) noexcept {
     if (!(dt_ > Scalar(0))) return UpdateStatus::invalid_argument;
@@ -163,13 +151,12 @@ class MomentumObserver {
   const JointVector& residual() const noexcept { return residual_; }
   const JointVector& gain() const noexcept { return gain_; }
 
-  /// The model split tau = M(q) qdd + n(q, qd) of the configured table (M: N x N [kg m^2], n [Nm];
-  /// the friction terms at qd with the standstill band's entries 0).
+  /// The model split tau = M(q) qdd + n(q, qd) of the configured table (M: N x N [kg m^2], n [Nm]).
   void model(const JointVector& q, const JointVector& qd, MassMatrix& M, JointVector& n) const noexcept {
     model(q, qd, qd, M, n);
   }
-  /// The same with the friction terms at qd_friction (band applied to it).
-  void model(const JointVector& q, const JointVector& qd, const JointVector& qd_friction_in, MassMatrix& M,
+  /// The same with the friction terms at qd_friction.
+  void model(const JointVector& q, const JointVector& qd, const JointVector& qd_friction, MassMatrix& M,
              JointVector& n) const noexcept {
     Robot::mass_matrix(q, phi_, M);
     M += constant_inertia_;
@@ -177,9 +164,6 @@ class MomentumObserver {
     JointVector n_rb;
     Robot::inverse_dynamics(q, qd, zero, phi_, n_rb);
     n = n_rb;
-    JointVector qd_friction = qd_friction_in;  // 0 inside the standstill band
-    for (int j = 0; j < kJoints; ++j)
-      if (abs_value(qd_friction[j]) < band_[j]) qd_friction[j] = Scalar(0);
     int col = Robot::kNumBase;
     for (int j = 0; j < kJoints; ++j) {
       for (int t = 0; t < kNumTerms; ++t) {
@@ -199,7 +183,6 @@ class MomentumObserver {
 
   /// IdentificationModel's rule: term t has a column on joint j when the model has it, rotor
   /// inertia only where it is separately identifiable.
-  static Scalar abs_value(Scalar x) noexcept { return x < Scalar(0) ? -x : x; }
   static constexpr bool has_column(unsigned model, unsigned t, int j) {
     return (model & t) != 0u && (t != term::rotor_inertia || Robot::rotor_inertia_separate(j));
   }
@@ -241,8 +224,7 @@ class MomentumObserver {
   StandardVector phi_ = StandardVector::Zero();
   MassMatrix constant_inertia_ = MassMatrix::Zero();
   MassMatrix M_prev_ = MassMatrix::Zero();
-  JointVector gain_ = JointVector::Zero(), band_ = JointVector::Zero(), residual_ = JointVector::Zero(),
-              p_hat_ = JointVector::Zero();
+  JointVector gain_ = JointVector::Zero(), residual_ = JointVector::Zero(), p_hat_ = JointVector::Zero();
   JointVector qd_prev_ = JointVector::Zero(), force_prev_ = JointVector::Zero();
   Scalar dt_ = Scalar(0);
   bool started_ = false;

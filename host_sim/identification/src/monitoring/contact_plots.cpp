@@ -1,9 +1,9 @@
 // dyncal monitor --plots: SVG plots of each joint's observer residual with its contact threshold,
 // through gnuplot.
-#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 
+#include "dyncal_host/common/gnuplot.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/identification/monitoring/contact_monitor.hpp"
 
@@ -49,9 +49,7 @@ std::vector<std::string> write_contact_plots(const ObserverRun& run, const Resid
        << " w l lw 2 t 'threshold', '' u 1:(-$" << col + 1 << ") w l lw 2 t ''\n";
   }
   gp.close();
-  const std::string cmd = "gnuplot '" + dir + "/plots.gp' 2>'" + dir + "/gnuplot.log'";
-  if (std::system(cmd.c_str()) != 0)
-    throw InputError("gnuplot failed or is missing (scripts/setup installs gnuplot-nox); see " + dir + "/gnuplot.log");
+  run_gnuplot(dir);
   return files;
 }
 
