@@ -248,8 +248,7 @@ std::vector<Contact> detect_contacts(const ObserverRun& run, const ResidualStati
       }
       if (any && !open) {
         // A new contact, or the last one again within the observer's memory.
-        const bool merge =
-            !out.empty() && out.back().end >= 0 && run.t[k] - out.back().end < memory && out.back().end >= run.t[a];
+        const bool merge = !out.empty() && run.t[k] - out.back().end < memory && out.back().end >= run.t[a];
         if (!merge) {
           Contact c;
           c.start = run.t[k];
@@ -265,8 +264,7 @@ std::vector<Contact> detect_contacts(const ObserverRun& run, const ResidualStati
         for (int j = 0; j < N; ++j) {
           const double e = std::abs(run.r(k, j) - s.mean[static_cast<size_t>(j)]);
           c.peak[static_cast<size_t>(j)] = std::max(c.peak[static_cast<size_t>(j)], e);
-          if (e > thresholds[static_cast<size_t>(j)].value &&
-              std::find(c.joints.begin(), c.joints.end(), j + 1) == c.joints.end())
+          if (e > limit(k, j) && std::find(c.joints.begin(), c.joints.end(), j + 1) == c.joints.end())
             c.joints.push_back(j + 1);
         }
         c.end = run.t[k];
