@@ -365,6 +365,9 @@ TEST(CliErrors, MonitorRefusesBadStatisticsRatesAndGainsWithOneLine) {
       {"monitor" + data + " --params " + params + " --alarms-per-hour -1", "false-alarm rate"},
       {"monitor" + data + " --params " + params + " --reference " + DYNCAL_TX40_DATA + " --gain 6000", "K dt <= 1"},
       {"monitor" + data + " --params " + params + " --gain 100", "--gain sets the observer of --reference"},
+      {"monitor" + data + " --params " + params + " --drive tcp://127.0.0.1:1", "one or the other"},
+      {"monitor --format tx40 --params " + params, "--data LOG is required (or --drive URI)"},
+      {"monitor --format tx40 --params " + params + " --drive tcp://127.0.0.1:1", "127.0.0.1"},
   };
   for (const auto& c : cases) {
     const auto r = run_dyncal(c.args);

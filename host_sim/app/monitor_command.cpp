@@ -4,21 +4,99 @@
 #include <iomanip>
 #include <iostream>
 #include <memory>
+#include <sstream>
 
 #include "commands.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/identification/monitoring/contact_monitor.hpp"
+#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
 #include "dyncal_host/identification/reports/prediction.hpp"
+#include "dyncal_port/modbus_drive.hpp"
 
 namespace dyncal::app {
 namespace {
 
 struct MonitorSettings {
   LogOption log;
-  std::string params, reference, report, plots;
+  std::string params, reference, report, plots, drive;
   double alarms_per_hour = 0.01;
   double gain = 0;
 };
+
+/// Prints the thresholds with their basis; returns them as the report's JSON list.
+nlohmann::json print_thresholds(const MonitorSettings& s, const host::ResidualStatistics& stats,
+                                const std::vector<host::ContactThreshold>& thresholds) {
+  std::cout << "thresholds for " << s.alarms_per_hour << " false alarms per hour (residual statistics of "
+            << (stats.source.empty() ? s.params : stats.source) << ", " << stats.samples
+            << " samples; docs/monitor.md):\n"
+            << "  joint   mean [Nm]    std [Nm]  threshold |r - mean| [Nm]\n";
+  nlohmann::json threshold_list = nlohmann::json::array();
+  for (size_t j = 0; j < thresholds.size(); ++j) {
+    const host::ContactThreshold& c = thresholds[j];
+    std::cout << std::setw(7) << j + 1 << std::setw(12) << std::setprecision(4) << stats.mean[j] << std::setw(12)
+              << stats.std[j] << std::setw(14) << c.value;
+    if (c.peak_bound)
+      std::cout << "  the calibration's own peak: its residual's tails are heavier than Gaussian (Gaussian "
+                << c.gaussian << "); the rate is not established on this joint";
+    std::cout << "\n";
+    threshold_list.push_back({{"joint", j + 1},
+                              {"value", c.value},
+                              {"gaussian", c.gaussian},
+                              {"basis", c.peak_bound ? "calibration peak" : "gaussian"}});
+  }
+  std::cout << "note: the rate holds for motion like the calibration's; where the acceleration jumps (a stop or a "
+               "start without a jerk limit) the residual crosses more often (docs/monitor.md, \"Open\")\n";
+  return threshold_list;
+}
+
+/// --drive: the thresholds into the drive's collision monitor (docs/modbus.md "Collision monitor"),
+/// checked against the drive first: its robot and joints, and its control rate, which must be the
+/// statistics' sample rate (the drive runs the observer at its control rate).
+int write_drive_monitor(const MonitorSettings& s, const host::RobotDescription& robot,
+                        const host::ResidualStatistics& stats) {
+  const host::CompiledRobot& compiled = host::compiled_robot_for(robot);
+  std::string error;
+  auto drive = linux_port::ModbusDrive::connect(s.drive, &error);
+  if (!drive) throw host::InputError(error);
+  linux_port::DriveInfo info;
+  if (drive->read_info(info) != port::PortStatus::ok) throw host::InputError("drive: " + drive->error());
+  if (info.robot_id != compiled.robot_id || info.num_joints != robot.num_joints)
+    throw host::InputError("the drive's robot is not '" + robot.name + "' of the parameter file");
+  linux_port::DriveControlLaw law;
+  if (drive->read_control_law(law) != port::PortStatus::ok) throw host::InputError("drive: " + drive->error());
+  if (!(std::abs(law.control_rate_hz * stats.period - 1.0) <= 0.01)) {
+    std::ostringstream m;
+    m << "the drive's control rate is " << law.control_rate_hz << " Hz, the residual statistics were taken at "
+      << 1.0 / stats.period << " Hz: thresholds hold only at the rate they were measured at (calibrate at the control "
+      << "rate)";
+    throw host::InputError(m.str());
+  }
+  const std::vector<host::ContactThreshold> thresholds = host::contact_thresholds(stats, s.alarms_per_hour);
+  std::cout << "monitor: generalised-momentum observer, K = " << stats.gain << " 1/s (time constant "
+            << std::setprecision(3) << 1e3 / stats.gain << " ms), on the drive at " << std::setprecision(6)
+            << law.control_rate_hz << " Hz\n";
+  const nlohmann::json threshold_list = print_thresholds(s, stats, thresholds);
+  linux_port::DriveMonitor m;
+  m.gain = stats.gain;
+  for (size_t j = 0; j < thresholds.size(); ++j) {
+    m.threshold[j] = thresholds[j].value;
+    m.mean[j] = stats.mean[j];
+    m.band[j] = stats.band[j];
+  }
+  if (drive->write_monitor(m) != port::PortStatus::ok)
+    throw host::InputError("drive: the collision monitor was not written: " + drive->error());
+  std::cout << "written to the drive's collision monitor: it watches the runs started from now on (a collision "
+               "stops the trajectory with fault 5, docs/modbus.md)\n";
+  if (!s.report.empty()) {
+    write_json_file(s.report, {{"robot", robot.name},
+                               {"drive", s.drive},
+                               {"params", s.params},
+                               {"alarms_per_hour", s.alarms_per_hour},
+                               {"statistics", host::residual_statistics_json(stats)},
+                               {"thresholds", threshold_list}});
+  }
+  return 0;
+}
 
 int run_monitor(MonitorSettings& s) {
   const host::ParameterSet params = host::read_parameter_file(s.params);
@@ -46,6 +124,13 @@ int run_monitor(MonitorSettings& s) {
   if (static_cast<int>(stats.std.size()) != robot.num_joints)
     throw host::InputError(s.params + ": the residual statistics are for " + std::to_string(stats.std.size()) +
                            " joints, the robot has " + std::to_string(robot.num_joints));
+  if (!s.drive.empty()) {
+    if (!s.log.data.empty() || !s.plots.empty())
+      throw host::InputError(
+          "--drive sets the drive's collision monitor; --data and --plots read a log: one or the other");
+    return write_drive_monitor(s, robot, stats);
+  }
+  if (s.log.data.empty()) throw host::InputError("--data LOG is required (or --drive URI)");
   const host::ObserverRun run = host::run_observer(robot, s.log.load_log(robot), params, stats.gain, stats.band);
   if (std::abs(run.period - stats.period) > 0.01 * stats.period)
     throw host::InputError("the log is sampled every " + std::to_string(run.period * 1e3) +
@@ -57,26 +142,7 @@ int run_monitor(MonitorSettings& s) {
   std::cout << "monitor: generalised-momentum observer, K = " << stats.gain << " 1/s (time constant "
             << std::setprecision(3) << 1e3 / stats.gain << " ms), " << 1.0 / run.period << " Hz\n";
   for (const auto& n : run.notes) std::cout << "note: " << n << "\n";
-  std::cout << "thresholds for " << s.alarms_per_hour << " false alarms per hour (residual statistics of "
-            << (stats.source.empty() ? s.params : stats.source) << ", " << stats.samples
-            << " samples; docs/monitor.md):\n"
-            << "  joint   mean [Nm]    std [Nm]  threshold |r - mean| [Nm]\n";
-  nlohmann::json threshold_list = nlohmann::json::array();
-  for (size_t j = 0; j < thresholds.size(); ++j) {
-    const host::ContactThreshold& c = thresholds[j];
-    std::cout << std::setw(7) << j + 1 << std::setw(12) << std::setprecision(4) << stats.mean[j] << std::setw(12)
-              << stats.std[j] << std::setw(14) << c.value;
-    if (c.peak_bound)
-      std::cout << "  the calibration's own peak: its residual's tails are heavier than Gaussian (Gaussian "
-                << c.gaussian << "); the rate is not established on this joint";
-    std::cout << "\n";
-    threshold_list.push_back({{"joint", j + 1},
-                              {"value", c.value},
-                              {"gaussian", c.gaussian},
-                              {"basis", c.peak_bound ? "calibration peak" : "gaussian"}});
-  }
-  std::cout << "note: the rate holds for motion like the calibration's; where the acceleration jumps (a stop or a "
-               "start without a jerk limit) the residual crosses more often (docs/monitor.md, \"Open\")\n";
+  const nlohmann::json threshold_list = print_thresholds(s, stats, thresholds);
   std::cout << "contacts: " << contacts.size() << "\n";
   nlohmann::json list = nlohmann::json::array();
   for (const auto& c : contacts) {
@@ -109,9 +175,10 @@ int run_monitor(MonitorSettings& s) {
 
 void add_monitor_command(CLI::App& app, Action& run) {
   auto s = std::make_shared<MonitorSettings>();
-  auto* cmd = app.add_subcommand(
-      "monitor", "find contacts in a log with the calibrated model's generalised-momentum observer (docs/monitor.md)");
-  s->log.add_to(cmd);
+  auto* cmd = app.add_subcommand("monitor",
+                                 "find contacts in a log with the calibrated model's generalised-momentum observer, or "
+                                 "set a drive's collision monitor (docs/monitor.md)");
+  s->log.add_to(cmd, false);
   cmd->add_option("--params", s->params, "the calibrated parameter JSON (dyncal identify --params)")->required();
   cmd->add_option("--alarms-per-hour", s->alarms_per_hour,
                   "false alarms per hour the thresholds allow the whole arm on motion like the calibration's")
@@ -121,6 +188,9 @@ void add_monitor_command(CLI::App& app, Action& run) {
                   "file's, from the log identify fitted)");
   cmd->add_option("--gain", s->gain,
                   "observer gain K [1/s] with --reference (default: 4 / 20 ms, at most the sample rate)");
+  cmd->add_option("--drive", s->drive,
+                  "tcp://HOST:PORT or rtu:DEVICE: write the thresholds into this drive's collision monitor "
+                  "(instead of --data)");
   cmd->add_option("--report", s->report, "write thresholds and contacts as JSON");
   cmd->add_option("--plots", s->plots,
                   "write SVG plots (gnuplot) of each joint's residual and threshold, contacts shaded, into this "

@@ -55,7 +55,20 @@ JointLog verification_run(linux_port::ModbusDrive& drive, const linux_port::Traj
 
 constexpr const char* kFlashedMessage = "flashed, read back and compared: identical";
 
-/// The streamed samples as a log: q and tau, t from seq.
+/// `dir`/dyncal-fault-`run`-YYYYmmddTHHMMSS.csv (local time), with -2, -3 ... before the extension
+/// if that file exists: an earlier fault log is never overwritten.
+std::string fault_log_path(const StreamRun& run) {
+  const std::time_t now = std::time(nullptr);
+  char stamp[32];
+  std::strftime(stamp, sizeof stamp, "%Y%m%dT%H%M%S", std::localtime(&now));
+  const std::string stem = (std::filesystem::path(run.fault_dir) / ("dyncal-fault-" + run.name + "-" + stamp)).string();
+  std::string path = stem + ".csv";
+  for (int k = 2; std::filesystem::exists(path); ++k) path = stem + "-" + std::to_string(k) + ".csv";
+  return path;
+}
+
+}  // namespace
+
 JointLog samples_to_log(const std::vector<port::DriveSample>& samples, double sample_rate_hz, int joints) {
   const Eigen::Index S = static_cast<Eigen::Index>(samples.size());
   JointLog log;
@@ -73,20 +86,6 @@ JointLog samples_to_log(const std::vector<port::DriveSample>& samples, double sa
   log.source = "drive";
   return log;
 }
-
-/// `dir`/dyncal-fault-`run`-YYYYmmddTHHMMSS.csv (local time), with -2, -3 ... before the extension
-/// if that file exists: an earlier fault log is never overwritten.
-std::string fault_log_path(const StreamRun& run) {
-  const std::time_t now = std::time(nullptr);
-  char stamp[32];
-  std::strftime(stamp, sizeof stamp, "%Y%m%dT%H%M%S", std::localtime(&now));
-  const std::string stem = (std::filesystem::path(run.fault_dir) / ("dyncal-fault-" + run.name + "-" + stamp)).string();
-  std::string path = stem + ".csv";
-  for (int k = 2; std::filesystem::exists(path); ++k) path = stem + "-" + std::to_string(k) + ".csv";
-  return path;
-}
-
-}  // namespace
 
 JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory& trajectory, const StreamRun& run,
                     std::ostream* progress, std::uint32_t* lost, double* seconds,

@@ -43,6 +43,7 @@ void refresh_inputs(const SimulatedDrive& d, std::uint16_t* in, long& table_gene
     mm::set_f32(in + mm::kGainKdReg + 2 * j, static_cast<float>(kd[j]));
   }
   in[mm::kPayloadStateReg] = static_cast<std::uint16_t>(d.payload_state());
+  in[mm::kMonitorStateReg] = static_cast<std::uint16_t>(d.monitor_state());
   for (int i = 0; i < 10; ++i) {
     mm::set_f32(in + mm::kPayloadReg + 2 * i, static_cast<float>(d.payload_value()[static_cast<size_t>(i)]));
     mm::set_f32(in + mm::kPayloadStdReg + 2 * i, static_cast<float>(d.payload_std()[static_cast<size_t>(i)]));
@@ -132,8 +133,22 @@ int check_holding(const SimulatedDrive& d, const std::uint16_t* h, int address, 
   }
   if (overlaps(address, count, mm::kUnlockReg, 1) && h[mm::kUnlockReg] != mm::kUnlockKey)
     return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+  // Staging, and the collision monitor's settings (a safety function's): the same rule.
   if (overlaps(address, count, mm::kStagingSizeReg, mm::kHoldingWords - mm::kStagingSizeReg)) {
     if (const int e = staging_rule()) return e;
+  }
+  if (overlaps(address, count, mm::kMonitorGainReg, 2)) {
+    const double k = mm::get_f32(h + mm::kMonitorGainReg);
+    // K dt <= 1, and a velocity window of at most 2 kMonitorMaxHalfWidth + 1 periods.
+    if (!(k == 0 || (k <= control_rate && std::lround(control_rate / k) <= mm::kMonitorMaxHalfWidth)))
+      return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+  }
+  for (int k = 0; k < 2 * mm::kMaxJoints; k += 2) {
+    for (const std::uint16_t reg : {mm::kMonitorThresholdReg, mm::kMonitorMeanReg, mm::kMonitorBandReg}) {
+      if (!overlaps(address, count, static_cast<std::uint16_t>(reg + k), 2)) continue;
+      const float v = mm::get_f32(h + reg + k);
+      if (!std::isfinite(v) || (reg != mm::kMonitorMeanReg && v < 0)) return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+    }
   }
   if (overlaps(address, count, mm::kAckReg, 2)) {
     const std::uint32_t a = mm::get_u32(h + mm::kAckReg);
@@ -169,6 +184,18 @@ int check_holding(const SimulatedDrive& d, const std::uint16_t* h, int address, 
     return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
   }
   return 0;
+}
+
+/// The collision monitor's settings from the holding registers (checked when written).
+void load_monitor(SimulatedDrive& d, const std::uint16_t* h) {
+  MonitorSettings m;
+  m.gain = mm::get_f32(h + mm::kMonitorGainReg);
+  for (int j = 0; j < mm::kMaxJoints; ++j) {
+    m.threshold[static_cast<size_t>(j)] = mm::get_f32(h + mm::kMonitorThresholdReg + 2 * j);
+    m.mean[static_cast<size_t>(j)] = mm::get_f32(h + mm::kMonitorMeanReg + 2 * j);
+    m.band[static_cast<size_t>(j)] = mm::get_f32(h + mm::kMonitorBandReg + 2 * j);
+  }
+  d.set_monitor(m);  // values checked by check_holding: accepted
 }
 
 void load_trajectory(SimulatedDrive& d, const std::uint16_t* h) {
@@ -357,6 +384,7 @@ void ModbusRequestHandler::apply_write(int address, int count) {
   switch (static_cast<mm::Command>(h[mm::kCommandReg])) {
     case mm::Command::start:
       load_trajectory(drive_, h);
+      load_monitor(drive_, h);
       drive_.start();
       started_ = Clock::now();
       mm::set_u32(h + mm::kAckReg, 0);
@@ -364,6 +392,7 @@ void ModbusRequestHandler::apply_write(int address, int count) {
     case mm::Command::identify_payload:
       session_client_ = kNoClient;  // the table write it ends with uses the session
       load_trajectory(drive_, h);
+      load_monitor(drive_, h);
       drive_.start_payload();
       started_ = Clock::now();
       mm::set_u32(h + mm::kAckReg, 0);

@@ -194,6 +194,40 @@ Scenario load_scenario(const std::string& path, const RobotDescription& robot) {
     list("com", s.payload.com.data(), 3);
     list("inertia_about_com", s.payload.inertia.data(), 6);
   }
+  if (j.contains("contacts")) {
+    const json& cs = j["contacts"];
+    if (!cs.is_array()) throw InputError(w + ": contacts must be an array of objects");
+    for (size_t k = 0; k < cs.size(); ++k) {
+      const json& c = cs[k];
+      const std::string where = w + ": contacts[" + std::to_string(k + 1) + "]";
+      if (!c.is_object()) throw InputError(where + " must be an object {link, point, force, start, duration}");
+      ExternalContact e;
+      if (!c.contains("link") || !c["link"].is_number_integer() || c["link"].get<int>() < 1 ||
+          c["link"].get<int>() > s.num_joints)
+        throw InputError(where + ".link must be a link 1.." + std::to_string(s.num_joints));
+      e.link = c["link"].get<int>();
+      auto vec3 = [&](const char* key, std::array<double, 3>& out) {
+        if (!c.contains(key)) return;
+        const json& a = c[key];
+        if (!a.is_array() || a.size() != 3) throw InputError(where + "." + key + " must be 3 numbers");
+        for (size_t i = 0; i < 3; ++i) {
+          if (!a[i].is_number() || !std::isfinite(a[i].get<double>()))
+            throw InputError(where + "." + key + " must be 3 numbers");
+          out[i] = a[i].get<double>();
+        }
+      };
+      vec3("point", e.point);
+      vec3("force", e.force);
+      e.start = number(c, "start", 0.0, where);
+      e.duration = number(c, "duration", 0.0, where);
+      e.stiffness = number(c, "stiffness", 0.0, where);
+      if (!(e.start >= 0) || !(e.duration > 0) || !(e.stiffness >= 0))
+        throw InputError(where + ": start must be >= 0, duration > 0, stiffness >= 0");
+      if (e.force[0] == 0 && e.force[1] == 0 && e.force[2] == 0)
+        throw InputError(where + ".force must not be zero (with a stiffness: its direction)");
+      s.contacts.push_back(e);
+    }
+  }
   if (j.contains("joints")) {
     const json& js = j["joints"];
     if (!js.is_array() || static_cast<int>(js.size()) != s.num_joints)

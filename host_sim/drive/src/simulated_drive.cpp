@@ -168,18 +168,36 @@ void SimulatedDrive::step() {
     return;
   }
   const int n = plant_->num_joints();
+  // The measured torque: the commanded one with the sensor's noise, drawn for every recorded
+  // sample and, while the collision monitor watches, every control period.
+  const bool record = steps_ % steps_per_sample_ == 0;
+  const bool watching = plant_->monitor_state() == modbus_map::MonitorState::watching;
+  JointArray tau_measured{};
+  if (record || watching) {
+    for (int j = 0; j < n; ++j) tau_measured[j] = p.tau_cmd[j] + scenario_.tau_noise_std[j] * normal_(rng_);
+  }
+  if (watching) {
+    const Trip c = plant_->monitor(p, tau_measured);
+    if (c.fault != modbus_map::DriveFault::none) {
+      state_ = modbus_map::DriveState::fault;
+      if (payload_state_ == modbus_map::PayloadState::running) payload_state_ = modbus_map::PayloadState::not_written;
+      fault_ = c.fault;
+      fault_joint_ = c.joint + 1;
+      fault_value_ = c.value;
+      return;
+    }
+  }
   for (int j = 0; j < n; ++j) error_sq_[j] += (p.tau_cmd[j] - p.tau_ff[j]) * (p.tau_cmd[j] - p.tau_ff[j]);
   ++error_n_;
   // Record.
   const bool payload = payload_state_ == modbus_map::PayloadState::running;
-  if (steps_ % steps_per_sample_ == 0) {
-    JointArray tau_measured{}, r{};
+  if (record) {
+    JointArray r{};
     port::DriveSample sample{};
     sample.seq = produced_++;
     PlantSample exact;
     exact.t = time_;
     for (int j = 0; j < n; ++j) {
-      tau_measured[j] = p.tau_cmd[j] + scenario_.tau_noise_std[j] * normal_(rng_);
       // The sensor's variance (drive.json tau_noise_std); its float32 register's resolution at least.
       const double resolution = 6e-8 * std::max(1.0, std::fabs(tau_measured[j]));
       r[j] = std::max(scenario_.tau_noise_std[j] * scenario_.tau_noise_std[j], resolution * resolution);
@@ -272,6 +290,28 @@ void SimulatedDrive::set_plant_parameters(const std::vector<double>& phi_standar
 void SimulatedDrive::fix_gains(const JointArray& kp, const JointArray& kd) {
   plant_->fix_gains(kp, kd);
   gains_fixed_ = true;
+}
+
+std::string SimulatedDrive::set_monitor(const MonitorSettings& m) {
+  if (state_ == modbus_map::DriveState::playing) return "the collision monitor is set while no trajectory plays";
+  return plant_->set_monitor(m, control_period());
+}
+
+modbus_map::MonitorState SimulatedDrive::monitor_state() const {
+  return plant_->monitor_state();
+}
+
+JointArray SimulatedDrive::monitor_residual() const {
+  return plant_->monitor_residual();
+}
+
+JointArray SimulatedDrive::monitor_widening() const {
+  return plant_->monitor_widening();
+}
+
+JointArray SimulatedDrive::contact_torque(const JointArray& q, int link, const std::array<double, 3>& point,
+                                          const std::array<double, 3>& force) const {
+  return plant_->contact_torque(q, link, point, force);
 }
 
 JointArray SimulatedDrive::kp() const {

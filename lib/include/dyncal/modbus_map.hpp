@@ -30,8 +30,10 @@ inline constexpr int kMaxHarmonics = 8;
 /// 4: up to 7 joints (model error and coefficients sized for 7; ring samples packed for the
 /// drive's num_joints, as many per block as fit). 5: the `unlock` register and the `reset`
 /// command (access and state rules, docs/modbus.md "Access and states"). 7: the identify_payload
-/// command and the payload registers (docs/payload.md "On the drive").
-inline constexpr std::uint16_t kMapVersion = 7;
+/// command and the payload registers (docs/payload.md "On the drive"). 8: the collision monitor
+/// (fault 5 collision, monitor_state, the monitor_* holding registers; docs/monitor.md "On the
+/// drive").
+inline constexpr std::uint16_t kMapVersion = 8;
 
 /// Key that, written to `unlock`, opens a staging session for the writing connection.
 inline constexpr std::uint16_t kUnlockKey = 0xCA1B;
@@ -85,6 +87,9 @@ enum class DriveFault : std::uint16_t {
   /// No complete request from any client for the drive's watchdog time while playing: the host is
   /// gone, the trajectory stops (fault_joint 0, fault_value the silence in seconds).
   communication_lost = 4,
+  /// The collision monitor's residual left its threshold (docs/monitor.md "On the drive"):
+  /// fault_joint the joint furthest beyond it, fault_value its r - mean [Nm].
+  collision = 5,
 };
 
 constexpr const char* to_string(DriveFault f) noexcept {
@@ -99,6 +104,8 @@ constexpr const char* to_string(DriveFault f) noexcept {
       return "velocity limit";
     case DriveFault::communication_lost:
       return "communication lost";
+    case DriveFault::collision:
+      return "collision";
   }
   return "unknown fault";
 }
@@ -122,6 +129,17 @@ enum class PayloadState : std::uint16_t {
   written = 2,  ///< the run ended, the mass was determined: the active table holds the loaded model
   /// the run ended without a determined positive mass, or was stopped or tripped: the table unchanged
   not_written = 3,
+};
+
+/// The longest velocity window of a drive's collision monitor: 2 * 64 + 1 control periods (lib/
+/// centred_slope.hpp, D = round(1 / (K dt)) <= 64: K >= control_rate / 64.5).
+inline constexpr int kMonitorMaxHalfWidth = 64;
+
+/// The collision monitor of the run started last (input register `monitor_state`).
+enum class MonitorState : std::uint16_t {
+  off = 0,       ///< monitor_gain 0 when the run started
+  watching = 1,  ///< the observer runs on the active table
+  refused = 2,   ///< the observer cannot take the active table's model: the run is not watched
 };
 
 // --- input registers (function code 04), read-only
@@ -160,7 +178,8 @@ constexpr int samples_per_block(int joints) noexcept {
 inline constexpr std::uint16_t kPayloadStateReg = kRingReg + kRingWords;  // u16 PayloadState
 inline constexpr std::uint16_t kPayloadReg = kPayloadStateReg + 1;        // f32[10] XX..M, NaN: not determined
 inline constexpr std::uint16_t kPayloadStdReg = kPayloadReg + 20;         // f32[10] their std
-inline constexpr std::uint16_t kInputWords = kPayloadStdReg + 20;
+inline constexpr std::uint16_t kMonitorStateReg = kPayloadStdReg + 20;    // u16 MonitorState
+inline constexpr std::uint16_t kInputWords = kMonitorStateReg + 1;
 
 // --- holding registers (function codes 03, 06, 16, 23)
 inline constexpr std::uint16_t kCommandReg = 0;        // u16 Command
@@ -173,9 +192,13 @@ inline constexpr std::uint16_t kPeriodsReg = 9;        // u16 periods to play, 1
 inline constexpr std::uint16_t kCoefficientsReg = 10;  // f32[kMaxJoints][1 + 2 * 8]: q0, a_1..a_8, b_1..b_8
 inline constexpr int kCoefficientsPerJoint = 1 + 2 * kMaxHarmonics;
 inline constexpr std::uint16_t kCoefficientWords = 2 * kMaxJoints * kCoefficientsPerJoint;
-inline constexpr std::uint16_t kStagingSizeReg = 300;   // u16 bytes of the staged table
-inline constexpr std::uint16_t kStagingTableReg = 301;  // bytes, kTableMaxBytes
-inline constexpr std::uint16_t kHoldingWords = kStagingTableReg + kTableWords;
+inline constexpr std::uint16_t kStagingSizeReg = 300;                             // u16 bytes of the staged table
+inline constexpr std::uint16_t kStagingTableReg = 301;                            // bytes, kTableMaxBytes
+inline constexpr std::uint16_t kMonitorGainReg = kStagingTableReg + kTableWords;  // f32 K [1/s], 0: off
+inline constexpr std::uint16_t kMonitorThresholdReg = kMonitorGainReg + 2;        // f32[kMaxJoints] [Nm]
+inline constexpr std::uint16_t kMonitorMeanReg = kMonitorThresholdReg + 2 * kMaxJoints;  // f32[kMaxJoints] [Nm]
+inline constexpr std::uint16_t kMonitorBandReg = kMonitorMeanReg + 2 * kMaxJoints;       // f32[kMaxJoints] [rad/s]
+inline constexpr std::uint16_t kHoldingWords = kMonitorBandReg + 2 * kMaxJoints;
 
 static_assert(kCoefficientsReg + kCoefficientWords <= kStagingSizeReg, "holding fields overlap");
 static_assert(kModelErrorReg + 2 * kMaxJoints <= kActiveTableSizeReg, "input fields overlap");
@@ -187,7 +210,7 @@ static_assert(kRingWords <= 125, "one ring block must fit one Modbus read");
 static_assert(samples_per_block(kMaxJoints) >= 2, "a block carries at least two samples");
 
 inline constexpr Field kRegisterMap[] = {
-    {"map_version", Bank::input, kMapVersionReg, 1, Type::u16, "-", "register map version (7)"},
+    {"map_version", Bank::input, kMapVersionReg, 1, Type::u16, "-", "register map version (8)"},
     {"num_joints", Bank::input, kNumJointsReg, 1, Type::u16, "-", "joints of the arm"},
     {"robot_id", Bank::input, kRobotIdReg, 2, Type::u32, "-", "generated kRobotId of the drive's robot"},
     {"active_model_id", Bank::input, kActiveModelIdReg, 2, Type::u32, "-", "model id of the active table"},
@@ -205,10 +228,12 @@ inline constexpr Field kRegisterMap[] = {
     {"active_table", Bank::input, kActiveTableReg, kTableWords, Type::bytes, "-",
      "active parameter table, 2 bytes per register (first byte high)"},
     {"fault", Bank::input, kFaultReg, 1, Type::u16, "-",
-     "why the drive stopped: 0 none, 1 non-finite q or qd, 2 position limit, 3 velocity limit"},
+     "why the drive stopped: 0 none, 1 non-finite q or qd, 2 position limit, 3 velocity limit, 4 communication "
+     "lost, 5 collision"},
     {"fault_joint", Bank::input, kFaultJointReg, 1, Type::u16, "-", "joint that tripped (1-based; 0 none)"},
-    {"fault_value", Bank::input, kFaultValueReg, 2, Type::f32, "rad, rad/s",
-     "the measured q (position limit) or qd (velocity limit) of that joint at the trip"},
+    {"fault_value", Bank::input, kFaultValueReg, 2, Type::f32, "rad, rad/s, s, Nm",
+     "the measured q (position limit) or qd (velocity limit) of that joint at the trip; the silence "
+     "(communication lost); the observer's r - mean (collision)"},
     {"control_rate", Bank::input, kControlRateReg, 2, Type::f32, "Hz",
      "rate of the control loop (PD plus feed-forward) and of its zero-order hold"},
     {"gain_kp", Bank::input, kGainKpReg, 2 * kMaxJoints, Type::f32, "Nm/rad",
@@ -225,6 +250,9 @@ inline constexpr Field kRegisterMap[] = {
      "origin); NaN where the run does not determine it"},
     {"payload_std", Bank::input, kPayloadStdReg, 20, Type::f32, "as payload",
      "standard deviation of each payload parameter (NaN where not determined)"},
+    {"monitor_state", Bank::input, kMonitorStateReg, 1, Type::u16, "-",
+     "collision monitor of the run started last: 0 off, 1 watching, 2 refused (the observer cannot take the "
+     "active table)"},
     {"command", Bank::holding, kCommandReg, 1, Type::u16, "-",
      "1 start, 2 stop, 3 commit table, 4 reset a fault, 5 start and identify the payload; reads 0"},
     {"unlock", Bank::holding, kUnlockReg, 1, Type::u16, "-",
@@ -239,6 +267,14 @@ inline constexpr Field kRegisterMap[] = {
     {"staging_size", Bank::holding, kStagingSizeReg, 1, Type::u16, "bytes", "size of the staged table"},
     {"staging_table", Bank::holding, kStagingTableReg, kTableWords, Type::bytes, "-",
      "staging bank for the next table, 2 bytes per register (first byte high)"},
+    {"monitor_gain", Bank::holding, kMonitorGainReg, 2, Type::f32, "1/s",
+     "collision monitor: observer gain K, K / control_rate <= 1; 0 off (taken at the next start)"},
+    {"monitor_threshold", Bank::holding, kMonitorThresholdReg, 2 * kMaxJoints, Type::f32, "Nm",
+     "per joint: alarm when |r - mean| exceeds it (plus the table's |Fc| while the joint rests); 0 not watched"},
+    {"monitor_mean", Bank::holding, kMonitorMeanReg, 2 * kMaxJoints, Type::f32, "Nm",
+     "per joint: the residual's mean on contact-free motion"},
+    {"monitor_band", Bank::holding, kMonitorBandReg, 2 * kMaxJoints, Type::f32, "rad/s",
+     "per joint: friction standstill band (|qd| below it: no friction velocity)"},
 };
 
 /// The field that contains register `address` of `bank`, or nullptr (an illegal address).

@@ -143,6 +143,7 @@ std::string describe_fault(const DriveInfo& info) {
   }
   const char* what = info.fault == mm::DriveFault::position_limit   ? "q = %.4g rad"
                      : info.fault == mm::DriveFault::velocity_limit ? "qd = %.4g rad/s"
+                     : info.fault == mm::DriveFault::collision      ? "residual r - mean = %.4g Nm"
                                                                     : nullptr;
   char value[48] = "";
   if (what) std::snprintf(value, sizeof value, what, info.fault_value);
@@ -218,7 +219,7 @@ port::PortStatus ModbusDrive::identify_payload() {
 }
 
 port::PortStatus ModbusDrive::read_payload(DrivePayload& payload) {
-  constexpr int kWords = mm::kInputWords - mm::kPayloadStateReg;
+  constexpr int kWords = mm::kPayloadStdReg + 20 - mm::kPayloadStateReg;
   std::uint16_t r[kWords];
   if (const auto st = read_input(mm::kPayloadStateReg, kWords, r); st != port::PortStatus::ok) return st;
   payload.state = static_cast<mm::PayloadState>(r[0]);
@@ -226,6 +227,28 @@ port::PortStatus ModbusDrive::read_payload(DrivePayload& payload) {
     payload.value[static_cast<size_t>(i)] = mm::get_f32(r + (mm::kPayloadReg - mm::kPayloadStateReg) + 2 * i);
     payload.std[static_cast<size_t>(i)] = mm::get_f32(r + (mm::kPayloadStdReg - mm::kPayloadStateReg) + 2 * i);
   }
+  return port::PortStatus::ok;
+}
+
+port::PortStatus ModbusDrive::write_monitor(const DriveMonitor& m) {
+  constexpr int kWords = mm::kHoldingWords - mm::kMonitorGainReg;
+  std::uint16_t r[kWords] = {};
+  mm::set_f32(r, static_cast<float>(m.gain));
+  for (int j = 0; j < mm::kMaxJoints; ++j) {
+    const auto i = static_cast<size_t>(j);
+    mm::set_f32(r + (mm::kMonitorThresholdReg - mm::kMonitorGainReg) + 2 * j, static_cast<float>(m.threshold[i]));
+    mm::set_f32(r + (mm::kMonitorMeanReg - mm::kMonitorGainReg) + 2 * j, static_cast<float>(m.mean[i]));
+    mm::set_f32(r + (mm::kMonitorBandReg - mm::kMonitorGainReg) + 2 * j, static_cast<float>(m.band[i]));
+  }
+  const std::uint16_t key = mm::kUnlockKey;
+  if (const auto st = write_holding(mm::kUnlockReg, 1, &key); st != port::PortStatus::ok) return st;
+  return write_holding(mm::kMonitorGainReg, kWords, r);
+}
+
+port::PortStatus ModbusDrive::read_monitor_state(mm::MonitorState& state) {
+  std::uint16_t r = 0;
+  if (const auto st = read_input(mm::kMonitorStateReg, 1, &r); st != port::PortStatus::ok) return st;
+  state = static_cast<mm::MonitorState>(r);
   return port::PortStatus::ok;
 }
 

@@ -2,8 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
+#include "dyncal/centred_slope.hpp"
 #include "dyncal/contact_threshold.hpp"
+#include "dyncal/friction_uncertainty.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/identification/logs/uniform_grid.hpp"
 #include "dyncal_host/identification/pipeline/compiled_robot.hpp"
@@ -12,6 +15,10 @@
 
 namespace dyncal::host {
 namespace {
+
+/// The longest velocity window run_observer takes: 2 * 512 + 1 samples.
+constexpr int kMaxSlopeHalfWidth = 512;
+using Slope = CentredSlope<double, kMaxRobotDescriptionJoints, kMaxSlopeHalfWidth>;
 
 /// Samples at the start of a segment that the statistics skip: 5 time constants.
 Eigen::Index start_up(double gain, double period) {
@@ -58,40 +65,36 @@ ObserverRun run_observer(const RobotDescription& robot, JointLog log, const Para
   const std::vector<std::pair<Eigen::Index, Eigen::Index>> segments = log.segments();
   if (!log.has_qd) {
     // The velocity at sample m: the slope of the least-squares line through q_{m-D} .. q_{m+D}
-    // (symmetric: q's curvature does not bias it), D = 1 / (K dt) samples, so that the observer
+    // (lib/ centred_slope.hpp, as a drive runs it), D = 1 / (K dt) samples, so that the observer
     // takes q, qd and tau of one instant, D dt after it online. A difference of neighbouring
     // samples carries the encoder's quantisation straight into p = M qd and the residual (K M a
-    // quantum per period, in sparse impulses on a slow joint: tails far heavier than Gaussian);
-    // over 2D + 1 samples that noise is about (2D + 1)^1.5 / 2 times smaller. Where the
-    // acceleration jumps within the window (a stop without jerk limit) the slope is off by about
-    // the jump times D dt / 4, and the residual with it (docs/monitor.md).
+    // quantum per period, in sparse impulses on a slow joint: tails far heavier than Gaussian).
     const Eigen::Index D = std::max<Eigen::Index>(1, std::lround(1.0 / (run.gain * run.period)));
+    if (D > kMaxSlopeHalfWidth)
+      throw InputError("observer gain " + std::to_string(run.gain) + " 1/s: its velocity window of " +
+                       std::to_string(2 * D + 1) + " samples is longer than " +
+                       std::to_string(2 * kMaxSlopeHalfWidth + 1) + "; a gain of at least " +
+                       std::to_string(1.0 / (kMaxSlopeHalfWidth * run.period)) + " 1/s");
     run.delay = static_cast<double>(D) * run.period;
-    const double norm = static_cast<double>(D * (D + 1) * (2 * D + 1)) / 3.0 * run.period;
     qd = Eigen::MatrixXd::Zero(S, N);
+    run.still = Eigen::MatrixXi::Zero(S, N);
+    const auto slope = std::make_unique<Slope>();  // lib/ centred_slope.hpp, as a drive runs it
+    Slope::Vec q_in = Slope::Vec::Zero(), tau_in = Slope::Vec::Zero(), q_c, qd_c, tau_c;
+    Slope::Flags still;
     for (const auto& [a, b] : segments) {
       if (b - a < 2 * D + 3) continue;
-      for (Eigen::Index m = a + D; m < b - D; ++m) {
-        Eigen::RowVectorXd slope = Eigen::RowVectorXd::Zero(N);
-        for (Eigen::Index i = -D; i <= D; ++i) slope += static_cast<double>(i) * log.q.row(m + i);
-        qd.row(m) = slope / norm;
+      slope->reset(static_cast<int>(D), run.period, N);
+      for (Eigen::Index m = a; m < b; ++m) {
+        q_in.head(N) = log.q.row(m).transpose();
+        tau_in.head(N) = log.tau.row(m).transpose();
+        const UpdateStatus st = slope->update(q_in, tau_in, q_c, qd_c, tau_c, still);
+        if (st == UpdateStatus::rejected_non_finite)
+          throw InputError("sample " + std::to_string(m + 1) + " of the log is not finite");
+        if (st != UpdateStatus::ok) continue;
+        qd.row(m - D) = qd_c.head(N).transpose();
+        run.still.row(m - D) = still.head(N).transpose();
       }
       run.segments.emplace_back(a + D, b - D);
-    }
-    run.still = Eigen::MatrixXi::Zero(S, N);
-    for (const auto& [a, b] : run.segments) {
-      for (int j = 0; j < N; ++j) {
-        // Steps without a count among the window's 2D: a running count over the segment.
-        Eigen::Index stalled = 0;
-        for (Eigen::Index i = a - D + 1; i <= a + D; ++i) stalled += log.q(i, j) == log.q(i - 1, j);
-        for (Eigen::Index m = a; m < b; ++m) {
-          if (m > a) {
-            stalled += log.q(m + D, j) == log.q(m + D - 1, j);
-            stalled -= log.q(m - D, j) == log.q(m - D - 1, j);
-          }
-          run.still(m, j) = stalled > 0;
-        }
-      }
     }
     run.notes.push_back("velocity: the slope of q over " + std::to_string(2 * D + 1) +
                         " samples (the log has none), centred: an online observer runs " + std::to_string(D) +
@@ -109,7 +112,17 @@ ObserverRun run_observer(const RobotDescription& robot, JointLog log, const Para
     if (static_cast<int>(band.size()) != N) throw InputError("the standstill band is not one per joint");
     run.band = band;
   } else {
-    const Eigen::VectorXd noise = white_noise_std(qd, run.segments);
+    // The velocity one sample resolves: a backward difference of q (the log's qd when it has one),
+    // whose noise holds the encoder's quantisation and the motion's own fast fluctuation (a PD loop
+    // answering that quantisation) that the slope over the window smooths away: where the true
+    // velocity may cross 0 within it, the friction's sign is unknown.
+    Eigen::MatrixXd qd_sample = qd;
+    if (!log.has_qd) {
+      qd_sample = Eigen::MatrixXd::Zero(S, N);
+      for (const auto& [a, b] : run.segments)
+        for (Eigen::Index m = a; m < b; ++m) qd_sample.row(m) = (log.q.row(m) - log.q.row(m - 1)) / run.period;
+    }
+    const Eigen::VectorXd noise = white_noise_std(qd_sample, run.segments);
     for (int j = 0; j < N; ++j) run.band.push_back(kStandstillQuantile * noise[j]);
   }
   Eigen::MatrixXd qd_friction = qd;
@@ -127,6 +140,24 @@ ObserverRun run_observer(const RobotDescription& robot, JointLog log, const Para
       if (params.names[i] == "Fc" + std::to_string(j + 1)) fc = std::abs(params.values[static_cast<Eigen::Index>(i)]);
     run.static_friction.push_back(fc);
   }
+  // The friction the model cannot know (lib/ friction_uncertainty.hpp), per segment as a drive
+  // restarts it.
+  run.friction_weight = Eigen::MatrixXd::Zero(S, N);
+  {
+    using Uncertainty = FrictionUncertainty<double, kMaxRobotDescriptionJoints>;
+    Uncertainty uncertainty;
+    Uncertainty::Vec v = Uncertainty::Vec::Zero(), w;
+    Uncertainty::Flags still = Uncertainty::Flags::Zero();
+    for (const auto& [a, b] : run.segments) {
+      uncertainty.reset(run.gain, run.period, N);
+      for (Eigen::Index m = a; m < b; ++m) {
+        v.head(N) = qd_friction.row(m).transpose();
+        still.head(N) = run.still.row(m).transpose();
+        uncertainty.update(v, still, w);
+        run.friction_weight.row(m) = w.head(N).transpose();
+      }
+    }
+  }
   run.r = Eigen::MatrixXd::Zero(S, N);
   for (const auto& [a, b] : run.segments)
     compiled.momentum_residual(table, run.gain, run.period, log.q, qd, qd_friction, log.tau, a, b, run.r);
@@ -142,16 +173,21 @@ ResidualStatistics residual_statistics(const ObserverRun& run, const std::string
   s.gain = run.gain;
   s.period = run.period;
   s.band = run.band;
+  // Samples where the model knows the friction: 5 time constants after the joint last rested or
+  // reversed (friction_weight below e^-5, the start-up's rule), as the threshold, widened by the
+  // friction the model cannot know, is to hold for the rest.
+  const double forgotten = std::exp(-5.0);
+  const auto friction_known = [&](Eigen::Index k, int j) { return run.friction_weight(k, j) < forgotten; };
   for (int j = 0; j < N; ++j) {
     double sum = 0, sq = 0, dsq = 0;
     Eigen::Index n = 0, differences = 0;
     for (const auto& [a, b] : run.segments) {
       for (Eigen::Index k = a + skip; k < b; ++k) {
-        if (run.still(k, j)) continue;
+        if (!friction_known(k, j)) continue;
         sum += run.r(k, j);
         sq += run.r(k, j) * run.r(k, j);
         ++n;
-        if (k > a + skip && !run.still(k - 1, j)) {
+        if (k > a + skip && friction_known(k - 1, j)) {
           dsq += (run.r(k, j) - run.r(k - 1, j)) * (run.r(k, j) - run.r(k - 1, j));
           ++differences;
         }
@@ -165,9 +201,13 @@ ResidualStatistics residual_statistics(const ObserverRun& run, const std::string
     s.mean.push_back(mean);
     s.std.push_back(std::sqrt(std::max(0.0, sq / static_cast<double>(n) - mean * mean)));
     s.difference_std.push_back(std::sqrt(dsq / static_cast<double>(differences)));
+    // The peak the unwidened threshold would have to clear: detect_contacts widens it by the
+    // friction the model cannot know, so each sample counts by what exceeds that.
+    const double fc = run.static_friction.empty() ? 0.0 : run.static_friction[static_cast<size_t>(j)];
     double peak = 0;
     for (const auto& [a, b] : run.segments)
-      for (Eigen::Index k = a + skip; k < b; ++k) peak = std::max(peak, std::abs(run.r(k, j) - mean));
+      for (Eigen::Index k = a + skip; k < b; ++k)
+        peak = std::max(peak, std::abs(run.r(k, j) - mean) - run.friction_weight(k, j) * fc);
     s.peak.push_back(peak);
   }
   return s;
@@ -231,7 +271,7 @@ std::vector<Contact> detect_contacts(const ObserverRun& run, const ResidualStati
   const double memory = 1.0 / run.gain;
   const auto limit = [&](Eigen::Index k, int j) {
     const size_t i = static_cast<size_t>(j);
-    return thresholds[i].value + (run.still(k, j) ? run.static_friction[i] : 0.0);
+    return thresholds[i].value + run.friction_weight(k, j) * run.static_friction[i];
   };
   std::vector<Contact> out;
   for (const auto& [a, b] : run.segments) {

@@ -25,7 +25,7 @@ std::vector<std::string> write_contact_plots(const ObserverRun& run, const Resid
         for (Eigen::Index j = 0; j < N; ++j) {
           const size_t i = static_cast<size_t>(j);
           data << " " << run.r(k, j) - s.mean[i] << " "
-               << thresholds[i].value + (run.still(k, j) ? run.static_friction[i] : 0.0);
+               << thresholds[i].value + run.friction_weight(k, j) * run.static_friction[i];
         }
         data << "\n";
       }

@@ -52,6 +52,15 @@ struct DrivePayload {
   std::array<double, 10> std{};
 };
 
+/// The drive's collision monitor (registers monitor_gain .. monitor_band; docs/modbus.md
+/// "Collision monitor"): observer gain K [1/s] (0: off) and per joint (num_joints used) the
+/// threshold on |r - mean| [Nm] (0: not watched), the residual's mean [Nm] and the friction terms'
+/// standstill band [rad/s].
+struct DriveMonitor {
+  double gain = 0;
+  std::array<double, modbus_map::kMaxJoints> threshold{}, mean{}, band{};
+};
+
 /// The drive's fault in words: "joint 2 velocity limit: qd = 3.51 rad/s at t = 1.234 s".
 std::string describe_fault(const DriveInfo& info);
 
@@ -94,6 +103,13 @@ class ModbusDrive final : public port::SampleSource, public port::ParameterStore
   port::PortStatus identify_payload();
   /// Reads the payload registers. Errors: transport_error, rejected.
   port::PortStatus read_payload(DrivePayload& payload);
+  /// Writes the collision monitor's settings (opens a staging session first: a safety function's
+  /// settings are written as a table is); the drive takes them at its next start. Errors:
+  /// transport_error, rejected (playing, in fault, or a value the drive refuses: a gain outside
+  /// [control rate / 64.5, control rate], a negative or non-finite threshold or band).
+  port::PortStatus write_monitor(const DriveMonitor& monitor);
+  /// Reads monitor_state: the collision monitor of the run started last. Errors: transport_error, rejected.
+  port::PortStatus read_monitor_state(modbus_map::MonitorState& state);
   /// Clears a drive fault (the only way to): the drive becomes idle. A no-op in any other state.
   /// Errors: transport_error, rejected.
   port::PortStatus reset();

@@ -127,6 +127,10 @@ struct StreamRun {
   bool identify_payload = false;
 };
 
+/// Drive samples as a log: q [rad] and tau [Nm] of `joints` joints, t = seq / sample_rate_hz [s];
+/// no velocity (the drive's backward difference is not kept: the pipeline differentiates q).
+JointLog samples_to_log(const std::vector<port::DriveSample>& samples, double sample_rate_hz, int joints);
+
 /// Streams one run of `trajectory` from the drive into a log (q and tau; t from seq), handing each
 /// sample to `on_sample` (if set) as it arrives. Throws InputError on transport errors or lost
 /// samples, and DriveFaultError when the drive stops on a fault: the samples recorded before it are

@@ -46,6 +46,19 @@ struct PlantStep {
   JointArray tau_model{};
 };
 
+/// The drive's collision monitor (docs/monitor.md "On the drive"): lib/'s momentum observer on the
+/// active table at the control rate, fed the measured q and torque through lib/'s centred slope
+/// (D = round(1 / (K dt)) samples: it judges the state D control periods back). An alarm when
+/// |r_j - mean_j| exceeds threshold_j, widened by the active table's |Fc_j| where joint j's
+/// encoder stalled within the slope's window (static friction); the thresholds come from the
+/// calibration's residual statistics (dyncal monitor, contact_monitor.hpp), never tuned here.
+struct MonitorSettings {
+  double gain = 0;         ///< K [1/s] on every joint; 0: the monitor is off
+  JointArray threshold{};  ///< [Nm]; 0: the joint is not watched
+  JointArray mean{};       ///< the residual's mean on contact-free motion [Nm]
+  JointArray band{};       ///< the friction terms' standstill band [rad/s]: |qd| below it counts as 0
+};
+
 /// The drive's payload estimate (docs/payload.md "On the drive"): the last link's 10 standard
 /// parameters dphi [XX XY XZ YY YZ ZZ (kg m^2) MX MY MZ (kg m) M (kg)], link frame, about its origin.
 struct PayloadFit {
@@ -96,6 +109,25 @@ class DrivePlant {
   /// `active` with the payload dphi on the last link: its base parameters moved by K_N dphi
   /// (Gautier's base map of link N), every other value kept.
   virtual ParameterTable loaded_table(const ParameterTable& active, const std::array<double, 10>& dphi) const = 0;
+  /// Turns the collision monitor on (gain > 0) or off for the runs begun after it (dt: the control
+  /// period [s]). An empty string when taken, else why not (K dt above 1, a velocity window longer
+  /// than the drive's, a threshold, mean or band not finite or negative). A run whose active table
+  /// the observer cannot take is not watched: monitor_state() refused.
+  virtual std::string set_monitor(const MonitorSettings& m, double dt) = 0;
+  /// One control period's monitor step with the period's measured torque [Nm] (after step(), which
+  /// did not trip): a collision trip (joint 0-based, value r_j - mean_j [Nm]) or none.
+  virtual Trip monitor(const PlantStep& p, const JointArray& tau_measured) = 0;
+  /// The observer's last residual r - mean [Nm] (0 while the monitor is off or filling its window).
+  virtual JointArray monitor_residual() const = 0;
+  /// What the last step widened each threshold by: the friction the model cannot know [Nm]
+  /// (lib/ friction_uncertainty.hpp's weight times the active table's |Fc_j|).
+  virtual JointArray monitor_widening() const = 0;
+  /// Whether the run begun last is watched (refused: the observer cannot take the active table).
+  virtual modbus_map::MonitorState monitor_state() const = 0;
+  /// tau = J_p(q)^T F [Nm] of the force F [N, base frame] on `point` [m, link frame] of the 1-based
+  /// `link` at q [rad] (contact_force.hpp, with this robot's generated joint origins).
+  virtual JointArray contact_torque(const JointArray& q, int link, const std::array<double, 3>& point,
+                                    const std::array<double, 3>& force) const = 0;
   virtual void fix_gains(const JointArray& kp, const JointArray& kd) = 0;
   virtual JointArray kp() const = 0;
   virtual JointArray kd() const = 0;

@@ -9,12 +9,16 @@
 #include <limits>
 #include <optional>
 
+#include "dyncal/centred_slope.hpp"
 #include "dyncal/effect_terms.hpp"
+#include "dyncal/friction_uncertainty.hpp"
 #include "dyncal/identification_model.hpp"
+#include "dyncal/momentum_observer.hpp"
 #include "dyncal/payload_estimator.hpp"
 #include "dyncal/table_check.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/model_terms.hpp"
+#include "dyncal_host/drive/contact_force.hpp"
 #include "dyncal_host/drive/drive_plant.hpp"
 
 namespace dyncal::host {
@@ -23,6 +27,7 @@ namespace dyncal::host {
 struct GeneratedRobotData {
   const double* nominal_standard;                    ///< kNominalStandard [kNumStandard]
   const double* rotor_inertia_absorbed_coefficient;  ///< kRotorInertiaAbsorbedCoefficient [kNumJoints]
+  JointOrigins origins;                              ///< kJointOrigins (contact forces)
 };
 
 template <class Robot>
@@ -111,7 +116,10 @@ class DrivePlantOf final : public DrivePlant {
     for (int i = 0; i < Robot::kNumStandard; ++i) phi_true_[i] = phi_standard[static_cast<size_t>(i)];
   }
 
-  void set_active(const ParameterTable& table) override { ops_ = *find_ops(table.model_id); }
+  void set_active(const ParameterTable& table) override {
+    ops_ = *find_ops(table.model_id);
+    active_ = table;
+  }
 
   void begin(const DriveTrajectory& trajectory, const Scenario& scenario, bool gains_fixed, double dt) override {
     payload_running_ = false;  // begin_payload() after begin() turns it on for the run
@@ -120,6 +128,8 @@ class DrivePlantOf final : public DrivePlant {
     q_ = q_d;
     qd_ = qd_d;
     q_meas_prev_ = quantise(q_) - qd_d * dt;
+    anchors_.assign(scenario.contacts.size(), std::nullopt);
+    begin_monitor(dt);
     if (gains_fixed) return;
     // PD gains from the arm's inertia at the start pose, M_jj(q0) + Ia_j: natural frequency
     // bandwidth_hz, damping zeta. Capped for stability where the arm is light: the loop closes on
@@ -184,7 +194,11 @@ class DrivePlantOf final : public DrivePlant {
       ops_.feedforward(active, q_meas, qd_d, qdd_d, tau_model);
       for (int j = 0; j < N; ++j) out.tau_model[j] = tau_model[j];
     }
-    integrate(scenario, tau_cmd, clock, dt, out.qdd);
+    if (scenario.contacts.empty()) {
+      integrate(scenario, tau_cmd, clock, dt, out.qdd);
+    } else {
+      integrate(scenario, tau_cmd + contact_torques(scenario, time), clock, dt, out.qdd);
+    }
     return out;
   }
 
@@ -243,6 +257,69 @@ class DrivePlantOf final : public DrivePlant {
     return t;
   }
 
+  std::string set_monitor(const MonitorSettings& m, double dt) override {
+    if (!(m.gain >= 0) || !std::isfinite(m.gain)) return "the observer gain must be a number >= 0";
+    for (int j = 0; j < N; ++j) {
+      const double values[3] = {m.threshold[j], m.mean[j], m.band[j]};
+      if (!std::isfinite(values[0]) || !std::isfinite(values[1]) || !std::isfinite(values[2]) || values[0] < 0 ||
+          values[2] < 0)
+        return "joint " + std::to_string(j + 1) + ": threshold and band must be numbers >= 0, the mean a number";
+    }
+    if (m.gain > 0) {
+      if (!(m.gain * dt <= 1.0))
+        return "observer gain " + std::to_string(m.gain) + " 1/s: the discrete observer needs K dt <= 1";
+      if (half_width(m.gain, dt) > kMaxSlopeHalfWidth)
+        return "observer gain " + std::to_string(m.gain) + " 1/s: its velocity window is longer than the drive's " +
+               std::to_string(2 * kMaxSlopeHalfWidth + 1) + " samples";
+    }
+    monitor_ = m;
+    return {};
+  }
+
+  Trip monitor(const PlantStep& p, const JointArray& tau_measured) override {
+    if (!monitoring_) return {};
+    Vec q_in, tau_in, q, qd, tau;
+    for (int j = 0; j < N; ++j) {
+      q_in[j] = p.q_meas[j];
+      tau_in[j] = tau_measured[j];
+    }
+    typename Slope::Flags still;
+    if (slope_.update(q_in, tau_in, q, qd, tau, still) != UpdateStatus::ok) return {};
+    Vec qd_friction = qd;
+    for (int j = 0; j < N; ++j)
+      if (std::fabs(qd[j]) < monitor_.band[j]) qd_friction[j] = 0;
+    if (observer_.update(q, qd, qd_friction, tau) != UpdateStatus::ok) return {};
+    Vec weight;
+    if (uncertainty_.update(qd_friction, still, weight) != UpdateStatus::ok) return {};
+    // The joint furthest beyond its threshold, widened by the friction the model cannot know.
+    Trip trip;
+    double worst = 1.0;
+    for (int j = 0; j < N; ++j) {
+      residual_[j] = observer_.residual()[j] - monitor_.mean[j];
+      if (!(monitor_.threshold[j] > 0)) continue;
+      widening_[j] = weight[j] * static_friction_[j];
+      const double limit = monitor_.threshold[j] + widening_[j];
+      if (std::fabs(residual_[j]) > worst * limit) {
+        worst = std::fabs(residual_[j]) / limit;
+        trip = {modbus_map::DriveFault::collision, j, residual_[j]};
+      }
+    }
+    return trip;
+  }
+
+  JointArray monitor_residual() const override { return to_array(residual_); }
+  JointArray monitor_widening() const override { return to_array(widening_); }
+
+  modbus_map::MonitorState monitor_state() const override {
+    if (monitoring_) return modbus_map::MonitorState::watching;
+    return monitor_refused_ ? modbus_map::MonitorState::refused : modbus_map::MonitorState::off;
+  }
+
+  JointArray contact_torque(const JointArray& q, int link, const std::array<double, 3>& point,
+                            const std::array<double, 3>& force) const override {
+    return contact_joint_torque(data_.origins, N, q.data(), link, point, Eigen::Vector3d(force[0], force[1], force[2]));
+  }
+
   void fix_gains(const JointArray& kp, const JointArray& kd) override {
     for (int j = 0; j < N; ++j) {
       kp_[j] = kp[j];
@@ -258,7 +335,18 @@ class DrivePlantOf final : public DrivePlant {
     unsigned terms = 0;
     TableStatus (*check)(const ParameterTable&, const JointRatings<N>&) = nullptr;
     void (*feedforward)(const ParameterTable&, const Vec&, const Vec&, const Vec&, Vec&) = nullptr;
+    void (*coulomb)(const ParameterTable&, Vec&) = nullptr;  ///< |Fc_j| of the table (0 without the column)
   };
+
+  template <unsigned Terms>
+  static void coulomb(const ParameterTable& t, Vec& fc) {
+    using Model = IdentificationModel<Robot, Terms>;
+    fc = Vec::Zero();
+    for (int i = Robot::kNumBase; i < Model::kNumParams; ++i) {
+      const ParamInfo info = Model::info(i);
+      if (info.term == term::coulomb) fc[info.joint - 1] = std::fabs(static_cast<double>(t.values[i]));
+    }
+  }
 
   template <unsigned Terms>
   static void feedforward(const ParameterTable& t, const Vec& q, const Vec& qd, const Vec& qdd, Vec& tau) {
@@ -280,6 +368,7 @@ class DrivePlantOf final : public DrivePlant {
       ops.terms = Terms;
       ops.check = &check_table<IdentificationModel<Robot, Terms>>;  // the overload with the ratings
       ops.feedforward = &feedforward<Terms>;
+      ops.coulomb = &coulomb<Terms>;
       return ops;
     }
   };
@@ -321,6 +410,28 @@ class DrivePlantOf final : public DrivePlant {
 
   void integrate(const Scenario& scenario, const Vec& tau_cmd, double clock, double dt, JointArray& qdd0);
 
+  /// The external contacts' joint torques at the period's start, held over it as the command is
+  /// (ExternalContact: a fixed force, or a stiff obstacle anchored where the point was when the
+  /// contact began).
+  Vec contact_torques(const Scenario& scenario, double time) {
+    Vec tau = Vec::Zero();
+    for (size_t c = 0; c < scenario.contacts.size(); ++c) {
+      const ExternalContact& e = scenario.contacts[c];
+      if (time < e.start || time >= e.start + e.duration) continue;
+      const Eigen::Vector3d p = link_point_position(data_.origins, N, q_.data(), e.link, e.point);
+      if (!anchors_[c]) anchors_[c] = p;
+      Eigen::Vector3d F(e.force[0], e.force[1], e.force[2]);
+      if (e.stiffness > 0) {
+        const Eigen::Vector3d n = F.normalized();
+        const double depth = (p - *anchors_[c]).dot(n);
+        F = depth < 0 ? Eigen::Vector3d(-e.stiffness * depth * n) : Eigen::Vector3d::Zero();
+      }
+      const auto t = contact_joint_torque(data_.origins, N, q_.data(), e.link, e.point, F);
+      for (int j = 0; j < N; ++j) tau[j] += t[static_cast<size_t>(j)];
+    }
+    return tau;
+  }
+
   static JointArray to_array(const Vec& v) {
     JointArray a{};
     for (int j = 0; j < N; ++j) a[j] = v[j];
@@ -328,6 +439,32 @@ class DrivePlantOf final : public DrivePlant {
   }
 
   using Payload = PayloadEstimator<Robot, double>;
+  using Observer = MomentumObserver<Robot, double>;
+  static constexpr int kMaxSlopeHalfWidth = modbus_map::kMonitorMaxHalfWidth;
+  using Slope = CentredSlope<double, N, kMaxSlopeHalfWidth>;
+
+  static int half_width(double gain, double dt) {
+    return std::max(1, static_cast<int>(std::lround(1.0 / (gain * dt))));
+  }
+
+  /// Starts the monitor for a run with the active table; off when the settings are off or the
+  /// observer refuses the table (a commit since set_monitor): monitor_refused_ then says so.
+  void begin_monitor(double dt) {
+    monitoring_ = false;
+    monitor_refused_ = false;
+    residual_ = Vec::Zero();
+    widening_ = Vec::Zero();
+    if (!(monitor_.gain > 0)) return;
+    if (observer_.configure(active_, Vec::Constant(monitor_.gain), dt) != UpdateStatus::ok ||
+        slope_.reset(half_width(monitor_.gain, dt), dt, N) != UpdateStatus::ok ||
+        uncertainty_.reset(monitor_.gain, dt, N) != UpdateStatus::ok) {
+      monitor_refused_ = true;
+      return;
+    }
+    static_friction_ = Vec::Zero();
+    ops_.coulomb(active_, static_friction_);
+    monitoring_ = true;
+  }
 
   GeneratedRobotData data_;
   StdVec phi_true_;
@@ -342,8 +479,18 @@ class DrivePlantOf final : public DrivePlant {
   Vec kp_ = Vec::Zero(), kd_ = Vec::Zero();
   Vec quantum_ = Vec::Zero();                                             // encoder resolution on the joint side [rad]
   Vec q_min_ = Vec::Zero(), q_max_ = Vec::Zero(), qd_max_ = Vec::Zero();  // the drive's trips
-  JointRatings<N> ratings_{};  ///< tau_max, qd_max, qdd_max: table plausibility (check_table)
-  ModelOps ops_{};             // feed-forward and check of the active table's model
+  JointRatings<N> ratings_{};                            ///< tau_max, qd_max, qdd_max: table plausibility (check_table)
+  ModelOps ops_{};                                       // feed-forward and check of the active table's model
+  ParameterTable active_{};                              // the active table (the monitor's model)
+  std::vector<std::optional<Eigen::Vector3d>> anchors_;  // per scenario contact: where its obstacle sits
+  MonitorSettings monitor_{};
+  Observer observer_;
+  Slope slope_;
+  FrictionUncertainty<double, N> uncertainty_;
+  bool monitoring_ = false, monitor_refused_ = false;
+  Vec static_friction_ = Vec::Zero();  // |Fc_j| of the active table
+  Vec residual_ = Vec::Zero();         // r - mean of the last monitor step
+  Vec widening_ = Vec::Zero();         // its thresholds' widening [Nm]
 };
 
 /// Plant: (M(q) + sum_m Ia_m T_m^T T_m) qdd = tau - h(q, qd) - T^T f(T qd) - effects, RK4 with
@@ -481,11 +628,21 @@ std::vector<TrueParameter> DrivePlantOf<Robot>::Truth<Terms>::run(const Scenario
   return out;
 }
 
-/// Registers DrivePlantOf<Robot> under Robot::kName; returns true (for a static initialiser).
-template <class Robot>
+/// Registers DrivePlantOf<Robot> under Robot::kName with the generated model's namespace data
+/// (kNominalStandard, kRotorInertiaAbsorbedCoefficient, kJointOrigins); returns true (for a static
+/// initialiser).
+template <class Robot, class Origin>
 bool register_drive_plant_of(const double (&nominal_standard)[Robot::kNumStandard],
-                             const double (&rotor_inertia_absorbed_coefficient)[Robot::kNumJoints]) {
-  static const GeneratedRobotData data{nominal_standard, rotor_inertia_absorbed_coefficient};
+                             const double (&rotor_inertia_absorbed_coefficient)[Robot::kNumJoints],
+                             const Origin (&joint_origins)[Robot::kNumJoints]) {
+  static const GeneratedRobotData data = [&] {
+    GeneratedRobotData d{nominal_standard, rotor_inertia_absorbed_coefficient, {}};
+    for (int i = 0; i < Robot::kNumJoints; ++i) {
+      for (int k = 0; k < 9; ++k) d.origins[static_cast<size_t>(i)].R[static_cast<size_t>(k)] = joint_origins[i].R[k];
+      for (int k = 0; k < 3; ++k) d.origins[static_cast<size_t>(i)].p[static_cast<size_t>(k)] = joint_origins[i].p[k];
+    }
+    return d;
+  }();
   return register_drive_plant(Robot::kName, [] { return std::unique_ptr<DrivePlant>(new DrivePlantOf<Robot>(data)); });
 }
 

@@ -56,6 +56,22 @@ using MotorMap = std::array<std::array<double, kMaxDriveJoints>, kMaxDriveJoints
 /// The identity map: every motor turns with its own joint alone.
 MotorMap identity_motor_map();
 
+/// An external contact on the arm (docs/monitor.md "On the drive"): a force on a point of a link
+/// for a time window of the trajectory's clock. Its joint torques are J_p(q)^T F, J_p the point's
+/// translational Jacobian at the plant's exact q at each control period's start, held over the
+/// period as the command is (zero-order hold); with `stiffness` > 0 the force grows as the point
+/// presses into a stiff obstacle instead: F = -stiffness (d . n) n while d . n < 0, d the point's
+/// displacement from where it was at `start`, n the unit of `force` (its direction: the obstacle
+/// pushes back along it), and `force`'s magnitude is unused.
+struct ExternalContact {
+  int link = 1;                   ///< 1-based link (the link joint `link` moves)
+  std::array<double, 3> point{};  ///< [m] in that link's frame (the generated frames, robot.json)
+  std::array<double, 3> force{};  ///< [N] in the base frame
+  double start = 0;               ///< [s] trajectory time
+  double duration = 0;            ///< [s]
+  double stiffness = 0;           ///< [N/m]; 0: a force of fixed size
+};
+
 /// Per joint, joint 1 first; entries past num_joints are unused. friction[m] and
 /// effects[m].rotor_inertia are motor m's: its friction acts at its velocity v_m = (T qd)_m and its
 /// torque on every joint j by T(m, j) (the transmission's transpose); its rotor inertia Ia_m adds
@@ -84,6 +100,7 @@ struct Scenario {
     std::array<double, 3> com{};
     std::array<double, 6> inertia{};
   } payload;
+  std::vector<ExternalContact> contacts;  ///< none by default
 };
 
 /// The default scenario for `robot`: robot.json's transmission as the motor map (a coupled motor,

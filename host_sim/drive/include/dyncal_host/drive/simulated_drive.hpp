@@ -121,6 +121,23 @@ class SimulatedDrive {
   void fix_gains(const JointArray& kp, const JointArray& kd);
   JointArray kp() const;
   JointArray kd() const;
+  /// The collision monitor (drive_plant.hpp MonitorSettings, docs/monitor.md "On the drive") for
+  /// the runs started after it: while one is watched, every control period's measured torque goes
+  /// through lib/'s observer with the active table, and a residual beyond its threshold stops the
+  /// trajectory with fault collision (fault_joint the joint furthest beyond it, fault_value its
+  /// r - mean [Nm]; time() the drive time of the detection, which judges the state D = round(1 /
+  /// (K dt)) periods back). An empty string when taken, else why not (then unchanged): playing, or
+  /// a value DrivePlant::set_monitor refuses.
+  std::string set_monitor(const MonitorSettings& m);
+  /// Whether the run started last is watched (refused: the observer cannot take the active table).
+  modbus_map::MonitorState monitor_state() const;
+  /// The observer's last r - mean [Nm] per joint.
+  JointArray monitor_residual() const;
+  /// What the last period widened each threshold by [Nm]: the friction the model cannot know.
+  JointArray monitor_widening() const;
+  /// J_p(q)^T F [Nm] of a force F [N, base frame] on `point` [m] of 1-based `link` (its frame) at q.
+  JointArray contact_torque(const JointArray& q, int link, const std::array<double, 3>& point,
+                            const std::array<double, 3>& force) const;
   /// The control loop's rate [Hz] (the scenario's).
   double control_rate_hz() const { return scenario_.control_rate_hz; }
 

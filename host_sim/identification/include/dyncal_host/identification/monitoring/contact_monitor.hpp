@@ -38,6 +38,11 @@ struct ObserverRun {
   /// by static_friction; the statistics leave these samples out.
   Eigen::MatrixXi still;
   std::vector<double> static_friction;  ///< per joint, the model's Coulomb level |Fc_j| [Nm] (0 without one)
+  /// S x N in [0, 1]: the share of static_friction the residual may hold because the model cannot
+  /// know the friction there (lib/ friction_uncertainty.hpp: 1 at rest, in the standstill band and
+  /// at a velocity reversal, then decaying as the observer forgets); detection widens the threshold
+  /// by friction_weight * static_friction.
+  Eigen::MatrixXd friction_weight;
   std::vector<std::pair<Eigen::Index, Eigen::Index>> segments;  ///< [first, end) rows, each observed from its start
   std::vector<std::string> notes;                               ///< the log's sampling, the velocity's source
 };
@@ -65,7 +70,9 @@ struct ResidualStatistics {
   Eigen::Index samples = 0;
   std::vector<double> band;                       ///< the observer's standstill band [rad/s] (N)
   std::vector<double> mean, std, difference_std;  ///< N each [Nm]
-  std::vector<double> peak;                       ///< N: the largest |r - mean| on that motion [Nm]
+  /// N: the largest |r - mean| on that motion [Nm], less the friction the model cannot know there
+  /// (friction_weight * static_friction: what the threshold, widened by it, would have to clear)
+  std::vector<double> peak;
 };
 
 /// Throws InputError when no segment is longer than the start-up.

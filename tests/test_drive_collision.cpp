@@ -1,0 +1,362 @@
+// The simulated drive's collision monitor (issue 45, docs/monitor.md "On the drive") on every arm
+// of tests/robots, in process (the Modbus registers: test_drive_modbus):
+// - contact torques: J_p^T F of the drive's forward kinematics against the generated inverse
+//   dynamics' gravity torque of a point mass at the same point (an independent path: SymPy's);
+// - each arm is calibrated on its own drive: a 20 s excitation recorded from the ring, identify
+//   (WLS, Eq. 7, sign-constrained), the observer's residual statistics of that log and the thresholds for 0.01 false
+//   alarms per hour (contact_monitor.hpp); the table committed, the monitor set from them;
+// - contact-free runs on excitations the calibration never saw: no collision fault at 0.01 false
+//   alarms per hour, and at a stated 100 per hour the alarms within a factor 2 of the rate
+//   (20 minutes per arm, an hour over the three; DYNCAL_LONG_MONITOR=1: an hour per arm);
+// - 20 contacts per arm of 5-20 % of a joint's tau_max (the joint the force loads most) on random
+//   links, points, directions and times, 100 ms long: at least 95 % stop the drive within 20 ms
+//   of their onset (fault collision, or a velocity trip where the contact throws a light wrist
+//   over its qd_max first; at least 85 % by the monitor), none before it; reaction times printed;
+// - a stiff obstacle in the path of a link: the drive stops on it.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <functional>
+#include <iostream>
+#include <memory>
+#include <random>
+
+#include "dyncal/modbus_map.hpp"
+#include "dyncal_host/calibration/calibrate.hpp"
+#include "dyncal_host/drive/simulated_drive.hpp"
+#include "dyncal_host/identification/excitation/excitation.hpp"
+#include "dyncal_host/identification/monitoring/contact_monitor.hpp"
+#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
+#include "dyncal_host/identification/pipeline/identify.hpp"
+#include "dyncal_host/identification/reports/drive_table.hpp"
+#include "dyncal_host/identification/reports/prediction.hpp"
+#include "support/simulated_log.hpp"
+
+namespace {
+
+namespace mm = dyncal::modbus_map;
+using namespace dyncal::host;
+
+constexpr double kOnsetWindow = 0.020;  // the issue's detection time [s]
+constexpr double kContactSeconds = 0.1;
+
+std::string flash_path(const std::string& robot) {
+  return std::filesystem::temp_directory_path() / ("dyncal_collision_" + robot + "_" + std::to_string(getpid()));
+}
+
+/// Plays the drive's trajectory from its start until it finishes, faults or `until` [s]; the ring's
+/// samples into `samples` when given; `each_period` after every control period when given.
+void play(SimulatedDrive& d, double until = 1e30, std::vector<dyncal::port::DriveSample>* samples = nullptr,
+          const std::function<void()>& each_period = {}) {
+  d.start();
+  while (d.state() == mm::DriveState::playing && d.time() < until) {
+    d.step();
+    if (samples) samples->insert(samples->end(), d.ring().begin(), d.ring().end());
+    if (!d.ring().empty()) d.ack(d.ring().back().seq + 1);
+    if (each_period) each_period();
+  }
+}
+
+struct DriveCalibration {
+  RobotDescription robot;
+  Scenario scenario;
+  std::string flash;
+  ResidualStatistics stats;
+  MonitorSettings monitor;
+  JointArray kp{}, kd{};  ///< the PD gains of the calibration run, fixed for every later run
+};
+
+/// A drive of the calibrated arm with its table, the calibration's PD gains and the monitor set.
+/// The gains stay those of the calibration, as a real drive's: the simulated drive would otherwise
+/// set them from each start pose, and the residual's noise moves with kd (the PD loop's reaction
+/// to the encoder's quantisation is torque the slope of q cannot follow; docs/monitor.md).
+std::unique_ptr<SimulatedDrive> monitored_drive(const DriveCalibration& c, const Scenario& sc,
+                                                const MonitorSettings& m) {
+  auto d = std::make_unique<SimulatedDrive>(c.robot, sc, c.flash);
+  d->fix_gains(c.kp, c.kd);
+  EXPECT_EQ(d->set_monitor(m), "");
+  return d;
+}
+
+/// Calibrates `name` on its own simulated drive (header comment) and commits the table.
+DriveCalibration calibrate(const std::string& name) {
+  DriveCalibration c;
+  c.robot = dyncal::test::test_robot(name);
+  c.scenario = default_scenario(c.robot);
+  c.scenario.encoder_counts = 1 << 20;  // 20-bit joint encoders, as test_contact_monitor's logs
+  // Friction as tests/support/simulated_log.hpp's: Fc 2 % of tau_max, beta qd_max 1 % (Eq. 7).
+  for (int j = 0; j < c.robot.num_joints; ++j) {
+    c.scenario.friction[static_cast<size_t>(j)].Fc = 0.02 * c.robot.tau_max[j];
+    c.scenario.friction[static_cast<size_t>(j)].beta = 0.01 * c.robot.tau_max[j] / c.robot.qd_max[j];
+  }
+  c.flash = flash_path(name);
+  std::filesystem::remove(c.flash);
+  SimulatedDrive d(c.robot, c.scenario, c.flash);
+  d.trajectory = default_excitation(c.robot, 0.1, 5, 1, 3, nullptr);
+  d.periods = 2;
+  std::vector<dyncal::port::DriveSample> samples;
+  play(d, 1e30, &samples);
+  EXPECT_EQ(d.state(), mm::DriveState::finished);
+  c.kp = d.kp();
+  c.kd = d.kd();
+  // No velocity in the log: the observer takes the slope of q, as the drive does.
+  const JointLog log = samples_to_log(samples, d.sample_rate_hz, c.robot.num_joints);
+  IdentifyOptions options;
+  options.terms = dyncal::kFrictionEq7;
+  options.sign_constraints = true;  // as calibrate: a drive table holds friction >= 0
+  const ParameterSet params = parameter_set(identify(c.robot, log, options));
+  const ObserverRun run = run_observer(c.robot, log, params);
+  c.stats = residual_statistics(run, "drive calibration");
+  const std::vector<ContactThreshold> th = contact_thresholds(c.stats, 0.01);
+  const auto bytes = encoded_table(parameter_table(params, c.robot, nullptr));
+  EXPECT_EQ(d.commit(bytes.data(), static_cast<int>(bytes.size())), dyncal::TableStatus::ok);
+  c.monitor.gain = c.stats.gain;
+  for (int j = 0; j < c.robot.num_joints; ++j) {
+    const auto i = static_cast<size_t>(j);
+    c.monitor.threshold[i] = th[i].value;
+    c.monitor.mean[i] = c.stats.mean[i];
+    c.monitor.band[i] = c.stats.band[i];
+  }
+  return c;
+}
+
+/// One period of `trajectory` on the calibrated drive with contact `e` in its scenario, played until
+/// it ends, faults or `until` [s].
+std::unique_ptr<SimulatedDrive> play_with_contact(const DriveCalibration& c, const ExcitationTrajectory& trajectory,
+                                                  const ExternalContact& e, double until) {
+  Scenario sc = c.scenario;
+  sc.contacts.push_back(e);
+  auto d = monitored_drive(c, sc, c.monitor);
+  d->trajectory = trajectory;
+  d->periods = 1;
+  play(*d, until);
+  return d;
+}
+
+class DriveCollision : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(DriveCollision, ContactTorqueIsTheGravityTorqueOfAPointMassThere) {
+  const RobotDescription robot = dyncal::test::test_robot(GetParam());
+  const CompiledRobot& c = compiled_robot_for(robot);
+  SimulatedDrive d(robot, default_scenario(robot), flash_path(robot.name));
+  const int n = robot.num_joints;
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const Eigen::VectorXd phi = Eigen::Map<const Eigen::VectorXd>(c.nominal_standard.data(), c.num_standard);
+  const Eigen::VectorXd zero = Eigen::VectorXd::Zero(n);
+  const double g = 9.81, m = 1.0;
+  for (int trial = 0; trial < 20; ++trial) {
+    JointArray q{};
+    Eigen::VectorXd qv(n);
+    for (int j = 0; j < n; ++j) qv[j] = q[static_cast<size_t>(j)] = 3.0 * u(rng);
+    const int link = 1 + trial % n;
+    const std::array<double, 3> point{0.3 * u(rng), 0.3 * u(rng), 0.3 * u(rng)};
+    // A point mass m at `point` of the link: its standard parameters (about the link origin).
+    Eigen::VectorXd dphi = phi;
+    const Eigen::Vector3d p(point[0], point[1], point[2]);
+    const Eigen::Matrix3d I = m * (p.squaredNorm() * Eigen::Matrix3d::Identity() - p * p.transpose());
+    const double add[10] = {I(0, 0), I(0, 1), I(0, 2), I(1, 1), I(1, 2), I(2, 2), m * p[0], m * p[1], m * p[2], m};
+    for (int k = 0; k < 10; ++k) dphi[10 * (link - 1) + k] += add[k];
+    // The motors hold the mass: tau_id gains -J^T (m g_vec); the force the mass puts on the arm is m g_vec.
+    const Eigen::VectorXd held = c.inverse_dynamics(qv, zero, zero, dphi) - c.inverse_dynamics(qv, zero, zero, phi);
+    const JointArray tau = d.contact_torque(q, link, point, {0.0, 0.0, -m * g});
+    for (int j = 0; j < n; ++j) EXPECT_NEAR(tau[static_cast<size_t>(j)], -held[j], 1e-9 * (1 + std::abs(held[j])));
+  }
+}
+
+TEST_P(DriveCollision, ContactsStopTheDriveWithin20msAndUnseenMotionRaisesNoAlarm) {
+  const DriveCalibration cal = calibrate(GetParam());
+  const RobotDescription& robot = cal.robot;
+  const int n = robot.num_joints;
+  ASSERT_EQ(cal.monitor.gain, 200.0);
+  std::cout << robot.name << ": thresholds [Nm]";
+  for (int j = 0; j < n; ++j) std::cout << " " << cal.monitor.threshold[static_cast<size_t>(j)];
+  std::cout << " (" << (100.0 * cal.monitor.threshold[0] / robot.tau_max[0]) << " % of tau_max on joint 1); std";
+  for (int j = 0; j < n; ++j) std::cout << " " << cal.stats.std[static_cast<size_t>(j)];
+  std::cout << "; difference std";
+  for (int j = 0; j < n; ++j) std::cout << " " << cal.stats.difference_std[static_cast<size_t>(j)];
+  std::cout << "\n";
+
+  // Contact-free motion on excitations the calibration never saw: no trip at 0.01 per hour; and the
+  // alarms thresholds for a stated 100 per hour would raise, counted on the same residual (an alarm:
+  // a joint's |r - mean| above its threshold with the drive's widening, crossings within the
+  // observer's time constant 1 / K one alarm, as dyncal monitor merges them).
+  const bool long_run = std::getenv("DYNCAL_LONG_MONITOR") != nullptr;
+  const double quiet_seconds = long_run ? 3600.0 : 1200.0;
+  const std::vector<ContactThreshold> stated = contact_thresholds(cal.stats, 100.0);
+  std::cout << "  at 100 per hour:";
+  for (const auto& t : stated)
+    std::cout << " " << t.value << (t.peak_bound ? " (peak)" : "") << " [gaussian " << t.gaussian << "]";
+  std::cout << "\n";
+  double quiet = 0, last_above = -1e30;
+  int alarms = 0;
+  long stated_alarms = 0;
+  for (unsigned i = 0; quiet < quiet_seconds; ++i) {
+    Scenario sc = cal.scenario;
+    sc.seed = 100 + i;  // each run its own noise and its own excitation
+    auto dp = monitored_drive(cal, sc, cal.monitor);
+    SimulatedDrive& d = *dp;
+    d.trajectory = default_excitation(robot, 0.1, 5, 1, 11 + i, nullptr);
+    d.periods = 6;
+    play(d, 1e30, nullptr, [&] {
+      const JointArray r = d.monitor_residual(), widening = d.monitor_widening();
+      bool above = false;
+      for (int j = 0; j < n; ++j) {
+        const auto J = static_cast<size_t>(j);
+        above = above || std::abs(r[J]) > stated[J].value + widening[J];
+      }
+      if (!above) return;
+      const double t = quiet + d.time();
+      if (t - last_above >= 1.0 / cal.monitor.gain) ++stated_alarms;
+      last_above = t;
+    });
+    EXPECT_EQ(d.monitor_state(), mm::MonitorState::watching);
+    if (d.state() == mm::DriveState::fault) {
+      ++alarms;
+      std::cout << "  false alarm: " << to_string(d.fault()) << " joint " << d.fault_joint() << " value "
+                << d.fault_value() << " (widened by " << d.monitor_widening()[static_cast<size_t>(d.fault_joint() - 1)]
+                << ") at " << d.time() << " s\n";
+    }
+    quiet += d.time();
+  }
+  EXPECT_EQ(alarms, 0) << "over " << quiet << " s of contact-free motion";
+  const double expected = 100.0 * quiet / 3600.0;
+  std::cout << "  " << alarms << " trips at 0.01 per hour over " << quiet << " s of contact-free motion; at a stated "
+            << "100 per hour " << stated_alarms << " alarms (" << expected << " expected)\n";
+  EXPECT_GE(static_cast<double>(stated_alarms), expected / 2);
+  EXPECT_LE(static_cast<double>(stated_alarms), expected * 2);
+
+  // Contacts.
+  std::mt19937_64 rng(17);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  int detected = 0, other_trip = 0, early = 0;
+  std::vector<double> reaction;
+  constexpr int kContacts = 20;
+  for (int i = 0; i < kContacts; ++i) {
+    ExternalContact e;
+    e.link = 1 + static_cast<int>(unit(rng) * n) % n;
+    e.point = {0.2 * (unit(rng) - 0.5), 0.2 * (unit(rng) - 0.5), 0.2 * (unit(rng) - 0.5)};
+    Eigen::Vector3d dir(normal(rng), normal(rng), normal(rng));
+    dir.normalize();
+    e.start = 1.0 + 8.0 * unit(rng);
+    e.duration = kContactSeconds;
+    const ExcitationTrajectory traj = default_excitation(robot, 0.1, 5, 1, 11 + i % 2, nullptr);
+    // The size: fraction f of tau_max on the joint the force loads most, at the planned pose.
+    Eigen::Matrix<double, 7, 1> q7, qd7, qdd7;
+    traj.evaluate(e.start, q7, qd7, qdd7);
+    JointArray q{};
+    for (int j = 0; j < n; ++j) q[static_cast<size_t>(j)] = q7[j];
+    SimulatedDrive probe(robot, cal.scenario, cal.flash);
+    const JointArray unit_tau = probe.contact_torque(q, e.link, e.point, {dir[0], dir[1], dir[2]});
+    double load = 0;
+    for (int j = 0; j < n; ++j) load = std::max(load, std::abs(unit_tau[static_cast<size_t>(j)]) / robot.tau_max[j]);
+    if (load < 1e-6) {  // a point on the axes of every joint that moves it: draw again
+      --i;
+      continue;
+    }
+    const double fraction = 0.05 + 0.15 * unit(rng);
+    const Eigen::Vector3d F = dir * (fraction / load);
+    e.force = {F[0], F[1], F[2]};
+    const auto dp = play_with_contact(cal, traj, e, e.start + e.duration + 0.05);
+    const SimulatedDrive& d = *dp;
+    const bool fault = d.state() == mm::DriveState::fault;
+    const bool collision = fault && d.fault() == mm::DriveFault::collision;
+    const double after = d.time() - e.start;
+    if (fault && after < 0) {
+      ++early;
+    } else if (fault && after <= kOnsetWindow + 1e-9) {
+      // Stopped in time: by the monitor, or first by a rating the contact threw a light joint over.
+      (collision ? detected : other_trip) += 1;
+      reaction.push_back(after);
+      if (!collision)
+        std::cout << "  link " << e.link << ", " << 100 * fraction << " % of tau_max: " << to_string(d.fault())
+                  << " of joint " << d.fault_joint() << " after " << 1e3 * after << " ms, before the monitor\n";
+    } else {
+      std::cout << "  missed: link " << e.link << ", " << 100 * fraction << " % of tau_max, "
+                << (fault ? std::string(to_string(d.fault())) + " after " + std::to_string(1e3 * after) + " ms"
+                          : std::string("no fault"))
+                << "\n";
+    }
+  }
+  std::sort(reaction.begin(), reaction.end());
+  std::cout << "  " << detected << " of " << kContacts << " contacts detected within 20 ms by the monitor, "
+            << other_trip << " stopped first by a rating";
+  if (!reaction.empty())
+    std::cout << ", reaction " << 1e3 * reaction.front() << " / " << 1e3 * reaction[reaction.size() / 2] << " / "
+              << 1e3 * reaction.back() << " ms (min / median / max)";
+  std::cout << "\n";
+  EXPECT_EQ(early, 0);
+  EXPECT_GE(detected + other_trip, 19);  // 95 % stopped within 20 ms
+  EXPECT_GE(detected, 17);               // and at least 85 % by the monitor itself
+
+  // A stiff obstacle in the path of the last link's origin: it stops the drive.
+  {
+    const ExcitationTrajectory traj = default_excitation(robot, 0.1, 5, 1, 11, nullptr);
+    ExternalContact e;
+    e.link = n;
+    e.start = 2.0;
+    e.duration = 1.0;
+    e.stiffness = 1e5;  // [N/m]
+    // The point's velocity at the start, by a difference of the planned poses: the obstacle faces it.
+    Eigen::Matrix<double, 7, 1> q7, qd7, qdd7, q7b;
+    traj.evaluate(e.start, q7, qd7, qdd7);
+    traj.evaluate(e.start + 1e-3, q7b, qd7, qdd7);
+    const Eigen::VectorXd qa = q7.head(n), qb = q7b.head(n);
+    JointArray q{};
+    for (int j = 0; j < n; ++j) q[static_cast<size_t>(j)] = qa[j];
+    // The point's Jacobian from the contact torques of three unit forces: tau = J^T F.
+    SimulatedDrive probe(robot, cal.scenario, cal.flash);
+    Eigen::Matrix3Xd J(3, n);
+    for (int k = 0; k < 3; ++k) {
+      std::array<double, 3> f{0, 0, 0};
+      f[static_cast<size_t>(k)] = 1.0;
+      const JointArray t = probe.contact_torque(q, e.link, e.point, f);
+      for (int j = 0; j < n; ++j) J(k, j) = t[static_cast<size_t>(j)];
+    }
+    const Eigen::Vector3d v = J * (qb - qa) / 1e-3;
+    ASSERT_GT(v.norm(), 0.01) << "the link's origin hardly moves there";
+    const Eigen::Vector3d facing = -v.normalized();
+    e.force = {facing[0], facing[1], facing[2]};
+    const auto dp = play_with_contact(cal, traj, e, e.start + e.duration);
+    const SimulatedDrive& d = *dp;
+    EXPECT_EQ(d.fault(), mm::DriveFault::collision);
+    std::cout << "  obstacle at " << v.norm() << " m/s: " << to_string(d.fault()) << " after "
+              << 1e3 * (d.time() - e.start) << " ms, joint " << d.fault_joint() << " r - mean " << d.fault_value()
+              << " Nm\n";
+  }
+  std::filesystem::remove(cal.flash);
+}
+
+INSTANTIATE_TEST_SUITE_P(TestRobots, DriveCollision, ::testing::Values("arm3", "arm6", "cobot7"));
+
+TEST(DriveCollisionSettings, RefusedValuesLeaveTheMonitorAsItWas) {
+  const RobotDescription robot = dyncal::test::test_robot("arm3");
+  SimulatedDrive d(robot, default_scenario(robot), flash_path("arm3_settings"));
+  MonitorSettings m;
+  m.gain = 2000;  // K dt = 2 at 1 kHz
+  EXPECT_NE(d.set_monitor(m), "");
+  m.gain = 5;  // a window of 401 periods
+  EXPECT_NE(d.set_monitor(m), "");
+  m.gain = 200;
+  m.threshold[0] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_NE(d.set_monitor(m), "");
+  m.threshold[0] = -1;
+  EXPECT_NE(d.set_monitor(m), "");
+  d.trajectory = default_excitation(robot, 0.1, 5, 1, 3, nullptr);
+  play(d, 0.1);
+  EXPECT_EQ(d.monitor_state(), mm::MonitorState::off);  // none was taken
+  m.threshold[0] = 1;
+  EXPECT_NE(d.set_monitor(m), "");  // while playing
+  d.stop();
+  EXPECT_EQ(d.set_monitor(m), "");
+  play(d, 0.1);
+  EXPECT_EQ(d.monitor_state(), mm::MonitorState::watching);
+  d.stop();
+  std::filesystem::remove(flash_path("arm3_settings"));
+}
+
+}  // namespace
