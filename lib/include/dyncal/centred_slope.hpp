@@ -70,12 +70,15 @@ class CentredSlope {
     tau = Vec::Zero();
     qd = Vec::Zero();
     still = Flags::Zero();
+    Scalar slope[N] = {};
+    for (int i = -D_, k = index(centre - D_); i <= D_; ++i, k = k + 1 == kCapacity ? 0 : k + 1) {
+      for (int j = 0; j < joints_; ++j) slope[j] += Scalar(i) * q_ring_[k][j];
+    }
+    const int c = index(centre);
     for (int j = 0; j < joints_; ++j) {
-      Scalar slope = Scalar(0);
-      for (int i = -D_; i <= D_; ++i) slope += Scalar(i) * q_ring_[index(centre + i)][j];
-      q[j] = q_ring_[index(centre)][j];
-      tau[j] = tau_ring_[index(centre)][j];
-      qd[j] = slope / norm_;
+      q[j] = q_ring_[c][j];
+      tau[j] = tau_ring_[c][j];
+      qd[j] = slope[j] / norm_;
       still[j] = stalled_[j] > 0 ? 1 : 0;
     }
     if (count_ > 4 * kCapacity) count_ -= 2 * kCapacity;  // keeps the index arithmetic bounded

@@ -4,9 +4,13 @@
 // causal differentiator as on a drive, the model the KF replay's reference estimate as a parameter
 // table (what a calibrated drive holds). Runs the observer in the image's scalar (float on the
 // Cortex-M4F, double on the M7) and in double beside it, prints the instructions per observer
-// update, the stack and the two residuals' agreement, and exits 0 only when they agree.
+// update, the stack and the two residuals' agreement, and exits 0 only when they agree. Then the
+// rest of a drive's collision monitor step on the same samples (lib/ centred_slope.hpp with the
+// window of a 1 kHz drive, D = 5, and friction_uncertainty.hpp): its instructions per sample.
 #include <cmath>
 
+#include "dyncal/centred_slope.hpp"
+#include "dyncal/friction_uncertainty.hpp"
 #include "dyncal/momentum_observer.hpp"
 #include "dyncal/table_check.hpp"
 #include "dyncal_cortex_m/instruction_counter.hpp"
@@ -34,6 +38,10 @@ dyncal::MomentumObserver<Robot, double> g_reference;
 dyncal::CausalDifferentiator<Scalar, 6> g_diff;
 dyncal::CausalDifferentiator<double, 6> g_diff_reference;
 dyncal::ParameterTable g_table;
+// The rest of a drive's monitor step: the velocity's window of a 1 kHz drive at its default gain
+// (K = 200 1/s, D = round(1 / (K dt)) = 5) and the friction's uncertainty.
+dyncal::CentredSlope<Scalar, 6, 8> g_slope;
+dyncal::FrictionUncertainty<Scalar, 6> g_uncertainty;
 
 }  // namespace
 
@@ -81,6 +89,31 @@ int main() {
       st += tau_d[j] * tau_d[j];
     }
   }
+  // The monitor step's other parts over the same samples: slope, friction weight, threshold check.
+  std::uint32_t monitor_ticks = 0;
+  int monitor_steps = 0, alarms = 0;
+  if (g_slope.reset(5, Scalar(1e-3), 6) != dyncal::UpdateStatus::ok ||
+      g_uncertainty.reset(Scalar(200), Scalar(1e-3), 6) != dyncal::UpdateStatus::ok)
+    return 3;
+  for (int k = 0; k < data::kCount; ++k) {
+    V q_in, tau_in, q, qd, tau, weight;
+    for (int j = 0; j < 6; ++j) {
+      q_in[j] = Scalar(data::kSamples[k][j]);
+      tau_in[j] = Scalar(data::kSamples[k][6 + j]);
+    }
+    dyncal::CentredSlope<Scalar, 6, 8>::Flags still;
+    const std::uint32_t t0 = Counter::ticks();
+    if (g_slope.update(q_in, tau_in, q, qd, tau, still) == dyncal::UpdateStatus::ok) {
+      V qd_friction = qd;
+      for (int j = 0; j < 6; ++j)
+        if (std::fabs(qd[j]) < Scalar(1e-3)) qd_friction[j] = Scalar(0);
+      if (g_uncertainty.update(qd_friction, still, weight) == dyncal::UpdateStatus::ok) {
+        for (int j = 0; j < 6; ++j) alarms += std::fabs(tau[j]) > Scalar(1e6) + weight[j] ? 1 : 0;
+        monitor_ticks += Counter::elapsed(t0, Counter::ticks());
+        ++monitor_steps;
+      }
+    }
+  }
   const double difference = sr > 0 ? std::sqrt(sd / sr) : 1.0, residual = st > 0 ? std::sqrt(sr / st) : 0.0;
   // Float: the thresholds scale with the residual's RMS, so a float error within 1 % of that RMS
   // moves them by at most 1 % (the observer subtracts momenta of about the torque times the time
@@ -101,11 +134,17 @@ int main() {
   sh::write_float(tolerance, 1);
   sh::write("); residual RMS / torque RMS ");
   sh::write_float(residual, 4);
+  sh::write(
+      "\n  instructions per sample for the rest of a drive's monitor step (slope of q over 11 samples, "
+      "friction weight, threshold check): ");
+  sh::write_int(
+      monitor_steps > 0 ? static_cast<long long>(monitor_ticks) * Counter::kInstructionsPerTick / monitor_steps : 0);
   sh::write("\n  stack: peak ");
   sh::write_int(sh::StackUsage::peak_bytes());
   sh::write(" bytes of ");
   sh::write_int(sh::StackUsage::reserved_bytes());
   sh::write(" reserved\n");
-  const bool ok = difference < tolerance && residual > 0 && rejected == 0 && updates > data::kCount * 9 / 10;
+  const bool ok = difference < tolerance && residual > 0 && rejected == 0 && updates > data::kCount * 9 / 10 &&
+                  monitor_steps > data::kCount * 9 / 10 && alarms == 0;
   return ok ? 0 : 1;
 }

@@ -34,8 +34,7 @@ struct ObserverRun {
   Eigen::MatrixXd r;         ///< residual [Nm], S x N
   /// S x N, 1 where the joint is at or near rest: its encoder did not count on a step of the
   /// velocity's window (a log with qd: |qd| inside the band). Friction there is static, any value
-  /// up to its Coulomb level, which the model cannot know: detection widens that joint's threshold
-  /// by static_friction; the statistics leave these samples out.
+  /// up to its Coulomb level, which the model cannot know (friction_weight is 1 there).
   Eigen::MatrixXi still;
   std::vector<double> static_friction;  ///< per joint, the model's Coulomb level |Fc_j| [Nm] (0 without one)
   /// S x N in [0, 1]: the share of static_friction the residual may hold because the model cannot
@@ -54,15 +53,17 @@ struct ObserverRun {
 /// D = 1 / (K dt) (ObserverRun::delay = D dt; the first and last D samples of a segment are not
 /// observed). gain 0: default_observer_gain. The friction terms' standstill band:
 /// `band` when given (N), else identification's rule on this log: kStandstillQuantile times the
-/// velocity's white-noise std (signal.hpp), where a joint at rest reads |qd| above it on 0.1 % of
-/// its samples. Throws InputError: params of another robot, a model the observer cannot take, a gain
-/// with K dt > 1, the log's sampling (uniform_grid.hpp).
+/// white-noise std (signal.hpp) of the velocity one sample resolves (a backward difference of q, or
+/// the log's qd), where a joint at rest reads |qd| above it on 0.1 % of its samples. Throws
+/// InputError: params of another robot, a model the observer cannot take, a gain with K dt > 1 or a
+/// velocity window over 1025 samples, a non-finite sample, the log's sampling (uniform_grid.hpp).
 ObserverRun run_observer(const RobotDescription& robot, JointLog log, const ParameterSet& params, double gain = 0,
                          const std::vector<double>& band = {});
 
 /// The residual's statistics on contact-free motion, per joint: mean, standard deviation and the
 /// standard deviation of its sample-to-sample difference [Nm] (differences within segments), from
-/// the samples after each segment's first 5 / K (the observer's start-up: e^-5 < 1 %).
+/// the samples after each segment's first 5 / K (the observer's start-up: e^-5 < 1 %) where the
+/// model knows the friction (friction_weight below e^-5: 5 time constants after a rest or reversal).
 struct ResidualStatistics {
   std::string source;  ///< the log they come from
   double gain = 0;     ///< K [1/s]
