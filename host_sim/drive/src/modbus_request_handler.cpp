@@ -9,6 +9,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "dyncal/centred_slope.hpp"
 #include "mbap_frame.hpp"
 
 namespace dyncal::host {
@@ -140,7 +141,7 @@ int check_holding(const SimulatedDrive& d, const std::uint16_t* h, int address, 
   if (overlaps(address, count, mm::kMonitorGainReg, 2)) {
     const double k = mm::get_f32(h + mm::kMonitorGainReg);
     // K dt <= 1, and a velocity window of at most 2 kMonitorMaxHalfWidth + 1 periods.
-    if (!(k == 0 || (k <= control_rate && std::lround(control_rate / k) <= mm::kMonitorMaxHalfWidth)))
+    if (!(k == 0 || (k <= control_rate && centred_slope_half_width(k, 1.0 / control_rate) <= mm::kMonitorMaxHalfWidth)))
       return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
   }
   for (int k = 0; k < 2 * mm::kMaxJoints; k += 2) {

@@ -3,11 +3,21 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cmath>
 
 #include "dyncal/finite.hpp"
 #include "dyncal/status.hpp"
 
 namespace dyncal {
+
+/// The window's half-width D for a momentum observer of gain K [1/s] on samples dt [s] apart:
+/// round(1 / (K dt)), at least 1 (the observer's time constant on each side of the sample it
+/// takes); capped at 2^30 for a gain near 0.
+template <typename Scalar>
+int centred_slope_half_width(Scalar gain, Scalar dt) noexcept {
+  const double d = std::round(1.0 / (static_cast<double>(gain) * static_cast<double>(dt)));
+  return !(d >= 1.0) ? 1 : d > 1073741824.0 ? 1073741824 : static_cast<int>(d);
+}
 
 /// Streams samples (q, tau) and reports, D samples late, sample m's q and tau with
 ///   qd_m = sum_{i=-D..D} i q_{m+i} / (dt D (D + 1) (2 D + 1) / 3),

@@ -69,7 +69,7 @@ ObserverRun run_observer(const RobotDescription& robot, JointLog log, const Para
     // takes q, qd and tau of one instant, D dt after it online. A difference of neighbouring
     // samples carries the encoder's quantisation straight into p = M qd and the residual (K M a
     // quantum per period, in sparse impulses on a slow joint: tails far heavier than Gaussian).
-    const Eigen::Index D = std::max<Eigen::Index>(1, std::lround(1.0 / (run.gain * run.period)));
+    const Eigen::Index D = centred_slope_half_width(run.gain, run.period);
     if (D > kMaxSlopeHalfWidth)
       throw InputError("observer gain " + std::to_string(run.gain) + " 1/s: its velocity window of " +
                        std::to_string(2 * D + 1) + " samples is longer than " +

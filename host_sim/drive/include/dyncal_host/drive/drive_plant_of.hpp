@@ -268,7 +268,7 @@ class DrivePlantOf final : public DrivePlant {
     if (m.gain > 0) {
       if (!(m.gain * dt <= 1.0))
         return "observer gain " + std::to_string(m.gain) + " 1/s: the discrete observer needs K dt <= 1";
-      if (half_width(m.gain, dt) > kMaxSlopeHalfWidth)
+      if (centred_slope_half_width(m.gain, dt) > kMaxSlopeHalfWidth)
         return "observer gain " + std::to_string(m.gain) + " 1/s: its velocity window is longer than the drive's " +
                std::to_string(2 * kMaxSlopeHalfWidth + 1) + " samples";
     }
@@ -443,10 +443,6 @@ class DrivePlantOf final : public DrivePlant {
   static constexpr int kMaxSlopeHalfWidth = modbus_map::kMonitorMaxHalfWidth;
   using Slope = CentredSlope<double, N, kMaxSlopeHalfWidth>;
 
-  static int half_width(double gain, double dt) {
-    return std::max(1, static_cast<int>(std::lround(1.0 / (gain * dt))));
-  }
-
   /// Starts the monitor for a run with the active table; off when the settings are off or the
   /// observer refuses the table (a commit since set_monitor): monitor_refused_ then says so.
   void begin_monitor(double dt) {
@@ -456,7 +452,7 @@ class DrivePlantOf final : public DrivePlant {
     widening_ = Vec::Zero();
     if (!(monitor_.gain > 0)) return;
     if (observer_.configure(active_, Vec::Constant(monitor_.gain), dt) != UpdateStatus::ok ||
-        slope_.reset(half_width(monitor_.gain, dt), dt, N) != UpdateStatus::ok ||
+        slope_.reset(centred_slope_half_width(monitor_.gain, dt), dt, N) != UpdateStatus::ok ||
         uncertainty_.reset(monitor_.gain, dt, N) != UpdateStatus::ok) {
       monitor_refused_ = true;
       return;
