@@ -21,6 +21,7 @@
 
 #include "dyncal/centred_slope.hpp"
 #include "dyncal/contact_threshold.hpp"
+#include "dyncal/direct_residual.hpp"
 #include "dyncal/friction_uncertainty.hpp"
 #include "dyncal/generated/er20/robot.hpp"
 #include "dyncal/generated/tx40/robot.hpp"
@@ -173,6 +174,49 @@ TEST(MomentumObserver, ResidualIsTheLowPassedExternalTorque) {
   EXPECT_NEAR(observer.residual()[2], step, 0.02);
 }
 
+// The direct residual (direct_residual.hpp) with exact accelerations: the drive's feed-forward of
+// the table (an independent path to the model) minus an external step on joint 3 gives the
+// first-order filter's response r_k = step (1 - (1 - K dt)^(k + 1)), the other joints 0.
+TEST(DirectResidual, IsTheLowPassedExternalTorqueGivenTheAcceleration) {
+  const dyncal::ParameterTable t = nominal_table<Er20>(dyncal::generated::er20::kNominalStandard, true);
+  dyncal::DirectResidual<Er20> direct;
+  const double dt = 1e-3, K = 200, step = 50;
+  const int k0 = 1000;
+  V6 q, qd, qdd;
+  Motion::state(0, q, qd, qdd);
+  EXPECT_EQ(direct.update(q, qd, qd, qdd, V6::Zero()), UpdateStatus::invalid_argument);    // before configure
+  EXPECT_EQ(direct.configure(t, V6::Constant(1001), dt), UpdateStatus::invalid_argument);  // K dt > 1
+  ASSERT_EQ(direct.configure(t, V6::Constant(K), dt), UpdateStatus::ok);
+  double before = 0, others = 0, tracking = 0;
+  for (int k = 0; k <= 2000; ++k) {
+    Motion::state(k * dt, q, qd, qdd);
+    V6 ext = V6::Zero();
+    if (k >= k0) ext[2] = step;
+    const V6 tau = feed_forward<Er20>(t, q, qd, qdd) - ext;
+    if (k == k0) {  // a non-finite sample is refused and changes nothing
+      V6 bad = qdd;
+      bad[1] = std::nan("");
+      const V6 r = direct.residual();
+      EXPECT_EQ(direct.update(q, qd, qd, bad, tau), UpdateStatus::rejected_non_finite);
+      EXPECT_EQ(direct.residual(), r);
+    }
+    ASSERT_EQ(direct.update(q, qd, qd, qdd, tau), UpdateStatus::ok);
+    const V6& r = direct.residual();
+    if (k < k0) {
+      before = std::max(before, r.cwiseAbs().maxCoeff());
+      continue;
+    }
+    const double expected = step * (1 - std::pow(1 - K * dt, k - k0 + 1));
+    tracking = std::max(tracking, std::abs(r[2] - expected));
+    for (int j = 0; j < 6; ++j)
+      if (j != 2) others = std::max(others, std::abs(r[j]));
+  }
+  // The model and the feed-forward round the generated constants apart (1e-9 relative).
+  EXPECT_LT(before, 1e-6);
+  EXPECT_LT(others, 1e-6);
+  EXPECT_LT(tracking, 1e-6);
+}
+
 TEST(MomentumObserver, FloatFollowsDouble) {
   const dyncal::ParameterTable t = nominal_table<Er20>(dyncal::generated::er20::kNominalStandard, false);
   dyncal::MomentumObserver<Er20, double> d;
@@ -284,7 +328,7 @@ TEST(ContactThreshold, CrossingRateMatchesTheCountOnGaussianProcesses) {
 
 }  // namespace
 
-TEST(CentredSlope, IsTheLeastSquaresLineThroughTheWindowDSamplesLate) {
+TEST(CentredSlope, IsTheLeastSquaresLineAndParabolaThroughTheWindowDSamplesLate) {
   using Slope = dyncal::CentredSlope<double, 3, 8>;
   using V = Slope::Vec;
   Slope s;
@@ -301,9 +345,9 @@ TEST(CentredSlope, IsTheLeastSquaresLineThroughTheWindowDSamplesLate) {
     x[1] = quantum * std::round(std::max(0.0, 0.05 * (k - 100)) * std::max(0.0, 0.05 * (k - 100)) / quantum);
     x[2] = 7.0;  // past `joints`: ignored
     q.push_back(x);
-    V qc, qdc, tauc;
+    V qc, qdc, qddc, tauc;
     Slope::Flags still;
-    const auto st = s.update(x, V::Constant(k), qc, qdc, tauc, still);
+    const auto st = s.update(x, V::Constant(k), qc, qdc, qddc, tauc, still);
     if (k < 2 * D) {
       EXPECT_EQ(st, dyncal::UpdateStatus::not_ready);
       continue;
@@ -322,14 +366,51 @@ TEST(CentredSlope, IsTheLeastSquaresLineThroughTheWindowDSamplesLate) {
       }
     }
     const Eigen::MatrixXd line = A.colPivHouseholderQr().solve(b);
+    Eigen::MatrixXd A2(2 * D + 1, 3);  // and the parabola: qdd is twice its t^2 coefficient
+    A2 << A, A.col(1).cwiseProduct(A.col(1));
+    const Eigen::MatrixXd parabola = A2.colPivHouseholderQr().solve(b);
     for (int j = 0; j < joints; ++j) {
       EXPECT_NEAR(qdc[j], line(1, j), 1e-9 * (1 + std::abs(line(1, j))));
+      EXPECT_NEAR(qddc[j], 2 * parabola(2, j), 1e-6 * (1 + std::abs(parabola(2, j))));
       EXPECT_EQ(qc[j], q[static_cast<size_t>(m)][j]);
       EXPECT_EQ(still[j] != 0, stalled[j]) << "sample " << m << " joint " << j;
     }
-    EXPECT_EQ(tauc[0], m);
+    EXPECT_NEAR(tauc[0], m, 1e-12 * m);  // a ramp's weighted mean over a symmetric window: its centre
     EXPECT_EQ(qc[2], 0.0);
     EXPECT_EQ(qdc[2], 0.0);
+  }
+}
+
+// The torque comes weighted as the slope weights the acceleration: where the acceleration steps
+// (from 0 to 2 rad/s^2 between two samples), the slope's change per period follows the weighted
+// acceleration fed as torque, while the raw acceleration is up to a whole step ahead of it.
+TEST(CentredSlope, WeightsTheTorqueAsTheSlopeWeightsTheAcceleration) {
+  using Slope = dyncal::CentredSlope<double, 1, 16>;
+  using V = Slope::Vec;
+  const double dt = 1e-3, a = 2.0;
+  for (const int D : {1, 5, 16}) {
+    Slope s;
+    ASSERT_EQ(s.reset(D, dt, 1), dyncal::UpdateStatus::ok);
+    double previous = std::nan(""), previous_tau = 0, raw_lag = 0, weighted_lag = 0;
+    for (int k = 0; k < 200; ++k) {
+      const double t = k * dt, t0 = 100.5 * dt;  // the step, between samples 100 and 101
+      const double q = 0.3 * t + (t > t0 ? 0.5 * a * (t - t0) * (t - t0) : 0.0);
+      const double acceleration = t > t0 ? a : 0.0;
+      V qc, qd, tau;
+      Slope::Flags still;
+      if (s.update(V::Constant(q), V::Constant(acceleration), qc, qd, tau, still) != dyncal::UpdateStatus::ok) continue;
+      const int m = k - D;
+      if (!std::isnan(previous)) {
+        const double change = (qd[0] - previous) / dt;  // at m - 1/2
+        const double raw = m * dt > t0 ? a : 0.0;
+        raw_lag = std::max(raw_lag, std::abs(change - raw));
+        weighted_lag = std::max(weighted_lag, std::abs(change - 0.5 * (tau[0] + previous_tau)));
+      }
+      previous = qd[0];
+      previous_tau = tau[0];
+    }
+    EXPECT_GT(raw_lag, 0.4 * a) << "D " << D;
+    EXPECT_LT(weighted_lag, 0.1 * a) << "D " << D;
   }
 }
 

@@ -13,6 +13,7 @@
 #include "dyncal/causal_differentiator.hpp"
 #include "dyncal/centred_slope.hpp"
 #include "dyncal/contact_threshold.hpp"
+#include "dyncal/direct_residual.hpp"
 #include "dyncal/extended_kalman_filter.hpp"
 #include "dyncal/friction_tracker.hpp"
 #include "dyncal/friction_uncertainty.hpp"
@@ -84,6 +85,7 @@ struct Workspace {
   dyncal::CausalDifferentiator<Scalar, 6> diff;
   dyncal::PayloadEstimator<Er20, Scalar> payload;
   dyncal::MomentumObserver<Er20, Scalar> observer;
+  dyncal::DirectResidual<Er20, Scalar> direct;
   dyncal::CentredSlope<Scalar, 6> slope;
   dyncal::FrictionUncertainty<Scalar, 6> uncertainty;
   dyncal::ParameterTable table;
@@ -140,17 +142,21 @@ void run_updaters(Workspace<Scalar>& w) {
   // The momentum observer on that table and a contact threshold (what a drive does per sample and
   // once per commit).
   ASSERT_EQ(w.observer.configure(w.table, V::Constant(Scalar(100)), Scalar(0.01)), dyncal::UpdateStatus::ok);
+  ASSERT_EQ(w.direct.configure(w.table, V::Constant(Scalar(100)), Scalar(0.01)), dyncal::UpdateStatus::ok);
   ASSERT_EQ(w.slope.reset(1, Scalar(0.01), 6), dyncal::UpdateStatus::ok);
   ASSERT_EQ(w.uncertainty.reset(Scalar(100), Scalar(0.01), 6), dyncal::UpdateStatus::ok);
   for (int i = 0; i < 50; ++i) {
     dyncal::test::fourier_state(0.01 * i, q_, qd_, qdd_);
-    V sq, sqd, stau;
+    V sq, sqd, sqdd, stau;
     Eigen::Matrix<int, 6, 1> still = Eigen::Matrix<int, 6, 1>::Zero();
-    const auto ss = w.slope.update(q_.cast<Scalar>(), V::Constant(Scalar(i)), sq, sqd, stau, still);
+    const auto ss = w.slope.update(q_.cast<Scalar>(), V::Constant(Scalar(i)), sq, sqd, sqdd, stau, still);
     ASSERT_TRUE(ss == dyncal::UpdateStatus::ok || ss == dyncal::UpdateStatus::not_ready);
     V weight;
     ASSERT_EQ(w.uncertainty.update(qd_.cast<Scalar>(), still, weight), dyncal::UpdateStatus::ok);
     ASSERT_EQ(w.observer.update(q_.cast<Scalar>(), qd_.cast<Scalar>(), V::Constant(Scalar(i))),
+              dyncal::UpdateStatus::ok);
+    ASSERT_EQ(w.direct.update(q_.cast<Scalar>(), qd_.cast<Scalar>(), qd_.cast<Scalar>(), qdd_.cast<Scalar>(),
+                              V::Constant(Scalar(i))),
               dyncal::UpdateStatus::ok);
   }
   ASSERT_TRUE(std::isfinite(dyncal::contact_threshold(Scalar(1), Scalar(0.5), Scalar(0.001), 6, Scalar(1e-5))));

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "dyncal_host/common/stop_and_go.hpp"
 #include "dyncal_host/identification/excitation/excitation.hpp"
 #include "dyncal_host/identification/logs/joint_log.hpp"
 #include "dyncal_host/identification/pipeline/compiled_robot.hpp"
@@ -30,8 +31,9 @@ inline RobotDescription test_robot(const std::string& name) {
 using ExtraTorque = std::function<void(const Eigen::VectorXd& q, const Eigen::VectorXd& qd, const Eigen::VectorXd& qdd,
                                        Eigen::VectorXd& tau)>;
 
-/// The arm's motion clock: u(t) = t without rests; with rests, the designed trajectory is played
-/// for `move` seconds, then held still for `rest` seconds, repeatedly, with ramps of constant
+/// The arm's motion clock: u(t) = t without rests; with rests, point-to-point operation
+/// (host_sim's StopAndGo, as the simulated drive plays it): the designed trajectory is played for
+/// `move` seconds, then held still for `rest` seconds, repeatedly, with ramps of constant
 /// deceleration and acceleration of the clock (0.4 s) between, as a robot stops and starts.
 /// rate: the trajectory's speed without rests (0.1: a tenth of the designed speed, a slow log).
 struct MotionClock {
@@ -42,15 +44,8 @@ struct MotionClock {
   void speed(double t, double& w, double& wd) const {
     w = rate, wd = 0;
     if (!rests) return;
-    const double cycle = move + rest, x = std::fmod(t, cycle);
-    if (x < move - ramp) return;
-    if (x < move) {  // slowing down
-      w = (move - x) / ramp, wd = -1 / ramp;
-    } else if (x < cycle - ramp) {  // at rest
-      w = 0, wd = 0;
-    } else {  // starting
-      w = (x - (cycle - ramp)) / ramp, wd = 1 / ramp;
-    }
+    double u = 0;
+    host::StopAndGo{move, rest, ramp}.at(t, u, w, wd);
   }
 };
 

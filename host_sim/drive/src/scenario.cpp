@@ -228,6 +228,16 @@ Scenario load_scenario(const std::string& path, const RobotDescription& robot) {
       s.contacts.push_back(e);
     }
   }
+  if (j.contains("stop_and_go")) {
+    const json& g = j["stop_and_go"];
+    const std::string where = w + ": stop_and_go";
+    if (!g.is_object()) throw InputError(where + " must be an object {move, rest, ramp}");
+    s.stop_and_go.move = number(g, "move", s.stop_and_go.move, where);
+    s.stop_and_go.rest = number(g, "rest", 1.5, where);
+    s.stop_and_go.ramp = number(g, "ramp", s.stop_and_go.ramp, where);
+    if (!(s.stop_and_go.rest > 0) || !s.stop_and_go.valid())
+      throw InputError(where + ": ramp must be > 0, move and rest >= ramp [s]");
+  }
   if (j.contains("joints")) {
     const json& js = j["joints"];
     if (!js.is_array() || static_cast<int>(js.size()) != s.num_joints)

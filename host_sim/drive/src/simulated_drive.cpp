@@ -76,7 +76,7 @@ double SimulatedDrive::remaining() const {
 void SimulatedDrive::start() {
   const double steps_per_sample = scenario_.control_rate_hz / sample_rate_hz;
   steps_per_sample_ = std::max(1L, std::lround(steps_per_sample));
-  total_steps_ = std::lround(periods * trajectory.period() * scenario_.control_rate_hz);
+  total_steps_ = std::lround(scenario_.stop_and_go.run_time(periods * trajectory.period()) * scenario_.control_rate_hz);
   plant_->begin(trajectory, scenario_, gains_fixed_, control_period());
   time_ = 0;
   steps_ = 0;

@@ -38,11 +38,15 @@ double default_observer_gain(double period) {
 }
 
 ObserverRun run_observer(const RobotDescription& robot, JointLog log, const ParameterSet& params, double gain,
-                         const std::vector<double>& band) {
+                         const std::vector<double>& band, ResidualKind kind) {
   if (params.robot != robot.name)
     throw InputError("the parameters are for robot '" + params.robot + "', not '" + robot.name + "'");
   const CompiledRobot& compiled = compiled_robot_for(robot);
   ObserverRun run;
+  run.kind = kind;
+  const bool direct = kind == ResidualKind::direct;
+  if (direct && log.has_qd)
+    throw InputError("the direct residual takes its acceleration from the window of q: not from a log with qd");
   std::vector<std::string> notes;
   const ParameterTable table = parameter_table(params, robot, &notes);
   // The grid first (its period sets the default gain), bridging gaps up to pi / K of the default.
@@ -62,11 +66,15 @@ ObserverRun run_observer(const RobotDescription& robot, JointLog log, const Para
   const Eigen::Index S = log.samples();
   const int N = log.joints();
   Eigen::MatrixXd qd = log.qd;
+  Eigen::MatrixXd tau = log.tau;  // the observer's torque: the slope's weighting of it without qd
+  Eigen::MatrixXd qdd;            // the direct residual's acceleration
   const std::vector<std::pair<Eigen::Index, Eigen::Index>> segments = log.segments();
   if (!log.has_qd) {
     // The velocity at sample m: the slope of the least-squares line through q_{m-D} .. q_{m+D}
     // (lib/ centred_slope.hpp, as a drive runs it), D = 1 / (K dt) samples, so that the observer
-    // takes q, qd and tau of one instant, D dt after it online. A difference of neighbouring
+    // takes q, qd and tau of one instant, D dt after it online, tau weighted over the window as the
+    // slope weights the acceleration (a stop or start's acceleration step then leaves no residual).
+    // A difference of neighbouring
     // samples carries the encoder's quantisation straight into p = M qd and the residual (K M a
     // quantum per period, in sparse impulses on a slow joint: tails far heavier than Gaussian).
     const Eigen::Index D = centred_slope_half_width(run.gain, run.period);
@@ -77,9 +85,10 @@ ObserverRun run_observer(const RobotDescription& robot, JointLog log, const Para
                        std::to_string(1.0 / (kMaxSlopeHalfWidth * run.period)) + " 1/s");
     run.delay = static_cast<double>(D) * run.period;
     qd = Eigen::MatrixXd::Zero(S, N);
+    if (direct) qdd = Eigen::MatrixXd::Zero(S, N);
     run.still = Eigen::MatrixXi::Zero(S, N);
     const auto slope = std::make_unique<Slope>();  // lib/ centred_slope.hpp, as a drive runs it
-    Slope::Vec q_in = Slope::Vec::Zero(), tau_in = Slope::Vec::Zero(), q_c, qd_c, tau_c;
+    Slope::Vec q_in = Slope::Vec::Zero(), tau_in = Slope::Vec::Zero(), q_c, qd_c, qdd_c, tau_c;
     Slope::Flags still;
     for (const auto& [a, b] : segments) {
       if (b - a < 2 * D + 3) continue;
@@ -87,11 +96,14 @@ ObserverRun run_observer(const RobotDescription& robot, JointLog log, const Para
       for (Eigen::Index m = a; m < b; ++m) {
         q_in.head(N) = log.q.row(m).transpose();
         tau_in.head(N) = log.tau.row(m).transpose();
-        const UpdateStatus st = slope->update(q_in, tau_in, q_c, qd_c, tau_c, still);
+        const UpdateStatus st = direct ? slope->update(q_in, tau_in, q_c, qd_c, qdd_c, tau_c, still)
+                                       : slope->update(q_in, tau_in, q_c, qd_c, tau_c, still);
         if (st == UpdateStatus::rejected_non_finite)
           throw InputError("sample " + std::to_string(m + 1) + " of the log is not finite");
         if (st != UpdateStatus::ok) continue;
         qd.row(m - D) = qd_c.head(N).transpose();
+        tau.row(m - D) = tau_c.head(N).transpose();
+        if (direct) qdd.row(m - D) = qdd_c.head(N).transpose();
         run.still.row(m - D) = still.head(N).transpose();
       }
       run.segments.emplace_back(a + D, b - D);
@@ -159,8 +171,15 @@ ObserverRun run_observer(const RobotDescription& robot, JointLog log, const Para
     }
   }
   run.r = Eigen::MatrixXd::Zero(S, N);
-  for (const auto& [a, b] : run.segments)
-    compiled.momentum_residual(table, run.gain, run.period, log.q, qd, qd_friction, log.tau, a, b, run.r);
+  for (const auto& [a, b] : run.segments) {
+    if (direct)
+      compiled.direct_residual(table, run.gain, run.period, log.q, qd, qd_friction, qdd, tau, a, b, run.r);
+    else
+      compiled.momentum_residual(table, run.gain, run.period, log.q, qd, qd_friction, tau, a, b, run.r);
+  }
+  if (direct)
+    run.notes.push_back(
+        "residual: direct, the model's torque error with qdd from the window's parabola, low-passed by K");
   run.t = log.t;
   return run;
 }

@@ -41,6 +41,7 @@ bool register_robot(const CompiledRobot& robot) {
   if (robot.standard_to_base) entry.standard_to_base = robot.standard_to_base;
   if (robot.base_regressor) entry.base_regressor = robot.base_regressor;
   if (robot.momentum_residual) entry.momentum_residual = robot.momentum_residual;
+  if (robot.direct_residual) entry.direct_residual = robot.direct_residual;
   return true;
 }
 

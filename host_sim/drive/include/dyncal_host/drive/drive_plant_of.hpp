@@ -175,7 +175,15 @@ class DrivePlantOf final : public DrivePlant {
     if (out.trip.fault != modbus_map::DriveFault::none) return out;
     // Control law (survey Fig. 3): feed-forward from the active table plus PD on the tracking error.
     Vec q_d, qd_d, qdd_d, tau_ff;
-    trajectory.evaluate(time, q_d, qd_d, qdd_d);
+    if (scenario.stop_and_go.on()) {  // the trajectory on the point-to-point clock u(time)
+      double u = 0, w = 1, wd = 0;
+      scenario.stop_and_go.at(time, u, w, wd);
+      trajectory.evaluate(u, q_d, qd_d, qdd_d);
+      qdd_d = w * w * qdd_d + wd * qd_d;
+      qd_d *= w;
+    } else {
+      trajectory.evaluate(time, q_d, qd_d, qdd_d);
+    }
     ops_.feedforward(active, q_d, qd_d, qdd_d, tau_ff);
     const Vec tau_cmd = tau_ff + kp_.cwiseProduct(q_d - q_meas) + kd_.cwiseProduct(qd_d - qd_meas);
     for (int j = 0; j < N; ++j) {

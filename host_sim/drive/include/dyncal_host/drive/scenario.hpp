@@ -10,6 +10,7 @@
 
 #include "dyncal_host/common/friction_model.hpp"
 #include "dyncal_host/common/robot_description.hpp"
+#include "dyncal_host/common/stop_and_go.hpp"
 
 namespace dyncal::host {
 
@@ -57,17 +58,17 @@ using MotorMap = std::array<std::array<double, kMaxDriveJoints>, kMaxDriveJoints
 MotorMap identity_motor_map();
 
 /// An external contact on the arm (docs/monitor.md "On the drive"): a force on a point of a link
-/// for a time window of the trajectory's clock. Its joint torques are J_p(q)^T F, J_p the point's
-/// translational Jacobian at the plant's exact q at each control period's start, held over the
-/// period as the command is (zero-order hold); with `stiffness` > 0 the force grows as the point
-/// presses into a stiff obstacle instead: F = -stiffness (d . n) n while d . n < 0, d the point's
-/// displacement from where it was at `start`, n the unit of `force` (its direction: the obstacle
-/// pushes back along it), and `force`'s magnitude is unused.
+/// for a time window of the run's time (sim_time; with stop_and_go not the trajectory's clock). Its joint torques are
+/// J_p(q)^T F, J_p the point's translational Jacobian at the plant's exact q at each control period's start, held over
+/// the period as the command is (zero-order hold); with `stiffness` > 0 the force grows as the point presses into a
+/// stiff obstacle instead: F = -stiffness (d . n) n while d . n < 0, d the point's displacement from where it was at
+/// `start`, n the unit of `force` (its direction: the obstacle pushes back along it), and `force`'s magnitude is
+/// unused.
 struct ExternalContact {
   int link = 1;                   ///< 1-based link (the link joint `link` moves)
   std::array<double, 3> point{};  ///< [m] in that link's frame (the generated frames, robot.json)
   std::array<double, 3> force{};  ///< [N] in the base frame
-  double start = 0;               ///< [s] trajectory time
+  double start = 0;               ///< [s] run time
   double duration = 0;            ///< [s]
   double stiffness = 0;           ///< [N/m]; 0: a force of fixed size
 };
@@ -101,6 +102,10 @@ struct Scenario {
     std::array<double, 6> inertia{};
   } payload;
   std::vector<ExternalContact> contacts;  ///< none by default
+  /// Point-to-point operation: the trajectory played in moves with stops between (off by default;
+  /// its clock drives the reference q_d, qd_d = w qd(u), qdd_d = w^2 qdd(u) + w' qd(u)); a run
+  /// plays the trajectory's periods on that clock, so it lasts longer by the rests.
+  StopAndGo stop_and_go;
 };
 
 /// The default scenario for `robot`: robot.json's transmission as the motor map (a coupled motor,

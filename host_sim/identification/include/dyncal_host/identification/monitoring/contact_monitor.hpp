@@ -24,8 +24,14 @@ inline constexpr double kContactDetectionTime = 0.02;
 /// at most 1 / period (the discrete observer needs K dt <= 1).
 double default_observer_gain(double period);
 
+/// Which residual run_observer computes: lib/'s generalised-momentum observer (the monitor's), or
+/// the direct residual (lib/ direct_residual.hpp: the model's torque error with the window's
+/// acceleration, low-passed alike), for comparison (docs/monitor.md "Observer or direct residual").
+enum class ResidualKind { momentum_observer, direct };
+
 /// The observer's residual over a log.
 struct ObserverRun {
+  ResidualKind kind = ResidualKind::momentum_observer;
   double gain = 0;           ///< K [1/s], every joint
   double period = 0;         ///< sample period of the uniform grid [s]
   double delay = 0;          ///< how far an online observer runs behind the samples it reports on [s]
@@ -57,8 +63,11 @@ struct ObserverRun {
 /// the log's qd), where a joint at rest reads |qd| above it on 0.1 % of its samples. Throws
 /// InputError: params of another robot, a model the observer cannot take, a gain with K dt > 1 or a
 /// velocity window over 1025 samples, a non-finite sample, the log's sampling (uniform_grid.hpp).
+/// kind direct: the direct residual instead, qdd twice the curvature of the least-squares parabola
+/// through the same window (lib/ centred_slope.hpp); also throws for a log with qd (its
+/// acceleration comes from q's window only).
 ObserverRun run_observer(const RobotDescription& robot, JointLog log, const ParameterSet& params, double gain = 0,
-                         const std::vector<double>& band = {});
+                         const std::vector<double>& band = {}, ResidualKind kind = ResidualKind::momentum_observer);
 
 /// The residual's statistics on contact-free motion, per joint: mean, standard deviation and the
 /// standard deviation of its sample-to-sample difference [Nm] (differences within segments), from

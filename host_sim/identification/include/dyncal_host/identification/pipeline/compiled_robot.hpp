@@ -54,6 +54,12 @@ struct CompiledRobot {
                                       const Eigen::MatrixXd& qd, const Eigen::MatrixXd& qd_friction,
                                       const Eigen::MatrixXd& tau, Eigen::Index from, Eigen::Index to,
                                       Eigen::MatrixXd& r);
+  /// The direct residual (lib/ direct_residual.hpp) over the same rows, with the acceleration qdd
+  /// [rad/s^2] (S x N) besides; the same errors.
+  using DirectResidualFn = void (*)(const ParameterTable& table, double gain, double dt, const Eigen::MatrixXd& q,
+                                    const Eigen::MatrixXd& qd, const Eigen::MatrixXd& qd_friction,
+                                    const Eigen::MatrixXd& qdd, const Eigen::MatrixXd& tau, Eigen::Index from,
+                                    Eigen::Index to, Eigen::MatrixXd& r);
 
   /// The identification model of each built term set (by built_term_set_index): what the
   /// identification pipeline, compiled once, needs of this robot. Its names are the identified
@@ -65,6 +71,7 @@ struct CompiledRobot {
   StandardToBaseFn standard_to_base = nullptr;
   BaseRegressorFn base_regressor = nullptr;
   MomentumResidualFn momentum_residual = nullptr;
+  DirectResidualFn direct_residual = nullptr;
 };
 
 /// Adds (or completes) the entry of `robot.name`: fields that are set in `robot` overwrite the

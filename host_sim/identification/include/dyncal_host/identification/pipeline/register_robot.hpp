@@ -6,6 +6,7 @@
 #include <string>
 #include <utility>
 
+#include "dyncal/direct_residual.hpp"
 #include "dyncal/identification_model.hpp"
 #include "dyncal/momentum_observer.hpp"
 #include "dyncal/nonlinear_friction.hpp"
@@ -102,8 +103,28 @@ void momentum_residual(const ParameterTable& table, double gain, double dt, cons
   }
 }
 
+/// CompiledRobot::DirectResidualFn for `Robot`.
+template <class Robot>
+void direct_residual(const ParameterTable& table, double gain, double dt, const Eigen::MatrixXd& q,
+                     const Eigen::MatrixXd& qd, const Eigen::MatrixXd& qd_friction, const Eigen::MatrixXd& qdd,
+                     const Eigen::MatrixXd& tau, Eigen::Index from, Eigen::Index to, Eigen::MatrixXd& r) {
+  using Vec = typename Robot::template JointVector<double>;
+  DirectResidual<Robot> residual;
+  const UpdateStatus configured = residual.configure(table, Vec::Constant(gain), dt);
+  if (configured != UpdateStatus::ok)
+    throw InputError(std::string("direct residual: the parameter table or the gain is refused (") +
+                     to_string(configured) + ")");
+  for (Eigen::Index s = from; s < to; ++s) {
+    const UpdateStatus st = residual.update(q.row(s).transpose(), qd.row(s).transpose(), qd_friction.row(s).transpose(),
+                                            qdd.row(s).transpose(), tau.row(s).transpose());
+    if (st != UpdateStatus::ok)
+      throw InputError("direct residual: sample " + std::to_string(s + 1) + " refused (" + to_string(st) + ")");
+    r.row(s) = residual.residual().transpose();
+  }
+}
+
 /// Registers the robot's identity, nominal standard parameters (the generated kNominalStandard),
-/// excitation regressor, inverse dynamics and momentum observer.
+/// excitation regressor, inverse dynamics, momentum observer and direct residual.
 template <class Robot>
 bool register_robot_model(const double (&nominal_standard)[Robot::kNumStandard]) {
   CompiledRobot c;
@@ -118,6 +139,7 @@ bool register_robot_model(const double (&nominal_standard)[Robot::kNumStandard])
   c.standard_to_base = &standard_to_base<Robot>;
   c.base_regressor = &base_regressor<Robot>;
   c.momentum_residual = &momentum_residual<Robot>;
+  c.direct_residual = &direct_residual<Robot>;
   return register_robot(c);
 }
 
