@@ -203,8 +203,8 @@ TEST_P(DriveCollision, ContactsStopTheDriveWithin20msAndUnseenMotionRaisesNoAlar
     Scenario sc = cal.scenario;
     sc.seed = 100 + i;  // each run its own noise and its own excitation
     // DYNCAL_STOP_AND_GO=1: every other run point-to-point (moves of 3 s, stops of 1.5 s, braking
-    // and starting over 0.4 s without a jerk limit). Open on the drive: arm6 and cobot7 trip at the
-    // first stop (docs/monitor.md "Open").
+    // and starting over 0.4 s without a jerk limit). Open on the drive: arm6's and cobot7's wrists
+    // trip after stops, as the plant (no static friction) lets them creep (docs/monitor.md "Open").
     if (stop_and_go && i % 2 == 1) sc.stop_and_go = StopAndGo{3.0, 1.5, 0.4};
     auto dp = monitored_drive(cal, sc, cal.monitor);
     SimulatedDrive& d = *dp;

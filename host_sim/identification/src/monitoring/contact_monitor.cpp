@@ -74,9 +74,9 @@ ObserverRun run_observer(const RobotDescription& robot, JointLog log, const Para
     // (lib/ centred_slope.hpp, as a drive runs it), D = 1 / (K dt) samples, so that the observer
     // takes q, qd and tau of one instant, D dt after it online, tau weighted over the window as the
     // slope weights the acceleration (a stop or start's acceleration step then leaves no residual).
-    // A difference of neighbouring
-    // samples carries the encoder's quantisation straight into p = M qd and the residual (K M a
-    // quantum per period, in sparse impulses on a slow joint: tails far heavier than Gaussian).
+    // A difference of neighbouring samples carries the encoder's quantisation straight into
+    // p = M qd and the residual (K M a quantum per period, in sparse impulses on a slow joint:
+    // tails far heavier than Gaussian).
     const Eigen::Index D = centred_slope_half_width(run.gain, run.period);
     if (D > kMaxSlopeHalfWidth)
       throw InputError("observer gain " + std::to_string(run.gain) + " 1/s: its velocity window of " +

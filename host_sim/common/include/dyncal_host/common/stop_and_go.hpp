@@ -1,7 +1,7 @@
 #pragma once
 // Point-to-point operation of a designed trajectory: played for a while, stopped, held, started
 // again, as a robot moves between stations. Used by the simulated drive's scenario
-// ("stop_and_go", docs/drive.md) and by the tests' simulated logs.
+// ("stop_and_go", docs/modbus.md "Scenario file") and by the tests' simulated logs.
 
 #include <cmath>
 

@@ -58,12 +58,13 @@ using MotorMap = std::array<std::array<double, kMaxDriveJoints>, kMaxDriveJoints
 MotorMap identity_motor_map();
 
 /// An external contact on the arm (docs/monitor.md "On the drive"): a force on a point of a link
-/// for a time window of the run's time (sim_time; with stop_and_go not the trajectory's clock). Its joint torques are
-/// J_p(q)^T F, J_p the point's translational Jacobian at the plant's exact q at each control period's start, held over
-/// the period as the command is (zero-order hold); with `stiffness` > 0 the force grows as the point presses into a
-/// stiff obstacle instead: F = -stiffness (d . n) n while d . n < 0, d the point's displacement from where it was at
-/// `start`, n the unit of `force` (its direction: the obstacle pushes back along it), and `force`'s magnitude is
-/// unused.
+/// for a time window of the run's time (sim_time; with stop_and_go not the trajectory's clock).
+/// Its joint torques are J_p(q)^T F, J_p the point's translational Jacobian at the plant's exact q
+/// at each control period's start, held over the period as the command is (zero-order hold); with
+/// `stiffness` > 0 the force grows as the point presses into a stiff obstacle instead:
+/// F = -stiffness (d . n) n while d . n < 0, d the point's displacement from where it was at
+/// `start`, n the unit of `force` (its direction: the obstacle pushes back along it), and `force`'s
+/// magnitude is unused.
 struct ExternalContact {
   int link = 1;                   ///< 1-based link (the link joint `link` moves)
   std::array<double, 3> point{};  ///< [m] in that link's frame (the generated frames, robot.json)
