@@ -2,11 +2,13 @@
 // of tests/robots, in process (the Modbus registers: test_drive_modbus):
 // - contact torques: J_p^T F of the drive's forward kinematics against the generated inverse
 //   dynamics' gravity torque of a point mass at the same point (an independent path: SymPy's);
-// - each arm is calibrated on its own drive: a 20 s excitation recorded from the ring, identify
-//   (WLS, Eq. 7, sign-constrained), the observer's residual statistics of that log and the thresholds for 0.01 false
-//   alarms per hour (contact_monitor.hpp); the table committed, the monitor set from them;
-// - contact-free runs on excitations the calibration never saw (DYNCAL_STOP_AND_GO=1: every other
-//   one point-to-point, scenario stop_and_go; open, docs/monitor.md): no collision fault at 0.01 false
+// - each arm is calibrated on its own drive (its plant with static friction): a 20 s excitation
+//   recorded from the ring, identify as calibrate does (WLS, Eq. 7, sign-constrained, rows slower
+//   than 2 % of the joint's top speed left out), the observer's residual statistics of that log and
+//   the thresholds for 0.01 false alarms per hour (contact_monitor.hpp); the table committed, the
+//   monitor set from them;
+// - contact-free runs on excitations the calibration never saw (every other one point-to-point,
+//   scenario stop_and_go, the plant with static friction): no collision fault at 0.01 false
 //   alarms per hour, and at a stated 100 per hour the alarms within a factor 2 of the rate
 //   (20 minutes per arm, an hour over the three; DYNCAL_LONG_MONITOR=1: an hour per arm);
 // - 20 contacts per arm of 5-20 % of a joint's tau_max (the joint the force loads most) on random
@@ -91,6 +93,7 @@ DriveCalibration calibrate(const std::string& name) {
   c.robot = dyncal::test::test_robot(name);
   c.scenario = default_scenario(c.robot);
   c.scenario.encoder_counts = 1 << 20;  // 20-bit joint encoders, as test_contact_monitor's logs
+  c.scenario.stiction = true;           // a joint at rest sticks (at reversals, and in the point-to-point runs' stops)
   // Friction as tests/support/simulated_log.hpp's: Fc 2 % of tau_max, beta qd_max 1 % (Eq. 7).
   for (int j = 0; j < c.robot.num_joints; ++j) {
     c.scenario.friction[static_cast<size_t>(j)].Fc = 0.02 * c.robot.tau_max[j];
@@ -110,7 +113,8 @@ DriveCalibration calibrate(const std::string& name) {
   const JointLog log = samples_to_log(samples, d.sample_rate_hz, c.robot.num_joints);
   IdentifyOptions options;
   options.terms = dyncal::kFrictionEq7;
-  options.sign_constraints = true;  // as calibrate: a drive table holds friction >= 0
+  options.sign_constraints = true;    // as calibrate: a drive table holds friction >= 0
+  options.min_speed_fraction = 0.02;  // as calibrate: rows where a joint sticks at a reversal left out
   const ParameterSet params = parameter_set(identify(c.robot, log, options));
   const ObserverRun run = run_observer(c.robot, log, params);
   c.stats = residual_statistics(run, "drive calibration");
@@ -189,7 +193,6 @@ TEST_P(DriveCollision, ContactsStopTheDriveWithin20msAndUnseenMotionRaisesNoAlar
   // a joint's |r - mean| above its threshold with the drive's widening, crossings within the
   // observer's time constant 1 / K one alarm, as dyncal monitor merges them).
   const bool long_run = std::getenv("DYNCAL_LONG_MONITOR") != nullptr;
-  const bool stop_and_go = std::getenv("DYNCAL_STOP_AND_GO") != nullptr;
   const double quiet_seconds = long_run ? 3600.0 : 1200.0;
   const std::vector<ContactThreshold> stated = contact_thresholds(cal.stats, 100.0);
   std::cout << "  at 100 per hour:";
@@ -202,10 +205,9 @@ TEST_P(DriveCollision, ContactsStopTheDriveWithin20msAndUnseenMotionRaisesNoAlar
   for (unsigned i = 0; quiet < quiet_seconds; ++i) {
     Scenario sc = cal.scenario;
     sc.seed = 100 + i;  // each run its own noise and its own excitation
-    // DYNCAL_STOP_AND_GO=1: every other run point-to-point (moves of 3 s, stops of 1.5 s, braking
-    // and starting over 0.4 s without a jerk limit). Open on the drive: arm6's and cobot7's wrists
-    // trip after stops, as the plant (no static friction) lets them creep (docs/monitor.md "Open").
-    if (stop_and_go && i % 2 == 1) sc.stop_and_go = StopAndGo{3.0, 1.5, 0.4};
+    // Every other run point-to-point (moves of 3 s, stops of 1.5 s, braking and starting over 0.4 s
+    // without a jerk limit), where the plant's static friction holds the resting joints.
+    if (i % 2 == 1) sc.stop_and_go = StopAndGo{3.0, 1.5, 0.4};
     auto dp = monitored_drive(cal, sc, cal.monitor);
     SimulatedDrive& d = *dp;
     d.trajectory = default_excitation(robot, 0.1, 5, 1, 11 + i, nullptr);
@@ -349,8 +351,8 @@ INSTANTIATE_TEST_SUITE_P(TestRobots, DriveCollision, ::testing::Values("arm3", "
 
 // The point-to-point clock (stop_and_go.hpp): u is the integral of its speed w (Simpson on a fine
 // grid), w the integral of w', u advances `move` per cycle, run_time inverts u; the scenario reads it
-// and refuses a ramp longer than a phase with one line naming the field.
-TEST(DriveCollisionSettings, StopAndGoClockAndItsScenarioField) {
+// and refuses a ramp longer than a phase with one line naming the field; and its stiction flag.
+TEST(DriveCollisionSettings, StopAndGoClockAndTheScenarioFields) {
   const StopAndGo clock{3.0, 1.5, 0.4};
   ASSERT_TRUE(clock.on() && clock.valid());
   double u_integral = 0, w_integral = 1, worst_u = 0, worst_w = 0;
@@ -391,6 +393,17 @@ TEST(DriveCollisionSettings, StopAndGoClockAndItsScenarioField) {
   }
   std::filesystem::remove(path);
   EXPECT_FALSE(default_scenario(robot).stop_and_go.on());
+  EXPECT_FALSE(default_scenario(robot).stiction);
+  std::ofstream(path) << R"({"stiction": true})";
+  EXPECT_TRUE(load_scenario(path, robot).stiction);
+  std::ofstream(path) << R"({"stiction": 1})";
+  try {
+    load_scenario(path, robot);
+    ADD_FAILURE() << "a stiction that is not a boolean was taken";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("stiction"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove(path);
 }
 
 TEST(DriveCollisionSettings, RefusedValuesLeaveTheMonitorAsItWas) {
@@ -420,3 +433,84 @@ TEST(DriveCollisionSettings, RefusedValuesLeaveTheMonitorAsItWas) {
 }
 
 }  // namespace
+
+// Scenario::stiction (drive_plant_of.hpp): half a second into a point-to-point run's rest every joint
+// of cobot7 (its wrist light next to its friction) has stalled, its encoder reading one value;
+// without static friction the same rest creeps (the Coulomb term flips sign every substep); a push
+// of three times joint 1's Fc during the rest breaks it loose, and once the push ends the joints
+// stall again.
+TEST(DrivePlantStiction, RestingJointsStallUntilAPushExceedsTheirFriction) {
+  const RobotDescription robot = dyncal::test::test_robot("cobot7");
+  const int n = robot.num_joints;
+  Scenario sc = default_scenario(robot);
+  sc.encoder_counts = 1 << 20;
+  for (int j = 0; j < n; ++j) {
+    sc.friction[static_cast<size_t>(j)].Fc = 0.02 * robot.tau_max[j];
+    sc.friction[static_cast<size_t>(j)].beta = 0.01 * robot.tau_max[j] / robot.qd_max[j];
+  }
+  sc.stop_and_go = StopAndGo{3.0, 1.5, 0.4};  // at rest from 3.0 s to 4.1 s
+  const std::string flash = flash_path("cobot7_stiction");
+  // Per joint, the spread of the encoder reading over [from, to) s of a run of the scenario.
+  auto spread = [&](const Scenario& s, double from, double to) {
+    std::filesystem::remove(flash);
+    SimulatedDrive d(robot, s, flash);
+    d.trajectory = default_excitation(robot, 0.1, 5, 1, 3, nullptr);
+    d.periods = 1;
+    std::vector<dyncal::port::DriveSample> samples;
+    play(d, to, &samples);
+    EXPECT_EQ(d.state(), mm::DriveState::playing) << to_string(d.fault());
+    std::vector<double> lo(static_cast<size_t>(n), 1e30), hi(static_cast<size_t>(n), -1e30);
+    for (const auto& x : samples) {
+      if (x.seq * d.control_period() < from) continue;
+      for (int j = 0; j < n; ++j) {
+        lo[static_cast<size_t>(j)] = std::min(lo[static_cast<size_t>(j)], static_cast<double>(x.q[j]));
+        hi[static_cast<size_t>(j)] = std::max(hi[static_cast<size_t>(j)], static_cast<double>(x.q[j]));
+      }
+    }
+    std::vector<double> out(static_cast<size_t>(n));
+    for (int j = 0; j < n; ++j) out[static_cast<size_t>(j)] = hi[static_cast<size_t>(j)] - lo[static_cast<size_t>(j)];
+    return std::make_pair(out, samples.empty() ? dyncal::port::DriveSample{} : samples.back());
+  };
+  Scenario kinetic = sc;
+  kinetic.stiction = false;
+  sc.stiction = true;
+  const auto [still, at_rest] = spread(sc, 3.5, 4.1);
+  const auto creep = spread(kinetic, 3.5, 4.1).first;
+  double most_creep = 0;
+  for (int j = 0; j < n; ++j) {
+    EXPECT_EQ(still[static_cast<size_t>(j)], 0.0) << "joint " << j + 1 << " moved at rest with static friction";
+    most_creep = std::max(most_creep, creep[static_cast<size_t>(j)]);
+  }
+  const double count = 2 * M_PI / (1 << 20) / robot.gear_ratios[0];  // joint 1's encoder count [rad]
+  EXPECT_GT(most_creep, 10 * count) << "the kinetic plant's rest did not creep: the comparison shows nothing";
+
+  // A push on link 1 at 3.6-3.7 s (it loads joint 1 alone): three times joint 1's Fc.
+  JointArray q{};
+  for (int j = 0; j < n; ++j) q[static_cast<size_t>(j)] = at_rest.q[j];
+  const std::array<double, 3> point{0.1, 0.1, 0.0};
+  std::filesystem::remove(flash);
+  const SimulatedDrive probe(robot, sc, flash);
+  std::array<double, 3> best{};
+  double best_torque = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    std::array<double, 3> f{};
+    f[static_cast<size_t>(axis)] = 1.0;
+    const double t = probe.contact_torque(q, 1, point, f)[0];
+    if (std::abs(t) > std::abs(best_torque)) best_torque = t, best = f;
+  }
+  ASSERT_GT(std::abs(best_torque), 1e-3);
+  ExternalContact push;
+  push.link = 1;
+  push.point = point;
+  for (int k = 0; k < 3; ++k)
+    push.force[static_cast<size_t>(k)] = best[static_cast<size_t>(k)] * 3.0 * sc.friction[0].Fc / best_torque;
+  push.start = 3.6;
+  push.duration = 0.1;
+  Scenario pushed = sc;
+  pushed.contacts.push_back(push);
+  EXPECT_GT(spread(pushed, 3.5, 3.8).first[0], 10 * count) << "a push of 3 Fc left joint 1 stuck";
+  const auto after = spread(pushed, 3.95, 4.1).first;
+  for (int j = 0; j < n; ++j)
+    EXPECT_EQ(after[static_cast<size_t>(j)], 0.0) << "joint " << j + 1 << " did not stall again after the push";
+  std::filesystem::remove(flash);
+}

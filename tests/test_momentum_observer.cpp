@@ -16,6 +16,7 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <iostream>
 #include <random>
 #include <vector>
 
@@ -411,6 +412,45 @@ TEST(CentredSlope, WeightsTheTorqueAsTheSlopeWeightsTheAcceleration) {
     }
     EXPECT_GT(raw_lag, 0.4 * a) << "D " << D;
     EXPECT_LT(weighted_lag, 0.1 * a) << "D " << D;
+  }
+}
+
+// A torque held over each period (a drive's command, TorqueHold::zero_order): the motion between
+// samples k and k + 1 is tau_k's (q, qd exact for a piecewise constant acceleration), and with the
+// weights shifted half a sample the slope's change between samples equals the trapezoid of the
+// weighted torque to rounding, through an acceleration step; the sampled weights leave a part of the
+// step (K dt / 2 of it for the observer: a half-sample shift).
+TEST(CentredSlope, AHeldTorqueShiftsItsWeightsHalfASample) {
+  using Slope = dyncal::CentredSlope<double, 1, 16>;
+  using V = Slope::Vec;
+  const double dt = 1e-3, a = 2.0;
+  for (const int D : {1, 5, 16}) {
+    double lag[2] = {0, 0};
+    for (const auto hold : {dyncal::TorqueHold::sampled, dyncal::TorqueHold::zero_order}) {
+      Slope s;
+      ASSERT_EQ(s.reset(D, dt, 1, hold), dyncal::UpdateStatus::ok);
+      double q = 0.1, v = 0.3, previous = std::nan(""), previous_tau = 0;
+      for (int k = 0; k < 200; ++k) {
+        const double held = k >= 100 ? a : 0.0;  // applied from sample k to k + 1
+        V qc, qd, tau;
+        Slope::Flags still;
+        const dyncal::UpdateStatus st = s.update(V::Constant(q), V::Constant(held), qc, qd, tau, still);
+        q += dt * v + 0.5 * dt * dt * held;
+        v += dt * held;
+        if (st != dyncal::UpdateStatus::ok) continue;
+        if (!std::isnan(previous)) {
+          const double change = (qd[0] - previous) / dt;
+          double& worst = lag[hold == dyncal::TorqueHold::zero_order ? 1 : 0];
+          worst = std::max(worst, std::abs(change - 0.5 * (tau[0] + previous_tau)));
+        }
+        previous = qd[0];
+        previous_tau = tau[0];
+      }
+    }
+    EXPECT_LT(lag[1], 1e-9 * a) << "D " << D;
+    EXPECT_GT(lag[0], 0.02 * a) << "D " << D;
+    std::cout << "D " << D << ": a held step's lag " << lag[0] / a << " of the step with the sampled weights, "
+              << lag[1] / a << " with the held ones\n";
   }
 }
 

@@ -228,6 +228,10 @@ Scenario load_scenario(const std::string& path, const RobotDescription& robot) {
       s.contacts.push_back(e);
     }
   }
+  if (j.contains("stiction")) {
+    if (!j["stiction"].is_boolean()) throw InputError(w + ": stiction must be true or false");
+    s.stiction = j["stiction"].get<bool>();
+  }
   if (j.contains("stop_and_go")) {
     const json& g = j["stop_and_go"];
     const std::string where = w + ": stop_and_go";

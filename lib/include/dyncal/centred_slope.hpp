@@ -19,11 +19,23 @@ int centred_slope_half_width(Scalar gain, Scalar dt) noexcept {
   return !(d >= 1.0) ? 1 : d > 1073741824.0 ? 1073741824 : static_cast<int>(d);
 }
 
+/// How a torque sample relates to the motion between position samples.
+///   sampled: the torque at the sample's instant (a logged current, a simulated log's tau(t_m));
+///   zero_order: the torque applied from this sample to the next (a drive's own command, held over
+///     its control period), so that the motion from q_m to q_{m+1} is tau_m's.
+/// The momentum observer (momentum_observer.hpp) integrates the weighted torque by the trapezoidal
+/// rule; with the torque's weights below, the change of the slope between samples m - 1 and m
+/// equals that integral for either kind: with a held torque the second difference of q at m
+/// carries (tau_{m-1} + tau_m) / 2, which shifts the weights half a sample. The other weights leave
+/// an acceleration step a residual of up to K dt / 2 of the step (10 % at K dt = 0.2).
+enum class TorqueHold : int { sampled = 0, zero_order = 1 };
+
 /// Streams samples (q, tau) and reports, D samples late, sample m's q, its velocity
 ///   qd_m = sum_{i=-D..D} i q_{m+i} / (dt D (D + 1) (2 D + 1) / 3),
 /// the slope of the least-squares line through q_{m-D} .. q_{m+D}, and the torque weighted as
 /// that slope weights the acceleration:
-///   tau_m = sum_{i=-D..D} w_i tau_{m+i} / sum w_i,   w_i = (D + 1/2)^2 - i^2.
+///   tau_m = sum_{i=-D..D} w_i tau_{m+i} / sum w_i,   w_i = (D + 1/2)^2 - (i + s)^2,
+/// s = 0 for a sampled torque and 1/2 for one held over the period (TorqueHold).
 ///
 /// The slope is symmetric, so q's curvature does not bias it, and the encoder's quantisation,
 /// which a difference of neighbouring samples carries whole into qd (sparse impulses of a
@@ -41,7 +53,7 @@ int centred_slope_half_width(Scalar gain, Scalar dt) noexcept {
 ///
 /// Scalar: float or double. N: the most joints (the first `joints` entries are used, the rest read
 /// 0). MaxHalfWidth: the largest D. Memory: two rings of 2 MaxHalfWidth + 1 N-vectors and
-/// MaxHalfWidth + 1 weights; no heap.
+/// 2 MaxHalfWidth + 1 weights; no heap.
 template <typename Scalar, int N, int MaxHalfWidth = 64>
 class CentredSlope {
  public:
@@ -49,19 +61,23 @@ class CentredSlope {
   using Flags = Eigen::Matrix<int, N, 1>;
   static constexpr int kCapacity = 2 * MaxHalfWidth + 1;
 
-  /// Half-width D (samples, 1..MaxHalfWidth), sample period dt [s] > 0, joints 1..N; clears the
-  /// history. invalid_argument otherwise (state unchanged).
-  UpdateStatus reset(int half_width, Scalar dt, int joints) noexcept {
+  /// Half-width D (samples, 1..MaxHalfWidth), sample period dt [s] > 0, joints 1..N, how the torque
+  /// samples relate to the motion (TorqueHold); clears the history. invalid_argument otherwise
+  /// (state unchanged).
+  UpdateStatus reset(int half_width, Scalar dt, int joints, TorqueHold hold = TorqueHold::sampled) noexcept {
     if (half_width < 1 || half_width > MaxHalfWidth || !(dt > Scalar(0)) || !(dt < Scalar(1e30)) || joints < 1 ||
         joints > N)
       return UpdateStatus::invalid_argument;
     D_ = half_width;
     joints_ = joints;
     norm_ = Scalar(D_ * (D_ + 1) * (2 * D_ + 1)) / Scalar(3) * dt;
-    // w_i = (D + 1/2)^2 - i^2 over i = -D..D sums to (2D + 1) ((D + 1/2)^2 - D (D + 1) / 3).
-    const double half = D_ + 0.5;
-    const double sum = (2 * D_ + 1) * (half * half - D_ * (D_ + 1.0) / 3.0);
-    for (int i = 0; i <= D_; ++i) weight_[i] = Scalar((half * half - double(i) * i) / sum);
+    // w_i = (D + 1/2)^2 - (i + s)^2 over i = -D..D, s = 0 for a sampled torque, 1/2 for a held one.
+    const double half = D_ + 0.5, shift = hold == TorqueHold::zero_order ? 0.5 : 0.0;
+    // Their sum: (2D + 1) ((D + 1/2)^2 - D (D + 1) / 3) for s = 0, 2D (D + 1/2)^2 - D (4 D^2 - 1) / 6
+    // (the half-integers' squares) for s = 1/2.
+    const double sum = hold == TorqueHold::zero_order ? 2 * D_ * half * half - D_ * (4.0 * D_ * D_ - 1.0) / 6.0
+                                                      : (2 * D_ + 1) * (half * half - D_ * (D_ + 1.0) / 3.0);
+    for (int i = -D_; i <= D_; ++i) weight_[i + D_] = Scalar((half * half - (i + shift) * (i + shift)) / sum);
     // The least-squares parabola's curvature: qdd = 2 sum (i^2 - c) q_i / (dt^2 sum (i^2 - c)^2),
     // c = D (D + 1) / 3 the mean of i^2 (its columns 1, i, i^2 - c orthogonal on the window).
     double curvature_sum = 0;
@@ -113,7 +129,7 @@ class CentredSlope {
     still = Flags::Zero();
     Scalar slope[N] = {};
     for (int i = -D_, k = index(centre - D_); i <= D_; ++i, k = k + 1 == kCapacity ? 0 : k + 1) {
-      const Scalar w = weight_[i < 0 ? -i : i];
+      const Scalar w = weight_[i + D_];
       for (int j = 0; j < joints_; ++j) {
         slope[j] += Scalar(i) * q_ring_[k][j];
         tau[j] += w * tau_ring_[k][j];
@@ -143,7 +159,7 @@ class CentredSlope {
 
   Vec q_ring_[kCapacity] = {};
   Vec tau_ring_[kCapacity] = {};
-  Scalar weight_[MaxHalfWidth + 1] = {};  ///< w_|i| / sum w
+  Scalar weight_[kCapacity] = {};  ///< w_i / sum w at i + D
   Flags stalled_ = Flags::Zero();
   Scalar norm_ = Scalar(1), curvature_norm_ = Scalar(1);
   long count_ = 0;

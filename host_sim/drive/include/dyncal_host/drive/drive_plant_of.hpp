@@ -5,6 +5,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <optional>
@@ -127,6 +128,8 @@ class DrivePlantOf final : public DrivePlant {
     trajectory.evaluate(0.0, q_d, qd_d, qdd_d);  // the simulation starts on the trajectory
     q_ = q_d;
     qd_ = qd_d;
+    stuck_.fill(false);
+    start_sign_.fill(0.0);
     q_meas_prev_ = quantise(q_) - qd_d * dt;
     anchors_.assign(scenario.contacts.size(), std::nullopt);
     begin_monitor(dt);
@@ -460,7 +463,7 @@ class DrivePlantOf final : public DrivePlant {
     widening_ = Vec::Zero();
     if (!(monitor_.gain > 0)) return;
     if (observer_.configure(active_, Vec::Constant(monitor_.gain), dt) != UpdateStatus::ok ||
-        slope_.reset(centred_slope_half_width(monitor_.gain, dt), dt, N) != UpdateStatus::ok ||
+        slope_.reset(centred_slope_half_width(monitor_.gain, dt), dt, N, TorqueHold::zero_order) != UpdateStatus::ok ||
         uncertainty_.reset(monitor_.gain, dt, N) != UpdateStatus::ok) {
       monitor_refused_ = true;
       return;
@@ -479,6 +482,8 @@ class DrivePlantOf final : public DrivePlant {
   Mat motor_ = Mat::Identity();             // Scenario::motor_map: motor velocities v = T qd
   Mat rotor_ = Mat::Zero();                 // the motors' rotor inertia on the joints: sum_m Ia_m T_m^T T_m
   Vec q_ = Vec::Zero(), qd_ = Vec::Zero();  // plant state
+  std::array<bool, N> stuck_{};             // Scenario::stiction: motor m held at rest by its static friction
+  std::array<double, N> start_sign_{};      // a motor released at this substep's start: its direction
   Vec q_meas_prev_ = Vec::Zero();
   Vec kp_ = Vec::Zero(), kd_ = Vec::Zero();
   Vec quantum_ = Vec::Zero();                                             // encoder resolution on the joint side [rad]
@@ -500,11 +505,40 @@ class DrivePlantOf final : public DrivePlant {
 /// Plant: (M(q) + sum_m Ia_m T_m^T T_m) qdd = tau - h(q, qd) - T^T f(T qd) - effects, RK4 with
 /// zero-order hold (T the motor map, f the motors' friction; the identity without coupled motors).
 /// qdd0: the acceleration at the period's start (the first RK4 stage).
+/// With scenario.stiction the motors in stuck_ are held: their velocities v_S = T_S qd stay zero by
+/// a holding torque T_S^T f_S in place of their friction, f_S = (T_S M^-1 T_S^T)^-1 T_S M^-1 rhs
+/// (the constraint's force, Gauss's principle). At each substep's start a motor whose f_m leaves
+/// [friction(-0), friction(+0)] is released (the largest excess first, then the rest re-solved)
+/// and starts in f_m's direction against its friction. Within a substep each moving motor's friction
+/// keeps the sign of its direction at the start; after the substep a motor whose velocity ended
+/// against that direction (it crossed or reached zero) is caught: qd is projected onto v_S = 0 in the metric of M (the
+/// velocity change an impulse along T_S^T makes), and the next substep's start decides if it holds.
 template <class Robot>
 void DrivePlantOf<Robot>::integrate(const Scenario& scenario, const Vec& tau_cmd, double clock, double dt,
                                     JointArray& qdd0) {
   const double warm = clock;
-  auto accel = [&](const Vec& q, const Vec& qd, Vec& qdd) {
+  const bool stiction = scenario.stiction;
+  // The velocity a motor's friction is evaluated at while its velocity is zero or against its
+  // direction (below): its sign alone matters (a Stribeck law's value at 0+).
+  constexpr double kStartVelocity = 1e-12;
+  // With stiction, each moving motor's direction over a substep: its friction keeps that sign in
+  // every RK4 stage (a stage that crosses zero would otherwise flip it and throw a light joint
+  // back), and a velocity that ends the substep against it crossed zero.
+  std::array<double, N> direction{};
+  struct Hold {
+    Vec force = Vec::Zero();                 // f_m of the stuck motors
+    Vec lo = Vec::Zero(), hi = Vec::Zero();  // friction(-0), friction(+0)
+  };
+  auto stuck_rows = [&]() {
+    int k = 0;
+    for (int m = 0; m < N; ++m) k += stuck_[m] ? 1 : 0;
+    Eigen::MatrixXd T(k, N);
+    for (int m = 0, r = 0; m < N; ++m) {
+      if (stuck_[m]) T.row(r++) = motor_.row(m);
+    }
+    return T;
+  };
+  auto accel = [&](const Vec& q, const Vec& qd, Vec& qdd, Hold* hold) {
     Mat M;
     Robot::mass_matrix(q, phi_true_, M);
     M += rotor_;
@@ -516,14 +550,27 @@ void DrivePlantOf<Robot>::integrate(const Scenario& scenario, const Vec& tau_cmd
       const JointEffects& e = scenario.effects[j];
       JointFriction f = scenario.friction[j];
       if (e.viscous_drift != 0) f.beta *= 1.0 + e.viscous_drift * (1.0 - std::exp(-warm / e.drift_time_constant));
-      const double friction = friction_torque(f, v_motor[j], h[j]);  // motor j's, at its velocity
+      const bool held = stiction && stuck_[j];
+      double friction = 0;  // motor j's, at its velocity (held: its share of the holding torque)
+      if (!held) {
+        double v = v_motor[j];
+        if (stiction && direction[j] != 0 && v * direction[j] <= 0) v = direction[j] * kStartVelocity;
+        friction = friction_torque(f, v, h[j]);
+      }
       for (int k = 0; k < N; ++k) {
         if (k != j && motor_(j, k) != 0.0) rhs[k] -= motor_(j, k) * friction;
       }
       double tf = motor_(j, j) * friction + e.offset;
-      if (e.load_friction != 0) tf += e.load_friction * std::fabs(h[j]) * (qd[j] > 0 ? 1.0 : (qd[j] < 0 ? -1.0 : 0.0));
+      if (e.load_friction != 0 && !held) {
+        const double sg = stiction && direction[j] != 0 ? direction[j] : (qd[j] > 0 ? 1.0 : (qd[j] < 0 ? -1.0 : 0.0));
+        tf += e.load_friction * std::fabs(h[j]) * sg;
+      }
       if (e.cogging_amplitude != 0) tf += e.cogging_amplitude * std::sin(e.cogging_cycles * q[j] + e.cogging_phase);
       rhs[j] -= tf;
+      if (hold != nullptr) {
+        hold->hi[j] = friction_torque(f, kStartVelocity, h[j]) + e.load_friction * std::fabs(h[j]);
+        hold->lo[j] = friction_torque(f, -kStartVelocity, h[j]) - e.load_friction * std::fabs(h[j]);
+      }
     }
     for (const CoupledFriction& c : scenario.couplings) {
       const double v = qd[c.joint_i] + c.sign * qd[c.joint_j];
@@ -531,7 +578,19 @@ void DrivePlantOf<Robot>::integrate(const Scenario& scenario, const Vec& tau_cmd
       rhs[c.joint_i] -= f;
       rhs[c.joint_j] -= c.sign * f;
     }
-    qdd = M.ldlt().solve(rhs);
+    const Eigen::LDLT<Mat> ldlt(M);
+    qdd = ldlt.solve(rhs);
+    if (!stiction) return;
+    const Eigen::MatrixXd T = stuck_rows();
+    if (T.rows() == 0) return;
+    const Eigen::MatrixXd MinvTt = ldlt.solve(T.transpose());  // M^-1 T_S^T
+    const Eigen::VectorXd f = (T * MinvTt).ldlt().solve(T * qdd);
+    qdd -= MinvTt * f;
+    if (hold != nullptr) {
+      for (int m = 0, r = 0; m < N; ++m) {
+        if (stuck_[m]) hold->force[m] = f[r++];
+      }
+    }
   };
   // Explicit RK4 is stable for a damping rate lambda while h lambda < 2.78. The viscous friction of
   // a light link (no rotor inertia, or a light plant under test) can exceed that at the nominal
@@ -560,15 +619,59 @@ void DrivePlantOf<Robot>::integrate(const Scenario& scenario, const Vec& tau_cmd
   const double hstep = dt / substeps;
   for (int k = 0; k < substeps; ++k) {
     Vec a1, a2, a3, a4;
-    accel(q_, qd_, a1);
+    if (stiction) {
+      // Release the stuck motors whose holding torque their static friction cannot give.
+      const Vec v = motor_ * qd_;
+      Hold hold;
+      for (;;) {
+        for (int m = 0; m < N; ++m) {
+          direction[m] = stuck_[m]             ? 0.0
+                         : start_sign_[m] != 0 ? start_sign_[m]
+                                               : (v[m] > 0 ? 1.0 : (v[m] < 0 ? -1.0 : 0.0));
+        }
+        accel(q_, qd_, a1, &hold);
+        int worst = -1;
+        double excess = 0;
+        for (int m = 0; m < N; ++m) {
+          if (!stuck_[m]) continue;
+          const double over = std::max(hold.force[m] - hold.hi[m], hold.lo[m] - hold.force[m]);
+          if (over > excess) excess = over, worst = m;
+        }
+        if (worst < 0) break;
+        stuck_[worst] = false;
+        start_sign_[worst] = hold.force[worst] > hold.hi[worst] ? 1.0 : -1.0;
+      }
+    } else {
+      accel(q_, qd_, a1, nullptr);
+    }
     if (k == 0) {
       for (int j = 0; j < N; ++j) qdd0[j] = a1[j];
     }
-    accel(q_ + 0.5 * hstep * qd_, qd_ + 0.5 * hstep * a1, a2);
-    accel(q_ + 0.5 * hstep * (qd_ + 0.5 * hstep * a1), qd_ + 0.5 * hstep * a2, a3);
-    accel(q_ + hstep * (qd_ + 0.5 * hstep * a2), qd_ + hstep * a3, a4);
+    accel(q_ + 0.5 * hstep * qd_, qd_ + 0.5 * hstep * a1, a2, nullptr);
+    accel(q_ + 0.5 * hstep * (qd_ + 0.5 * hstep * a1), qd_ + 0.5 * hstep * a2, a3, nullptr);
+    accel(q_ + hstep * (qd_ + 0.5 * hstep * a2), qd_ + hstep * a3, a4, nullptr);
     q_ += hstep * qd_ + hstep * hstep / 6.0 * (a1 + a2 + a3);
     qd_ += hstep / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4);
+    if (!stiction) continue;
+    // Catch the motors whose velocity crossed or reached zero (a released one: that did not move
+    // the way it started), then hold every stuck one exactly at rest.
+    const Vec v_after = motor_ * qd_;
+    for (int m = 0; m < N; ++m) {
+      if (stuck_[m]) continue;
+      const JointFriction& f = scenario.friction[m];
+      const bool sticks = friction_torque(f, kStartVelocity, 0.0) > friction_torque(f, -kStartVelocity, 0.0) ||
+                          scenario.effects[m].load_friction > 0;  // a frictionless motor never sticks
+      if (sticks && direction[m] * v_after[m] <= 0) stuck_[m] = true;
+      start_sign_[m] = 0;
+    }
+    const Eigen::MatrixXd T = stuck_rows();
+    if (T.rows() == 0) continue;
+    Mat M;
+    Robot::mass_matrix(q_, phi_true_, M);
+    M += rotor_;
+    const Eigen::LDLT<Mat> ldlt(M);
+    const Eigen::MatrixXd MinvTt = ldlt.solve(T.transpose());
+    qd_ -= MinvTt * (T * MinvTt).ldlt().solve(T * qd_);
   }
 }
 

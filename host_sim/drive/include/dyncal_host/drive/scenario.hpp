@@ -107,6 +107,13 @@ struct Scenario {
   /// its clock drives the reference q_d, qd_d = w qd(u), qdd_d = w^2 qdd(u) + w' qd(u)); a run
   /// plays the trajectory's periods on that clock, so it lasts longer by the rests.
   StopAndGo stop_and_go;
+  /// Static friction (off by default: the survey's friction laws are kinetic): a motor whose
+  /// velocity reaches zero stays at rest while the torque that holds it there lies within its
+  /// friction's values just above and below zero velocity, friction(+0) and friction(-0) (Fs for
+  /// Eq. 4, Fc for Eq. 7; with the identity map plus the load-dependent friction); otherwise it
+  /// starts with that friction against it (a stick-slip law as Karnopp's, docs/modbus.md). The
+  /// coupled frictions (`couplings`) stay kinetic.
+  bool stiction = false;
 };
 
 /// The default scenario for `robot`: robot.json's transmission as the motor map (a coupled motor,
