@@ -92,7 +92,7 @@ int main() {
   // The monitor step's other parts over the same samples: slope, friction weight, threshold check.
   std::uint32_t monitor_ticks = 0;
   int monitor_steps = 0, alarms = 0;
-  if (g_slope.reset(5, Scalar(1e-3), 6) != dyncal::UpdateStatus::ok ||
+  if (g_slope.reset(5, Scalar(1e-3), 6, dyncal::TorqueHold::zero_order) != dyncal::UpdateStatus::ok ||
       g_uncertainty.reset(Scalar(200), Scalar(1e-3), 6) != dyncal::UpdateStatus::ok)
     return 3;
   for (int k = 0; k < data::kCount; ++k) {
