@@ -10,11 +10,13 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <random>
 
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/identification/excitation/excitation.hpp"
+#include "dyncal_host/identification/logs/column_map.hpp"
 #include "dyncal_host/identification/logs/uniform_grid.hpp"
 #include "dyncal_host/identification/pipeline/compiled_robot.hpp"
 #include "dyncal_host/identification/pipeline/identify.hpp"
@@ -327,6 +329,145 @@ TEST(RealLogsCli, MotorCurrentLogGivesTheTorqueLogsModel) {
   std::ofstream(dir / "robots" / "arm3" / "robot.json") << desc.dump(2);
   EXPECT_EQ(run_dyncal("identify" + robots + " --torque-from current --data " + (dir / "i.csv").string() +
                        " --report " + (dir / "none.json").string()),
+            2);
+  EXPECT_FALSE(std::filesystem::exists(dir / "none.json"));
+  std::filesystem::remove_all(dir);
+}
+
+// A logger's named columns (issue 46): a tab-separated log with the time in ms, positions in
+// degrees, velocities in deg/s, torques in mNm and a column dyncal does not read, mapped by
+// --columns, gives the simulated log's values back (17 digits written: 1e-12 after the units); a
+// semicolon-separated and a space-aligned copy read alike. Bad maps and logs are refused with the
+// entry, file and column named.
+TEST(LogFormats, NamedColumnsWithUnitsAndSeparators) {
+  const RobotDescription robot = test_robot("arm3");
+  const SimulatedLog a = simulate(robot, uniform_times(kRate, 4.0), MotionClock{}, 21, 3);
+  const auto dir = std::filesystem::temp_directory_path() / ("dyncal_columns_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const double deg = 180.0 / M_PI;
+  auto write = [&](const std::string& name, const std::string& sep) {
+    std::ofstream out(dir / name);
+    out << "time_ms" << sep << "mode";
+    for (const char* s : {"pos", "vel", "torque"})
+      for (int j = 1; j <= 3; ++j) out << sep << s << j;
+    out << "\n";
+    char number[40];
+    for (Eigen::Index k = 0; k < a.log.samples(); ++k) {
+      std::snprintf(number, sizeof number, "%.17g", 1e3 * a.log.t[k]);
+      out << number << sep << 7;
+      for (int j = 0; j < 3; ++j)
+        std::snprintf(number, sizeof number, "%s%.17g", sep.c_str(), deg * a.log.q(k, j)), out << number;
+      for (int j = 0; j < 3; ++j)
+        std::snprintf(number, sizeof number, "%s%.17g", sep.c_str(), deg * a.log.qd(k, j)), out << number;
+      for (int j = 0; j < 3; ++j)
+        std::snprintf(number, sizeof number, "%s%.17g", sep.c_str(), 1e3 * a.log.tau(k, j)), out << number;
+      out << "\n";
+    }
+  };
+  write("tab.tsv", "\t");
+  write("semicolon.csv", ";");
+  write("spaces.txt", "   ");
+  const ColumnMap map = parse_column_map("t=time_ms:ms, q=pos{1..3}:deg, qd=vel{1..3}:deg/s, tau=torque{1..3}:mNm", 3);
+  for (const char* name : {"tab.tsv", "semicolon.csv", "spaces.txt"}) {
+    SCOPED_TRACE(name);
+    const JointLog b = read_mapped_csv_log((dir / name).string(), map, 3);
+    ASSERT_EQ(b.samples(), a.log.samples());
+    EXPECT_TRUE(b.has_qd);
+    EXPECT_FALSE(b.has_qdd);
+    EXPECT_NEAR((b.t - a.log.t).cwiseAbs().maxCoeff(), 0.0, 1e-12 * a.log.t.cwiseAbs().maxCoeff());
+    EXPECT_NEAR((b.q - a.log.q).cwiseAbs().maxCoeff(), 0.0, 1e-12 * (1 + a.log.q.cwiseAbs().maxCoeff()));
+    EXPECT_NEAR((b.qd - a.log.qd).cwiseAbs().maxCoeff(), 0.0, 1e-12 * (1 + a.log.qd.cwiseAbs().maxCoeff()));
+    EXPECT_NEAR((b.tau - a.log.tau).cwiseAbs().maxCoeff(), 0.0, 1e-12 * (1 + a.log.tau.cwiseAbs().maxCoeff()));
+  }
+  // One line each, naming what is wrong.
+  auto refused = [&](const std::function<void()>& f, const std::string& expected) {
+    try {
+      f();
+      ADD_FAILURE() << "accepted; expected: " << expected;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
+      EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << e.what();
+    }
+  };
+  refused([] { parse_column_map("t=time, q=pos{1..4}, tau=torque{1..3}", 3); }, "names 4 columns, the robot has 3");
+  refused([] { parse_column_map("t=time:min, q=pos{1..3}, tau=torque{1..3}", 3); }, "unit 'min' is not one of s, ms");
+  refused([] { parse_column_map("t=time, q=pos{1..3}", 3); }, "no tau=... entry");
+  refused([] { parse_column_map("t=time, q=pos{1..3}, q=p{1..3}, tau=torque{1..3}", 3); }, "q is mapped twice");
+  refused([] { parse_column_map("t=time, q=pos{3..1}, tau=torque{1..3}", 3); }, "integers a <= b");
+  refused([] { parse_column_map("t=time, x=pos{1..3}, tau=torque{1..3}", 3); }, "signal 'x'");
+  refused(
+      [&] {
+        read_mapped_csv_log((dir / "tab.tsv").string(), parse_column_map("t=time_ms, q=pos{1..3}, tau=effort{1..3}", 3),
+                            3);
+      },
+      "tab.tsv: no column 'effort1' (--columns)");
+  std::filesystem::remove_all(dir);
+}
+
+// Universal Robots' RTDE recorder's CSV (issue 46) is read by --format ur-rtde with no converter:
+// arm6 given gear ratios and torque constants, a simulated log written as the recorder writes it
+// (space-separated; timestamp, actual_q_0..5, actual_qd_0..5, actual_current_0..5 as motor current
+// i = (N^T diag(Kt))^-1 tau, and columns dyncal does not read), identifies as the same log in
+// dyncal's CSV (q, qd, tau) does, to the conversion's rounding. Without torque constants the
+// currents cannot be converted: refused with exit 2, nothing written.
+TEST(RealLogsCli, UrRtdeRecorderCsvIsReadWithoutAConverter) {
+  const auto dir = std::filesystem::temp_directory_path() / ("dyncal_rtde_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir / "robots");
+  std::filesystem::copy(std::string(DYNCAL_SOURCE_DIR) + "/tests/robots/arm6", dir / "robots" / "arm6");
+  nlohmann::json desc = read_json(dir / "robots" / "arm6" / "robot.json");
+  const std::vector<double> gear{101.0, 101.0, 101.0, 101.0, 101.0, 101.0},
+      kt{0.125, 0.125, 0.125, 0.092, 0.092, 0.092};
+  desc["transmission"] = {{"gear_ratios", gear}, {"torque_constants", kt}};
+  std::ofstream(dir / "robots" / "arm6" / "robot.json") << desc.dump(2);
+  const RobotDescription robot = test_robot("arm6");
+  SimulatedLog a = simulate(robot, uniform_times(kRate, 20.0), MotionClock{}, 31, 3);
+  a.log.has_qd = true;  // the recorder logs the measured velocity; so does the reference CSV
+  write_csv_log((dir / "dyncal.csv").string(), a.log);
+  {
+    std::ofstream out(dir / "rtde.csv");
+    out << "timestamp";
+    for (const char* s : {"target_q", "actual_q", "actual_qd", "actual_current", "target_moment"})
+      for (int j = 0; j < 6; ++j) out << ' ' << s << '_' << j;
+    out << " robot_mode\n";
+    char number[32];
+    for (Eigen::Index k = 0; k < a.log.samples(); ++k) {
+      std::snprintf(number, sizeof number, "%.17g", a.log.t[k]);
+      out << number;
+      for (int j = 0; j < 6; ++j) out << ' ' << 0.5;  // target_q: not read
+      for (const Eigen::MatrixXd* m : {&a.log.q, &a.log.qd}) {
+        for (int j = 0; j < 6; ++j) {
+          std::snprintf(number, sizeof number, " %.17g", (*m)(k, j));
+          out << number;
+        }
+      }
+      for (int j = 0; j < 6; ++j) {  // i = tau / (N Kt) for a diagonal transmission
+        std::snprintf(number, sizeof number, " %.17g",
+                      a.log.tau(k, j) / (gear[static_cast<size_t>(j)] * kt[static_cast<size_t>(j)]));
+        out << number;
+      }
+      for (int j = 0; j < 6; ++j) out << ' ' << 1.0;  // target_moment: a command, not read
+      out << " 7\n";
+    }
+  }
+  const std::string robots = " --robot arm6 --robots-dir " + (dir / "robots").string() + " --model eq7";
+  ASSERT_EQ(run_dyncal("identify" + robots + " --data " + (dir / "dyncal.csv").string() + " --report " +
+                       (dir / "dyncal.json").string()),
+            0);
+  ASSERT_EQ(run_dyncal("identify" + robots + " --format ur-rtde --data " + (dir / "rtde.csv").string() + " --report " +
+                       (dir / "rtde.json").string()),
+            0);
+  const nlohmann::json x = read_json(dir / "dyncal.json"), y = read_json(dir / "rtde.json");
+  ASSERT_EQ(x["params"].size(), y["params"].size());
+  for (size_t k = 0; k < x["params"].size(); ++k) {
+    SCOPED_TRACE(x["params"][k]["name"].get<std::string>());
+    const double u = x["params"][k]["value"].get<double>(), v = y["params"][k]["value"].get<double>();
+    EXPECT_NEAR(v, u, 1e-8 * (1 + std::fabs(u)));
+  }
+  desc["transmission"].erase("torque_constants");
+  std::ofstream(dir / "robots" / "arm6" / "robot.json") << desc.dump(2);
+  EXPECT_EQ(run_dyncal("identify" + robots + " --format ur-rtde --data " + (dir / "rtde.csv").string() + " --report " +
+                       (dir / "none.json").string()),
             2);
   EXPECT_FALSE(std::filesystem::exists(dir / "none.json"));
   std::filesystem::remove_all(dir);

@@ -56,14 +56,16 @@ struct RobotOption {
   host::RobotDescription load() const;
 };
 
-/// A measured log: --format csv|tx40, --data, and the robot (tx40 by default with --format tx40).
+/// A measured log: --format csv|ur-rtde|tx40, --columns, --data, and the robot (tx40 by default
+/// with --format tx40).
 struct LogOption {
   RobotOption robot;
   std::string format = "csv";
   std::string torque_from = "torque";  ///< csv logs: "torque" (tau1..tauN [Nm]) or "current" (i1..iN [A])
+  std::string columns;                 ///< csv logs: a logger's named columns (column_map.hpp), empty: dyncal's
   std::vector<std::string> data;       ///< one or more logs (--data A --data B): stacked as segments
   bool drop_outliers = false;
-  /// Adds --format, --torque-from, --data, --drop-outliers and the robot options to `cmd`; returns
+  /// Adds --format, --torque-from, --columns, --data, --drop-outliers and the robot options to `cmd`; returns
   /// --data's option (required unless `data_required` is false: the command checks it then).
   CLI::Option* add_to(CLI::App* cmd, bool data_required = true);
   /// The robot (--robot, or tx40 for --format tx40). Throws InputError (no --robot for csv, ...).

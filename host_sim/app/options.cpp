@@ -3,11 +3,13 @@
 #include <sys/wait.h>
 
 #include <fstream>
+#include <optional>
 #include <utility>
 
 #include "commands.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/robot_description.hpp"
+#include "dyncal_host/identification/logs/column_map.hpp"
 #include "dyncal_host/identification/logs/log_plausibility.hpp"
 #include "dyncal_host/identification/logs/uniform_grid.hpp"
 #include "dyncal_host/identification/pipeline/compiled_robot.hpp"
@@ -61,13 +63,19 @@ host::RobotDescription RobotOption::load() const {
 
 CLI::Option* LogOption::add_to(CLI::App* cmd, bool data_required) {
   robot.add_to(cmd, "robot name (robots/<name>/); tx40 by default with --format tx40");
-  cmd->add_option("--format", format, "log format: csv (t,q1..qN,[qd..],[qdd..],tau1..tauN) or tx40")
-      ->check(CLI::IsMember({"csv", "tx40"}));
+  cmd->add_option("--format", format,
+                  "log format: csv (t,q1..qN,[qd..],[qdd..],tau1..tauN, or --columns), ur-rtde (Universal Robots' "
+                  "RTDE recorder: timestamp, actual_q_*, actual_qd_*, actual_current_* as motor current) or tx40")
+      ->check(CLI::IsMember({"csv", "ur-rtde", "tx40"}));
   cmd->add_option("--torque-from", torque_from,
                   "csv logs: torque (columns tau1..tauN, joint torque [Nm]) or current (columns i1..iN, motor "
                   "current [A]; tau = N^T diag(Kt) i with robot.json's transmission.torque_constants and gear "
                   "ratios)")
       ->check(CLI::IsMember({"torque", "current"}));
+  cmd->add_option("--columns", columns,
+                  "csv logs with a logger's column names: signal=column[:unit] entries, comma-separated, a {a..b} "
+                  "range per joint, e.g. 't=time:ms,q=pos_{1..6}:deg,qd=vel_{1..6}:deg/s,tau=cur_{1..6}:current' "
+                  "(units: t s|ms|us|ns, q rad|deg, qd rad/s|deg/s, qdd rad/s^2|deg/s^2, tau Nm|mNm|current)");
   CLI::Option* data_option =
       cmd->add_option("--data", data,
                       "CSV log file (time-stamped; jitter and missing samples allowed), or the folder of the TX40 "
@@ -82,7 +90,7 @@ CLI::Option* LogOption::add_to(CLI::App* cmd, bool data_required) {
 host::RobotDescription LogOption::load_robot() const {
   RobotOption r = robot;
   if (r.name.empty()) {
-    if (format != "tx40") throw InputError("--robot is required for --format csv");
+    if (format != "tx40") throw InputError("--robot is required for --format " + format);
     r.name = "tx40";
   }
   return r.load();
@@ -100,12 +108,27 @@ host::JointLog LogOption::load_logs(const host::RobotDescription& r, const std::
       throw InputError("--torque-from current: " + r.directory +
                        "/robot.json has no transmission.torque_constants (Nm/A per motor; docs/robots.md)");
   }
+  // A logger's named columns: --columns, or the preset of --format ur-rtde.
+  std::optional<host::ColumnMap> map;
+  if (!columns.empty() && format != "csv")
+    throw InputError("--columns maps a CSV's columns; --format " + format + " has its own");
+  if (!columns.empty()) map = host::parse_column_map(columns, r.num_joints);
+  if (format == "ur-rtde") map = host::ur_rtde_column_map(r.num_joints);
+  if (map && torque_from == "current") map->effort_is_current = true;
+  if (map && map->effort_is_current && r.torque_constants.size() == 0)
+    throw InputError(map->origin + ": the effort is motor current, and " + r.directory +
+                     "/robot.json has no transmission.torque_constants (Nm/A per motor; docs/robots.md)");
   std::vector<host::JointLog> logs;
   for (const std::string& path : paths) {
-    host::JointLog log = format == "tx40" ? host::read_tx40_log(path, r.transmission, r.joint_offsets)
-                         : torque_from == "current"
-                             ? host::read_current_csv_log(path, r.transmission, r.torque_constants)
-                             : host::read_csv_log(path, r.num_joints);
+    host::JointLog log;
+    if (map) {
+      log = host::read_mapped_csv_log(path, *map, r.num_joints);
+      if (map->effort_is_current) host::current_to_joint_torque(log, r.transmission, r.torque_constants, path);
+    } else {
+      log = format == "tx40"           ? host::read_tx40_log(path, r.transmission, r.joint_offsets)
+            : torque_from == "current" ? host::read_current_csv_log(path, r.transmission, r.torque_constants)
+                                       : host::read_csv_log(path, r.num_joints);
+    }
     const auto lines = host::check_plausibility(log, r, drop_outliers);
     if (dropped) dropped->insert(dropped->end(), lines.begin(), lines.end());
     logs.push_back(std::move(log));

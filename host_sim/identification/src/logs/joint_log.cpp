@@ -12,9 +12,8 @@
 #include "dyncal_host/identification/logs/numeric_csv.hpp"
 
 namespace dyncal::host {
-namespace {
 
-void check_time(const Eigen::VectorXd& t, const std::string& path) {
+void check_log_time(const Eigen::VectorXd& t, const std::string& path) {
   if (t.size() < 3) throw InputError(path + ": fewer than 3 samples");
   for (Eigen::Index i = 1; i < t.size(); ++i) {
     if (!(t[i] > t[i - 1])) {
@@ -23,8 +22,6 @@ void check_time(const Eigen::VectorXd& t, const std::string& path) {
     }
   }
 }
-
-}  // namespace
 
 void write_csv_log(const std::string& path, const JointLog& log) {
   std::ofstream out(path);
@@ -97,7 +94,7 @@ JointLog read_csv_columns(const std::string& path, int expected_joints, const st
   log.source = path;
   const Eigen::Index rows = csv.values.rows();
   log.t = csv.values.col(col["t"]);
-  check_time(log.t, path);
+  check_log_time(log.t, path);
   auto block = [&](const std::string& prefix) {
     Eigen::MatrixXd m(rows, expected_joints);
     for (int j = 0; j < expected_joints; ++j) m.col(j) = csv.values.col(col[prefix + std::to_string(j + 1)]);
@@ -127,10 +124,20 @@ JointLog read_current_csv_log(const std::string& path, const Eigen::MatrixXd& tr
                      "per motor, docs/robots.md)");
   }
   JointLog log = read_csv_columns(path, n, "i");
+  current_to_joint_torque(log, transmission, torque_constants, path);
+  return log;
+}
+
+void current_to_joint_torque(JointLog& log, const Eigen::MatrixXd& transmission,
+                             const Eigen::VectorXd& torque_constants, const std::string& what) {
+  if (torque_constants.size() != transmission.rows()) {
+    throw InputError(what +
+                     ": motor currents need the robot's transmission.torque_constants (Nm/A "
+                     "per motor, docs/robots.md)");
+  }
   // tau_m = Kt i per motor; tau = N^T tau_m   (rows are samples: Tau = I diag(Kt) N)
   log.tau = log.tau * torque_constants.asDiagonal() * transmission;
-  log.source = path + " (torque from motor current: tau = N^T diag(Kt) i)";
-  return log;
+  log.source += " (torque from motor current: tau = N^T diag(Kt) i)";
 }
 
 JointLog read_tx40_log(const std::string& folder, const Eigen::MatrixXd& transmission,

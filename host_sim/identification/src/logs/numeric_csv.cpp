@@ -18,14 +18,32 @@ std::string trim(const std::string& s) {
   return s.substr(b, e - b + 1);
 }
 
-std::vector<std::string> split(const std::string& line) {
+/// The header's separator: a comma, else a semicolon, else a tab, else ' ' (runs of spaces or tabs
+/// separate, as in a space-aligned export).
+char separator_of(const std::string& header) {
+  for (const char c : {',', ';', '\t'}) {
+    if (header.find(c) != std::string::npos) return c;
+  }
+  return ' ';
+}
+
+std::vector<std::string> split(const std::string& line, char sep) {
   std::vector<std::string> out;
+  if (sep == ' ') {
+    std::string::size_type start = line.find_first_not_of(" \t\r");
+    while (start != std::string::npos) {
+      const auto end = line.find_first_of(" \t\r", start);
+      out.push_back(line.substr(start, end == std::string::npos ? std::string::npos : end - start));
+      start = end == std::string::npos ? end : line.find_first_not_of(" \t\r", end);
+    }
+    return out;
+  }
   std::string::size_type start = 0;
   while (true) {
-    const auto comma = line.find(',', start);
-    out.push_back(trim(line.substr(start, comma == std::string::npos ? std::string::npos : comma - start)));
-    if (comma == std::string::npos) break;
-    start = comma + 1;
+    const auto at = line.find(sep, start);
+    out.push_back(trim(line.substr(start, at == std::string::npos ? std::string::npos : at - start)));
+    if (at == std::string::npos) break;
+    start = at + 1;
   }
   return out;
 }
@@ -46,7 +64,8 @@ NumericCsv parse_numeric_csv(std::istream& in, const std::string& path) {
   if (!std::getline(in, line) || trim(line).empty()) throw InputError(path + ": empty file (no header line)");
   // A UTF-8 byte-order mark (spreadsheet exports) is not part of the first column's name.
   if (line.compare(0, 3, "\xEF\xBB\xBF") == 0) line.erase(0, 3);
-  csv.header = split(line);
+  const char sep = separator_of(line);
+  csv.header = split(line, sep);
   const size_t cols = csv.header.size();
   // Rows are read into blocks of kBlockRows and copied into the matrix block by block, each freed
   // once copied: the peak is the table twice, not a growing vector's reallocations (issue 23).
@@ -57,7 +76,7 @@ NumericCsv parse_numeric_csv(std::istream& in, const std::string& path) {
   while (std::getline(in, line)) {
     ++line_no;
     if (trim(line).empty()) continue;
-    const auto fields = split(line);
+    const auto fields = split(line, sep);
     if (fields.size() != cols) {
       throw InputError(path + ":" + std::to_string(line_no) + ": " + std::to_string(fields.size()) +
                        " fields, header has " + std::to_string(cols));

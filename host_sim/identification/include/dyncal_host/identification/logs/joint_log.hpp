@@ -58,6 +58,17 @@ JointLog read_csv_log(const std::string& path, int expected_joints);
 JointLog read_current_csv_log(const std::string& path, const Eigen::MatrixXd& transmission,
                               const Eigen::VectorXd& torque_constants);
 
+/// Converts a log whose `tau` holds motor currents [A] (motor k's in column k) to joint torque,
+/// tau = N^T diag(Kt) i [Nm]: each motor's torque Kt_k i_k reflected to the joints by the transpose
+/// of the transmission matrix N (q_motor = N q; coupled motors included). Friction and rotor inertia
+/// stay in the fitted model. Throws InputError naming `what` (the log) when `torque_constants` is not
+/// one per motor (the robot file gives none).
+void current_to_joint_torque(JointLog& log, const Eigen::MatrixXd& transmission,
+                             const Eigen::VectorXd& torque_constants, const std::string& what);
+
+/// Throws InputError naming `what` unless `t` has at least 3 samples and strictly increases.
+void check_log_time(const Eigen::VectorXd& t, const std::string& what);
+
 /// Writes `log` as a CSV that read_csv_log reads back exactly: header `t, q1..qN, [qd1..qdN,]
 /// [qdd1..qddN,] tau1..tauN` (qd, qdd only when measured), 17 significant digits. Throws
 /// InputError when the file cannot be written.

@@ -7,7 +7,9 @@
 
 namespace dyncal::host {
 
-/// A CSV file of numbers with one header line.
+/// A delimited file of numbers with one header line. The header sets the separator: a comma, else
+/// a semicolon, else a tab, else spaces (runs of spaces or tabs separate; loggers that align columns
+/// or write the RTDE recorder's default). Fields are trimmed of spaces.
 struct NumericCsv {
   std::vector<std::string> header;  ///< column names, surrounding spaces removed
   Eigen::MatrixXd values;           ///< rows = data lines

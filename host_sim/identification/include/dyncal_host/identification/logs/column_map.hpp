@@ -1,0 +1,45 @@
+#pragma once
+// A logger's named columns as dyncal's signals (docs/cli.md "Logs"): which column holds the time,
+// each joint's position, velocity, acceleration and effort, and in what units.
+
+#include <string>
+#include <vector>
+
+#include "dyncal_host/identification/logs/joint_log.hpp"
+
+namespace dyncal::host {
+
+/// Per signal, the logger's column names (joint 1 first) and the factor that takes its values to
+/// dyncal's units: t [s], q [rad], qd [rad/s], qdd [rad/s^2], effort [Nm] or, with
+/// effort_is_current, motor current [A] (converted by the robot's torque constants afterwards:
+/// current_to_joint_torque). qd and qdd empty: not in the log (computed).
+struct ColumnMap {
+  std::string t;
+  std::vector<std::string> q, qd, qdd, effort;
+  double t_scale = 1, q_scale = 1, qd_scale = 1, qdd_scale = 1, effort_scale = 1;
+  bool effort_is_current = false;
+  std::string origin;  ///< what the map came from, for messages ("--columns", "--format ur-rtde")
+};
+
+/// Parses `--columns`: entries `signal=names[:unit]` separated by commas, signal one of t, q, qd,
+/// qdd, tau. names is one column name, or a pattern with one range {a..b} (a <= b, integers) that
+/// expands to one name per joint: `q=actual_q_{0..5}` is actual_q_0 .. actual_q_5. Units: t s (the
+/// default), ms, us, ns; q rad, deg; qd rad/s, deg/s; qdd rad/s^2, deg/s^2; tau Nm, mNm, or current
+/// (motor current [A]). t, q and tau are required. Throws InputError naming the entry: an unknown
+/// signal or unit, a repeated signal, a range that does not give `joints` names, a malformed range.
+ColumnMap parse_column_map(const std::string& spec, int joints);
+
+/// The built-in map of Universal Robots' RTDE recorder (its CSV: `timestamp`, `actual_q_0..`,
+/// `actual_qd_0..`, `actual_current_0..`; space-separated by default): time [s], measured joint
+/// positions [rad] and velocities [rad/s], and the motors' measured currents [A] as the effort (the
+/// recorder's `target_moment_*` is a command, not a measurement).
+ColumnMap ur_rtde_column_map(int joints);
+
+/// Reads a delimited log (read_numeric_csv: comma, semicolon, tab or space separated) with the
+/// columns `map` names; other columns are ignored. The effort lands in `tau` as it is (currents
+/// when map.effort_is_current: convert with current_to_joint_torque). Throws InputError naming the
+/// file and the first column the log lacks, or as read_numeric_csv and read_csv_log (time not
+/// strictly increasing, fewer than 3 samples).
+JointLog read_mapped_csv_log(const std::string& path, const ColumnMap& map, int joints);
+
+}  // namespace dyncal::host

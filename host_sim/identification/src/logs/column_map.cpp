@@ -1,0 +1,179 @@
+#include "dyncal_host/identification/logs/column_map.hpp"
+
+#include <cmath>
+#include <cstdlib>
+#include <map>
+#include <utility>
+
+#include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/identification/logs/numeric_csv.hpp"
+
+namespace dyncal::host {
+namespace {
+
+std::string trim(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t");
+  if (b == std::string::npos) return "";
+  return s.substr(b, s.find_last_not_of(" \t") - b + 1);
+}
+
+/// Splits at commas outside braces (a range's braces hold none, but a stray one is reported there).
+std::vector<std::string> entries(const std::string& spec) {
+  std::vector<std::string> out;
+  std::string cur;
+  int depth = 0;
+  for (const char c : spec) {
+    if (c == '{') ++depth;
+    if (c == '}') --depth;
+    if (c == ',' && depth == 0) {
+      out.push_back(trim(cur));
+      cur.clear();
+    } else {
+      cur += c;
+    }
+  }
+  out.push_back(trim(cur));
+  return out;
+}
+
+/// An integer of a range's bound, or false.
+bool integer(const std::string& s, long& v) {
+  if (s.empty()) return false;
+  char* end = nullptr;
+  v = std::strtol(s.c_str(), &end, 10);
+  return end == s.c_str() + s.size();
+}
+
+/// The column names of `names`: one name, or a pattern with one {a..b} expanded to `joints` names
+/// (`expand` false: one name, and a range is refused).
+std::vector<std::string> column_names(const std::string& names, bool expand, int joints, const std::string& where) {
+  const auto open = names.find('{');
+  if (open == std::string::npos) {
+    if (names.find('}') != std::string::npos) throw InputError(where + ": '}' without '{'");
+    if (names.empty()) throw InputError(where + ": no column name");
+    if (!expand) return {names};
+    if (joints == 1) return {names};
+    throw InputError(where + ": one column for " + std::to_string(joints) + " joints; give a range, e.g. " + names +
+                     "{1.." + std::to_string(joints) + "}");
+  }
+  if (!expand) throw InputError(where + ": a range names several columns; this signal has one");
+  const auto close = names.find('}', open);
+  const auto dots = names.find("..", open);
+  if (close == std::string::npos || dots == std::string::npos || dots > close ||
+      names.find('{', open + 1) != std::string::npos)
+    throw InputError(where + ": a range is {a..b}, once in a name");
+  long a = 0, b = 0;
+  if (!integer(names.substr(open + 1, dots - open - 1), a) || !integer(names.substr(dots + 2, close - dots - 2), b) ||
+      a > b)
+    throw InputError(where + ": a range is {a..b} with integers a <= b");
+  if (b - a + 1 != joints)
+    throw InputError(where + ": {" + std::to_string(a) + ".." + std::to_string(b) + "} names " +
+                     std::to_string(b - a + 1) + " columns, the robot has " + std::to_string(joints) + " joints");
+  std::vector<std::string> out;
+  for (long k = a; k <= b; ++k) out.push_back(names.substr(0, open) + std::to_string(k) + names.substr(close + 1));
+  return out;
+}
+
+/// The factor from `unit` to the signal's SI unit, or InputError listing the signal's units.
+double unit_scale(const std::string& signal, const std::string& unit, bool& current, const std::string& where) {
+  const double deg = M_PI / 180.0;
+  static const std::map<std::string, std::vector<std::pair<std::string, double>>> units{
+      {"t", {{"s", 1.0}, {"ms", 1e-3}, {"us", 1e-6}, {"ns", 1e-9}}},
+      {"q", {{"rad", 1.0}, {"deg", deg}}},
+      {"qd", {{"rad/s", 1.0}, {"deg/s", deg}}},
+      {"qdd", {{"rad/s^2", 1.0}, {"deg/s^2", deg}}},
+      {"tau", {{"Nm", 1.0}, {"mNm", 1e-3}, {"current", 1.0}}},
+  };
+  const auto& list = units.at(signal);
+  std::string known;
+  for (const auto& [name, factor] : list) {
+    if (name == unit) {
+      current = unit == "current";
+      return factor;
+    }
+    known += (known.empty() ? "" : ", ") + name;
+  }
+  throw InputError(where + ": unit '" + unit + "' is not one of " + known);
+}
+
+}  // namespace
+
+ColumnMap parse_column_map(const std::string& spec, int joints) {
+  ColumnMap map;
+  map.origin = "--columns";
+  std::map<std::string, bool> seen;
+  for (const std::string& entry : entries(spec)) {
+    const std::string where = "--columns '" + entry + "'";
+    const auto eq = entry.find('=');
+    if (eq == std::string::npos) throw InputError(where + ": expected signal=column[:unit]");
+    const std::string signal = trim(entry.substr(0, eq));
+    std::string names = trim(entry.substr(eq + 1)), unit;
+    // The unit follows the last ':' outside the range (column names may hold none).
+    const auto colon = names.rfind(':');
+    if (colon != std::string::npos && names.find('}', colon) == std::string::npos) {
+      unit = trim(names.substr(colon + 1));
+      names = trim(names.substr(0, colon));
+    }
+    if (signal != "t" && signal != "q" && signal != "qd" && signal != "qdd" && signal != "tau")
+      throw InputError(where + ": signal '" + signal + "' is not one of t, q, qd, qdd, tau");
+    if (seen[signal]) throw InputError(where + ": " + signal + " is mapped twice");
+    seen[signal] = true;
+    bool current = false;
+    const double scale = unit.empty() ? 1.0 : unit_scale(signal, unit, current, where);
+    if (signal == "t") {
+      map.t = column_names(names, false, joints, where).front();
+      map.t_scale = scale;
+    } else {
+      std::vector<std::string> cols = column_names(names, true, joints, where);
+      if (signal == "q") map.q = std::move(cols), map.q_scale = scale;
+      if (signal == "qd") map.qd = std::move(cols), map.qd_scale = scale;
+      if (signal == "qdd") map.qdd = std::move(cols), map.qdd_scale = scale;
+      if (signal == "tau") map.effort = std::move(cols), map.effort_scale = scale, map.effort_is_current = current;
+    }
+  }
+  for (const char* required : {"t", "q", "tau"}) {
+    if (!seen[required]) throw InputError("--columns: no " + std::string(required) + "=... entry");
+  }
+  return map;
+}
+
+ColumnMap ur_rtde_column_map(int joints) {
+  ColumnMap map = parse_column_map("t=timestamp, q=actual_q_{0.." + std::to_string(joints - 1) +
+                                       "}, qd=actual_qd_{0.." + std::to_string(joints - 1) +
+                                       "}, tau=actual_current_{0.." + std::to_string(joints - 1) + "}:current",
+                                   joints);
+  map.origin = "--format ur-rtde";
+  return map;
+}
+
+JointLog read_mapped_csv_log(const std::string& path, const ColumnMap& map, int joints) {
+  const NumericCsv csv = read_numeric_csv(path);
+  std::map<std::string, Eigen::Index> col;
+  for (size_t i = 0; i < csv.header.size(); ++i) {
+    if (!col.emplace(csv.header[i], static_cast<Eigen::Index>(i)).second)
+      throw InputError(path + ": duplicate column '" + csv.header[i] + "'");
+  }
+  auto find = [&](const std::string& name) {
+    const auto it = col.find(name);
+    if (it == col.end()) throw InputError(path + ": no column '" + name + "' (" + map.origin + ")");
+    return it->second;
+  };
+  auto block = [&](const std::vector<std::string>& names, double scale) {
+    Eigen::MatrixXd m(csv.values.rows(), joints);
+    for (int j = 0; j < joints; ++j) m.col(j) = scale * csv.values.col(find(names[static_cast<size_t>(j)]));
+    return m;
+  };
+  JointLog log;
+  log.source = path + " (" + map.origin + ")";
+  log.t = map.t_scale * csv.values.col(find(map.t));
+  log.q = block(map.q, map.q_scale);
+  log.tau = block(map.effort, map.effort_scale);
+  log.has_qd = !map.qd.empty();
+  log.has_qdd = !map.qdd.empty();
+  if (log.has_qd) log.qd = block(map.qd, map.qd_scale);
+  if (log.has_qdd) log.qdd = block(map.qdd, map.qdd_scale);
+  check_log_time(log.t, path);
+  return log;
+}
+
+}  // namespace dyncal::host
