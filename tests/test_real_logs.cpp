@@ -405,8 +405,9 @@ TEST(LogFormats, NamedColumnsWithUnitsAndSeparators) {
 }
 
 // Universal Robots' RTDE recorder's CSV (issue 46) is read by --format ur-rtde with no converter:
-// arm6 given gear ratios and torque constants, a simulated log written as the recorder writes it
-// (space-separated; timestamp, actual_q_0..5, actual_qd_0..5, actual_current_0..5 as motor current
+// arm3 (the preset numbers any joint count from 0; three joints keep the sanitize run short) given
+// gear ratios and torque constants, a simulated log written as the recorder writes it
+// (space-separated; timestamp, actual_q_0..2, actual_qd_0..2, actual_current_0..2 as motor current
 // i = (N^T diag(Kt))^-1 tau, and columns dyncal does not read), identifies as the same log in
 // dyncal's CSV (q, qd, tau) does, to the conversion's rounding. Without torque constants the
 // currents cannot be converted: refused with exit 2, nothing written.
@@ -414,13 +415,12 @@ TEST(RealLogsCli, UrRtdeRecorderCsvIsReadWithoutAConverter) {
   const auto dir = std::filesystem::temp_directory_path() / ("dyncal_rtde_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir / "robots");
-  std::filesystem::copy(std::string(DYNCAL_SOURCE_DIR) + "/tests/robots/arm6", dir / "robots" / "arm6");
-  nlohmann::json desc = read_json(dir / "robots" / "arm6" / "robot.json");
-  const std::vector<double> gear{101.0, 101.0, 101.0, 101.0, 101.0, 101.0},
-      kt{0.125, 0.125, 0.125, 0.092, 0.092, 0.092};
+  std::filesystem::copy(std::string(DYNCAL_SOURCE_DIR) + "/tests/robots/arm3", dir / "robots" / "arm3");
+  nlohmann::json desc = read_json(dir / "robots" / "arm3" / "robot.json");
+  const std::vector<double> gear{101.0, 121.0, 81.0}, kt{0.125, 0.11, 0.092};
   desc["transmission"] = {{"gear_ratios", gear}, {"torque_constants", kt}};
-  std::ofstream(dir / "robots" / "arm6" / "robot.json") << desc.dump(2);
-  const RobotDescription robot = test_robot("arm6");
+  std::ofstream(dir / "robots" / "arm3" / "robot.json") << desc.dump(2);
+  const RobotDescription robot = test_robot("arm3");
   SimulatedLog a = simulate(robot, uniform_times(kRate, 20.0), MotionClock{}, 31, 3);
   a.log.has_qd = true;  // the recorder logs the measured velocity; so does the reference CSV
   write_csv_log((dir / "dyncal.csv").string(), a.log);
@@ -428,29 +428,29 @@ TEST(RealLogsCli, UrRtdeRecorderCsvIsReadWithoutAConverter) {
     std::ofstream out(dir / "rtde.csv");
     out << "timestamp";
     for (const char* s : {"target_q", "actual_q", "actual_qd", "actual_current", "target_moment"})
-      for (int j = 0; j < 6; ++j) out << ' ' << s << '_' << j;
+      for (int j = 0; j < 3; ++j) out << ' ' << s << '_' << j;
     out << " robot_mode\n";
     char number[32];
     for (Eigen::Index k = 0; k < a.log.samples(); ++k) {
       std::snprintf(number, sizeof number, "%.17g", a.log.t[k]);
       out << number;
-      for (int j = 0; j < 6; ++j) out << ' ' << 0.5;  // target_q: not read
+      for (int j = 0; j < 3; ++j) out << ' ' << 0.5;  // target_q: not read
       for (const Eigen::MatrixXd* m : {&a.log.q, &a.log.qd}) {
-        for (int j = 0; j < 6; ++j) {
+        for (int j = 0; j < 3; ++j) {
           std::snprintf(number, sizeof number, " %.17g", (*m)(k, j));
           out << number;
         }
       }
-      for (int j = 0; j < 6; ++j) {  // i = tau / (N Kt) for a diagonal transmission
+      for (int j = 0; j < 3; ++j) {  // i = tau / (N Kt) for a diagonal transmission
         std::snprintf(number, sizeof number, " %.17g",
                       a.log.tau(k, j) / (gear[static_cast<size_t>(j)] * kt[static_cast<size_t>(j)]));
         out << number;
       }
-      for (int j = 0; j < 6; ++j) out << ' ' << 1.0;  // target_moment: a command, not read
+      for (int j = 0; j < 3; ++j) out << ' ' << 1.0;  // target_moment: a command, not read
       out << " 7\n";
     }
   }
-  const std::string robots = " --robot arm6 --robots-dir " + (dir / "robots").string() + " --model eq7";
+  const std::string robots = " --robot arm3 --robots-dir " + (dir / "robots").string() + " --model eq7";
   ASSERT_EQ(run_dyncal("identify" + robots + " --data " + (dir / "dyncal.csv").string() + " --report " +
                        (dir / "dyncal.json").string()),
             0);
@@ -465,7 +465,7 @@ TEST(RealLogsCli, UrRtdeRecorderCsvIsReadWithoutAConverter) {
     EXPECT_NEAR(v, u, 1e-8 * (1 + std::fabs(u)));
   }
   desc["transmission"].erase("torque_constants");
-  std::ofstream(dir / "robots" / "arm6" / "robot.json") << desc.dump(2);
+  std::ofstream(dir / "robots" / "arm3" / "robot.json") << desc.dump(2);
   EXPECT_EQ(run_dyncal("identify" + robots + " --format ur-rtde --data " + (dir / "rtde.csv").string() + " --report " +
                        (dir / "none.json").string()),
             2);
