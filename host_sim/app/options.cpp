@@ -102,12 +102,8 @@ host::JointLog LogOption::load_log(const host::RobotDescription& r, std::vector<
 
 host::JointLog LogOption::load_logs(const host::RobotDescription& r, const std::vector<std::string>& paths,
                                     std::vector<std::string>* dropped) const {
-  if (torque_from == "current") {
-    if (format == "tx40") throw InputError("--torque-from current: the TX40 format holds motor torques already");
-    if (r.torque_constants.size() == 0)
-      throw InputError("--torque-from current: " + r.directory +
-                       "/robot.json has no transmission.torque_constants (Nm/A per motor; docs/robots.md)");
-  }
+  if (torque_from == "current" && format == "tx40")
+    throw InputError("--torque-from current: the TX40 format holds motor torques already");
   // A logger's named columns: --columns, or the preset of --format ur-rtde.
   std::optional<host::ColumnMap> map;
   if (!columns.empty() && format != "csv")
@@ -115,9 +111,11 @@ host::JointLog LogOption::load_logs(const host::RobotDescription& r, const std::
   if (!columns.empty()) map = host::parse_column_map(columns, r.num_joints);
   if (format == "ur-rtde") map = host::ur_rtde_column_map(r.num_joints);
   if (map && torque_from == "current") map->effort_is_current = true;
-  if (map && map->effort_is_current && r.torque_constants.size() == 0)
-    throw InputError(map->origin + ": the effort is motor current, and " + r.directory +
-                     "/robot.json has no transmission.torque_constants (Nm/A per motor; docs/robots.md)");
+  // Motor currents need the torque constants: refused before any file is read.
+  if ((torque_from == "current" || (map && map->effort_is_current)) && r.torque_constants.size() == 0)
+    throw InputError(
+        (torque_from == "current" ? std::string("--torque-from current") : map->origin + " reads motor currents") +
+        ": " + r.directory + "/robot.json has no transmission.torque_constants (Nm/A per motor; docs/robots.md)");
   std::vector<host::JointLog> logs;
   for (const std::string& path : paths) {
     host::JointLog log;

@@ -148,11 +148,7 @@ ColumnMap ur_rtde_column_map(int joints) {
 
 JointLog read_mapped_csv_log(const std::string& path, const ColumnMap& map, int joints) {
   const NumericCsv csv = read_numeric_csv(path);
-  std::map<std::string, Eigen::Index> col;
-  for (size_t i = 0; i < csv.header.size(); ++i) {
-    if (!col.emplace(csv.header[i], static_cast<Eigen::Index>(i)).second)
-      throw InputError(path + ": duplicate column '" + csv.header[i] + "'");
-  }
+  std::map<std::string, Eigen::Index> col = column_index(csv, path);
   auto find = [&](const std::string& name) {
     const auto it = col.find(name);
     if (it == col.end()) throw InputError(path + ": no column '" + name + "' (" + map.origin + ")");

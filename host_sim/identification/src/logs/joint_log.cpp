@@ -57,12 +57,7 @@ namespace {
 /// read_csv_log with the torque columns named `effort` (tau or i) followed by the joint number.
 JointLog read_csv_columns(const std::string& path, int expected_joints, const std::string& effort) {
   const NumericCsv csv = read_numeric_csv(path);
-  std::map<std::string, Eigen::Index> col;
-  for (size_t i = 0; i < csv.header.size(); ++i) {
-    if (!col.emplace(csv.header[i], static_cast<Eigen::Index>(i)).second) {
-      throw InputError(path + ": duplicate column '" + csv.header[i] + "'");
-    }
-  }
+  std::map<std::string, Eigen::Index> col = column_index(csv, path);
   auto count = [&](const std::string& prefix) {
     int n = 0;
     while (col.count(prefix + std::to_string(n + 1))) ++n;

@@ -120,4 +120,13 @@ NumericCsv parse_numeric_csv(std::istream& in, const std::string& path) {
   return csv;
 }
 
+std::map<std::string, Eigen::Index> column_index(const NumericCsv& csv, const std::string& path) {
+  std::map<std::string, Eigen::Index> col;
+  for (size_t i = 0; i < csv.header.size(); ++i) {
+    if (!col.emplace(csv.header[i], static_cast<Eigen::Index>(i)).second)
+      throw InputError(path + ": duplicate column '" + csv.header[i] + "'");
+  }
+  return col;
+}
+
 }  // namespace dyncal::host

@@ -129,7 +129,6 @@ class DrivePlantOf final : public DrivePlant {
     q_ = q_d;
     qd_ = qd_d;
     stuck_.fill(false);
-    start_sign_.fill(0.0);
     q_meas_prev_ = quantise(q_) - qd_d * dt;
     anchors_.assign(scenario.contacts.size(), std::nullopt);
     begin_monitor(dt);
@@ -483,7 +482,6 @@ class DrivePlantOf final : public DrivePlant {
   Mat rotor_ = Mat::Zero();                 // the motors' rotor inertia on the joints: sum_m Ia_m T_m^T T_m
   Vec q_ = Vec::Zero(), qd_ = Vec::Zero();  // plant state
   std::array<bool, N> stuck_{};             // Scenario::stiction: motor m held at rest by its static friction
-  std::array<double, N> start_sign_{};      // a motor released at this substep's start: its direction
   Vec q_meas_prev_ = Vec::Zero();
   Vec kp_ = Vec::Zero(), kd_ = Vec::Zero();
   Vec quantum_ = Vec::Zero();                                             // encoder resolution on the joint side [rad]
@@ -521,9 +519,10 @@ void DrivePlantOf<Robot>::integrate(const Scenario& scenario, const Vec& tau_cmd
   // The velocity a motor's friction is evaluated at while its velocity is zero or against its
   // direction (below): its sign alone matters (a Stribeck law's value at 0+).
   constexpr double kStartVelocity = 1e-12;
-  // With stiction, each moving motor's direction over a substep: its friction keeps that sign in
-  // every RK4 stage (a stage that crosses zero would otherwise flip it and throw a light joint
-  // back), and a velocity that ends the substep against it crossed zero.
+  // With stiction, each moving motor's direction over a substep (its velocity's sign at the start,
+  // a released motor's the way it starts; 0 for a stuck one and without stiction): its friction
+  // keeps that sign in every RK4 stage (a stage that crosses zero would otherwise flip it and throw
+  // a light joint back), and a velocity that ends the substep against it crossed zero.
   std::array<double, N> direction{};
   struct Hold {
     Vec force = Vec::Zero();                 // f_m of the stuck motors
@@ -538,6 +537,7 @@ void DrivePlantOf<Robot>::integrate(const Scenario& scenario, const Vec& tau_cmd
     }
     return T;
   };
+  Eigen::MatrixXd stuck_T = stiction ? stuck_rows() : Eigen::MatrixXd();  // rows T_m of the stuck motors
   auto accel = [&](const Vec& q, const Vec& qd, Vec& qdd, Hold* hold) {
     Mat M;
     Robot::mass_matrix(q, phi_true_, M);
@@ -554,7 +554,7 @@ void DrivePlantOf<Robot>::integrate(const Scenario& scenario, const Vec& tau_cmd
       double friction = 0;  // motor j's, at its velocity (held: its share of the holding torque)
       if (!held) {
         double v = v_motor[j];
-        if (stiction && direction[j] != 0 && v * direction[j] <= 0) v = direction[j] * kStartVelocity;
+        if (direction[j] != 0 && v * direction[j] <= 0) v = direction[j] * kStartVelocity;
         friction = friction_torque(f, v, h[j]);
       }
       for (int k = 0; k < N; ++k) {
@@ -562,7 +562,7 @@ void DrivePlantOf<Robot>::integrate(const Scenario& scenario, const Vec& tau_cmd
       }
       double tf = motor_(j, j) * friction + e.offset;
       if (e.load_friction != 0 && !held) {
-        const double sg = stiction && direction[j] != 0 ? direction[j] : (qd[j] > 0 ? 1.0 : (qd[j] < 0 ? -1.0 : 0.0));
+        const double sg = direction[j] != 0 ? direction[j] : (qd[j] > 0 ? 1.0 : (qd[j] < 0 ? -1.0 : 0.0));
         tf += e.load_friction * std::fabs(h[j]) * sg;
       }
       if (e.cogging_amplitude != 0) tf += e.cogging_amplitude * std::sin(e.cogging_cycles * q[j] + e.cogging_phase);
@@ -580,9 +580,8 @@ void DrivePlantOf<Robot>::integrate(const Scenario& scenario, const Vec& tau_cmd
     }
     const Eigen::LDLT<Mat> ldlt(M);
     qdd = ldlt.solve(rhs);
-    if (!stiction) return;
-    const Eigen::MatrixXd T = stuck_rows();
-    if (T.rows() == 0) return;
+    if (stuck_T.rows() == 0) return;
+    const Eigen::MatrixXd& T = stuck_T;
     const Eigen::MatrixXd MinvTt = ldlt.solve(T.transpose());  // M^-1 T_S^T
     const Eigen::VectorXd f = (T * MinvTt).ldlt().solve(T * qdd);
     qdd -= MinvTt * f;
@@ -622,13 +621,9 @@ void DrivePlantOf<Robot>::integrate(const Scenario& scenario, const Vec& tau_cmd
     if (stiction) {
       // Release the stuck motors whose holding torque their static friction cannot give.
       const Vec v = motor_ * qd_;
+      for (int m = 0; m < N; ++m) direction[m] = stuck_[m] ? 0.0 : (v[m] > 0 ? 1.0 : (v[m] < 0 ? -1.0 : 0.0));
       Hold hold;
       for (;;) {
-        for (int m = 0; m < N; ++m) {
-          direction[m] = stuck_[m]             ? 0.0
-                         : start_sign_[m] != 0 ? start_sign_[m]
-                                               : (v[m] > 0 ? 1.0 : (v[m] < 0 ? -1.0 : 0.0));
-        }
         accel(q_, qd_, a1, &hold);
         int worst = -1;
         double excess = 0;
@@ -639,7 +634,8 @@ void DrivePlantOf<Robot>::integrate(const Scenario& scenario, const Vec& tau_cmd
         }
         if (worst < 0) break;
         stuck_[worst] = false;
-        start_sign_[worst] = hold.force[worst] > hold.hi[worst] ? 1.0 : -1.0;
+        direction[worst] = hold.force[worst] > hold.hi[worst] ? 1.0 : -1.0;
+        stuck_T = stuck_rows();
       }
     } else {
       accel(q_, qd_, a1, nullptr);
@@ -662,9 +658,9 @@ void DrivePlantOf<Robot>::integrate(const Scenario& scenario, const Vec& tau_cmd
       const bool sticks = friction_torque(f, kStartVelocity, 0.0) > friction_torque(f, -kStartVelocity, 0.0) ||
                           scenario.effects[m].load_friction > 0;  // a frictionless motor never sticks
       if (sticks && direction[m] * v_after[m] <= 0) stuck_[m] = true;
-      start_sign_[m] = 0;
     }
-    const Eigen::MatrixXd T = stuck_rows();
+    stuck_T = stuck_rows();
+    const Eigen::MatrixXd& T = stuck_T;
     if (T.rows() == 0) continue;
     Mat M;
     Robot::mass_matrix(q_, phi_true_, M);

@@ -2,6 +2,7 @@
 
 #include <Eigen/Core>
 #include <istream>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -23,5 +24,9 @@ NumericCsv read_numeric_csv(const std::string& path);
 /// Parses CSV text from `in` as read_numeric_csv does; `name` stands for the file in messages.
 /// Throws InputError as read_numeric_csv (the fuzz target tests/fuzz/fuzz_numeric_csv.cpp).
 NumericCsv parse_numeric_csv(std::istream& in, const std::string& name);
+
+/// Each of `csv`'s columns by name: its index. Throws InputError naming `path` and a column name
+/// the header gives twice.
+std::map<std::string, Eigen::Index> column_index(const NumericCsv& csv, const std::string& path);
 
 }  // namespace dyncal::host
