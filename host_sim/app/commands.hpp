@@ -33,6 +33,8 @@ void add_predict_command(CLI::App& app, Action& run);
 void add_payload_command(CLI::App& app, Action& run);
 void add_export_command(CLI::App& app, Action& run);
 void add_monitor_command(CLI::App& app, Action& run);
+/// Adds every subcommand above to `app` (the dyncal program's, and the Python module's).
+void add_commands(CLI::App& app, Action& run);
 
 /// Runs codegen/import_urdf.py (the URDF work: import, check, export; orocos-kdl checks) with `args`
 /// under the Debian python3; its messages go straight to our stdout/stderr. Returns its exit code;
@@ -65,7 +67,11 @@ struct LogOption {
   std::string columns;                 ///< csv logs: a logger's named columns (column_map.hpp), empty: dyncal's
   std::vector<std::string> data;       ///< one or more logs (--data A --data B): stacked as segments
   bool drop_outliers = false;
-  /// Adds --format, --torque-from, --columns, --data, --drop-outliers and the robot options to `cmd`; returns
+  std::string topic;             ///< ROS 2 bags: the JointState topic; empty: the bag's only one
+  std::string effort;            ///< ROS 2 bags: what JointState.effort holds, "torque" or "current" (required)
+  std::string clock = "header";  ///< ROS 2 bags: "header" (the message's stamp) or "log" (the recorder's time)
+  /// Adds --format, --torque-from, --columns, --data, --drop-outliers, the bag options (--topic, --effort,
+  /// --clock) and the robot options to `cmd`; returns
   /// --data's option (required unless `data_required` is false: the command checks it then).
   CLI::Option* add_to(CLI::App* cmd, bool data_required = true);
   /// The robot (--robot, or tx40 for --format tx40). Throws InputError (no --robot for csv, ...).
@@ -79,6 +85,12 @@ struct LogOption {
   /// As load_log, for the logs at `paths` (in --format) instead of --data.
   host::JointLog load_logs(const host::RobotDescription& robot, const std::vector<std::string>& paths,
                            std::vector<std::string>* dropped = nullptr) const;
+  /// The ROS 2 bag at `path` (ros2_bag.hpp) as a joint-side log: --effort declared (current: through
+  /// the robot's torque constants), joints matched by robot.json's names; the reading's notes (topic,
+  /// clocks, joints ignored) appended to *notes. Throws InputError (no --effort, a robot without joint
+  /// names, the bag's errors).
+  host::JointLog load_bag(const host::RobotDescription& robot, const std::string& path,
+                          std::vector<std::string>* notes) const;
 };
 
 }  // namespace dyncal::app

@@ -11,6 +11,7 @@
 #include "dyncal_host/common/robot_description.hpp"
 #include "dyncal_host/identification/logs/column_map.hpp"
 #include "dyncal_host/identification/logs/log_plausibility.hpp"
+#include "dyncal_host/identification/logs/ros2_bag.hpp"
 #include "dyncal_host/identification/logs/uniform_grid.hpp"
 #include "dyncal_host/identification/pipeline/compiled_robot.hpp"
 
@@ -64,9 +65,19 @@ host::RobotDescription RobotOption::load() const {
 CLI::Option* LogOption::add_to(CLI::App* cmd, bool data_required) {
   robot.add_to(cmd, "robot name (robots/<name>/); tx40 by default with --format tx40");
   cmd->add_option("--format", format,
-                  "log format: csv (t,q1..qN,[qd..],[qdd..],tau1..tauN, or --columns), ur-rtde (Universal Robots' "
-                  "RTDE recorder: timestamp, actual_q_*, actual_qd_*, actual_current_* as motor current) or tx40")
-      ->check(CLI::IsMember({"csv", "ur-rtde", "tx40"}));
+                  "log format: csv (t,q1..qN,[qd..],[qdd..],tau1..tauN, or --columns; a ROS 2 bag given to --data "
+                  "is read as one), ur-rtde (Universal Robots' RTDE recorder: timestamp, actual_q_*, actual_qd_*, "
+                  "actual_current_* as motor current), tx40, or ros2-bag (an .mcap, a .db3, or a rosbag2 folder)")
+      ->check(CLI::IsMember({"csv", "ur-rtde", "tx40", "ros2-bag"}));
+  cmd->add_option("--topic", topic, "ROS 2 bags: the sensor_msgs/msg/JointState topic (default: the bag's only one)");
+  cmd->add_option("--effort", effort,
+                  "ROS 2 bags: what JointState.effort holds, as the robot's driver publishes it: torque (joint torque "
+                  "[Nm]) or current (motor current [A], tau = N^T diag(Kt) i); required, never guessed")
+      ->check(CLI::IsMember({"torque", "current"}));
+  cmd->add_option("--clock", clock,
+                  "ROS 2 bags: the samples' time, header (the message's stamp, when the driver sampled) or log (when "
+                  "the recorder received it); both are reported")
+      ->check(CLI::IsMember({"header", "log"}));
   cmd->add_option("--torque-from", torque_from,
                   "csv logs: torque (columns tau1..tauN, joint torque [Nm]) or current (columns i1..iN, motor "
                   "current [A]; tau = N^T diag(Kt) i with robot.json's transmission.torque_constants and gear "
@@ -100,6 +111,32 @@ host::JointLog LogOption::load_log(const host::RobotDescription& r, std::vector<
   return load_logs(r, data, dropped);
 }
 
+host::JointLog LogOption::load_bag(const host::RobotDescription& r, const std::string& path,
+                                   std::vector<std::string>* notes) const {
+  if (!columns.empty()) throw InputError("--columns maps a CSV's columns; " + path + " is a ROS 2 bag");
+  if (torque_from == "current")
+    throw InputError("--torque-from is for CSV logs; a ROS 2 bag's JointState.effort is declared with --effort");
+  if (effort.empty())
+    throw InputError(path +
+                     ": a ROS 2 bag's JointState.effort is joint torque or motor current depending on the "
+                     "robot's driver; declare which with --effort torque|current");
+  if (r.joint_names.empty())
+    throw InputError(r.directory +
+                     "/robot.json names no joints (joint_names, or source.joints of robot import); a "
+                     "bag's JointState is matched to the robot by joint name (docs/robots.md)");
+  if (effort == "current" && r.torque_constants.size() == 0)
+    throw InputError("--effort current: " + r.directory +
+                     "/robot.json has no transmission.torque_constants (Nm/A per motor; docs/robots.md)");
+  host::BagLogOptions options;
+  options.topic = topic;
+  options.clock = clock == "log" ? host::BagClock::log : host::BagClock::header;
+  options.joint_names = r.joint_names;
+  host::BagLog bag = host::read_ros2_bag_log(path, options);
+  if (effort == "current") host::current_to_joint_torque(bag.log, r.transmission, r.torque_constants, path);
+  if (notes) notes->insert(notes->end(), bag.notes.begin(), bag.notes.end());
+  return std::move(bag.log);
+}
+
 host::JointLog LogOption::load_logs(const host::RobotDescription& r, const std::vector<std::string>& paths,
                                     std::vector<std::string>* dropped) const {
   if (torque_from == "current" && format == "tx40")
@@ -119,7 +156,11 @@ host::JointLog LogOption::load_logs(const host::RobotDescription& r, const std::
   std::vector<host::JointLog> logs;
   for (const std::string& path : paths) {
     host::JointLog log;
-    if (map) {
+    if (format == "ros2-bag" || (format == "csv" && !map && host::is_ros2_bag(path))) {
+      log = load_bag(r, path, dropped);
+    } else if (!topic.empty() || !effort.empty()) {
+      throw InputError("--topic and --effort are for ROS 2 bags; " + path + " is not one");
+    } else if (map) {
       log = host::read_mapped_csv_log(path, *map, r.num_joints);
       if (map->effort_is_current) host::current_to_joint_torque(log, r.transmission, r.torque_constants, path);
     } else {

@@ -151,6 +151,28 @@ void read_friction(const Reader& rd, const json& j, RobotDescription& r) {
   }
 }
 
+void read_joint_names(const Reader& rd, const json& j, RobotDescription& r) {
+  const json* names = nullptr;
+  std::string field = "joint_names";
+  if (j.contains("joint_names")) {
+    names = &j["joint_names"];
+  } else if (j.contains("source") && j["source"].is_object() && j["source"].contains("joints")) {
+    names = &j["source"]["joints"];
+    field = "source.joints";
+  }
+  if (!names) return;
+  if (!names->is_array() || static_cast<int>(names->size()) != r.num_joints)
+    rd.fail(field, "expected a list of " + std::to_string(r.num_joints) + " joint names (one per joint)");
+  for (size_t k = 0; k < names->size(); ++k) {
+    const json& n = (*names)[k];
+    if (!n.is_string() || n.get<std::string>().empty())
+      rd.fail(field + "[" + std::to_string(k + 1) + "]", "expected a joint's name");
+    for (const auto& before : r.joint_names)
+      if (before == n.get<std::string>()) rd.fail(field + "[" + std::to_string(k + 1) + "]", "'" + before + "' twice");
+    r.joint_names.push_back(n.get<std::string>());
+  }
+}
+
 }  // namespace
 
 std::string default_robots_dir() {
@@ -172,6 +194,7 @@ RobotDescription load_robot(const std::string& robots_dir, const std::string& na
   read_limits(rd, j, r);
   read_transmission(rd, j, r);
   read_friction(rd, j, r);
+  read_joint_names(rd, j, r);
   return r;
 }
 

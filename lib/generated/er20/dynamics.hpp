@@ -1,6 +1,6 @@
 // GENERATED FILE - DO NOT EDIT.
 // Generator: codegen/generate.py (dyncal codegen 4, SymPy 1.11.1)
-// Robot: er20; inputs: robots/er20/robot.json (sha256 2ed936baf54754ce)
+// Robot: er20; inputs: robots/er20/robot.json (sha256 4a57ae3dca2a7e3c)
 // Contents: inverse dynamics tau(q, qd, qdd, phi) and mass matrix M(q, phi)
 // Operation count inverse_dynamics: 372 multiplications, 309 additions (plus dyncal::sin_cos of q)
 // Operation count mass_matrix: 401 multiplications, 312 additions (plus dyncal::sin_cos of q)

@@ -1,6 +1,6 @@
 // GENERATED FILE - DO NOT EDIT.
 // Generator: codegen/generate.py (dyncal codegen 4, SymPy 1.11.1)
-// Robot: er20; inputs: robots/er20/robot.json (sha256 2ed936baf54754ce)
+// Robot: er20; inputs: robots/er20/robot.json (sha256 4a57ae3dca2a7e3c)
 // Contents: standard regressor Y and base regressor Y_b
 // Operation count standard_regressor: 559 multiplications, 374 additions (plus dyncal::sin_cos of q)
 // Operation count base_regressor: 439 multiplications, 294 additions (plus dyncal::sin_cos of q)

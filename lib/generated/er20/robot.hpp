@@ -1,6 +1,6 @@
 // GENERATED FILE - DO NOT EDIT.
 // Generator: codegen/generate.py (dyncal codegen 4, SymPy 1.11.1)
-// Robot: er20; inputs: robots/er20/robot.json (sha256 2ed936baf54754ce)
+// Robot: er20; inputs: robots/er20/robot.json (sha256 4a57ae3dca2a7e3c)
 // Contents: the Robot traits type gathering the generated model
 // Include as "dyncal/generated/er20/<file>.hpp". Regenerate: cmake --build <build> --target regenerate (or scripts/codegen).
 #pragma once

@@ -39,6 +39,10 @@ struct RobotDescription {
   Eigen::VectorXd tau_max;
   bool tau_max_derived = false;
   std::vector<NominalFriction> friction;  ///< per joint (num_joints entries); Fs defaults to Fc
+  /// The joints' names as the robot's own software publishes them (a ROS 2 bag's JointState is
+  /// matched by them): robot.json's "joint_names", else "source.joints" (the URDF joints `robot
+  /// import` kept); empty when the file gives neither.
+  std::vector<std::string> joint_names;
 };
 
 /// Loads robots/<name>/robot.json below `robots_dir`. Throws InputError on one line naming the file

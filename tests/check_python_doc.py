@@ -1,0 +1,112 @@
+#!/usr/bin/env python3
+"""Runs docs/python.md's example with the built module and checks it against the dyncal program.
+
+- every identified parameter and standard deviation equals `dyncal identify`'s with the same
+  options, bit for bit;
+- the regressor times the base parameters equals the generated inverse dynamics (Newton-Euler,
+  not through the regressor) on every sample, to 1e-9 of max(1, |tau|);
+- the refused input raises dyncal.InputError with the CLI's message;
+- predict, with the parameters identify saved, returns the CLI's report document.
+
+usage: check_python_doc.py SOURCE_DIR MODULE_DIR DYNCAL_BINARY
+"""
+import contextlib
+import io
+import json
+import os
+import re
+import subprocess
+import sys
+import tempfile
+
+
+def to_lists(x):
+    """The module's result as JSON values (numpy arrays as lists)."""
+    if isinstance(x, dict):
+        return {k: to_lists(v) for k, v in x.items()}
+    if isinstance(x, list):
+        return [to_lists(v) for v in x]
+    if hasattr(x, "tolist"):
+        return x.tolist()
+    return x
+
+
+def main():
+    source, module_dir, binary = sys.argv[1:4]
+    sys.path.insert(0, module_dir)
+    os.chdir(source)
+    doc = open(os.path.join(source, "docs", "python.md")).read()
+    blocks = re.findall(r"```python\n(.*?)```", doc, re.S)
+    if len(blocks) != 1:
+        sys.exit(f"docs/python.md: expected one python example, found {len(blocks)}")
+    scope = {}
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        exec(compile(blocks[0], "docs/python.md", "exec"), scope)
+    print(out.getvalue(), end="")
+    failures = []
+
+    # The CLI with the same options.
+    with tempfile.TemporaryDirectory() as tmp:
+        report = os.path.join(tmp, "cli.json")
+        subprocess.run([binary, "identify", "--format", "tx40", "--data", "tests/data/staubli_tx40", "--model",
+                        "eq7,rotor_inertia,offset", "--report", report], check=True, stdout=subprocess.DEVNULL)
+        cli = json.load(open(report))
+        refused = subprocess.run([binary, "identify", "--robot", "tx40", "--data", "no_such_log.csv"],
+                                 capture_output=True, text=True)
+    got = scope["result"]
+    if len(got["params"]) != len(cli["params"]):
+        failures.append(f"{len(got['params'])} parameters, the CLI {len(cli['params'])}")
+    for a, b in zip(got["params"], cli["params"]):
+        for key in ("name", "value", "std"):
+            if a[key] != b[key]:
+                failures.append(f"{b['name']} {key}: python {a[key]!r}, CLI {b[key]!r}")
+    for a, b in zip(got["joints"], cli["joints"]):
+        if a["r2_validation"] != b["r2_validation"]:
+            failures.append(f"joint {b['joint']} r2_validation: python {a['r2_validation']!r}, CLI {b['r2_validation']!r}")
+    if "Ia5 =" not in out.getvalue():
+        failures.append("the example printed no Ia5")
+
+    # Another command through the module: predict with the parameters identify saved, against the CLI's.
+    dyncal = scope["dyncal"]
+    with tempfile.TemporaryDirectory() as tmp:
+        params = os.path.join(tmp, "p.json")
+        dyncal.identify(format="tx40", data="tests/data/staubli_tx40", model="eq7,rotor_inertia,offset",
+                        params=params)
+        predicted = dyncal.predict(params=params, format="tx40", data="tests/data/staubli_tx40")
+        report = os.path.join(tmp, "predict.json")
+        subprocess.run([binary, "predict", "--params", params, "--format", "tx40", "--data", "tests/data/staubli_tx40",
+                        "--report", report], check=True, stdout=subprocess.DEVNULL)
+        cli_predicted = json.load(open(report))
+    if json.dumps(to_lists(predicted), sort_keys=True) != json.dumps(
+            {**cli_predicted, "report_text": predicted["report_text"]}, sort_keys=True):
+        failures.append("predict: the module's document differs from the CLI's")
+
+    # Y_b phi_b against the generated Newton-Euler.
+    robot, q, qd, qdd, tau, phi = (scope[k] for k in ("robot", "q", "qd", "qdd", "tau", "phi_b"))
+    if scope["Y"].shape != (100, robot.joints, len(robot.base_parameter_names)):
+        failures.append(f"Y has shape {scope['Y'].shape}")
+    worst = 0.0
+    for k in range(q.shape[0]):
+        ref = robot.inverse_dynamics(q[k], qd[k], qdd[k], robot.nominal_standard)
+        worst = max(worst, max(abs(ref - tau[k]) / max(1.0, abs(ref).max())))
+    if not worst < 1e-9:
+        failures.append(f"Y_b phi_b differs from the inverse dynamics by {worst:.3g}")
+    one = robot.regressor(q[0], qd[0], qdd[0])
+    if one.shape != (robot.joints, len(robot.base_parameter_names)) or abs(one - scope["Y"][0]).max() != 0:
+        failures.append("one sample's regressor is not the batch's first")
+
+    # The refused input: the CLI's one line.
+    line = refused.stderr.strip()
+    expected = line.removeprefix("dyncal: error: ")
+    if refused.returncode != 2 or f"refused: {expected}" not in out.getvalue():
+        failures.append(f"refusal: the CLI said {line!r} (exit {refused.returncode}), the example printed "
+                        f"{out.getvalue().splitlines()[-1]!r}")
+    if failures:
+        print("\n".join("FAIL: " + f for f in failures))
+        sys.exit(1)
+    print(f"python_doc_example: {len(cli['params'])} parameters equal the CLI's; Y_b phi_b = ID to {worst:.2g}")
+
+
+if __name__ == "__main__":
+    main()
