@@ -1,6 +1,7 @@
 // `dyncal identify` and `dyncal calibrate --trajectory` on malformed input: one clear line on
 // stderr naming the problem, exit code 2; `dyncal excite` writes a file calibrate accepts.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -21,6 +22,18 @@ struct Run {
 Run run_dyncal(const std::string& args) {
   const std::string err_file = std::filesystem::temp_directory_path() / ("dyncal_err_" + std::to_string(::getpid()));
   const std::string cmd = std::string(DYNCAL_BINARY) + " " + args + " >/dev/null 2>" + err_file;
+  const int status = std::system(cmd.c_str());
+  std::ifstream in(err_file);
+  std::string err((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::filesystem::remove(err_file);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, err};
+}
+
+/// As run_dyncal, killed after `seconds` (exit code 124 then, as timeout(1) reports it).
+Run run_dyncal_timeout(const std::string& args, int seconds) {
+  const std::string err_file = std::filesystem::temp_directory_path() / ("dyncal_err_" + std::to_string(::getpid()));
+  const std::string cmd = "timeout " + std::to_string(seconds) + " " + std::string(DYNCAL_BINARY) + " " + args +
+                          " >/dev/null 2>" + err_file;
   const int status = std::system(cmd.c_str());
   std::ifstream in(err_file);
   std::string err((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -379,3 +392,22 @@ TEST(CliErrors, MonitorRefusesBadStatisticsRatesAndGainsWithOneLine) {
 }
 
 }  // namespace
+
+// The drive's table file must be a regular file: a FIFO blocked the drive before it was ready, and
+// /dev/zero grew it to 400 MB (issue 47). Run under `timeout`, so that a drive that blocks fails
+// the test instead of hanging it.
+TEST(CliErrors, ADriveTableThatIsNotARegularFileIsRefused) {
+  const auto dir = std::filesystem::temp_directory_path() / ("dyncal_table_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir / "folder");
+  const std::string fifo = (dir / "fifo").string();
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  for (const std::string& table : {fifo, std::string("/dev/zero"), (dir / "folder").string()}) {
+    SCOPED_TRACE(table);
+    const auto r = run_dyncal_timeout("drive --robot er20 --tcp 127.0.0.1:0 --table " + table, 20);
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_NE(r.err.find(table + ": the drive's table file is not a regular file"), std::string::npos) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
+  std::filesystem::remove_all(dir);
+}

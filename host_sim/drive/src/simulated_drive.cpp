@@ -5,6 +5,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <optional>
@@ -39,9 +40,17 @@ SimulatedDrive::SimulatedDrive(const RobotDescription& robot, const Scenario& sc
   // The flash: the stored table if it is valid for this drive, else the factory table.
   active_ = plant_->nominal_table({}, {});
   startup_note_ = "factory table (nominal base parameters, no friction)";
+  // The flash is a regular file: a FIFO would block the drive before it is ready, a device such as
+  // /dev/zero would never end. Refused before opening. Read up to one byte past the largest table.
+  std::error_code ec;
+  const auto kind = std::filesystem::status(table_path_, ec).type();
+  if (kind != std::filesystem::file_type::not_found && kind != std::filesystem::file_type::regular)
+    throw InputError(table_path_ + ": the drive's table file is not a regular file");
   std::ifstream in(table_path_, std::ios::binary);
   if (in) {
-    std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::vector<std::uint8_t> bytes(static_cast<std::size_t>(kTableMaxBytes) + 1);
+    in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+    bytes.resize(static_cast<std::size_t>(in.gcount()));
     ParameterTable t;
     TableStatus st = decode_table(bytes.data(), static_cast<int>(bytes.size()), t);
     if (st == TableStatus::ok) st = plant_->check(t);
