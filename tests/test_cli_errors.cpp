@@ -19,9 +19,10 @@ struct Run {
   std::string err;
 };
 
-Run run_dyncal(const std::string& args) {
+/// Runs `PREFIX dyncal ARGS` with stdout discarded: its exit code (-1 if it did not exit) and stderr.
+Run run_with_prefix(const std::string& prefix, const std::string& args) {
   const std::string err_file = std::filesystem::temp_directory_path() / ("dyncal_err_" + std::to_string(::getpid()));
-  const std::string cmd = std::string(DYNCAL_BINARY) + " " + args + " >/dev/null 2>" + err_file;
+  const std::string cmd = prefix + std::string(DYNCAL_BINARY) + " " + args + " >/dev/null 2>" + err_file;
   const int status = std::system(cmd.c_str());
   std::ifstream in(err_file);
   std::string err((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -29,16 +30,13 @@ Run run_dyncal(const std::string& args) {
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, err};
 }
 
+Run run_dyncal(const std::string& args) {
+  return run_with_prefix("", args);
+}
+
 /// As run_dyncal, killed after `seconds` (exit code 124 then, as timeout(1) reports it).
 Run run_dyncal_timeout(const std::string& args, int seconds) {
-  const std::string err_file = std::filesystem::temp_directory_path() / ("dyncal_err_" + std::to_string(::getpid()));
-  const std::string cmd = "timeout " + std::to_string(seconds) + " " + std::string(DYNCAL_BINARY) + " " + args +
-                          " >/dev/null 2>" + err_file;
-  const int status = std::system(cmd.c_str());
-  std::ifstream in(err_file);
-  std::string err((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  std::filesystem::remove(err_file);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, err};
+  return run_with_prefix("timeout " + std::to_string(seconds) + " ", args);
 }
 
 std::string write_csv(const std::string& name, const std::string& text) {

@@ -202,6 +202,9 @@ BagLog read_ros2_bag_log(const std::string& path, const BagLogOptions& options) 
       messages.push_back(std::move(m));
     }
   }
+  const auto topic_named = [&](const std::string& name) {
+    return std::find_if(topics.begin(), topics.end(), [&](const BagTopic& x) { return x.name == name; });
+  };
   // The topic: --topic, else the one JointState topic.
   std::vector<std::string> joint_state_topics, all;
   for (const BagTopic& t : topics) {
@@ -218,14 +221,14 @@ BagLog read_ros2_bag_log(const std::string& path, const BagLogOptions& options) 
                        joined(joint_state_topics) + "); choose one with --topic");
     topic = joint_state_topics.front();
   } else {
-    const auto t = std::find_if(topics.begin(), topics.end(), [&](const BagTopic& x) { return x.name == topic; });
+    const auto t = topic_named(topic);
     if (t == topics.end())
       throw InputError(path + ": no topic " + topic + "; the bag has " + (all.empty() ? "no topics" : joined(all)));
     if (t->type != kJointState)
       throw InputError(path + ": topic " + topic + " is " + (t->type.empty() ? "untyped" : t->type) + ", not a " +
                        kJointState);
   }
-  const auto topic_at = std::find_if(topics.begin(), topics.end(), [&](const BagTopic& x) { return x.name == topic; });
+  const auto topic_at = topic_named(topic);
   if (topic_at->encoding != "cdr")
     throw InputError(path + ": topic " + topic + " is serialised as '" + topic_at->encoding + "', not cdr");
   const int topic_index = static_cast<int>(topic_at - topics.begin());
