@@ -1,7 +1,8 @@
 #!/bin/sh
 # CTest fixture for a simulated drive (or a socat pty pair): started in the background, ready when
 # its ready file appears (the drive writes it atomically once it serves requests), stopped by PID.
-#   drive_fixture.sh start DIR NAME DYNCAL [drive options...]
+#   drive_fixture.sh start DIR NAME DYNCAL [--real-time] [drive options...]
+#     (the drive runs in lockstep unless --real-time comes first)
 #   drive_fixture.sh pty DIR NAME              (socat pty pair: DIR/NAME.a <-> DIR/NAME.b)
 #   drive_fixture.sh stop DIR NAME
 set -eu
@@ -21,8 +22,10 @@ case "$action" in
   start)
     dyncal=$1
     shift
+    clock=--lockstep
+    if [ "${1:-}" = --real-time ]; then clock=; shift; fi
     rm -f "$dir/$name.ready" "$dir/$name.table" "$dir/$name.table.tmp"
-    "$dyncal" drive --ready-file "$dir/$name.ready" --table "$dir/$name.table" --lockstep "$@" >"$dir/$name.log" 2>&1 &
+    "$dyncal" drive --ready-file "$dir/$name.ready" --table "$dir/$name.table" $clock "$@" >"$dir/$name.log" 2>&1 &
     echo $! >"$dir/$name.pid"
     wait_for "$dir/$name.ready" "$(cat "$dir/$name.pid")"
     ;;

@@ -171,11 +171,52 @@ TEST(DriveHostileClients, ManyIdleConnectionsNeitherCrashNorLockOutTheHost) {
   }
   ASSERT_LE(held.size(), 16U);
   // The drive's slots are full of idle clients (this process's descriptors are below 1024 again:
-  // libmodbus's client uses select). Once they have been silent for the frame time-out, a host
-  // gets in and streams.
-  std::this_thread::sleep_for(std::chrono::milliseconds(1200));
+  // libmodbus's client uses select). A host gets in at once (the least recently used makes room)
+  // and streams.
   stream_while([](std::atomic<bool>&) {});
   for (int fd : held) ::close(fd);
+}
+
+// Issue 47: 16 clients polling every 0.5 s locked every other client out for as long as they
+// polled (a newcomer replaced only a client silent for 1 s). Least-recently-used eviction: 24
+// pollers, every 0.1 s, reconnecting when evicted, while a host streams a whole run; the host is
+// never evicted (it started the trajectory), and the pollers share the other slots.
+TEST(DriveHostileClients, PollersShareTheSlotsAndCannotLockOutTheHost) {
+  constexpr int kPollers = 24;
+  std::vector<long> answered(kPollers, 0);
+  std::atomic<int> rounds{0};
+  std::atomic<bool> stop{false};
+  std::thread pollers([&] {
+    std::vector<int> fds(kPollers, -1);
+    std::uint16_t tid = 0;
+    while (!stop) {
+      for (int i = 0; i < kPollers; ++i) {
+        if (fds[i] < 0) fds[i] = raw_connect();
+        if (fds[i] < 0) continue;
+        const auto req = read_request(++tid, 0, 0xFF, mm::kMapVersionReg, 1);
+        if (::send(fds[i], req.data(), req.size(), MSG_NOSIGNAL) != static_cast<ssize_t>(req.size()) ||
+            reply(fds[i], 0.05).size() != 11) {
+          ::close(fds[i]);  // evicted: reconnect on the next round
+          fds[i] = -1;
+          continue;
+        }
+        ++answered[static_cast<size_t>(i)];
+      }
+      ++rounds;
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    for (int fd : fds) {
+      if (fd >= 0) ::close(fd);
+    }
+  });
+  // Every slot is taken before the host connects.
+  while (rounds < 5) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  stream_while([](std::atomic<bool>&) {});
+  const int during = rounds;
+  while (rounds < during + 3) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  stop = true;
+  pollers.join();
+  for (int i = 0; i < kPollers; ++i) EXPECT_GE(answered[static_cast<size_t>(i)], 4) << "poller " << i;
 }
 
 // fault 2: a frame sent one byte per 0.45 s froze the drive for everyone.
@@ -309,16 +350,22 @@ TEST(DriveHostileClients, BadQuantitiesAndReservedFunctionsGetTheirExceptionAtOn
 
 // fault 5: a host that died after `start` left the drive playing with no one listening. The
 // watchdog (2 s by default) stops it with fault communication_lost; the samples recorded before
-// it are still delivered, then the fault.
+// it are still delivered, then the fault. Issue 47: another client polling meanwhile kept the
+// watchdog from tripping; the watchdog now watches the client that started the trajectory.
 TEST(DriveHostileClients, ADrivePlayingForNoOneStopsOnItsWatchdog) {
   std::string error;
   auto drive = ModbusDrive::connect(uri(), &error);
   ASSERT_NE(drive, nullptr) << error;
+  auto poller = ModbusDrive::connect(uri(), &error);
+  ASSERT_NE(poller, nullptr) << error;
   ASSERT_NO_FATAL_FAILURE(start_run(*drive, 0.1, 100));
   dyncal::linux_port::DriveInfo info;
   ASSERT_EQ(drive->read_info(info), PortStatus::ok);
   EXPECT_EQ(info.state, mm::DriveState::playing);
-  std::this_thread::sleep_for(std::chrono::milliseconds(2600));  // silent for more than the watchdog
+  for (int k = 0; k < 13; ++k) {  // the host is silent for more than the watchdog; a poller is not
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    ASSERT_EQ(poller->read_info(info), PortStatus::ok) << poller->error();
+  }
   ASSERT_EQ(drive->read_info(info), PortStatus::ok);
   EXPECT_EQ(info.state, mm::DriveState::fault);
   EXPECT_EQ(info.fault, mm::DriveFault::communication_lost);

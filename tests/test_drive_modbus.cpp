@@ -7,6 +7,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
@@ -277,6 +278,67 @@ TEST_F(DriveModbus, StagingNeedsASessionOfItsOwnConnectionAndStartWhilePlayingIs
   ASSERT_EQ(drive_->stop(), dyncal::port::PortStatus::ok);
   modbus_close(a);
   modbus_free(a);
+  modbus_close(b);
+  modbus_free(b);
+}
+
+// Issue 47: a second connection could take over a session (writing the key again) and commit the
+// table the first one had staged. One session at a time (06 busy while another is open), and a new
+// session starts with nothing staged: a commit writes only what its own connection staged.
+TEST_F(DriveModbus, ACommitWritesOnlyWhatItsOwnSessionStaged) {
+  using Model = dyncal::IdentificationModel<Er20, dyncal::kFrictionEq7 | dyncal::term::rotor_inertia>;
+  std::uint8_t before[dyncal::kTableMaxBytes], after[dyncal::kTableMaxBytes];
+  int before_size = 0, after_size = 0;
+  ASSERT_EQ(drive_->read_active_bytes(before, sizeof before, &before_size), dyncal::port::PortStatus::ok);
+  dyncal::ParameterTable staged;
+  dyncal::make_table<Model>(Model::ParamVector<double>::Constant(0.25), staged);
+  std::uint8_t bytes[dyncal::kTableMaxBytes];
+  int size = 0;
+  ASSERT_EQ(dyncal::encode_table(staged, bytes, sizeof bytes, &size), dyncal::TableStatus::ok);
+  ASSERT_TRUE(before_size != size || std::memcmp(before, bytes, static_cast<size_t>(size)) != 0);
+  std::vector<std::uint16_t> regs(1 + static_cast<size_t>(size + 1) / 2);
+  regs[0] = static_cast<std::uint16_t>(size);
+  mm::bytes_to_regs(bytes, size, regs.data() + 1);
+
+  modbus_t* a = raw();
+  modbus_t* b = raw();
+  ASSERT_EQ(modbus_write_register(a, mm::kUnlockReg, mm::kUnlockKey), 1) << modbus_strerror(errno);
+  for (size_t done = 0; done < regs.size();) {  // a stages a valid table, and does not commit it
+    const int n = static_cast<int>(std::min<size_t>(regs.size() - done, MODBUS_MAX_WRITE_REGISTERS));
+    ASSERT_EQ(modbus_write_registers(a, mm::kStagingSizeReg + static_cast<int>(done), n, regs.data() + done), n)
+        << modbus_strerror(errno);
+    done += static_cast<size_t>(n);
+  }
+  EXPECT_EQ(modbus_write_register(b, mm::kUnlockReg, mm::kUnlockKey), -1);  // a's session is open: busy
+  EXPECT_EQ(errno, EMBXSBUSY);
+  EXPECT_EQ(modbus_write_register(b, mm::kCommandReg, static_cast<int>(mm::Command::commit_table)), -1);
+  EXPECT_EQ(errno, EMBXILFUN);
+  // a leaves without committing; b's own session starts empty, so its commit has nothing to write.
+  modbus_close(a);
+  modbus_free(a);
+  bool unlocked = false;
+  for (int k = 0; k < 200 && !unlocked; ++k) {  // the drive sees a's close at its next poll
+    unlocked = modbus_write_register(b, mm::kUnlockReg, mm::kUnlockKey) == 1;
+    if (!unlocked) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  ASSERT_TRUE(unlocked) << modbus_strerror(errno);
+  std::uint16_t staged_size = 99;
+  ASSERT_EQ(modbus_read_registers(b, mm::kStagingSizeReg, 1, &staged_size), 1);
+  EXPECT_EQ(staged_size, 0);
+  std::uint16_t counter[2] = {0, 0};
+  ASSERT_EQ(drive_->read_input(mm::kCommitResultReg, 2, counter), dyncal::port::PortStatus::ok);
+  const std::uint16_t commits_before = counter[1];
+  ASSERT_EQ(modbus_write_register(b, mm::kCommandReg, static_cast<int>(mm::Command::commit_table)), 1);
+  for (int k = 0; k < 1000 && counter[1] == commits_before; ++k) {
+    ASSERT_EQ(drive_->read_input(mm::kCommitResultReg, 2, counter), dyncal::port::PortStatus::ok);
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  ASSERT_NE(counter[1], commits_before) << "the commit never completed";
+  EXPECT_NE(static_cast<dyncal::TableStatus>(counter[0]), dyncal::TableStatus::ok);
+  ASSERT_EQ(drive_->read_active_bytes(after, sizeof after, &after_size), dyncal::port::PortStatus::ok);
+  ASSERT_EQ(after_size, before_size);
+  EXPECT_EQ(std::memcmp(before, after, static_cast<size_t>(before_size)), 0)
+      << "another connection's staged table became active";
   modbus_close(b);
   modbus_free(b);
 }

@@ -22,6 +22,7 @@ struct DriveSettings {
   std::string listen = "127.0.0.1:1502";
   bool lockstep = false;
   int flash_delay_ms = 0;
+  int ring_samples = host::SimulatedDrive::kRingCapacity;
   double watchdog_s = 2.0;
 };
 
@@ -32,6 +33,7 @@ int run_drive(DriveSettings& s) {
   host::SimulatedDrive drive(robot, scenario, s.table_file);
   drive.lockstep = s.lockstep;
   drive.flash_chunk_delay_ms = s.flash_delay_ms;
+  drive.ring_capacity = s.ring_samples;
   std::cout << "dyncal drive: " << robot.name << ", " << (s.lockstep ? "lockstep" : "real-time") << ", "
             << drive.startup_note() << std::endl;
   host::DriveServerOptions o;
@@ -69,6 +71,10 @@ void add_drive_command(CLI::App& app, Action& run) {
   cmd->add_option("--watchdog", s->watchdog_s,
                   "stop a playing trajectory when no request arrives for this long [s] (0: off)")
       ->check(CLI::Range(0.0, 3600.0))
+      ->capture_default_str();
+  cmd->add_option("--ring-samples", s->ring_samples,
+                  "samples the drive's ring buffer holds (a smaller buffer overruns sooner in real time)")
+      ->check(CLI::Range(1, host::SimulatedDrive::kRingCapacity))
       ->capture_default_str();
   cmd->add_option("--flash-delay-ms", s->flash_delay_ms, "sleep per 64 bytes written to flash (tests)");
   cmd->callback([&run, s] { run = [s] { return run_drive(*s); }; });

@@ -118,9 +118,19 @@ JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory
     if (n > 0) {
       last_progress = SteadyClock::now();
     } else if (std::chrono::duration<double>(SteadyClock::now() - last_progress).count() > kStallSeconds) {
-      throw InputError("drive: no new sample for " + std::to_string(static_cast<int>(kStallSeconds)) + " s after " +
-                       std::to_string(samples.size()) + " of " + std::to_string(expected) + " (" + run.name +
-                       " run): the drive has stalled");
+      // Which side stopped, from the drive's own counter: samples it produced past the last one
+      // received are in its ring (the link does not deliver them); none means the drive stopped.
+      linux_port::DriveInfo now;
+      if (drive.read_info(now) != port::PortStatus::ok) throw InputError("drive: " + drive.error());
+      const std::uint32_t next = samples.empty() ? 0 : samples.back().seq + 1;
+      const std::string after = " s after " + std::to_string(samples.size()) + " of " + std::to_string(expected) +
+                                " samples (" + run.name + " run): ";
+      if (now.produced > next)
+        throw InputError("drive: no new sample for " + std::to_string(static_cast<int>(kStallSeconds)) + after +
+                         "the drive has produced " + std::to_string(now.produced - next) +
+                         " more, but the link does not deliver them");
+      throw InputError("drive: no new sample for " + std::to_string(static_cast<int>(kStallSeconds)) + after +
+                       "the drive has stalled (its produced counter stays at " + std::to_string(now.produced) + ")");
     }
     if (st == port::PortStatus::transport_error) throw InputError("drive: " + drive.error());
     if (st == port::PortStatus::device_fault) {
@@ -138,7 +148,8 @@ JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory
     if (st == port::PortStatus::sequence_gap) {
       throw InputError(
           "drive overrun: " + std::to_string(drive.lost()) +
-          " samples lost (the host read too slowly; use --lockstep on the simulated drive or a lower --rate)");
+          " samples lost (the drive's overrun counter; the host read too slowly: use --lockstep on the simulated "
+          "drive or a lower --rate)");
     }
     samples.insert(samples.end(), block, block + n);
     if (on_sample) {

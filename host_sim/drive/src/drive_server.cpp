@@ -79,13 +79,17 @@ class Server {
   }
 
  private:
-  // The host streams while a trajectory plays: silence for watchdog_s means it is gone.
+  // The host that started the trajectory streams while it plays: its silence for watchdog_s means
+  // it is gone (other clients' requests do not count: a poller says nothing about that host).
   void watch_communication() {
     if (options_.watchdog_s <= 0 || drive_.state() != mm::DriveState::playing) return;
-    const double silent = std::chrono::duration<double>(Clock::now() - handler_->last_request()).count();
+    const double silent = std::chrono::duration<double>(Clock::now() - handler_->owner_last_request()).count();
     if (silent <= options_.watchdog_s) return;
     drive_.trip(mm::DriveFault::communication_lost, silent);
-    std::printf("dyncal drive: no request for %.3f s while playing: trajectory stopped (communication lost)\n", silent);
+    std::printf(
+        "dyncal drive: no request from the host that started the trajectory for %.3f s: trajectory stopped "
+        "(communication lost)\n",
+        silent);
     std::fflush(stdout);
   }
 
@@ -145,19 +149,22 @@ class Server {
     if (ready > 0 && (fds[0].revents & POLLIN)) accept_clients(now);
   }
 
-  // Accepts every pending connection. At max_connections, the client silent for longest makes room
-  // if it has sent nothing for frame_timeout_s (a polling host is never that client); otherwise the
-  // newcomer is closed at once: a clean refusal that leaves the connected clients served.
+  // Accepts every pending connection. At max_connections the least recently used client makes room
+  // (the one whose last complete request is oldest), unless it holds a role: the client that
+  // started the trajectory and the holder of an open staging session are never evicted. Pollers
+  // thus share the slots among themselves and cannot lock a host out. A newcomer is refused (closed
+  // at once) only when every connected client holds a role.
   void accept_clients(Clock::time_point now) {
     for (;;) {
       const int fd = ::accept4(listen_fd_, nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC);
       if (fd < 0) return;  // EAGAIN: none left (or a transient error; the next poll retries)
       if (static_cast<int>(clients_.size()) >= options_.max_connections) {
-        auto idlest = std::min_element(clients_.begin(), clients_.end(), [](const Connection& a, const Connection& b) {
-          return a.last_request < b.last_request;
-        });
-        if (idlest != clients_.end() && now - idlest->last_request > seconds(options_.frame_timeout_s))
-          disconnect(idlest);
+        auto lru = clients_.end();
+        for (auto c = clients_.begin(); c != clients_.end(); ++c) {
+          if (handler_->holds_a_role(c->fd)) continue;
+          if (lru == clients_.end() || c->last_request < lru->last_request) lru = c;
+        }
+        if (lru != clients_.end()) disconnect(lru);
       }
       if (static_cast<int>(clients_.size()) >= options_.max_connections) {
         ::close(fd);

@@ -103,9 +103,10 @@ bool overlaps(int address, int count, std::uint16_t reg, int words) {
 
 /// Checks the holding registers after a write (applied to a scratch copy) against the access and
 /// state rules (docs/modbus.md "Access and states"). `session`: the writing connection holds an
-/// open staging session. Returns a Modbus exception code or 0.
+/// open staging session; `session_elsewhere`: another connection does. Returns a Modbus exception
+/// code or 0.
 int check_holding(const SimulatedDrive& d, const std::uint16_t* h, int address, int count, double control_rate,
-                  bool session) {
+                  bool session, bool session_elsewhere) {
   const bool playing = d.state() == mm::DriveState::playing;
   const bool fault = d.state() == mm::DriveState::fault;
   // Staging and committing: only in a session, only while no trajectory plays and no fault stands.
@@ -132,8 +133,12 @@ int check_holding(const SimulatedDrive& d, const std::uint16_t* h, int address, 
         return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;  // the run would outlast the sample counter's resolution
     }
   }
-  if (overlaps(address, count, mm::kUnlockReg, 1) && h[mm::kUnlockReg] != mm::kUnlockKey)
-    return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+  if (overlaps(address, count, mm::kUnlockReg, 1)) {
+    if (h[mm::kUnlockReg] != mm::kUnlockKey) return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+    // One session at a time: another connection's open session is not taken over (it would commit
+    // what that connection staged).
+    if (session_elsewhere) return MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY;
+  }
   // Staging, and the collision monitor's settings (a safety function's): the same rule.
   if (overlaps(address, count, mm::kStagingSizeReg, mm::kHoldingWords - mm::kStagingSizeReg)) {
     if (const int e = staging_rule()) return e;
@@ -250,7 +255,7 @@ ModbusRequestHandler::TcpResult ModbusRequestHandler::serve_tcp(const std::uint8
     if (f.protocol != 0 || (f.unit != 0xFF && f.unit != unit_id_)) continue;
     modbus_set_socket(ctx_, client);
     if (!request_pdu_consistent(frame + kMbapHeaderBytes, f.bytes - kMbapHeaderBytes)) {
-      last_request_ = Clock::now();
+      if (client == owner_client_) owner_last_request_ = Clock::now();
       if (modbus_reply_exception(ctx_, frame, MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE) < 0) {
         r.keep = false;
         return r;
@@ -287,15 +292,25 @@ bool ModbusRequestHandler::reply_reserved_function(const std::uint8_t* query, in
 
 void ModbusRequestHandler::client_closed(int client) {
   if (session_client_ == client) session_client_ = kNoClient;
+  if (owner_client_ == client) owner_client_ = kNoClient;
 }
 
 bool ModbusRequestHandler::session_open() const {
   return session_client_ != kNoClient && session_client_ == current_client_ && Clock::now() < session_until_;
 }
 
+bool ModbusRequestHandler::session_held_by_another() const {
+  return session_client_ != kNoClient && session_client_ != current_client_ && Clock::now() < session_until_;
+}
+
+bool ModbusRequestHandler::holds_a_role(int client) const {
+  if (client == owner_client_) return true;
+  return client == session_client_ && Clock::now() < session_until_;
+}
+
 bool ModbusRequestHandler::answer(const std::uint8_t* query, int rc, int client) {
-  last_request_ = Clock::now();
   current_client_ = client;
+  if (client == owner_client_) owner_last_request_ = Clock::now();
   const int off = modbus_get_header_length(ctx_);
   const int function = query[off];
   if (function >= 0x80) return reply_reserved_function(query, off, client);
@@ -362,7 +377,7 @@ bool ModbusRequestHandler::answer(const std::uint8_t* query, int rc, int client)
       exception = MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS;
     } else {
       exception = check_holding(drive_, scratch.data(), write_address, write_count, 1.0 / drive_.control_period(),
-                                session_open());
+                                session_open(), session_held_by_another());
     }
   }
   if (exception) {
@@ -377,9 +392,11 @@ void ModbusRequestHandler::apply_write(int address, int count) {
   std::uint16_t* h = map_->tab_registers;
   if (overlaps(address, count, mm::kAckReg, 2)) drive_.ack(mm::get_u32(h + mm::kAckReg));
   if (overlaps(address, count, mm::kUnlockReg, 1)) {
+    // A new session starts empty: a commit writes only what its own connection staged.
     session_client_ = current_client_;
     session_until_ = Clock::now() + seconds(mm::kSessionSeconds);
     h[mm::kUnlockReg] = 0;
+    std::fill(h + mm::kStagingSizeReg, h + mm::kStagingTableReg + mm::kTableWords, std::uint16_t{0});
   }
   if (!overlaps(address, count, mm::kCommandReg, 1)) return;
   switch (static_cast<mm::Command>(h[mm::kCommandReg])) {
@@ -388,6 +405,8 @@ void ModbusRequestHandler::apply_write(int address, int count) {
       load_monitor(drive_, h);
       drive_.start();
       started_ = Clock::now();
+      owner_client_ = current_client_;
+      owner_last_request_ = started_;
       mm::set_u32(h + mm::kAckReg, 0);
       break;
     case mm::Command::identify_payload:
@@ -396,6 +415,8 @@ void ModbusRequestHandler::apply_write(int address, int count) {
       load_monitor(drive_, h);
       drive_.start_payload();
       started_ = Clock::now();
+      owner_client_ = current_client_;
+      owner_last_request_ = started_;
       mm::set_u32(h + mm::kAckReg, 0);
       break;
     case mm::Command::stop:

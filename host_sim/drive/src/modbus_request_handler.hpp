@@ -52,11 +52,18 @@ class ModbusRequestHandler {
   /// the Modbus exception they give). False when the reply could not be sent in full.
   bool answer(const std::uint8_t* adu, int length, int client);
 
-  /// `client`'s connection closed: a session it held ends (its id may be reused by a new client).
+  /// `client`'s connection closed: a session it held ends and it no longer owns the trajectory (its
+  /// id may be reused by a new client). The watchdog still counts the owner's silence from its last
+  /// request: a host that died mid-run trips it.
   void client_closed(int client);
 
-  /// The last complete request of any client (construction time before the first).
-  Clock::time_point last_request() const { return last_request_; }
+  /// The last complete request of the client that started the trajectory (the owner; the time of
+  /// the start if it has sent nothing since). The watchdog watches this client only: another
+  /// client's polling says nothing about the host that commands the run.
+  Clock::time_point owner_last_request() const { return owner_last_request_; }
+  /// `client` must not be disconnected to make room for a newcomer: it owns the trajectory, or
+  /// holds an open staging session.
+  bool holds_a_role(int client) const;
   /// When the last start command was applied (real-time mode follows the wall clock from there).
   Clock::time_point started() const { return started_; }
 
@@ -64,6 +71,7 @@ class ModbusRequestHandler {
   void apply_write(int address, int count);
   bool reply_reserved_function(const std::uint8_t* query, int header_length, int client);
   bool session_open() const;
+  bool session_held_by_another() const;
 
   static constexpr int kNoClient = -1;
   SimulatedDrive& drive_;
@@ -73,8 +81,9 @@ class ModbusRequestHandler {
   modbus_mapping_t* map_ = nullptr;
   int current_client_ = kNoClient;  ///< the client whose request is being answered
   int session_client_ = kNoClient;  ///< the client holding the staging session
+  int owner_client_ = kNoClient;    ///< the client that started the trajectory (while connected)
   Clock::time_point session_until_ = Clock::now();
-  Clock::time_point last_request_ = Clock::now();
+  Clock::time_point owner_last_request_ = Clock::now();
   Clock::time_point started_ = Clock::now();
   long table_generation_ = -1;  ///< the drive's table generation last copied into the registers
 };

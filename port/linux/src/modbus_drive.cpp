@@ -205,7 +205,7 @@ port::PortStatus ModbusDrive::write_trajectory(const Trajectory& t, int periods,
 port::PortStatus ModbusDrive::start() {
   const std::uint16_t cmd = static_cast<std::uint16_t>(mm::Command::start);
   next_seq_ = 0;
-  lost_ = 0;
+  lost_ = drive_overruns_ = 0;
   return write_holding(mm::kCommandReg, 1, &cmd);
 }
 
@@ -214,7 +214,7 @@ port::PortStatus ModbusDrive::identify_payload() {
   if (const auto st = write_holding(mm::kUnlockReg, 1, &key); st != port::PortStatus::ok) return st;
   const std::uint16_t cmd = static_cast<std::uint16_t>(mm::Command::identify_payload);
   next_seq_ = 0;
-  lost_ = 0;
+  lost_ = drive_overruns_ = 0;
   return write_holding(mm::kCommandReg, 1, &cmd);
 }
 
@@ -262,6 +262,29 @@ port::PortStatus ModbusDrive::stop() {
   return write_holding(mm::kCommandReg, 1, &cmd);
 }
 
+port::PortStatus ModbusDrive::read_ring_window(std::uint16_t* w) {
+  if (const auto st = read_input(mm::kRingReg, mm::kRingWords, w); st != port::PortStatus::ok) return st;
+  if (w[2] > mm::samples_per_block(joints_)) {
+    error_ = "ring block of " + std::to_string(w[2]) + " samples, at most " +
+             std::to_string(mm::samples_per_block(joints_)) + " fit for " + std::to_string(joints_) + " joints";
+    return port::PortStatus::transport_error;
+  }
+  return port::PortStatus::ok;
+}
+
+port::PortStatus ModbusDrive::confirm_loss(std::uint32_t from, std::uint32_t to) {
+  DriveInfo info;
+  if (read_info(info) != port::PortStatus::ok) return port::PortStatus::transport_error;
+  if (info.overruns < lost_) {
+    error_ = "the samples jump from seq " + std::to_string(from) + " to " + std::to_string(to) + " (" +
+             std::to_string(lost_) + " missing in all) but the drive counts " + std::to_string(info.overruns) +
+             " overruns: the link delivered replies out of step with the requests";
+    return port::PortStatus::transport_error;
+  }
+  drive_overruns_ = info.overruns;
+  return port::PortStatus::sequence_gap;
+}
+
 port::PortStatus ModbusDrive::read(port::DriveSample* out, int capacity, int* count) noexcept {
   *count = 0;
   if (joints_ == 0) {  // the sample layout depends on the drive's joint count
@@ -269,29 +292,30 @@ port::PortStatus ModbusDrive::read(port::DriveSample* out, int capacity, int* co
     if (const auto st = read_info(info); st != port::PortStatus::ok) return st;
   }
   std::uint16_t w[mm::kRingWords];
-  if (read_input(mm::kRingReg, mm::kRingWords, w) != port::PortStatus::ok) return port::PortStatus::transport_error;
-  const std::uint32_t first = mm::get_u32(w);
-  const int n = std::min<int>(w[2], capacity);
-  if (w[2] > mm::samples_per_block(joints_)) {
-    error_ = "ring block of " + std::to_string(w[2]) + " samples, at most " +
-             std::to_string(mm::samples_per_block(joints_)) + " fit for " + std::to_string(joints_) + " joints";
-    return port::PortStatus::transport_error;
-  }
-  if (n == 0) {
+  if (read_ring_window(w) != port::PortStatus::ok) return port::PortStatus::transport_error;
+  if (w[2] == 0) {
     DriveInfo info;
     if (read_info(info) != port::PortStatus::ok) return port::PortStatus::transport_error;
-    const bool done = info.state != mm::DriveState::playing;
-    if (done && info.produced > next_seq_) {  // dropped at the end of the run
-      lost_ += info.produced - next_seq_;
-      next_seq_ = info.produced;
-      return port::PortStatus::sequence_gap;
+    if (info.state == mm::DriveState::playing) return port::PortStatus::no_data;
+    // The run has ended, but maybe after the window was read: its last samples may be in the ring
+    // now. Only a window read after the end is final.
+    if (read_ring_window(w) != port::PortStatus::ok) return port::PortStatus::transport_error;
+    if (w[2] == 0) {
+      if (info.produced > next_seq_) {  // the run's last samples were dropped (a full ring)
+        const std::uint32_t from = next_seq_;
+        lost_ += info.produced - next_seq_;
+        next_seq_ = info.produced;
+        return confirm_loss(from, info.produced);
+      }
+      if (info.produced == next_seq_ && info.state == mm::DriveState::fault) {
+        error_ = "drive fault: " + describe_fault(info);
+        return port::PortStatus::device_fault;
+      }
+      return info.produced == next_seq_ ? port::PortStatus::end_of_stream : port::PortStatus::no_data;
     }
-    if (done && info.produced == next_seq_ && info.state == mm::DriveState::fault) {
-      error_ = "drive fault: " + describe_fault(info);
-      return port::PortStatus::device_fault;
-    }
-    return done && info.produced == next_seq_ ? port::PortStatus::end_of_stream : port::PortStatus::no_data;
   }
+  const std::uint32_t first = mm::get_u32(w);
+  const int n = std::min<int>(w[2], capacity);
   const std::uint16_t* p = w + 3;
   for (int k = 0; k < n; ++k, p += mm::sample_words(joints_)) {
     port::DriveSample& s = out[k];
@@ -303,19 +327,26 @@ port::PortStatus ModbusDrive::read(port::DriveSample* out, int capacity, int* co
       s.tau[j] = mm::get_f32(p + 2 + 2 * (2 * joints_ + j));
     }
   }
-  port::PortStatus status = port::PortStatus::ok;
-  if (first != next_seq_ || out[0].seq != first) {
-    if (first < next_seq_) {
-      error_ = "drive repeated samples already received (seq " + std::to_string(first) + ")";
+  if (out[0].seq != first || first < next_seq_) {
+    error_ = "the drive's ring window repeats samples already received (seq " + std::to_string(first) + ", expected " +
+             std::to_string(next_seq_) + ")";
+    return port::PortStatus::transport_error;
+  }
+  // A full ring drops the samples the drive produces meanwhile (its overrun counter counts them): the
+  // next sample it records follows the gap, in the same block or at the window's start.
+  const std::uint32_t expected = next_seq_;
+  std::uint32_t gap_from = next_seq_, gap_to = next_seq_;
+  for (int k = 0; k < n; ++k) {
+    const std::uint32_t want = k == 0 ? next_seq_ : out[k - 1].seq + 1;
+    if (out[k].seq < want) {
+      error_ = "samples out of order in one block (seq " + std::to_string(out[k].seq) + " after " +
+               std::to_string(want - 1) + ")";
       return port::PortStatus::transport_error;
     }
-    lost_ += first - next_seq_;
-    status = port::PortStatus::sequence_gap;
-  }
-  for (int k = 1; k < n; ++k) {
-    if (out[k].seq != out[k - 1].seq + 1) {
-      error_ = "samples out of order in one block";
-      return port::PortStatus::transport_error;
+    if (out[k].seq > want) {
+      lost_ += out[k].seq - want;
+      if (gap_from == gap_to) gap_from = want;
+      gap_to = out[k].seq;
     }
   }
   next_seq_ = out[n - 1].seq + 1;
@@ -323,7 +354,8 @@ port::PortStatus ModbusDrive::read(port::DriveSample* out, int capacity, int* co
   mm::set_u32(ack, next_seq_);
   if (write_holding(mm::kAckReg, 2, ack) != port::PortStatus::ok) return port::PortStatus::transport_error;
   *count = n;
-  return status;
+  if (next_seq_ - expected == static_cast<std::uint32_t>(n)) return port::PortStatus::ok;
+  return confirm_loss(gap_from, gap_to);
 }
 
 port::PortStatus ModbusDrive::write(const ParameterTable& table, TableStatus* reason) noexcept {

@@ -119,11 +119,16 @@ class ModbusDrive final : public port::SampleSource, public port::ParameterStore
   // port::SampleSource
   /// Samples carry the drive's num_joints joints (the rest of each DriveSample is zero); the first
   /// call reads it with read_info.
-  /// Errors: transport_error, rejected (read_info's); sequence_gap when samples were lost (lost() counts them);
-  /// device_fault once every sample recorded before a drive fault has been read (error() then describes the fault).
+  /// A block may hold a gap where the drive dropped samples (a full ring): it is delivered with
+  /// status sequence_gap. Every gap is checked against the drive's own overrun counter.
+  /// Errors: transport_error, rejected (read_info's; also a gap the drive's overrun counter does not
+  /// account for, or a window that repeats received samples: replies out of step with requests);
+  /// sequence_gap when samples were lost (lost() counts them); device_fault once every sample
+  /// recorded before a drive fault has been read (error() then describes the fault).
   port::PortStatus read(port::DriveSample* out, int capacity, int* count) noexcept override;
-  /// Samples lost to drive overruns so far (gaps in seq).
-  std::uint32_t lost() const { return lost_; }
+  /// Samples the drive dropped in this run, by its own overrun counter as read at the last gap
+  /// (0 while no sample is missing).
+  std::uint32_t lost() const { return drive_overruns_; }
 
   // port::ParameterStore
   /// Opens a staging session (writes modbus_map::kUnlockKey to `unlock`), stages, commits and reads
@@ -159,11 +164,17 @@ class ModbusDrive final : public port::SampleSource, public port::ParameterStore
   explicit ModbusDrive(modbus_t* ctx) : ctx_(ctx) {}
   /// error() from errno; rejected for a Modbus exception, transport_error otherwise.
   port::PortStatus fail(const char* what);
+  /// Reads the ring window into w (kRingWords); transport_error if its count cannot be.
+  port::PortStatus read_ring_window(std::uint16_t* w);
+  /// After the samples jumped from seq `from` to `to`: sequence_gap if the drive's overrun counter
+  /// accounts for every sample missing so far (drive_overruns_ takes it), else transport_error.
+  port::PortStatus confirm_loss(std::uint32_t from, std::uint32_t to);
   modbus_t* ctx_;
   std::string error_;
   std::uint32_t next_seq_ = 0;
-  std::uint32_t lost_ = 0;
-  int joints_ = 0;  ///< the drive's num_joints (read_info), 0 until known
+  std::uint32_t lost_ = 0;            ///< samples missing from the seq received in this run
+  std::uint32_t drive_overruns_ = 0;  ///< the drive's overrun counter at the last gap
+  int joints_ = 0;                    ///< the drive's num_joints (read_info), 0 until known
   double commit_timeout_s_ = 10.0;
 };
 

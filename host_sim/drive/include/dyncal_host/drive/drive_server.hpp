@@ -16,16 +16,16 @@ struct DriveServerOptions {
   int rtu_baud = 115200;
   int rtu_slave = 1;       ///< the drive's unit id (RTU slave address; on TCP, 0xFF is accepted too)
   std::string ready_file;  ///< written (atomically) with the drive's URI once it serves requests
-  /// TCP clients served at once. A newcomer beyond it replaces the client silent for longest if that
-  /// one has sent nothing for frame_timeout_s, else it is closed at once (docs/reliability.md).
+  /// TCP clients served at once. A newcomer beyond it replaces the least recently used client that
+  /// neither started the trajectory nor holds a staging session (docs/reliability.md).
   int max_connections = 16;
   /// A TCP client whose frame is still incomplete after this long is disconnected [s] (a whole
   /// Modbus TCP frame is at most 260 bytes: one segment).
   double frame_timeout_s = 1.0;
   /// A TCP client that sends no complete request for this long is disconnected [s].
   double idle_timeout_s = 60.0;
-  /// Communication watchdog [s]: while a trajectory plays, no complete request from any client for
-  /// this long stops it with fault communication_lost. 0 disables it.
+  /// Communication watchdog [s]: while a trajectory plays, no complete request from the client that
+  /// started it for this long stops it with fault communication_lost. 0 disables it.
   double watchdog_s = 2.0;
 };
 

@@ -25,6 +25,7 @@ namespace dyncal::host {
 
 class SimulatedDrive {
  public:
+  /// The largest ring buffer (samples); ring_capacity may make it smaller.
   static constexpr int kRingCapacity = 16384;
 
   /// `table_path`: the simulated flash. Its table becomes active if valid; otherwise (missing or
@@ -82,7 +83,10 @@ class SimulatedDrive {
   std::uint32_t acked() const { return acked_; }
   /// Frees samples with seq < seq_end (ignored if it would skip unrecorded samples).
   void ack(std::uint32_t seq_end);
-  bool ring_full() const { return static_cast<int>(ring_.size()) >= kRingCapacity; }
+  bool ring_full() const { return static_cast<int>(ring_.size()) >= ring_capacity; }
+  /// Samples the ring holds, 1..kRingCapacity (a real drive's trace buffer is often far smaller;
+  /// `dyncal drive --ring-samples`). Set while not playing.
+  int ring_capacity = kRingCapacity;
   /// Lockstep mode: the drive waits for the host instead of dropping samples when the ring is full.
   bool lockstep = true;
   std::uint32_t produced() const { return produced_; }

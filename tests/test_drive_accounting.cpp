@@ -1,0 +1,104 @@
+// Loss accounting on a real-time drive with a small ring (issue 47, fault "accounting"): a drive
+// whose ring (50 samples) overruns while the host does not read. The host used to report the gap
+// the dropped samples leave inside a ring block as "samples out of order in one block", and at a
+// run's end a sample produced between its window read and its status read as "1 samples lost"
+// while the drive's overrun counter read 0. Every loss must now be the drive's own count.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cstdint>
+#include <string>
+#include <thread>
+
+#include "dyncal/modbus_map.hpp"
+#include "dyncal_port/modbus_drive.hpp"
+#include "support/drive_uri.hpp"
+
+namespace {
+
+namespace mm = dyncal::modbus_map;
+using dyncal::linux_port::DriveInfo;
+using dyncal::linux_port::ModbusDrive;
+using dyncal::port::PortStatus;
+
+std::unique_ptr<ModbusDrive> connect() {
+  std::string error;
+  auto drive = ModbusDrive::connect(fixture_drive_uri("DYNCAL_DRIVE_SMALL_RING_READY"), &error);
+  EXPECT_NE(drive, nullptr) << error;
+  return drive;
+}
+
+// Plays `periods` periods of a one-harmonic trajectory at f_f [Hz], sampled at 1 kHz.
+void start_run(ModbusDrive& drive, double f_f, int periods) {
+  dyncal::linux_port::Trajectory t;
+  t.f_f = f_f;
+  t.harmonics = 1;
+  for (int j = 0; j < mm::kMaxJoints; ++j) t.a(j, 0) = 0.05;
+  ASSERT_EQ(drive.reset(), PortStatus::ok) << drive.error();
+  ASSERT_EQ(drive.write_trajectory(t, periods, 1000), PortStatus::ok) << drive.error();
+  ASSERT_EQ(drive.start(), PortStatus::ok) << drive.error();
+}
+
+TEST(DriveAccounting, AnOverrunIsTheDrivesOwnCountAndNeverABrokenBlock) {
+  auto drive = connect();
+  ASSERT_NE(drive, nullptr);
+  ASSERT_NO_FATAL_FAILURE(start_run(*drive, 0.5, 1));  // 2000 samples in 2 s
+  dyncal::port::DriveSample block[16];
+  long received = 0, missing = 0, gaps_reported = 0;
+  std::uint32_t next = 0;
+  PortStatus st = PortStatus::ok;
+  for (int k = 0; k < 1000000; ++k) {
+    int n = 0;
+    st = drive->read(block, 16, &n);
+    ASSERT_TRUE(st == PortStatus::ok || st == PortStatus::no_data || st == PortStatus::sequence_gap ||
+                st == PortStatus::end_of_stream)
+        << static_cast<int>(st) << ": " << drive->error();
+    for (int i = 0; i < n; ++i) {
+      ASSERT_GE(block[i].seq, next);
+      missing += block[i].seq - next;
+      next = block[i].seq + 1;
+    }
+    received += n;
+    if (st == PortStatus::sequence_gap) {
+      ++gaps_reported;
+      // The drive's counter covers every sample missing so far (and those it dropped since).
+      EXPECT_GE(drive->lost(), static_cast<std::uint32_t>(missing));
+    }
+    if (st == PortStatus::end_of_stream) break;
+    if (k % 50 == 10) std::this_thread::sleep_for(std::chrono::milliseconds(150));  // the ring overruns
+  }
+  EXPECT_EQ(st, PortStatus::end_of_stream);
+  DriveInfo info;
+  ASSERT_EQ(drive->read_info(info), PortStatus::ok);
+  EXPECT_GT(info.overruns, 0U) << "the test did not overrun the ring";
+  EXPECT_GT(gaps_reported, 0);
+  missing += info.produced - next;  // dropped at the run's end: no later sample shows the gap
+  EXPECT_EQ(static_cast<std::uint32_t>(missing), info.overruns);
+  EXPECT_EQ(drive->lost(), info.overruns);
+  EXPECT_EQ(static_cast<std::uint32_t>(received) + info.overruns, info.produced);
+}
+
+// Many short runs read without pause: each ends with every sample and no loss, however the last
+// sample falls between the host's requests.
+TEST(DriveAccounting, ShortRunsEndWithEverySampleAndNoPhantomLoss) {
+  auto drive = connect();
+  ASSERT_NE(drive, nullptr);
+  for (int run = 0; run < 30; ++run) {
+    ASSERT_NO_FATAL_FAILURE(start_run(*drive, 10, 1));  // 100 samples in 0.1 s
+    dyncal::port::DriveSample block[16];
+    long received = 0;
+    PortStatus st = PortStatus::ok;
+    for (int k = 0; k < 1000000 && st != PortStatus::end_of_stream; ++k) {
+      int n = 0;
+      st = drive->read(block, 16, &n);
+      ASSERT_TRUE(st == PortStatus::ok || st == PortStatus::no_data || st == PortStatus::end_of_stream)
+          << "run " << run << ": status " << static_cast<int>(st) << " after " << received << " samples, lost "
+          << drive->lost() << ": " << drive->error();
+      received += n;
+    }
+    EXPECT_EQ(received, 100) << "run " << run;
+    EXPECT_EQ(drive->lost(), 0U) << "run " << run;
+  }
+}
+
+}  // namespace
