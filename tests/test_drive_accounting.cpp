@@ -7,6 +7,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <cstdio>
 #include <string>
 #include <thread>
 
@@ -76,6 +77,40 @@ TEST(DriveAccounting, AnOverrunIsTheDrivesOwnCountAndNeverABrokenBlock) {
   EXPECT_EQ(static_cast<std::uint32_t>(missing), info.overruns);
   EXPECT_EQ(drive->lost(), info.overruns);
   EXPECT_EQ(static_cast<std::uint32_t>(received) + info.overruns, info.produced);
+}
+
+// Issue 47: the host spent 18.5 requests per sample (ring reads, acknowledgements, status reads),
+// often for one sample. Now one function 23 transaction per block: at 1 kHz in real time, read as
+// fast as the host likes, at most 1.2 transactions per full block's worth of samples, and the
+// bytes on the wire within 1.5 times the samples' own bytes (format counts).
+TEST(DriveAccounting, OneTransactionPerBlockAtOneKilohertz) {
+  auto drive = connect();
+  ASSERT_NE(drive, nullptr);
+  ASSERT_NO_FATAL_FAILURE(start_run(*drive, 1.0, 1));  // 1000 samples in 1 s
+  const auto before = drive->link_stats();
+  dyncal::port::DriveSample block[mm::kMaxSamplesPerBlock];
+  long received = 0;
+  PortStatus st = PortStatus::ok;
+  for (int k = 0; k < 1000000 && st != PortStatus::end_of_stream; ++k) {
+    int n = 0;
+    st = drive->read(block, mm::kMaxSamplesPerBlock, &n);
+    ASSERT_TRUE(st == PortStatus::ok || st == PortStatus::no_data || st == PortStatus::end_of_stream)
+        << static_cast<int>(st) << ": " << drive->error();
+    received += n;
+  }
+  ASSERT_EQ(received, 1000);
+  ASSERT_EQ(drive->ring_format(), mm::RingFormat::counts);
+  DriveInfo info;
+  ASSERT_EQ(drive->read_info(info), PortStatus::ok);
+  const int joints = info.num_joints;
+  const double blocks = static_cast<double>(received) / mm::samples_per_block(joints, mm::RingFormat::counts);
+  const long transactions = drive->link_stats().transactions - before.transactions;
+  const double bytes_per_sample = static_cast<double>(drive->link_stats().bytes - before.bytes) / received;
+  const double payload = 2.0 * mm::sample_words(joints, mm::RingFormat::counts);
+  std::printf("%ld transactions for %.1f blocks (%.3f per block), %.1f bytes per sample, payload %.0f\n", transactions,
+              blocks, transactions / blocks, bytes_per_sample, payload);
+  EXPECT_LE(transactions, 1.2 * blocks);
+  EXPECT_LE(bytes_per_sample, 1.5 * payload);
 }
 
 // Many short runs read without pause: each ends with every sample and no loss, however the last

@@ -68,9 +68,9 @@ bool closed_by_peer(int fd, double seconds) {
   return false;
 }
 
-// A read-input-registers request (function 4) as raw MBAP bytes.
+// A read request (function 4: input registers, 3: holding registers) as raw MBAP bytes.
 std::vector<std::uint8_t> read_request(std::uint16_t tid, std::uint16_t protocol, std::uint8_t unit, int address,
-                                       int count) {
+                                       int count, std::uint8_t function = 4) {
   return {static_cast<std::uint8_t>(tid >> 8),
           static_cast<std::uint8_t>(tid),
           static_cast<std::uint8_t>(protocol >> 8),
@@ -78,7 +78,7 @@ std::vector<std::uint8_t> read_request(std::uint16_t tid, std::uint16_t protocol
           0,
           6,
           unit,
-          4,
+          function,
           static_cast<std::uint8_t>(address >> 8),
           static_cast<std::uint8_t>(address),
           static_cast<std::uint8_t>(count >> 8),
@@ -249,7 +249,7 @@ TEST(DriveHostileClients, AFloodThatNeverReadsItsRepliesIsDisconnected) {
   stream_while([&](std::atomic<bool>& stop) {
     std::vector<std::uint8_t> burst;
     for (int k = 0; k < 100; ++k) {
-      const auto f = read_request(static_cast<std::uint16_t>(k), 0, 0xFF, mm::kRingReg, mm::kRingWords);
+      const auto f = read_request(static_cast<std::uint16_t>(k), 0, 0xFF, mm::kRingReg, mm::kRingWords, 3);
       burst.insert(burst.end(), f.begin(), f.end());
     }
     while (!stop) {

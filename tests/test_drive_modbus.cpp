@@ -112,7 +112,12 @@ TEST_F(DriveModbus, IllegalAddressesAndValuesGetModbusExceptions) {
   std::uint16_t r[4];
   EXPECT_EQ(modbus_read_registers(ctx, 250, 1, r), -1);  // hole between coefficients and staging
   EXPECT_EQ(errno, EMBXILADD);
-  EXPECT_EQ(modbus_read_input_registers(ctx, mm::kRingReg - 1, 2, r), -1);
+  EXPECT_EQ(modbus_read_input_registers(ctx, mm::kPayloadStateReg - 1, 2, r), -1);  // hole before the payload
+  EXPECT_EQ(errno, EMBXILADD);
+  r[0] = r[1] = 0;
+  EXPECT_EQ(modbus_write_registers(ctx, mm::kRingReg, 2, r), -1);  // the ring window is read-only
+  EXPECT_EQ(errno, EMBXILADD);
+  EXPECT_EQ(modbus_write_and_read_registers(ctx, mm::kRingReg + 4, 2, r, mm::kRingReg, 8, r), -1);
   EXPECT_EQ(errno, EMBXILADD);
   EXPECT_EQ(modbus_read_registers(ctx, mm::kHoldingWords, 1, r), -1);  // beyond the map
   EXPECT_EQ(errno, EMBXILADD);

@@ -27,8 +27,10 @@ int run_registers() {
   std::cout << "| name | bank | address | registers | type | unit | description |\n|---|---|---|---|---|---|---|\n";
   for (const auto& f : mm::kRegisterMap) {
     std::cout << "| `" << f.name << "` | "
-              << (f.bank == mm::Bank::input ? "input (04, read)" : "holding (03/06/16, read-write)") << " | "
-              << f.address << " | " << f.words << " | " << type_name(f.type) << " | " << f.unit << " | "
+              << (f.bank == mm::Bank::input  ? "input (04, read)"
+                  : mm::read_only_holding(f) ? "holding (03/23, read-only)"
+                                             : "holding (03/06/16/23, read-write)")
+              << " | " << f.address << " | " << f.words << " | " << type_name(f.type) << " | " << f.unit << " | "
               << f.description << " |\n";
   }
   return 0;

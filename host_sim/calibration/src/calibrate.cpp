@@ -105,7 +105,7 @@ JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory
   const long expected = std::lround(run.periods * trajectory.period() * run.sample_rate_hz);
   std::vector<port::DriveSample> samples;
   samples.reserve(static_cast<size_t>(expected));
-  port::DriveSample block[mm::samples_per_block(1)];  // the most a block can carry
+  port::DriveSample block[mm::kMaxSamplesPerBlock];
   long last_shown = -1;
   // Every wait has a deadline: a drive that delivers nothing new for kStallSeconds while it should
   // be playing has stalled (a healthy one delivers a sample every period, at least 100 Hz).
@@ -113,7 +113,7 @@ JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory
   auto last_progress = SteadyClock::now();
   for (;;) {
     int n = 0;
-    const port::PortStatus st = drive.read(block, mm::samples_per_block(1), &n);
+    const port::PortStatus st = drive.read(block, mm::kMaxSamplesPerBlock, &n);
     if (st == port::PortStatus::end_of_stream) break;
     if (n > 0) {
       last_progress = SteadyClock::now();
@@ -167,6 +167,13 @@ JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory
   }
   if (seconds) *seconds = seconds_since(t0);
   if (lost) *lost += drive.lost();
+  for (int j = 0; j < joints; ++j) {  // a saturated torque is a bound, not a measurement
+    const long n = drive.saturated()[static_cast<size_t>(j)];
+    if (n > 0)
+      throw InputError("drive: joint " + std::to_string(j + 1) + "'s torque read the stream's full scale in " +
+                       std::to_string(n) + " of " + std::to_string(samples.size()) + " samples (" + run.name +
+                       " run): saturated, not measured; the run demands more torque than the drive measures");
+  }
   if (samples.size() < 10) throw InputError("drive delivered only " + std::to_string(samples.size()) + " samples");
   return samples_to_log(samples, run.sample_rate_hz, joints);
 }

@@ -131,6 +131,7 @@ class Server {
     }
     const timespec ts{timeout_us / 1000000, (timeout_us % 1000000) * 1000};
     const int ready = ::ppoll(fds.data(), fds.size(), &ts, nullptr);
+    advance();  // as a drive's control loop runs beside its fieldbus: requests see every sample due
     if (!options_.rtu_device.empty()) {
       if (ready > 0) serve_rtu();
       return;

@@ -40,6 +40,11 @@ bool request_pdu_consistent(const std::uint8_t* pdu, std::size_t n) noexcept {
     }
     case 0x11:
       return n == 1;
+    case 0x17: {  // read/write multiple registers: byte_count = 2 write quantity
+      if (n < 10) return false;
+      const std::size_t quantity = be16(pdu + 7);
+      return pdu[9] == 2 * quantity && n == 10 + static_cast<std::size_t>(pdu[9]);
+    }
     default:
       return true;
   }

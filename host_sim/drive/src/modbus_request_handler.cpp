@@ -58,22 +58,49 @@ void refresh_inputs(const SimulatedDrive& d, std::uint16_t* in, long& table_gene
     mm::bytes_to_regs(bytes.data(), static_cast<int>(bytes.size()), in + mm::kActiveTableReg);
     table_generation = static_cast<long>(d.table_generation());
   }
-  // Ring window: the oldest unacknowledged samples.
-  std::uint16_t* w = in + mm::kRingReg;
+  in[mm::kRingFormatReg] = static_cast<std::uint16_t>(d.ring_format_in_use());
+  for (int j = 0; j < n_joints; ++j) {
+    mm::set_f32(in + mm::kQResolutionReg + 2 * j, static_cast<float>(d.q_resolution(j)));
+    mm::set_f32(in + mm::kTauResolutionReg + 2 * j, static_cast<float>(d.tau_resolution(j)));
+  }
+}
+
+/// Writes the ring window into the holding registers: the oldest unacknowledged samples up to the
+/// first gap (samples dropped by a full ring), with the drive's state and counters of this instant.
+void refresh_window(const SimulatedDrive& d, std::uint16_t* h) {
+  std::uint16_t* w = h + mm::kRingReg;
+  std::memset(w, 0, 2 * mm::kRingWords);
+  const int n_joints = d.num_joints();
+  const mm::RingFormat format = d.ring_format_in_use();
   const auto& ring = d.ring();
-  const int n = std::min<int>(mm::samples_per_block(n_joints), static_cast<int>(ring.size()));
-  mm::set_u32(w, ring.empty() ? d.produced() : ring.front().seq);
+  const std::uint32_t first = ring.empty() ? d.produced() : ring.front().seq;
+  int n = 0;
+  while (n < mm::samples_per_block(n_joints, format) && n < static_cast<int>(ring.size()) &&
+         ring[static_cast<size_t>(n)].seq == first + static_cast<std::uint32_t>(n))
+    ++n;
+  mm::set_u32(w, first);
   w[2] = static_cast<std::uint16_t>(n);
-  std::uint16_t* p = w + 3;
-  for (int k = 0; k < n; ++k) {
+  w[3] = static_cast<std::uint16_t>(d.state());
+  mm::set_u32(w + 4, d.produced());
+  mm::set_u32(w + 6, d.overruns());
+  std::uint16_t* p = w + mm::kRingHeaderWords;
+  for (int k = 0; k < n; ++k, p += mm::sample_words(n_joints, format)) {
     const port::DriveSample& s = ring[static_cast<size_t>(k)];
-    mm::set_u32(p, s.seq);
     for (int j = 0; j < n_joints; ++j) {
-      mm::set_f32(p + 2 + 2 * j, s.q[j]);
-      mm::set_f32(p + 2 + 2 * (n_joints + j), s.qd[j]);
-      mm::set_f32(p + 2 + 2 * (2 * n_joints + j), s.tau[j]);
+      if (format == mm::RingFormat::float32) {
+        mm::set_f32(p + 2 * j, s.q[j]);
+        mm::set_f32(p + 2 * (n_joints + j), s.qd[j]);
+        mm::set_f32(p + 2 * (2 * n_joints + j), s.tau[j]);
+        continue;
+      }
+      const double q = std::round(static_cast<double>(s.q[j]) / d.q_resolution(j));
+      const double tau = std::round(static_cast<double>(s.tau[j]) / d.tau_resolution(j));
+      const bool q_fits = std::fabs(q) <= 2147483647.0;  // false for NaN too
+      mm::set_u32(p + 2 * j, static_cast<std::uint32_t>(q_fits ? static_cast<std::int32_t>(q) : mm::kQInvalid));
+      const double full = mm::kTauFullScale;
+      const double saturated = std::isnan(tau) ? full : std::clamp(tau, -full, full);  // as an ADC saturates
+      p[2 * n_joints + j] = static_cast<std::uint16_t>(static_cast<std::int16_t>(saturated));
     }
-    p += mm::sample_words(n_joints);
   }
 }
 
@@ -140,7 +167,7 @@ int check_holding(const SimulatedDrive& d, const std::uint16_t* h, int address, 
     if (session_elsewhere) return MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY;
   }
   // Staging, and the collision monitor's settings (a safety function's): the same rule.
-  if (overlaps(address, count, mm::kStagingSizeReg, mm::kHoldingWords - mm::kStagingSizeReg)) {
+  if (overlaps(address, count, mm::kStagingSizeReg, mm::kRingReg - mm::kStagingSizeReg)) {
     if (const int e = staging_rule()) return e;
   }
   if (overlaps(address, count, mm::kMonitorGainReg, 2)) {
@@ -316,6 +343,7 @@ bool ModbusRequestHandler::answer(const std::uint8_t* query, int rc, int client)
   if (function >= 0x80) return reply_reserved_function(query, off, client);
   const int address = be16(query + off + 1);
   refresh_inputs(drive_, map_->tab_input_registers, table_generation_);
+  refresh_window(drive_, map_->tab_registers);
   map_->tab_registers[mm::kCommandReg] = 0;
   int exception = 0;
   int write_address = -1, write_count = 0;
@@ -359,6 +387,24 @@ bool ModbusRequestHandler::answer(const std::uint8_t* query, int rc, int client)
       }
       break;
     }
+    case MODBUS_FC_WRITE_AND_READ_REGISTERS: {  // the write first, then the read (of the state after it)
+      const int write_quantity = be16(query + off + 7);
+      if (quantity_outside(MODBUS_MAX_WR_READ_REGISTERS) || write_quantity < 1 ||
+          write_quantity > MODBUS_MAX_WR_WRITE_REGISTERS) {
+        exception = MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+        break;
+      }
+      write_address = be16(query + off + 5);
+      write_count = write_quantity;
+      if (!addresses_defined(mm::Bank::holding, address, count) ||
+          !addresses_defined(mm::Bank::holding, write_address, write_count)) {
+        exception = MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS;
+      } else {
+        for (int k = 0; k < write_count; ++k)
+          scratch[static_cast<size_t>(write_address + k)] = be16(query + off + 10 + 2 * k);
+      }
+      break;
+    }
     case MODBUS_FC_READ_COILS:
     case MODBUS_FC_READ_DISCRETE_INPUTS:
       if (quantity_outside(MODBUS_MAX_READ_BITS)) exception = MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
@@ -373,7 +419,8 @@ bool ModbusRequestHandler::answer(const std::uint8_t* query, int rc, int client)
       exception = MODBUS_EXCEPTION_ILLEGAL_FUNCTION;
   }
   if (!exception && write_count > 0 && write_address >= 0) {
-    if (splits_element(write_address, write_count)) {
+    if (splits_element(write_address, write_count) ||
+        overlaps(write_address, write_count, mm::kRingReg, mm::kRingWords)) {
       exception = MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS;
     } else {
       exception = check_holding(drive_, scratch.data(), write_address, write_count, 1.0 / drive_.control_period(),
@@ -382,6 +429,18 @@ bool ModbusRequestHandler::answer(const std::uint8_t* query, int rc, int client)
   }
   if (exception) {
     return modbus_reply_exception(ctx_, query, static_cast<unsigned>(exception)) >= 0;
+  }
+  if (function == MODBUS_FC_WRITE_AND_READ_REGISTERS) {
+    // libmodbus writes, then reads the mapping: the write takes effect first, and the window read
+    // shows the drive after it (an acknowledgement frees its samples before the next are shown).
+    std::copy(scratch.begin() + write_address, scratch.begin() + write_address + write_count,
+              map_->tab_registers + write_address);
+    apply_write(write_address, write_count);
+    refresh_window(drive_, map_->tab_registers);
+    const bool sent = modbus_reply(ctx_, query, rc, map_) >= 0;
+    map_->tab_registers[mm::kCommandReg] = 0;  // both read 0 (libmodbus wrote the request's values again)
+    map_->tab_registers[mm::kUnlockReg] = 0;
+    return sent;
   }
   if (modbus_reply(ctx_, query, rc, map_) < 0) return false;
   if (write_count > 0) apply_write(write_address, write_count);

@@ -37,6 +37,12 @@ SimulatedDrive::SimulatedDrive(const RobotDescription& robot, const Scenario& sc
     throw InputError("the scenario is for robot '" + scenario.robot + "', the drive runs '" + robot.name + "'");
   sample_rate_hz = scenario.sample_rate_hz;
   plant_->configure(robot, scenario);
+  for (int j = 0; j < robot.num_joints; ++j) {
+    const double counts = scenario.encoder_counts > 0 ? scenario.encoder_counts : 1048576.0;
+    q_resolution_[static_cast<std::size_t>(j)] = 2.0 * M_PI / (counts * std::fabs(robot.gear_ratios[j]));
+    const bool rated = robot.tau_max.size() == robot.num_joints && robot.tau_max[j] > 0;
+    tau_resolution_[static_cast<std::size_t>(j)] = rated ? 2.0 * robot.tau_max[j] / 32767.0 : 0.0;
+  }
   // The flash: the stored table if it is valid for this drive, else the factory table.
   active_ = plant_->nominal_table({}, {});
   startup_note_ = "factory table (nominal base parameters, no friction)";
@@ -230,6 +236,13 @@ void SimulatedDrive::step() {
   ++steps_;
   time_ += dt;
   clock_ += dt;
+}
+
+modbus_map::RingFormat SimulatedDrive::ring_format_in_use() const {
+  for (int j = 0; j < num_joints(); ++j) {
+    if (!(tau_resolution_[static_cast<std::size_t>(j)] > 0)) return modbus_map::RingFormat::float32;
+  }
+  return ring_format;
 }
 
 void SimulatedDrive::ack(std::uint32_t seq_end) {

@@ -32,8 +32,11 @@ inline constexpr int kMaxHarmonics = 8;
 /// command (access and state rules, docs/modbus.md "Access and states"). 7: the identify_payload
 /// command and the payload registers (docs/payload.md "On the drive"). 8: the collision monitor
 /// (fault 5 collision, monitor_state, the monitor_* holding registers; docs/monitor.md "On the
-/// drive").
-inline constexpr std::uint16_t kMapVersion = 8;
+/// drive"). 9: the ring window moves to the holding registers, read with the acknowledgement in
+/// one transaction (function 23); its header carries the drive's state and counters; samples
+/// carry no seq (a block ends at a gap) and come in the drive's ring_format (counts: i32 encoder
+/// counts and i16 torque counts, scaled by q_resolution and tau_resolution).
+inline constexpr std::uint16_t kMapVersion = 9;
 
 /// Key that, written to `unlock`, opens a staging session for the writing connection.
 inline constexpr std::uint16_t kUnlockKey = 0xCA1B;
@@ -165,20 +168,29 @@ inline constexpr std::uint16_t kFaultValueReg = 462;   // f32 the measured q [ra
 inline constexpr std::uint16_t kControlRateReg = 464;  // f32 [Hz] the control loop's rate
 inline constexpr std::uint16_t kGainKpReg = 466;       // f32[kMaxJoints] PD position gains of the last start
 inline constexpr std::uint16_t kGainKdReg = 480;       // f32[kMaxJoints] PD velocity gains of the last start
-inline constexpr std::uint16_t kRingReg = 500;         // u32 first seq, u16 count, samples
-inline constexpr std::uint16_t kRingWords = 123;       // one read of at most 125 registers
-/// Registers of one ring sample of a drive with `joints` joints: u32 seq, f32 q, qd, tau [joints].
-constexpr int sample_words(int joints) noexcept {
-  return 2 + 3 * 2 * joints;
+/// How the ring window packs a sample (input register `ring_format`).
+enum class RingFormat : std::uint16_t {
+  /// f32 q[N] [rad], qd[N] [rad/s], tau[N] [Nm]: 6 N registers per sample
+  float32 = 0,
+  /// i32 q[N] in encoder counts (q = count x q_resolution), i16 tau[N] (tau = count x tau_resolution,
+  /// saturated at +-kTauFullScale), velocity left to the host: 3 N registers
+  counts = 1,
+};
+/// Full scale of a tau count (format counts): a torque at or beyond it reads +-kTauFullScale.
+inline constexpr std::int16_t kTauFullScale = 32767;
+/// q count meaning "no finite position" (format counts).
+inline constexpr std::int32_t kQInvalid = -2147483647 - 1;
+inline constexpr std::uint16_t kRingFormatReg = 500;     // u16 RingFormat
+inline constexpr std::uint16_t kQResolutionReg = 501;    // f32[kMaxJoints] rad per position count
+inline constexpr std::uint16_t kTauResolutionReg = 515;  // f32[kMaxJoints] Nm per torque count
+/// Registers of one ring sample of a drive with `joints` joints in `format`.
+constexpr int sample_words(int joints, RingFormat format) noexcept {
+  return format == RingFormat::counts ? 3 * joints : 6 * joints;
 }
-/// Samples per ring block for `joints` joints (1 joint: 15, 3: 6, 6: 3, 7: 2).
-constexpr int samples_per_block(int joints) noexcept {
-  return (kRingWords - 3) / sample_words(joints);
-}
-inline constexpr std::uint16_t kPayloadStateReg = kRingReg + kRingWords;  // u16 PayloadState
-inline constexpr std::uint16_t kPayloadReg = kPayloadStateReg + 1;        // f32[10] XX..M, NaN: not determined
-inline constexpr std::uint16_t kPayloadStdReg = kPayloadReg + 20;         // f32[10] their std
-inline constexpr std::uint16_t kMonitorStateReg = kPayloadStdReg + 20;    // u16 MonitorState
+inline constexpr std::uint16_t kPayloadStateReg = 623;                  // u16 PayloadState
+inline constexpr std::uint16_t kPayloadReg = kPayloadStateReg + 1;      // f32[10] XX..M, NaN: not determined
+inline constexpr std::uint16_t kPayloadStdReg = kPayloadReg + 20;       // f32[10] their std
+inline constexpr std::uint16_t kMonitorStateReg = kPayloadStdReg + 20;  // u16 MonitorState
 inline constexpr std::uint16_t kInputWords = kMonitorStateReg + 1;
 
 // --- holding registers (function codes 03, 06, 16, 23)
@@ -198,19 +210,34 @@ inline constexpr std::uint16_t kMonitorGainReg = kStagingTableReg + kTableWords;
 inline constexpr std::uint16_t kMonitorThresholdReg = kMonitorGainReg + 2;        // f32[kMaxJoints] [Nm]
 inline constexpr std::uint16_t kMonitorMeanReg = kMonitorThresholdReg + 2 * kMaxJoints;  // f32[kMaxJoints] [Nm]
 inline constexpr std::uint16_t kMonitorBandReg = kMonitorMeanReg + 2 * kMaxJoints;       // f32[kMaxJoints] [rad/s]
-inline constexpr std::uint16_t kHoldingWords = kMonitorBandReg + 2 * kMaxJoints;
+/// The ring window (read-only): the oldest unacknowledged consecutive samples. Header: u32 first
+/// seq, u16 count n, u16 state (DriveState), u32 produced, u32 overruns (the drive's counters at
+/// the same instant as the samples); then n samples. Read it with function 23, writing `ack` in the
+/// same transaction: the write is applied first, so the window shows the samples after it.
+inline constexpr std::uint16_t kRingReg = kMonitorBandReg + 2 * kMaxJoints;
+inline constexpr std::uint16_t kRingWords = 125;  // one read of at most 125 registers
+inline constexpr int kRingHeaderWords = 8;
+/// Samples per ring block for `joints` joints in `format` (float32: 1 joint 19, 3: 6, 6: 3, 7: 2;
+/// counts: 1 joint 39, 3: 13, 6: 6, 7: 5).
+constexpr int samples_per_block(int joints, RingFormat format) noexcept {
+  return (kRingWords - kRingHeaderWords) / sample_words(joints, format);
+}
+/// The most samples any block carries (one joint, format counts).
+inline constexpr int kMaxSamplesPerBlock = samples_per_block(1, RingFormat::counts);
+inline constexpr std::uint16_t kHoldingWords = kRingReg + kRingWords;
 
 static_assert(kCoefficientsReg + kCoefficientWords <= kStagingSizeReg, "holding fields overlap");
 static_assert(kModelErrorReg + 2 * kMaxJoints <= kActiveTableSizeReg, "input fields overlap");
 static_assert(kActiveTableReg + kTableWords <= kFaultReg, "input fields overlap");
 static_assert(kFaultValueReg + 2 <= kControlRateReg, "input fields overlap");
 static_assert(kControlRateReg + 2 <= kGainKpReg && kGainKpReg + 2 * kMaxJoints <= kGainKdReg, "input fields overlap");
-static_assert(kGainKdReg + 2 * kMaxJoints <= kRingReg, "input fields overlap");
+static_assert(kGainKdReg + 2 * kMaxJoints <= kRingFormatReg, "input fields overlap");
+static_assert(kTauResolutionReg + 2 * kMaxJoints <= kPayloadStateReg, "input fields overlap");
 static_assert(kRingWords <= 125, "one ring block must fit one Modbus read");
-static_assert(samples_per_block(kMaxJoints) >= 2, "a block carries at least two samples");
+static_assert(samples_per_block(kMaxJoints, RingFormat::float32) >= 2, "a block carries at least two samples");
 
 inline constexpr Field kRegisterMap[] = {
-    {"map_version", Bank::input, kMapVersionReg, 1, Type::u16, "-", "register map version (8)"},
+    {"map_version", Bank::input, kMapVersionReg, 1, Type::u16, "-", "register map version (9)"},
     {"num_joints", Bank::input, kNumJointsReg, 1, Type::u16, "-", "joints of the arm"},
     {"robot_id", Bank::input, kRobotIdReg, 2, Type::u32, "-", "generated kRobotId of the drive's robot"},
     {"active_model_id", Bank::input, kActiveModelIdReg, 2, Type::u32, "-", "model id of the active table"},
@@ -240,9 +267,12 @@ inline constexpr Field kRegisterMap[] = {
      "per joint: PD position gain of the run started last (set at start; 0 before the first)"},
     {"gain_kd", Bank::input, kGainKdReg, 2 * kMaxJoints, Type::f32, "Nm s/rad",
      "per joint: PD velocity gain (on the backward-difference velocity) of the run started last"},
-    {"ring", Bank::input, kRingReg, kRingWords, Type::bytes, "-",
-     "u32 first seq, u16 count n <= 120 / (2 + 6 N), then n samples of N = num_joints: u32 seq, "
-     "f32 q[N] rad, qd[N] rad/s, tau[N] Nm"},
+    {"ring_format", Bank::input, kRingFormatReg, 1, Type::u16, "-",
+     "how the ring window packs a sample: 0 float32 (f32 q, qd, tau), 1 counts (i32 q counts, i16 tau counts)"},
+    {"q_resolution", Bank::input, kQResolutionReg, 2 * kMaxJoints, Type::f32, "rad",
+     "per joint: the position of one count (format counts; the encoder's resolution on the joint side)"},
+    {"tau_resolution", Bank::input, kTauResolutionReg, 2 * kMaxJoints, Type::f32, "Nm",
+     "per joint: the torque of one count (format counts; full scale +-32767 counts, saturated there)"},
     {"payload_state", Bank::input, kPayloadStateReg, 1, Type::u16, "-",
      "payload identification: 0 none, 1 running, 2 written into the active table, 3 not written"},
     {"payload", Bank::input, kPayloadReg, 20, Type::f32, "kg m^2, kg m, kg",
@@ -275,7 +305,16 @@ inline constexpr Field kRegisterMap[] = {
      "per joint: the residual's mean on contact-free motion"},
     {"monitor_band", Bank::holding, kMonitorBandReg, 2 * kMaxJoints, Type::f32, "rad/s",
      "per joint: friction standstill band (|qd| below it: no friction velocity)"},
+    {"ring", Bank::holding, kRingReg, kRingWords, Type::bytes, "-",
+     "read-only: u32 first seq, u16 count n, u16 state, u32 produced, u32 overruns, then n consecutive "
+     "samples of N = num_joints in ring_format (float32: 6 N registers, counts: 3 N); read with function 23 "
+     "writing ack"},
 };
+
+/// A holding field no write may touch (the ring window).
+constexpr bool read_only_holding(const Field& f) noexcept {
+  return f.bank == Bank::holding && f.address == kRingReg;
+}
 
 /// The field that contains register `address` of `bank`, or nullptr (an illegal address).
 inline const Field* find_field(Bank bank, int address) noexcept {

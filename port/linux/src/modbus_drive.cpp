@@ -199,13 +199,18 @@ port::PortStatus ModbusDrive::write_trajectory(const Trajectory& t, int periods,
     }
   }
   if (const auto st = write_holding(mm::kSampleRateReg, 6, settings); st != port::PortStatus::ok) return st;
-  return write_holding(mm::kCoefficientsReg, mm::kCoefficientWords, c.data());
+  if (const auto st = write_holding(mm::kCoefficientsReg, mm::kCoefficientWords, c.data()); st != port::PortStatus::ok)
+    return st;
+  sample_rate_hz_ = sample_rate_hz;
+  return port::PortStatus::ok;
 }
 
 port::PortStatus ModbusDrive::start() {
   const std::uint16_t cmd = static_cast<std::uint16_t>(mm::Command::start);
   next_seq_ = 0;
+  saturated_.fill(0);
   lost_ = drive_overruns_ = 0;
+  pace_until_ = {};
   return write_holding(mm::kCommandReg, 1, &cmd);
 }
 
@@ -214,7 +219,9 @@ port::PortStatus ModbusDrive::identify_payload() {
   if (const auto st = write_holding(mm::kUnlockReg, 1, &key); st != port::PortStatus::ok) return st;
   const std::uint16_t cmd = static_cast<std::uint16_t>(mm::Command::identify_payload);
   next_seq_ = 0;
+  saturated_.fill(0);
   lost_ = drive_overruns_ = 0;
+  pace_until_ = {};
   return write_holding(mm::kCommandReg, 1, &cmd);
 }
 
@@ -231,7 +238,7 @@ port::PortStatus ModbusDrive::read_payload(DrivePayload& payload) {
 }
 
 port::PortStatus ModbusDrive::write_monitor(const DriveMonitor& m) {
-  constexpr int kWords = mm::kHoldingWords - mm::kMonitorGainReg;
+  constexpr int kWords = mm::kMonitorBandReg + 2 * mm::kMaxJoints - mm::kMonitorGainReg;
   std::uint16_t r[kWords] = {};
   mm::set_f32(r, static_cast<float>(m.gain));
   for (int j = 0; j < mm::kMaxJoints; ++j) {
@@ -262,100 +269,128 @@ port::PortStatus ModbusDrive::stop() {
   return write_holding(mm::kCommandReg, 1, &cmd);
 }
 
-port::PortStatus ModbusDrive::read_ring_window(std::uint16_t* w) {
-  if (const auto st = read_input(mm::kRingReg, mm::kRingWords, w); st != port::PortStatus::ok) return st;
-  if (w[2] > mm::samples_per_block(joints_)) {
-    error_ = "ring block of " + std::to_string(w[2]) + " samples, at most " +
-             std::to_string(mm::samples_per_block(joints_)) + " fit for " + std::to_string(joints_) + " joints";
-    return port::PortStatus::transport_error;
+port::PortStatus ModbusDrive::read_stream_format() {
+  DriveInfo info;
+  if (const auto st = read_info(info); st != port::PortStatus::ok) return st;
+  constexpr int kWords = mm::kTauResolutionReg + 2 * mm::kMaxJoints - mm::kRingFormatReg;
+  std::uint16_t r[kWords];
+  if (const auto st = read_input(mm::kRingFormatReg, kWords, r); st != port::PortStatus::ok) return st;
+  if (r[0] > static_cast<std::uint16_t>(mm::RingFormat::counts)) {
+    error_ = "the drive's ring format " + std::to_string(r[0]) + " is unknown (0 float32, 1 counts)";
+    return port::PortStatus::rejected;
+  }
+  format_ = static_cast<mm::RingFormat>(r[0]);
+  for (int j = 0; j < joints_; ++j) {
+    q_resolution_[j] = mm::get_f32(r + (mm::kQResolutionReg - mm::kRingFormatReg) + 2 * j);
+    tau_resolution_[j] = mm::get_f32(r + (mm::kTauResolutionReg - mm::kRingFormatReg) + 2 * j);
+    if (format_ == mm::RingFormat::counts && !(q_resolution_[j] > 0 && tau_resolution_[j] > 0)) {
+      error_ = "the drive streams counts but gives joint " + std::to_string(j + 1) + " no resolution";
+      return port::PortStatus::rejected;
+    }
   }
   return port::PortStatus::ok;
 }
 
-port::PortStatus ModbusDrive::confirm_loss(std::uint32_t from, std::uint32_t to) {
-  DriveInfo info;
-  if (read_info(info) != port::PortStatus::ok) return port::PortStatus::transport_error;
-  if (info.overruns < lost_) {
+port::PortStatus ModbusDrive::confirm_loss(std::uint32_t from, std::uint32_t to, std::uint32_t overruns) {
+  if (overruns < lost_) {
     error_ = "the samples jump from seq " + std::to_string(from) + " to " + std::to_string(to) + " (" +
-             std::to_string(lost_) + " missing in all) but the drive counts " + std::to_string(info.overruns) +
+             std::to_string(lost_) + " missing in all) but the drive counts " + std::to_string(overruns) +
              " overruns: the link delivered replies out of step with the requests";
     return port::PortStatus::transport_error;
   }
-  drive_overruns_ = info.overruns;
+  drive_overruns_ = overruns;
   return port::PortStatus::sequence_gap;
 }
 
 port::PortStatus ModbusDrive::read(port::DriveSample* out, int capacity, int* count) noexcept {
   *count = 0;
-  if (joints_ == 0) {  // the sample layout depends on the drive's joint count
-    DriveInfo info;
-    if (const auto st = read_info(info); st != port::PortStatus::ok) return st;
+  if (!stream_format_known_) {  // the sample layout depends on the drive's joint count and format
+    if (const auto st = read_stream_format(); st != port::PortStatus::ok) return st;
+    stream_format_known_ = true;
   }
+  const int per_block = mm::samples_per_block(joints_, format_);
+  // Paced: after a block that was not full, wait until the rest of a block is due instead of
+  // asking again at once (a block per transaction, not a sample).
+  if (pace_until_ > std::chrono::steady_clock::now()) std::this_thread::sleep_until(pace_until_);
+  // One transaction: acknowledge what was received (ack = next seq) and read the window after it.
+  std::uint16_t ack[2];
+  mm::set_u32(ack, next_seq_);
   std::uint16_t w[mm::kRingWords];
-  if (read_ring_window(w) != port::PortStatus::ok) return port::PortStatus::transport_error;
-  if (w[2] == 0) {
-    DriveInfo info;
-    if (read_info(info) != port::PortStatus::ok) return port::PortStatus::transport_error;
-    if (info.state == mm::DriveState::playing) return port::PortStatus::no_data;
-    // The run has ended, but maybe after the window was read: its last samples may be in the ring
-    // now. Only a window read after the end is final.
-    if (read_ring_window(w) != port::PortStatus::ok) return port::PortStatus::transport_error;
-    if (w[2] == 0) {
-      if (info.produced > next_seq_) {  // the run's last samples were dropped (a full ring)
-        const std::uint32_t from = next_seq_;
-        lost_ += info.produced - next_seq_;
-        next_seq_ = info.produced;
-        return confirm_loss(from, info.produced);
-      }
-      if (info.produced == next_seq_ && info.state == mm::DriveState::fault) {
-        error_ = "drive fault: " + describe_fault(info);
-        return port::PortStatus::device_fault;
-      }
-      return info.produced == next_seq_ ? port::PortStatus::end_of_stream : port::PortStatus::no_data;
-    }
+  if (modbus_write_and_read_registers(ctx_, mm::kAckReg, 2, ack, mm::kRingReg, mm::kRingWords, w) != mm::kRingWords) {
+    fail("reading the ring window");
+    return port::PortStatus::transport_error;
   }
+  ++link_.transactions;
+  link_.bytes += kTransactionBytes;
   const std::uint32_t first = mm::get_u32(w);
-  const int n = std::min<int>(w[2], capacity);
-  const std::uint16_t* p = w + 3;
-  for (int k = 0; k < n; ++k, p += mm::sample_words(joints_)) {
-    port::DriveSample& s = out[k];
-    s = port::DriveSample{};
-    s.seq = mm::get_u32(p);
-    for (int j = 0; j < joints_; ++j) {
-      s.q[j] = mm::get_f32(p + 2 + 2 * j);
-      s.qd[j] = mm::get_f32(p + 2 + 2 * (joints_ + j));
-      s.tau[j] = mm::get_f32(p + 2 + 2 * (2 * joints_ + j));
-    }
+  const int in_block = w[2];
+  const auto state = static_cast<mm::DriveState>(w[3]);
+  const std::uint32_t produced = mm::get_u32(w + 4), overruns = mm::get_u32(w + 6);
+  if (in_block > per_block) {
+    error_ = "ring block of " + std::to_string(in_block) + " samples, at most " + std::to_string(per_block) +
+             " fit for " + std::to_string(joints_) + " joints";
+    return port::PortStatus::transport_error;
   }
-  if (out[0].seq != first || first < next_seq_) {
+  const bool playing = state == mm::DriveState::playing;
+  // Samples the drive holds past this block (by its counter): fewer than a block's worth means the
+  // next call waits until the rest is due.
+  const long waiting = static_cast<long>(produced) - static_cast<long>(first) - in_block;
+  pace_until_ = playing && waiting < per_block && sample_rate_hz_ > 0
+                    ? std::chrono::steady_clock::now() +
+                          std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(
+                              std::min(0.05, (static_cast<double>(per_block - waiting) + 0.5) / sample_rate_hz_)))
+                    : std::chrono::steady_clock::time_point{};
+  if (in_block == 0) {
+    if (playing) return port::PortStatus::no_data;
+    // The header and the window are of one instant: an empty window after the run is final.
+    if (produced > next_seq_) {  // the run's last samples were dropped (a full ring)
+      const std::uint32_t from = next_seq_;
+      lost_ += produced - next_seq_;
+      next_seq_ = produced;
+      return confirm_loss(from, produced, overruns);
+    }
+    if (state == mm::DriveState::fault) {
+      DriveInfo info;
+      if (read_info(info) != port::PortStatus::ok) return port::PortStatus::transport_error;
+      error_ = "drive fault: " + describe_fault(info);
+      return port::PortStatus::device_fault;
+    }
+    return port::PortStatus::end_of_stream;
+  }
+  if (first < next_seq_) {
     error_ = "the drive's ring window repeats samples already received (seq " + std::to_string(first) + ", expected " +
              std::to_string(next_seq_) + ")";
     return port::PortStatus::transport_error;
   }
-  // A full ring drops the samples the drive produces meanwhile (its overrun counter counts them): the
-  // next sample it records follows the gap, in the same block or at the window's start.
-  const std::uint32_t expected = next_seq_;
-  std::uint32_t gap_from = next_seq_, gap_to = next_seq_;
-  for (int k = 0; k < n; ++k) {
-    const std::uint32_t want = k == 0 ? next_seq_ : out[k - 1].seq + 1;
-    if (out[k].seq < want) {
-      error_ = "samples out of order in one block (seq " + std::to_string(out[k].seq) + " after " +
-               std::to_string(want - 1) + ")";
-      return port::PortStatus::transport_error;
-    }
-    if (out[k].seq > want) {
-      lost_ += out[k].seq - want;
-      if (gap_from == gap_to) gap_from = want;
-      gap_to = out[k].seq;
+  const int n = std::min(in_block, capacity);
+  const std::uint16_t* p = w + mm::kRingHeaderWords;
+  for (int k = 0; k < n; ++k, p += mm::sample_words(joints_, format_)) {
+    port::DriveSample& s = out[k];
+    s = port::DriveSample{};
+    s.seq = first + static_cast<std::uint32_t>(k);
+    for (int j = 0; j < joints_; ++j) {
+      if (format_ == mm::RingFormat::float32) {
+        s.q[j] = mm::get_f32(p + 2 * j);
+        s.qd[j] = mm::get_f32(p + 2 * (joints_ + j));
+        s.tau[j] = mm::get_f32(p + 2 * (2 * joints_ + j));
+        continue;
+      }
+      // Counts: the velocity is the host's (qd stays NaN); an invalid q decodes as NaN, a torque
+      // at full scale is counted as saturated.
+      const auto q = static_cast<std::int32_t>(mm::get_u32(p + 2 * j));
+      const auto tau = static_cast<std::int16_t>(p[2 * joints_ + j]);
+      s.q[j] = q == mm::kQInvalid ? NAN : static_cast<float>(q * q_resolution_[j]);
+      s.qd[j] = NAN;
+      s.tau[j] = static_cast<float>(tau * tau_resolution_[j]);
+      if (tau >= mm::kTauFullScale || tau <= -mm::kTauFullScale) ++saturated_[static_cast<std::size_t>(j)];
     }
   }
-  next_seq_ = out[n - 1].seq + 1;
-  std::uint16_t ack[2];
-  mm::set_u32(ack, next_seq_);
-  if (write_holding(mm::kAckReg, 2, ack) != port::PortStatus::ok) return port::PortStatus::transport_error;
+  const std::uint32_t from = next_seq_;
+  next_seq_ = first + static_cast<std::uint32_t>(n);  // acknowledged by the next transaction
   *count = n;
-  if (next_seq_ - expected == static_cast<std::uint32_t>(n)) return port::PortStatus::ok;
-  return confirm_loss(gap_from, gap_to);
+  if (first == from) return port::PortStatus::ok;
+  lost_ += first - from;  // dropped by a full ring: the block starts after the gap
+  return confirm_loss(from, first, overruns);
 }
 
 port::PortStatus ModbusDrive::write(const ParameterTable& table, TableStatus* reason) noexcept {

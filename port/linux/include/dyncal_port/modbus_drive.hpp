@@ -4,6 +4,7 @@
 // once), parameter store (staging bank + commit + read-back) and a monotonic clock.
 
 #include <array>
+#include <chrono>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -117,10 +118,16 @@ class ModbusDrive final : public port::SampleSource, public port::ParameterStore
   port::PortStatus stop();
 
   // port::SampleSource
-  /// Samples carry the drive's num_joints joints (the rest of each DriveSample is zero); the first
-  /// call reads it with read_info.
-  /// A block may hold a gap where the drive dropped samples (a full ring): it is delivered with
-  /// status sequence_gap. Every gap is checked against the drive's own overrun counter.
+  /// One function 23 transaction per call: it acknowledges the samples the previous call returned
+  /// and reads the ring window after that (docs/modbus.md "Measurement stream"). Samples carry the
+  /// drive's num_joints joints (the rest of each DriveSample is zero); the first call reads the
+  /// joint count and the ring format. In format counts, q and tau are decoded with the drive's
+  /// resolutions, qd is NaN (the host differentiates), an invalid q is NaN, and a torque at the
+  /// stream's full scale (saturated: its true value may lie beyond) is counted in saturated(). While the run plays and
+  /// the drive holds less than a block past the samples returned (by the window header's produced counter), the next
+  /// call first waits until the rest of a block is due, plus half a sample period (at most 50 ms), instead of asking
+  /// again at once. A block that starts past a gap (samples dropped by a full ring) is delivered with status
+  /// sequence_gap; every gap is checked against the drive's own overrun counter, which the window's header carries.
   /// Errors: transport_error, rejected (read_info's; also a gap the drive's overrun counter does not
   /// account for, or a window that repeats received samples: replies out of step with requests);
   /// sequence_gap when samples were lost (lost() counts them); device_fault once every sample
@@ -129,6 +136,17 @@ class ModbusDrive final : public port::SampleSource, public port::ParameterStore
   /// Samples the drive dropped in this run, by its own overrun counter as read at the last gap
   /// (0 while no sample is missing).
   std::uint32_t lost() const { return drive_overruns_; }
+  /// Per joint (0-based), the samples of this run whose torque read the stream's full scale
+  /// (format counts: +-32767 counts, 2 tau_max on the simulated drive): saturated, not measured.
+  const std::array<long, modbus_map::kMaxJoints>& saturated() const { return saturated_; }
+  /// The stream's cost on the link since connect (read()'s transactions).
+  struct LinkStats {
+    long transactions = 0;  ///< function 23 transactions (one per block)
+    long bytes = 0;         ///< Modbus TCP bytes of those transactions, both ways (MBAP headers included)
+  };
+  const LinkStats& link_stats() const { return link_; }
+  /// How the drive packs a sample (known after the first read()).
+  modbus_map::RingFormat ring_format() const { return format_; }
 
   // port::ParameterStore
   /// Opens a staging session (writes modbus_map::kUnlockKey to `unlock`), stages, commits and reads
@@ -164,17 +182,28 @@ class ModbusDrive final : public port::SampleSource, public port::ParameterStore
   explicit ModbusDrive(modbus_t* ctx) : ctx_(ctx) {}
   /// error() from errno; rejected for a Modbus exception, transport_error otherwise.
   port::PortStatus fail(const char* what);
-  /// Reads the ring window into w (kRingWords); transport_error if its count cannot be.
-  port::PortStatus read_ring_window(std::uint16_t* w);
+  /// Reads the joint count (read_info), ring_format, q_resolution and tau_resolution.
+  port::PortStatus read_stream_format();
   /// After the samples jumped from seq `from` to `to`: sequence_gap if the drive's overrun counter
-  /// accounts for every sample missing so far (drive_overruns_ takes it), else transport_error.
-  port::PortStatus confirm_loss(std::uint32_t from, std::uint32_t to);
+  /// `overruns` accounts for every sample missing so far (drive_overruns_ takes it), else
+  /// transport_error.
+  port::PortStatus confirm_loss(std::uint32_t from, std::uint32_t to, std::uint32_t overruns);
+  /// Bytes of one ring transaction on Modbus TCP: the function 23 request (MBAP 7, PDU 14 with
+  /// the two ack registers) and its reply (MBAP 7, PDU 2 + 2 kRingWords).
+  static constexpr long kTransactionBytes = (7 + 10 + 4) + (7 + 2 + 2 * modbus_map::kRingWords);
   modbus_t* ctx_;
   std::string error_;
   std::uint32_t next_seq_ = 0;
   std::uint32_t lost_ = 0;            ///< samples missing from the seq received in this run
   std::uint32_t drive_overruns_ = 0;  ///< the drive's overrun counter at the last gap
-  int joints_ = 0;                    ///< the drive's num_joints (read_info), 0 until known
+  bool stream_format_known_ = false;  ///< read_stream_format has run (once per connection)
+  modbus_map::RingFormat format_ = modbus_map::RingFormat::float32;
+  std::array<double, modbus_map::kMaxJoints> q_resolution_{}, tau_resolution_{};
+  double sample_rate_hz_ = 0;  ///< of the trajectory written last (paces read())
+  std::array<long, modbus_map::kMaxJoints> saturated_{};
+  std::chrono::steady_clock::time_point pace_until_{};
+  LinkStats link_;
+  int joints_ = 0;  ///< the drive's num_joints (read_info), 0 until known
   double commit_timeout_s_ = 10.0;
 };
 

@@ -87,6 +87,19 @@ class SimulatedDrive {
   /// Samples the ring holds, 1..kRingCapacity (a real drive's trace buffer is often far smaller;
   /// `dyncal drive --ring-samples`). Set while not playing.
   int ring_capacity = kRingCapacity;
+  /// How the Modbus ring window packs a sample (docs/modbus.md "Measurement stream"). Set while not
+  /// playing.
+  modbus_map::RingFormat ring_format = modbus_map::RingFormat::counts;
+  /// Joint j's (0-based) position per count of format counts [rad]: the encoder's quantum on the
+  /// joint side, 2 pi / (encoder_counts |N_j|); 2 pi / (2^20 |N_j|) when the scenario does not
+  /// quantise (encoder_counts 0).
+  double q_resolution(int j) const { return q_resolution_[static_cast<std::size_t>(j)]; }
+  /// Joint j's torque per count of format counts [Nm]: 2 tau_max_j / 32767 (full scale twice the
+  /// joint's rated torque; 0 when the robot gives no tau_max). Resolution against the noise:
+  /// docs/modbus.md.
+  double tau_resolution(int j) const { return tau_resolution_[static_cast<std::size_t>(j)]; }
+  /// ring_format, or float32 when a joint has no torque resolution (no tau_max).
+  modbus_map::RingFormat ring_format_in_use() const;
   /// Lockstep mode: the drive waits for the host instead of dropping samples when the ring is full.
   bool lockstep = true;
   std::uint32_t produced() const { return produced_; }
@@ -157,6 +170,7 @@ class SimulatedDrive {
   long steps_ = 0, steps_per_sample_ = 1, total_steps_ = 0;
   std::deque<port::DriveSample> ring_;
   std::uint32_t acked_ = 0, produced_ = 0, overruns_ = 0;
+  JointArray q_resolution_{}, tau_resolution_{};
   ParameterTable active_;
   std::vector<std::uint8_t> active_bytes_;
   std::uint32_t table_generation_ = 0;
