@@ -14,6 +14,7 @@
 #include "dyncal/modbus_map.hpp"
 #include "dyncal_port/modbus_drive.hpp"
 #include "support/drive_uri.hpp"
+#include "support/one_harmonic_run.hpp"
 
 namespace {
 
@@ -29,21 +30,10 @@ std::unique_ptr<ModbusDrive> connect() {
   return drive;
 }
 
-// Plays `periods` periods of a one-harmonic trajectory at f_f [Hz], sampled at 1 kHz.
-void start_run(ModbusDrive& drive, double f_f, int periods) {
-  dyncal::linux_port::Trajectory t;
-  t.f_f = f_f;
-  t.harmonics = 1;
-  for (int j = 0; j < mm::kMaxJoints; ++j) t.a(j, 0) = 0.05;
-  ASSERT_EQ(drive.reset(), PortStatus::ok) << drive.error();
-  ASSERT_EQ(drive.write_trajectory(t, periods, 1000), PortStatus::ok) << drive.error();
-  ASSERT_EQ(drive.start(), PortStatus::ok) << drive.error();
-}
-
 TEST(DriveAccounting, AnOverrunIsTheDrivesOwnCountAndNeverABrokenBlock) {
   auto drive = connect();
   ASSERT_NE(drive, nullptr);
-  ASSERT_NO_FATAL_FAILURE(start_run(*drive, 0.5, 1));  // 2000 samples in 2 s
+  ASSERT_NO_FATAL_FAILURE(start_one_harmonic_run(*drive, 0.5, 1));  // 2000 samples in 2 s
   dyncal::port::DriveSample block[16];
   long received = 0, missing = 0, gaps_reported = 0;
   std::uint32_t next = 0;
@@ -86,7 +76,7 @@ TEST(DriveAccounting, AnOverrunIsTheDrivesOwnCountAndNeverABrokenBlock) {
 TEST(DriveAccounting, OneTransactionPerBlockAtOneKilohertz) {
   auto drive = connect();
   ASSERT_NE(drive, nullptr);
-  ASSERT_NO_FATAL_FAILURE(start_run(*drive, 1.0, 1));  // 1000 samples in 1 s
+  ASSERT_NO_FATAL_FAILURE(start_one_harmonic_run(*drive, 1.0, 1));  // 1000 samples in 1 s
   const auto before = drive->link_stats();
   dyncal::port::DriveSample block[mm::kMaxSamplesPerBlock];
   long received = 0;
@@ -119,7 +109,7 @@ TEST(DriveAccounting, ShortRunsEndWithEverySampleAndNoPhantomLoss) {
   auto drive = connect();
   ASSERT_NE(drive, nullptr);
   for (int run = 0; run < 30; ++run) {
-    ASSERT_NO_FATAL_FAILURE(start_run(*drive, 10, 1));  // 100 samples in 0.1 s
+    ASSERT_NO_FATAL_FAILURE(start_one_harmonic_run(*drive, 10, 1));  // 100 samples in 0.1 s
     dyncal::port::DriveSample block[16];
     long received = 0;
     PortStatus st = PortStatus::ok;

@@ -24,6 +24,7 @@
 #include "dyncal/modbus_map.hpp"
 #include "dyncal_port/modbus_drive.hpp"
 #include "support/drive_uri.hpp"
+#include "support/one_harmonic_run.hpp"
 
 namespace {
 
@@ -96,18 +97,6 @@ std::vector<std::uint8_t> reply(int fd, double seconds) {
   return out;
 }
 
-// Plays a one-harmonic trajectory of `periods` periods at f_f [Hz], 1 kHz, on `drive` (after a
-// reset: another test may have left a fault).
-void start_run(ModbusDrive& drive, double f_f, int periods) {
-  dyncal::linux_port::Trajectory t;
-  t.f_f = f_f;
-  t.harmonics = 1;
-  for (int j = 0; j < mm::kMaxJoints; ++j) t.a(j, 0) = 0.05;
-  ASSERT_EQ(drive.reset(), PortStatus::ok) << drive.error();
-  ASSERT_EQ(drive.write_trajectory(t, periods, 1000), PortStatus::ok) << drive.error();
-  ASSERT_EQ(drive.start(), PortStatus::ok) << drive.error();
-}
-
 // Streams a 2-period trajectory (2000 samples) from the drive with a real host and checks that every
 // sample arrives in order with none lost, while `attack` runs on other connections.
 void stream_while(const std::function<void(std::atomic<bool>&)>& attack) {
@@ -124,7 +113,7 @@ void stream_while(const std::function<void(std::atomic<bool>&)>& attack) {
   std::string error;
   auto drive = ModbusDrive::connect(uri(), &error);
   ASSERT_NE(drive, nullptr) << error;
-  ASSERT_NO_FATAL_FAILURE(start_run(*drive, 1.0, 2));
+  ASSERT_NO_FATAL_FAILURE(start_one_harmonic_run(*drive, 1.0, 2));
   dyncal::port::DriveSample block[16];
   long received = 0;
   std::uint32_t next = 0;
@@ -358,7 +347,7 @@ TEST(DriveHostileClients, ADrivePlayingForNoOneStopsOnItsWatchdog) {
   ASSERT_NE(drive, nullptr) << error;
   auto poller = ModbusDrive::connect(uri(), &error);
   ASSERT_NE(poller, nullptr) << error;
-  ASSERT_NO_FATAL_FAILURE(start_run(*drive, 0.1, 100));
+  ASSERT_NO_FATAL_FAILURE(start_one_harmonic_run(*drive, 0.1, 100));
   dyncal::linux_port::DriveInfo info;
   ASSERT_EQ(drive->read_info(info), PortStatus::ok);
   EXPECT_EQ(info.state, mm::DriveState::playing);
