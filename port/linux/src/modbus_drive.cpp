@@ -205,12 +205,16 @@ port::PortStatus ModbusDrive::write_trajectory(const Trajectory& t, int periods,
   return port::PortStatus::ok;
 }
 
-port::PortStatus ModbusDrive::start() {
-  const std::uint16_t cmd = static_cast<std::uint16_t>(mm::Command::start);
+void ModbusDrive::begin_run() {
   next_seq_ = 0;
   saturated_.fill(0);
   lost_ = drive_overruns_ = 0;
   pace_until_ = {};
+}
+
+port::PortStatus ModbusDrive::start() {
+  const std::uint16_t cmd = static_cast<std::uint16_t>(mm::Command::start);
+  begin_run();
   return write_holding(mm::kCommandReg, 1, &cmd);
 }
 
@@ -218,10 +222,7 @@ port::PortStatus ModbusDrive::identify_payload() {
   const std::uint16_t key = mm::kUnlockKey;
   if (const auto st = write_holding(mm::kUnlockReg, 1, &key); st != port::PortStatus::ok) return st;
   const std::uint16_t cmd = static_cast<std::uint16_t>(mm::Command::identify_payload);
-  next_seq_ = 0;
-  saturated_.fill(0);
-  lost_ = drive_overruns_ = 0;
-  pace_until_ = {};
+  begin_run();
   return write_holding(mm::kCommandReg, 1, &cmd);
 }
 

@@ -182,6 +182,8 @@ class ModbusDrive final : public port::SampleSource, public port::ParameterStore
   explicit ModbusDrive(modbus_t* ctx) : ctx_(ctx) {}
   /// error() from errno; rejected for a Modbus exception, transport_error otherwise.
   port::PortStatus fail(const char* what);
+  /// A new run's stream: seq from 0, no loss, no saturation, no pacing (start, identify_payload).
+  void begin_run();
   /// Reads the joint count (read_info), ring_format, q_resolution and tau_resolution.
   port::PortStatus read_stream_format();
   /// After the samples jumped from seq `from` to `to`: sequence_gap if the drive's overrun counter
