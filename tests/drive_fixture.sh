@@ -4,6 +4,7 @@
 #   drive_fixture.sh start DIR NAME DYNCAL [--real-time] [drive options...]
 #     (the drive runs in lockstep unless --real-time comes first)
 #   drive_fixture.sh pty DIR NAME              (socat pty pair: DIR/NAME.a <-> DIR/NAME.b)
+#   drive_fixture.sh relay DIR NAME RELAY BAUD (a serial line at BAUD: DIR/NAME.drive <-> DIR/NAME.host)
 #   drive_fixture.sh stop DIR NAME
 set -eu
 action=$1 dir=$2 name=$3
@@ -35,6 +36,12 @@ case "$action" in
     echo $! >"$dir/$name.pid"
     wait_for "$dir/$name.b" "$(cat "$dir/$name.pid")"
     wait_for "$dir/$name.a" "$(cat "$dir/$name.pid")"
+    ;;
+  relay)
+    rm -f "$dir/$name.drive" "$dir/$name.host" "$dir/$name.ready"
+    "$1" "$2" "$dir/$name.drive" "$dir/$name.host" "$dir/$name.ready" >"$dir/$name.log" 2>&1 &
+    echo $! >"$dir/$name.pid"
+    wait_for "$dir/$name.ready" "$(cat "$dir/$name.pid")"
     ;;
   stop)
     pid=$(cat "$dir/$name.pid")

@@ -126,4 +126,61 @@ TEST(DriveAccounting, ShortRunsEndWithEverySampleAndNoPhantomLoss) {
   }
 }
 
+// Reads a run to its end; returns the samples received (their seq consecutive from 0 unless lost).
+long read_to_end(ModbusDrive& drive, std::uint32_t* lost) {
+  dyncal::port::DriveSample block[16];
+  long received = 0;
+  for (int k = 0; k < 100000; ++k) {
+    int n = 0;
+    const PortStatus st = drive.read(block, 16, &n);
+    EXPECT_TRUE(st == PortStatus::ok || st == PortStatus::no_data || st == PortStatus::sequence_gap ||
+                st == PortStatus::end_of_stream)
+        << drive.error();
+    received += n;
+    if (st == PortStatus::end_of_stream || st == PortStatus::transport_error) break;
+  }
+  *lost = drive.lost();
+  return received;
+}
+
+// Trace mode (docs/modbus.md "Trace"): the drive starts a trace only when its ring holds every
+// sample of the run, so a host that reads nothing until the run has ended still gets all of them;
+// the same run started live loses what the ring cannot hold.
+TEST(DriveAccounting, ATraceIsRecordedWholeOrRefusedBeforeItStarts) {
+  auto drive = connect();
+  ASSERT_NE(drive, nullptr);
+  dyncal::linux_port::Trajectory t;
+  t.f_f = 10;  // 10 samples a period at 100 Hz
+  t.harmonics = 1;
+  for (int j = 0; j < mm::kMaxJoints; ++j) t.a(j, 0) = 0.05;
+  ASSERT_EQ(drive->reset(), PortStatus::ok) << drive->error();
+  // 60 samples: refused as a trace, the drive stays idle.
+  ASSERT_EQ(drive->write_trajectory(t, 6, 100), PortStatus::ok) << drive->error();
+  EXPECT_EQ(drive->trace(), PortStatus::rejected);
+  EXPECT_NE(drive->error().find("Illegal data value"), std::string::npos) << drive->error();
+  DriveInfo info;
+  ASSERT_EQ(drive->read_info(info), PortStatus::ok);
+  EXPECT_NE(info.state, mm::DriveState::playing);
+  // Live, read only after the run: the ring keeps 50 and the drive counts the 10 it dropped.
+  ASSERT_EQ(drive->start(), PortStatus::ok) << drive->error();
+  std::this_thread::sleep_for(std::chrono::milliseconds(900));  // the run lasts 0.6 s
+  std::uint32_t lost = 0;
+  EXPECT_EQ(read_to_end(*drive, &lost), 50);
+  EXPECT_EQ(lost, 10u);
+  // Another connection measures the link (its probe writes the acknowledgement the drive holds,
+  // 60 now, which a fresh host does not know) and reads the ring's capacity.
+  drive = connect();
+  ASSERT_NE(drive, nullptr);
+  double seconds = 0;
+  ASSERT_EQ(drive->measure_link(2, &seconds), PortStatus::ok) << drive->error();
+  EXPECT_EQ(drive->ring_capacity(), 50);
+  EXPECT_GT(seconds, 0.0);
+  // 50 samples: traced whole, read only after the run.
+  ASSERT_EQ(drive->write_trajectory(t, 5, 100), PortStatus::ok) << drive->error();
+  ASSERT_EQ(drive->trace(), PortStatus::ok) << drive->error();
+  std::this_thread::sleep_for(std::chrono::milliseconds(800));
+  EXPECT_EQ(read_to_end(*drive, &lost), 50);
+  EXPECT_EQ(lost, 0u);
+}
+
 }  // namespace

@@ -14,7 +14,7 @@ struct CalibrateSettings {
   RobotOption robot;
   std::string uri = "tcp://127.0.0.1:1502";
   host::CalibrateOptions options;
-  std::string model = "eq7,rotor_inertia,offset", report, trajectory;
+  std::string model = "eq7,rotor_inertia,offset", report, trajectory, stream = "auto";
   bool no_flash = false, quiet = false;
 };
 
@@ -24,6 +24,7 @@ int run_calibrate(CalibrateSettings& s) {
   o.uri = s.uri;
   o.terms = host::parse_model(s.model);
   o.flash = !s.no_flash;
+  o.stream = host::parse_stream_mode(s.stream);
   o.progress = !s.quiet && isatty(2);  // the bar redraws with \r: only on a terminal
   if (!s.trajectory.empty()) o.excitation = host::trajectory_from_json(robot, read_json_file(s.trajectory));
   const auto r = host::calibrate(robot, o, std::cerr);
@@ -67,6 +68,10 @@ void add_calibrate_command(CLI::App& app, Action& run) {
                   "beside it): what identify --method iv --law needs for the --save-log log");
   cmd->add_option("--fault-dir", o.fault_dir,
                   "where a run the drive stops on a fault leaves the samples recorded before it")
+      ->capture_default_str();
+  cmd->add_option("--stream", s->stream,
+                  "auto: each run live if the link carries it, else traced (the drive records the run, the host "
+                  "uploads it); live; trace")
       ->capture_default_str();
   cmd->add_flag("--quiet", s->quiet, "no progress output");
   cmd->add_option("--report", s->report, "write the report as JSON");

@@ -43,10 +43,11 @@ void progress_bar(std::ostream& out, double fraction, long samples, const char* 
 
 /// Verification run: stream a fresh trajectory and read the drive's model error.
 JointLog verification_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory& t, const CalibrateOptions& o,
-                          std::ostream* progress, std::uint32_t* lost,
+                          bool trace, std::ostream* progress, std::uint32_t* lost,
                           std::array<double, modbus_map::kMaxJoints>& drive_error) {
-  JointLog log = stream_run(drive, t, {"verification", o.verify_periods, o.sample_rate_hz, o.fault_dir}, progress, lost,
-                            nullptr, nullptr);
+  StreamRun run{"verification", o.verify_periods, o.sample_rate_hz, o.fault_dir};
+  run.trace = trace;
+  JointLog log = stream_run(drive, t, run, progress, lost, nullptr, nullptr);
   linux_port::DriveInfo info;
   if (drive.read_info(info) != port::PortStatus::ok) throw InputError("drive: " + drive.error());
   drive_error = info.model_error_rms;
@@ -100,8 +101,10 @@ JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory
   if (drive.write_trajectory(trajectory, run.periods, run.sample_rate_hz) != port::PortStatus::ok)
     throw InputError("drive: " + drive.error());
   const auto t0 = SteadyClock::now();
-  if ((run.identify_payload ? drive.identify_payload() : drive.start()) != port::PortStatus::ok)
-    throw InputError("drive: " + drive.error());
+  const port::PortStatus started = run.identify_payload ? drive.identify_payload()
+                                   : run.trace          ? drive.trace()
+                                                        : drive.start();
+  if (started != port::PortStatus::ok) throw InputError("drive: " + drive.error());
   const long expected = std::lround(run.periods * trajectory.period() * run.sample_rate_hz);
   std::vector<port::DriveSample> samples;
   samples.reserve(static_cast<size_t>(expected));
@@ -148,8 +151,8 @@ JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory
     if (st == port::PortStatus::sequence_gap) {
       throw InputError(
           "drive overrun: " + std::to_string(drive.lost()) +
-          " samples lost (the drive's overrun counter; the host read too slowly: use --lockstep on the simulated "
-          "drive or a lower --rate)");
+          " samples lost (the drive's overrun counter; the host read too slowly: use --stream trace, a lower --rate, "
+          "or --lockstep on the simulated drive)");
     }
     samples.insert(samples.end(), block, block + n);
     if (on_sample) {
@@ -158,11 +161,11 @@ JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory
     if (progress && static_cast<long>(samples.size()) / 500 != last_shown) {
       last_shown = static_cast<long>(samples.size()) / 500;
       progress_bar(*progress, static_cast<double>(samples.size()) / static_cast<double>(expected),
-                   static_cast<long>(samples.size()), "streaming");
+                   static_cast<long>(samples.size()), run.trace ? "uploading" : "streaming");
     }
   }
   if (progress) {
-    progress_bar(*progress, 1.0, static_cast<long>(samples.size()), "streaming");
+    progress_bar(*progress, 1.0, static_cast<long>(samples.size()), run.trace ? "uploading" : "streaming");
     *progress << "\n";
   }
   if (seconds) *seconds = seconds_since(t0);
@@ -310,6 +313,25 @@ CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions&
   CalibrateResult r;
   r.num_joints = robot.num_joints;
   std::ostream* prog = o.progress ? &progress : nullptr;
+  // The link, as the stream uses it: its transaction time with the samples a block carries, and
+  // the drive's ring; each run then streams live or is traced (stream_plan.hpp).
+  {
+    constexpr int kProbeTransactions = 8;
+    if (drive->measure_link(kProbeTransactions, &r.link.capacity.transaction_seconds) != port::PortStatus::ok)
+      throw InputError("drive: " + drive->error());
+    r.link.transport = drive->transport();
+    r.link.capacity.samples_per_second =
+        drive->samples_per_block() / std::max(1e-9, r.link.capacity.transaction_seconds);
+    r.link.capacity.ring_capacity = drive->ring_capacity();
+  }
+  const linux_port::ModbusDrive::LinkStats link_before = drive->link_stats();
+  auto plan = [&](const char* name, const linux_port::Trajectory& t, int periods) {
+    const long samples = std::lround(periods * t.period() * o.sample_rate_hz);
+    const StreamPlan p = plan_stream(o.stream, r.link.capacity, name, samples, o.sample_rate_hz, periods);
+    progress << p.line << "\n";
+    r.link.plans.push_back(p.line);
+    return p.trace;
+  };
   // 1. Excitation: stream, then online estimators sample by sample and the batch fit.
   linux_port::Trajectory excitation;
   if (o.excitation) {
@@ -331,8 +353,9 @@ CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions&
       throw InputError("drive: " + drive->error());
     feed_forward.resize(static_cast<size_t>(size));
   }
-  const JointLog log = stream_run(*drive, excitation, {"excitation", o.periods, o.sample_rate_hz, o.fault_dir}, prog,
-                                  &r.lost, &r.stream_seconds, sink.push);
+  StreamRun excitation_run{"excitation", o.periods, o.sample_rate_hz, o.fault_dir};
+  excitation_run.trace = plan("excitation", excitation, o.periods);
+  const JointLog log = stream_run(*drive, excitation, excitation_run, prog, &r.lost, &r.stream_seconds, sink.push);
   if (!o.save_log.empty()) {
     write_csv_log(o.save_log, log);
     progress << "excitation log written to " << o.save_log << "\n";
@@ -361,8 +384,9 @@ CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions&
   ParameterSet batch_set = parameter_set(r.batch);
   // 2. Fresh trajectory with the drive's current table, flash, same trajectory again.
   const auto fresh = default_excitation(robot, o.f_f, o.harmonics, 1, o.seed + 1000, nullptr);
+  const bool trace_verification = plan("verification", fresh, o.verify_periods);
   progress << "verification run with the drive's current table\n";
-  const JointLog vlog = verification_run(*drive, fresh, o, prog, &r.lost, r.drive_error_before);
+  const JointLog vlog = verification_run(*drive, fresh, o, trace_verification, prog, &r.lost, r.drive_error_before);
   const OnlineModel::VerifyFn verify = online.verify[static_cast<size_t>(term_set)];
   {
     // The batch estimate as the drive would apply it: the table's parameters and effect terms.
@@ -388,13 +412,16 @@ CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions&
     const ParameterTable table = parameter_table(batch_set, robot, &r.table_notes);
     const FlashOutcome f = flash_and_verify(*drive, table, [&] {
       progress << kFlashedMessage << "\nverification run with the new table\n";
-      verification_run(*drive, fresh, o, prog, &r.lost, r.drive_error_after);
+      verification_run(*drive, fresh, o, trace_verification, prog, &r.lost, r.drive_error_after);
     });
     r.flashed = f.flashed;
     r.flash_status = f.status;
     r.flash_message = f.message;
     if (!f.flashed) progress << r.flash_message << "\n";
   }
+  r.link.transactions = drive->link_stats().transactions - link_before.transactions;
+  r.link.bytes = drive->link_stats().bytes - link_before.bytes;
+  r.link.samples = drive->link_stats().samples - link_before.samples;
   r.total_seconds = seconds_since(t0);
   return r;
 }
@@ -404,6 +431,18 @@ void print_calibrate_report(std::ostream& out, const CalibrateResult& r) {
   out << "\ncalibration: " << r.samples << " samples streamed in " << std::setprecision(1) << r.stream_seconds << " s ("
       << std::setprecision(0) << r.samples_per_second << " samples/s), " << r.lost << " lost; online updates "
       << r.online_updates << " (" << r.online_rejected << " rejected)\n";
+  const auto& l = r.link;
+  if (l.transactions > 0 && l.samples > 0) {
+    out << "link: " << l.transport << ", " << l.transactions << " ring transactions for " << l.samples
+        << " samples in all runs (" << std::setprecision(1)
+        << static_cast<double>(l.samples) / static_cast<double>(l.transactions) << " per transaction, "
+        << static_cast<double>(l.bytes) / static_cast<double>(l.samples)
+        << " bytes per sample on the wire); measured before the runs: " << std::setprecision(0)
+        << l.capacity.samples_per_second << " samples/s live (" << std::setprecision(2)
+        << 1e3 * l.capacity.transaction_seconds << " ms per transaction), ring of " << l.capacity.ring_capacity
+        << " samples\n";
+    for (const auto& p : l.plans) out << "  " << p << "\n";
+  }
   out << "batch fit (" << r.batch.method << ", " << r.batch.model
       << (r.friction_per_motor ? ", friction and rotor inertia per motor" : "")
       << "), cross-validated on the excitation run:\n";
@@ -445,6 +484,14 @@ nlohmann::json calibrate_report_json(const CalibrateResult& r) {
   j["samples"] = r.samples;
   j["lost"] = r.lost;
   j["samples_per_second"] = r.samples_per_second;
+  j["link"] = {{"transport", r.link.transport},
+               {"samples_per_second_live", r.link.capacity.samples_per_second},
+               {"transaction_seconds", r.link.capacity.transaction_seconds},
+               {"ring_capacity", r.link.capacity.ring_capacity},
+               {"runs", r.link.plans},
+               {"transactions", r.link.transactions},
+               {"bytes", r.link.bytes},
+               {"samples", r.link.samples}};
   j["trajectory_cond"] = r.trajectory_cond;
   j["params"] = nlohmann::json::array();
   for (size_t i = 0; i < r.names.size(); ++i) {

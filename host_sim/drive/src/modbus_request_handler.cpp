@@ -59,6 +59,7 @@ void refresh_inputs(const SimulatedDrive& d, std::uint16_t* in, long& table_gene
     table_generation = static_cast<long>(d.table_generation());
   }
   in[mm::kRingFormatReg] = static_cast<std::uint16_t>(d.ring_format_in_use());
+  mm::set_u32(in + mm::kRingCapacityReg, static_cast<std::uint32_t>(d.ring_capacity));
   for (int j = 0; j < n_joints; ++j) {
     mm::set_f32(in + mm::kQResolutionReg + 2 * j, static_cast<float>(d.q_resolution(j)));
     mm::set_f32(in + mm::kTauResolutionReg + 2 * j, static_cast<float>(d.tau_resolution(j)));
@@ -145,19 +146,24 @@ int check_holding(const SimulatedDrive& d, const std::uint16_t* h, int address, 
   };
   if (overlaps(address, count, mm::kCommandReg, 1)) {
     const std::uint16_t c = h[mm::kCommandReg];
-    if (c > static_cast<std::uint16_t>(mm::Command::identify_payload)) return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+    if (c > static_cast<std::uint16_t>(mm::Command::trace)) return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
     // identify_payload writes the active table at the run's end: a staging session's right.
     if (c == static_cast<std::uint16_t>(mm::Command::commit_table) ||
         c == static_cast<std::uint16_t>(mm::Command::identify_payload)) {
       if (const int e = staging_rule()) return e;
     }
     if (c == static_cast<std::uint16_t>(mm::Command::start) ||
-        c == static_cast<std::uint16_t>(mm::Command::identify_payload)) {
+        c == static_cast<std::uint16_t>(mm::Command::identify_payload) ||
+        c == static_cast<std::uint16_t>(mm::Command::trace)) {
       if (playing) return MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY;   // would jump the arm back to the start pose
       if (fault) return MODBUS_EXCEPTION_SLAVE_OR_SERVER_FAILURE;  // only reset clears a fault
-      if (!(mm::run_samples(h[mm::kPeriodsReg], mm::get_f32(h + mm::kOmegaFReg), mm::get_f32(h + mm::kSampleRateReg)) <=
-            mm::kMaxRunSamples))
+      const double f_f = mm::get_f32(h + mm::kOmegaFReg), fs = mm::get_f32(h + mm::kSampleRateReg);
+      if (!(mm::run_samples(h[mm::kPeriodsReg], f_f, fs) <= mm::kMaxRunSamples))
         return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;  // the run would outlast the sample counter's resolution
+      // A trace records the whole run: refused unless the ring holds every sample of it.
+      if (c == static_cast<std::uint16_t>(mm::Command::trace) &&
+          !(f_f > 0 && fs > 0 && d.run_samples(h[mm::kPeriodsReg], 1.0 / f_f, fs) <= d.ring_capacity))
+        return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
     }
   }
   if (overlaps(address, count, mm::kUnlockReg, 1)) {
@@ -460,6 +466,7 @@ void ModbusRequestHandler::apply_write(int address, int count) {
   if (!overlaps(address, count, mm::kCommandReg, 1)) return;
   switch (static_cast<mm::Command>(h[mm::kCommandReg])) {
     case mm::Command::start:
+    case mm::Command::trace:  // the same run: the start check made sure the ring holds all of it
       load_trajectory(drive_, h);
       load_monitor(drive_, h);
       drive_.start();

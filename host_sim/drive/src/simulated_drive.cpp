@@ -88,6 +88,12 @@ double SimulatedDrive::remaining() const {
                                                    : 0.0;
 }
 
+long SimulatedDrive::run_samples(double run_periods, double period_s, double sample_rate) const {
+  const long per_sample = std::max(1L, std::lround(scenario_.control_rate_hz / sample_rate));
+  const long steps = std::lround(scenario_.stop_and_go.run_time(run_periods * period_s) * scenario_.control_rate_hz);
+  return (steps + per_sample - 1) / per_sample;  // a sample at every per_sample-th step from step 0
+}
+
 void SimulatedDrive::start() {
   const double steps_per_sample = scenario_.control_rate_hz / sample_rate_hz;
   steps_per_sample_ = std::max(1L, std::lround(steps_per_sample));

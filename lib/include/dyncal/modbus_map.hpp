@@ -36,7 +36,7 @@ inline constexpr int kMaxHarmonics = 8;
 /// one transaction (function 23); its header carries the drive's state and counters; samples
 /// carry no seq (a block ends at a gap) and come in the drive's ring_format (counts: i32 encoder
 /// counts and i16 torque counts, scaled by q_resolution and tau_resolution).
-inline constexpr std::uint16_t kMapVersion = 9;
+inline constexpr std::uint16_t kMapVersion = 10;
 
 /// Key that, written to `unlock`, opens a staging session for the writing connection.
 inline constexpr std::uint16_t kUnlockKey = 0xCA1B;
@@ -123,6 +123,10 @@ enum class Command : std::uint16_t {
   /// play the trajectory from its start as `start`, identifying the payload on the last link with
   /// the active table fixed; at the run's end the active table takes it (docs/payload.md)
   identify_payload = 5,
+  /// play the trajectory from its start as `start`, recording the whole run for upload (trace mode,
+  /// docs/modbus.md "Trace"): refused with ILLEGAL DATA VALUE when the run records more samples than
+  /// `ring_capacity`, so a traced run never drops one, however slowly the host reads
+  trace = 6,
 };
 
 /// The drive's payload identification (input register `payload_state`).
@@ -183,6 +187,7 @@ inline constexpr std::int32_t kQInvalid = -2147483647 - 1;
 inline constexpr std::uint16_t kRingFormatReg = 500;     // u16 RingFormat
 inline constexpr std::uint16_t kQResolutionReg = 501;    // f32[kMaxJoints] rad per position count
 inline constexpr std::uint16_t kTauResolutionReg = 515;  // f32[kMaxJoints] Nm per torque count
+inline constexpr std::uint16_t kRingCapacityReg = kTauResolutionReg + 2 * kMaxJoints;  // u32 samples the ring holds
 /// Registers of one ring sample of a drive with `joints` joints in `format`.
 constexpr int sample_words(int joints, RingFormat format) noexcept {
   return format == RingFormat::counts ? 3 * joints : 6 * joints;
@@ -232,12 +237,12 @@ static_assert(kActiveTableReg + kTableWords <= kFaultReg, "input fields overlap"
 static_assert(kFaultValueReg + 2 <= kControlRateReg, "input fields overlap");
 static_assert(kControlRateReg + 2 <= kGainKpReg && kGainKpReg + 2 * kMaxJoints <= kGainKdReg, "input fields overlap");
 static_assert(kGainKdReg + 2 * kMaxJoints <= kRingFormatReg, "input fields overlap");
-static_assert(kTauResolutionReg + 2 * kMaxJoints <= kPayloadStateReg, "input fields overlap");
+static_assert(kRingCapacityReg + 2 <= kPayloadStateReg, "input fields overlap");
 static_assert(kRingWords <= 125, "one ring block must fit one Modbus read");
 static_assert(samples_per_block(kMaxJoints, RingFormat::float32) >= 2, "a block carries at least two samples");
 
 inline constexpr Field kRegisterMap[] = {
-    {"map_version", Bank::input, kMapVersionReg, 1, Type::u16, "-", "register map version (9)"},
+    {"map_version", Bank::input, kMapVersionReg, 1, Type::u16, "-", "register map version (10)"},
     {"num_joints", Bank::input, kNumJointsReg, 1, Type::u16, "-", "joints of the arm"},
     {"robot_id", Bank::input, kRobotIdReg, 2, Type::u32, "-", "generated kRobotId of the drive's robot"},
     {"active_model_id", Bank::input, kActiveModelIdReg, 2, Type::u32, "-", "model id of the active table"},
@@ -273,6 +278,8 @@ inline constexpr Field kRegisterMap[] = {
      "per joint: the position of one count (format counts; the encoder's resolution on the joint side)"},
     {"tau_resolution", Bank::input, kTauResolutionReg, 2 * kMaxJoints, Type::f32, "Nm",
      "per joint: the torque of one count (format counts; full scale +-32767 counts, saturated there)"},
+    {"ring_capacity", Bank::input, kRingCapacityReg, 2, Type::u32, "samples",
+     "samples the ring holds: a run of at most this many is recorded whole however slowly it is read (trace)"},
     {"payload_state", Bank::input, kPayloadStateReg, 1, Type::u16, "-",
      "payload identification: 0 none, 1 running, 2 written into the active table, 3 not written"},
     {"payload", Bank::input, kPayloadReg, 20, Type::f32, "kg m^2, kg m, kg",
@@ -284,7 +291,8 @@ inline constexpr Field kRegisterMap[] = {
      "collision monitor of the run started last: 0 off, 1 watching, 2 refused (the observer cannot take the "
      "active table)"},
     {"command", Bank::holding, kCommandReg, 1, Type::u16, "-",
-     "1 start, 2 stop, 3 commit table, 4 reset a fault, 5 start and identify the payload; reads 0"},
+     "1 start, 2 stop, 3 commit table, 4 reset a fault, 5 start and identify the payload, 6 start and "
+     "record the whole run (trace; refused beyond ring_capacity); reads 0"},
     {"unlock", Bank::holding, kUnlockReg, 1, Type::u16, "-",
      "0xCA1B opens a staging session for this connection (10 s, until commit or disconnect); reads 0"},
     {"ack", Bank::holding, kAckReg, 2, Type::u32, "-", "samples with seq < ack are consumed and freed"},

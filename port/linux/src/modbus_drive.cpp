@@ -49,7 +49,7 @@ std::unique_ptr<ModbusDrive> ModbusDrive::connect(const std::string& uri, std::s
     modbus_free(ctx);
     return nullptr;
   }
-  return std::unique_ptr<ModbusDrive>(new ModbusDrive(ctx));
+  return std::unique_ptr<ModbusDrive>(new ModbusDrive(ctx, uri.rfind("rtu:", 0) == 0));
 }
 
 ModbusDrive::~ModbusDrive() {
@@ -218,6 +218,12 @@ port::PortStatus ModbusDrive::start() {
   return write_holding(mm::kCommandReg, 1, &cmd);
 }
 
+port::PortStatus ModbusDrive::trace() {
+  const std::uint16_t cmd = static_cast<std::uint16_t>(mm::Command::trace);
+  begin_run();
+  return write_holding(mm::kCommandReg, 1, &cmd);
+}
+
 port::PortStatus ModbusDrive::identify_payload() {
   const std::uint16_t key = mm::kUnlockKey;
   if (const auto st = write_holding(mm::kUnlockReg, 1, &key); st != port::PortStatus::ok) return st;
@@ -273,7 +279,7 @@ port::PortStatus ModbusDrive::stop() {
 port::PortStatus ModbusDrive::read_stream_format() {
   DriveInfo info;
   if (const auto st = read_info(info); st != port::PortStatus::ok) return st;
-  constexpr int kWords = mm::kTauResolutionReg + 2 * mm::kMaxJoints - mm::kRingFormatReg;
+  constexpr int kWords = mm::kRingCapacityReg + 2 - mm::kRingFormatReg;
   std::uint16_t r[kWords];
   if (const auto st = read_input(mm::kRingFormatReg, kWords, r); st != port::PortStatus::ok) return st;
   if (r[0] > static_cast<std::uint16_t>(mm::RingFormat::counts)) {
@@ -281,6 +287,7 @@ port::PortStatus ModbusDrive::read_stream_format() {
     return port::PortStatus::rejected;
   }
   format_ = static_cast<mm::RingFormat>(r[0]);
+  ring_capacity_ = static_cast<long>(mm::get_u32(r + (mm::kRingCapacityReg - mm::kRingFormatReg)));
   for (int j = 0; j < joints_; ++j) {
     q_resolution_[j] = mm::get_f32(r + (mm::kQResolutionReg - mm::kRingFormatReg) + 2 * j);
     tau_resolution_[j] = mm::get_f32(r + (mm::kTauResolutionReg - mm::kRingFormatReg) + 2 * j);
@@ -303,6 +310,37 @@ port::PortStatus ModbusDrive::confirm_loss(std::uint32_t from, std::uint32_t to,
   return port::PortStatus::sequence_gap;
 }
 
+port::PortStatus ModbusDrive::ring_transaction(std::uint32_t ack_seq, std::uint16_t* w) {
+  std::uint16_t ack[2];
+  mm::set_u32(ack, ack_seq);
+  if (modbus_write_and_read_registers(ctx_, mm::kAckReg, 2, ack, mm::kRingReg, mm::kRingWords, w) != mm::kRingWords) {
+    fail("reading the ring window");
+    return port::PortStatus::transport_error;
+  }
+  ++link_.transactions;
+  link_.bytes += rtu_ ? kRtuTransactionBytes : kTcpTransactionBytes;
+  return port::PortStatus::ok;
+}
+
+port::PortStatus ModbusDrive::measure_link(int transactions, double* seconds) {
+  if (!stream_format_known_) {
+    if (const auto st = read_stream_format(); st != port::PortStatus::ok) return st;
+    stream_format_known_ = true;
+  }
+  // The acknowledgement the drive holds (the ack register), written again: it frees nothing, and
+  // the drive accepts it whoever streamed last (an ack below it is refused).
+  std::uint16_t held[2];
+  if (const auto st = read_holding(mm::kAckReg, 2, held); st != port::PortStatus::ok) return st;
+  std::uint16_t w[mm::kRingWords];
+  const int n = std::max(1, transactions);
+  const auto t0 = std::chrono::steady_clock::now();
+  for (int k = 0; k < n; ++k) {
+    if (const auto st = ring_transaction(mm::get_u32(held), w); st != port::PortStatus::ok) return st;
+  }
+  *seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() / n;
+  return port::PortStatus::ok;
+}
+
 port::PortStatus ModbusDrive::read(port::DriveSample* out, int capacity, int* count) noexcept {
   *count = 0;
   if (!stream_format_known_) {  // the sample layout depends on the drive's joint count and format
@@ -314,15 +352,8 @@ port::PortStatus ModbusDrive::read(port::DriveSample* out, int capacity, int* co
   // asking again at once (a block per transaction, not a sample).
   if (pace_until_ > std::chrono::steady_clock::now()) std::this_thread::sleep_until(pace_until_);
   // One transaction: acknowledge what was received (ack = next seq) and read the window after it.
-  std::uint16_t ack[2];
-  mm::set_u32(ack, next_seq_);
   std::uint16_t w[mm::kRingWords];
-  if (modbus_write_and_read_registers(ctx_, mm::kAckReg, 2, ack, mm::kRingReg, mm::kRingWords, w) != mm::kRingWords) {
-    fail("reading the ring window");
-    return port::PortStatus::transport_error;
-  }
-  ++link_.transactions;
-  link_.bytes += kTransactionBytes;
+  if (const auto st = ring_transaction(next_seq_, w); st != port::PortStatus::ok) return st;
   const std::uint32_t first = mm::get_u32(w);
   const int in_block = w[2];
   const auto state = static_cast<mm::DriveState>(w[3]);
@@ -389,6 +420,7 @@ port::PortStatus ModbusDrive::read(port::DriveSample* out, int capacity, int* co
   const std::uint32_t from = next_seq_;
   next_seq_ = first + static_cast<std::uint32_t>(n);  // acknowledged by the next transaction
   *count = n;
+  link_.samples += n;
   if (first == from) return port::PortStatus::ok;
   lost_ += first - from;  // dropped by a full ring: the block starts after the gap
   return confirm_loss(from, first, overruns);

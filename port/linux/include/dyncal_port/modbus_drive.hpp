@@ -97,6 +97,11 @@ class ModbusDrive final : public port::SampleSource, public port::ParameterStore
   /// Starts the written trajectory from its beginning (clears the ring and the statistics).
   /// Errors: transport_error, rejected (the drive is playing already, or in fault: reset() first).
   port::PortStatus start();
+  /// Starts the written trajectory as start() does, recording the whole run for upload (trace mode,
+  /// docs/modbus.md "Trace"): the drive keeps every sample until read() has received it, however
+  /// slowly the link carries them. Errors: transport_error, rejected (playing, in fault, or a run
+  /// of more samples than ring_capacity(): the drive refuses to start it).
+  port::PortStatus trace();
   /// Starts the written trajectory as start() does and has the drive identify the payload on the
   /// last link while it plays (opens a staging session first: the drive writes the loaded model
   /// into its active table at the run's end; docs/payload.md "On the drive"). Errors:
@@ -139,14 +144,26 @@ class ModbusDrive final : public port::SampleSource, public port::ParameterStore
   /// Per joint (0-based), the samples of this run whose torque read the stream's full scale
   /// (format counts: +-32767 counts, 2 tau_max on the simulated drive): saturated, not measured.
   const std::array<long, modbus_map::kMaxJoints>& saturated() const { return saturated_; }
-  /// The stream's cost on the link since connect (read()'s transactions).
+  /// The stream's cost on the link since connect (the ring transactions of read() and measure_link()).
   struct LinkStats {
     long transactions = 0;  ///< function 23 transactions (one per block)
-    long bytes = 0;         ///< Modbus TCP bytes of those transactions, both ways (MBAP headers included)
+    long bytes = 0;    ///< bytes of those transactions on the wire, both ways (TCP: MBAP headers; RTU: address, CRC)
+    long samples = 0;  ///< samples read() delivered
   };
   const LinkStats& link_stats() const { return link_; }
-  /// How the drive packs a sample (known after the first read()).
+  /// How the drive packs a sample, and the samples its ring holds (known after the first read() or
+  /// measure_link()).
   modbus_map::RingFormat ring_format() const { return format_; }
+  long ring_capacity() const { return ring_capacity_; }
+  /// Samples one read() delivers at most (joints and format as above).
+  int samples_per_block() const { return modbus_map::samples_per_block(joints_, format_); }
+  /// Times `transactions` (>= 1) ring transactions, the stream's own (a function 23 that writes
+  /// the acknowledgement the drive holds again: it frees nothing), and stores the mean wall time of one in *seconds
+  /// [s]: with samples_per_block(), what the link carries live. Reads the stream's format first. Call it between runs.
+  /// Errors: transport_error, rejected (as read()).
+  port::PortStatus measure_link(int transactions, double* seconds);
+  /// The transport's name: "TCP" or "RTU".
+  const char* transport() const { return rtu_ ? "RTU" : "TCP"; }
 
   // port::ParameterStore
   /// Opens a staging session (writes modbus_map::kUnlockKey to `unlock`), stages, commits and reads
@@ -179,7 +196,7 @@ class ModbusDrive final : public port::SampleSource, public port::ParameterStore
   port::PortStatus write_holding(int address, int count, const std::uint16_t* regs);
 
  private:
-  explicit ModbusDrive(modbus_t* ctx) : ctx_(ctx) {}
+  ModbusDrive(modbus_t* ctx, bool rtu) : ctx_(ctx), rtu_(rtu) {}
   /// error() from errno; rejected for a Modbus exception, transport_error otherwise.
   port::PortStatus fail(const char* what);
   /// A new run's stream: seq from 0, no loss, no saturation, no pacing (start, identify_payload).
@@ -190,10 +207,18 @@ class ModbusDrive final : public port::SampleSource, public port::ParameterStore
   /// `overruns` accounts for every sample missing so far (drive_overruns_ takes it), else
   /// transport_error.
   port::PortStatus confirm_loss(std::uint32_t from, std::uint32_t to, std::uint32_t overruns);
-  /// Bytes of one ring transaction on Modbus TCP: the function 23 request (MBAP 7, PDU 14 with
-  /// the two ack registers) and its reply (MBAP 7, PDU 2 + 2 kRingWords).
-  static constexpr long kTransactionBytes = (7 + 10 + 4) + (7 + 2 + 2 * modbus_map::kRingWords);
+  /// One ring transaction: the function 23 request (PDU 10 + 4 bytes for the two ack registers)
+  /// and its reply (PDU 2 + 2 kRingWords) in their frames: TCP adds a 7-byte MBAP header to each,
+  /// RTU an address byte and a 2-byte CRC (its 3.5-character silences carry no byte).
+  static constexpr long kPduBytes = (10 + 4) + (2 + 2 * modbus_map::kRingWords);
+  static constexpr long kTcpTransactionBytes = kPduBytes + 2 * 7;
+  static constexpr long kRtuTransactionBytes = kPduBytes + 2 * 3;
+  /// One ring transaction: writes `ack_seq` to ack and reads the window into w (kRingWords);
+  /// counted in link_.
+  port::PortStatus ring_transaction(std::uint32_t ack_seq, std::uint16_t* w);
   modbus_t* ctx_;
+  bool rtu_ = false;
+  long ring_capacity_ = 0;  ///< the drive's ring_capacity register (read_stream_format)
   std::string error_;
   std::uint32_t next_seq_ = 0;
   std::uint32_t lost_ = 0;            ///< samples missing from the seq received in this run

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "dyncal/parameter_table.hpp"
+#include "dyncal_host/calibration/stream_plan.hpp"
 #include "dyncal_host/diagnosis/diagnose.hpp"
 #include "dyncal_host/identification/excitation/excitation.hpp"
 #include "dyncal_host/identification/pipeline/identify.hpp"
@@ -44,6 +45,8 @@ struct CalibrateOptions {
   std::string save_law;
   /// Where a run that ends in a drive fault leaves the samples recorded before it.
   std::string fault_dir = ".";
+  /// Live or trace per run (stream_plan.hpp): automatic picks from the link measured before the runs.
+  StreamMode stream = StreamMode::automatic;
   IdentifyOptions identify = stiction_excluded();  ///< batch fit settings (terms copied from above)
 
   /// Batch defaults for drive data: rows of a joint below 2 % of its top speed are left out of the
@@ -84,6 +87,15 @@ struct CalibrateResult {
   /// own velocity; the online KF and RLS are lib's per-joint models either way).
   bool friction_per_motor = false;
   std::vector<std::string> table_notes;  ///< how the table holds the batch model (a coupled motor's coupling term)
+  /// The drive link: measured before the runs, each run's way over it, and what the runs cost it.
+  struct Link {
+    std::string transport;           ///< "TCP" or "RTU"
+    LinkCapacity capacity;           ///< ModbusDrive::measure_link before the excitation
+    std::vector<std::string> plans;  ///< each run's StreamPlan::line, in order
+    long transactions = 0;           ///< ring transactions of every run (one per block)
+    long bytes = 0;                  ///< their bytes on the wire, both ways
+    long samples = 0;                ///< samples received in every run
+  } link;
   bool flashed = false;
   TableStatus flash_status = TableStatus::ok;
   std::string flash_message;
@@ -125,6 +137,9 @@ struct StreamRun {
   /// Start the run with the identify_payload command instead of start (the drive identifies the
   /// payload on the last link while it plays; docs/payload.md "On the drive").
   bool identify_payload = false;
+  /// Start it with the trace command (the drive records the whole run; stream_plan.hpp). Not with
+  /// identify_payload.
+  bool trace = false;
 };
 
 /// Drive samples as a log: q [rad] and tau [Nm] of `joints` joints, t = seq / sample_rate_hz [s];

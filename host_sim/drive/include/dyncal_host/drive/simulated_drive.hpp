@@ -77,6 +77,9 @@ class SimulatedDrive {
   double control_period() const { return 1.0 / scenario_.control_rate_hz; }
   /// Seconds of simulated time until the trajectory ends.
   double remaining() const;
+  /// Samples a run of `run_periods` periods of `period_s` [s] at `sample_rate` [Hz] records (the
+  /// scenario's rests included): what the ring must hold to record it whole (trace mode).
+  long run_samples(double run_periods, double period_s, double sample_rate) const;
 
   /// Ring buffer: samples with seq >= acked() not yet freed, oldest first.
   const std::deque<port::DriveSample>& ring() const { return ring_; }
