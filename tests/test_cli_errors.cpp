@@ -99,6 +99,17 @@ TEST(CliErrors, UnknownRobot) {
                "unknown robot 'nosuch'");
 }
 
+// Without --robot, drive, calibrate and excite take the robot the robots directory's default.txt
+// names: a directory without one, or naming a robot it lacks, is one line, never a guess.
+TEST(CliErrors, NoRobotAndNoDefaultIsOneLine) {
+  const auto dir = std::filesystem::temp_directory_path() / ("dyncal_test_robots_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  expect_error("excite --robots-dir " + dir.string() + " --out " + (dir / "e.json").string(), "names no default robot");
+  std::ofstream(dir / "default.txt") << "# comment\n\n  lost7  \n";
+  expect_error("drive --robots-dir " + dir.string(), "names robot 'lost7', which has no folder there");
+  std::filesystem::remove_all(dir);
+}
+
 TEST(CliErrors, MissingTimeColumn) {
   expect_error("identify --robot er20 --data " + write_csv("not", header(6, false) + rows(6, 10)),
                "missing column 't'");

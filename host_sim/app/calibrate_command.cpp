@@ -38,11 +38,10 @@ int run_calibrate(CalibrateSettings& s) {
 void add_calibrate_command(CLI::App& app, Action& run) {
   auto s = std::make_shared<CalibrateSettings>();
   host::CalibrateOptions& o = s->options;
-  s->robot.name = "er20";
+  s->robot.default_robot = true;
   auto* cmd = app.add_subcommand("calibrate", "excite the drive, identify online and in batch, flash, verify");
   cmd->add_option("--drive", s->uri, "tcp://HOST:PORT or rtu:DEVICE")->capture_default_str();
-  s->robot.add_to(cmd, "robot (robots/<name>/)");
-  cmd->get_option("--robot")->capture_default_str();
+  s->robot.add_to(cmd, "robot (robots/<name>/; robots/default.txt names the default)");
   cmd->add_option("--model", s->model, "identification model terms (as dyncal identify)")->capture_default_str();
   cmd->add_option("--rate", o.sample_rate_hz, "sample rate [Hz], 100..1000")->capture_default_str();
   cmd->add_option("--omega-f", o.f_f, "Fourier fundamental frequency [Hz] (Eq. 27)")->capture_default_str();

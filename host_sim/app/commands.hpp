@@ -52,6 +52,9 @@ std::unique_ptr<linux_port::ModbusDrive> connect_drive(const std::string& uri);
 struct RobotOption {
   std::string name;
   std::string robots_dir;
+  /// Without --robot, load() takes the robots directory's default (default_robot_name) instead of
+  /// refusing.
+  bool default_robot = false;
   /// Adds --robot (with `help`) and --robots-dir to `cmd`.
   void add_to(CLI::App* cmd, const std::string& help);
   /// The robot's description. Throws InputError (unknown robot, malformed robot.json).

@@ -58,10 +58,9 @@ int run_drive(DriveSettings& s) {
 
 void add_drive_command(CLI::App& app, Action& run) {
   auto s = std::make_shared<DriveSettings>();
-  s->robot.name = "er20";
+  s->robot.default_robot = true;
   auto* cmd = app.add_subcommand("drive", "run the simulated drive of a robot (Modbus server)");
-  s->robot.add_to(cmd, "robot (robots/<name>/; er20 by default)");
-  cmd->get_option("--robot")->capture_default_str();
+  s->robot.add_to(cmd, "robot (robots/<name>/; robots/default.txt names the default)");
   cmd->add_option("--scenario", s->scenario, "scenario JSON: friction models, effects, noise (docs/modbus.md)");
   cmd->add_option("--tcp", s->listen, "serve Modbus TCP on HOST:PORT (port 0: any free port)")->capture_default_str();
   cmd->add_option("--rtu", s->rtu, "serve Modbus RTU on this serial device instead (e.g. a socat pty)");

@@ -49,11 +49,10 @@ int run_excite(ExciteSettings& s) {
 void add_excite_command(CLI::App& app, Action& run) {
   auto s = std::make_shared<ExciteSettings>();
   host::ExciteOptions& x = s->options;
-  s->robot.name = "er20";
+  s->robot.default_robot = true;
   auto* cmd = app.add_subcommand(
       "excite", "design an excitation trajectory (Fourier series, Eq. 27) minimising cond(K) (Eq. 26) or -log det");
-  s->robot.add_to(cmd, "robot (robots/<name>/)");
-  cmd->get_option("--robot")->capture_default_str();
+  s->robot.add_to(cmd, "robot (robots/<name>/; robots/default.txt names the default)");
   cmd->add_option("--omega-f", x.f_f, "fundamental frequency [Hz]")->capture_default_str();
   cmd->add_option("--harmonics", x.harmonics, "L")->capture_default_str();
   cmd->add_option("--criterion", s->criterion, "cond | logdet")

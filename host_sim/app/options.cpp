@@ -56,8 +56,8 @@ void RobotOption::add_to(CLI::App* cmd, const std::string& help) {
 }
 
 host::RobotDescription RobotOption::load() const {
-  if (name.empty()) throw InputError("--robot is required (robots/<name>/; docs/robots.md)");
-  host::RobotDescription r = host::load_robot(robots_dir, name);
+  if (name.empty() && !default_robot) throw InputError("--robot is required (robots/<name>/; docs/robots.md)");
+  host::RobotDescription r = host::load_robot(robots_dir, name.empty() ? host::default_robot_name(robots_dir) : name);
   host::derive_tau_max(r);
   return r;
 }

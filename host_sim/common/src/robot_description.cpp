@@ -180,6 +180,21 @@ std::string default_robots_dir() {
   return DYNCAL_SOURCE_ROBOTS_DIR;
 }
 
+std::string default_robot_name(const std::string& robots_dir) {
+  const std::string path = robots_dir + "/default.txt";
+  std::ifstream in(path);
+  std::string line;
+  while (in && std::getline(in, line)) {
+    const auto b = line.find_first_not_of(" \t\r");
+    if (b == std::string::npos || line[b] == '#') continue;
+    const std::string name = line.substr(b, line.find_last_not_of(" \t\r") + 1 - b);
+    if (!std::filesystem::is_regular_file(robots_dir + "/" + name + "/robot.json"))
+      throw InputError(path + " names robot '" + name + "', which has no folder there: give --robot");
+    return name;
+  }
+  throw InputError("no --robot given, and " + path + " names no default robot: give --robot");
+}
+
 RobotDescription load_robot(const std::string& robots_dir, const std::string& name) {
   const std::string path = robots_dir + "/" + name + "/robot.json";
   const json j = read_json(name, path);

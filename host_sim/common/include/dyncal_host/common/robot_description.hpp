@@ -55,4 +55,9 @@ RobotDescription load_robot(const std::string& robots_dir, const std::string& na
 /// The robots directory: $DYNCAL_ROBOTS if set, else the source tree's robots/ (compiled in).
 std::string default_robots_dir();
 
+/// The robot a command takes when given no --robot: the name in `robots_dir`/default.txt (its first
+/// line that is neither empty nor a # comment). Throws InputError when the file is missing or names
+/// no folder of `robots_dir`.
+std::string default_robot_name(const std::string& robots_dir);
+
 }  // namespace dyncal::host

@@ -80,7 +80,7 @@ struct ExternalContact {
 /// Ia_m T_m^T T_m to the mass matrix. With the identity map (a robot without coupled motors) they
 /// are joint m's. The other effects are per joint.
 struct Scenario {
-  std::string robot = "er20";
+  std::string robot;  ///< the robot it is for (default_scenario sets it; the drive checks it)
   int num_joints = 6;
   std::uint64_t seed = 1;
   double control_rate_hz = 1000;  ///< control and integration step (RK4, `substeps` per step)
