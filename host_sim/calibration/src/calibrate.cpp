@@ -104,6 +104,10 @@ JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory
   const port::PortStatus started = run.identify_payload ? drive.identify_payload()
                                    : run.trace          ? drive.trace()
                                                         : drive.start();
+  if (started == port::PortStatus::rejected && run.trace)
+    throw InputError("drive: the drive refused to trace the " + run.name + " run (" + drive.error() +
+                     "): its ring cannot hold every sample the run records (its scenario's rests included); "
+                     "use fewer --periods or --stream live");
   if (started != port::PortStatus::ok) throw InputError("drive: " + drive.error());
   const long expected = std::lround(run.periods * trajectory.period() * run.sample_rate_hz);
   std::vector<port::DriveSample> samples;
