@@ -88,16 +88,28 @@ double SimulatedDrive::remaining() const {
                                                    : 0.0;
 }
 
+namespace {
+
+/// A run's control periods per recorded sample and in all (the scenario's rests included).
+struct RunSteps {
+  long per_sample = 1, total = 0;
+};
+RunSteps run_steps(const Scenario& sc, double run_periods, double period_s, double sample_rate) {
+  return {std::max(1L, std::lround(sc.control_rate_hz / sample_rate)),
+          std::lround(sc.stop_and_go.run_time(run_periods * period_s) * sc.control_rate_hz)};
+}
+
+}  // namespace
+
 long SimulatedDrive::run_samples(double run_periods, double period_s, double sample_rate) const {
-  const long per_sample = std::max(1L, std::lround(scenario_.control_rate_hz / sample_rate));
-  const long steps = std::lround(scenario_.stop_and_go.run_time(run_periods * period_s) * scenario_.control_rate_hz);
-  return (steps + per_sample - 1) / per_sample;  // a sample at every per_sample-th step from step 0
+  const RunSteps s = run_steps(scenario_, run_periods, period_s, sample_rate);
+  return (s.total + s.per_sample - 1) / s.per_sample;  // a sample at every per_sample-th step from step 0
 }
 
 void SimulatedDrive::start() {
-  const double steps_per_sample = scenario_.control_rate_hz / sample_rate_hz;
-  steps_per_sample_ = std::max(1L, std::lround(steps_per_sample));
-  total_steps_ = std::lround(scenario_.stop_and_go.run_time(periods * trajectory.period()) * scenario_.control_rate_hz);
+  const RunSteps s = run_steps(scenario_, periods, trajectory.period(), sample_rate_hz);
+  steps_per_sample_ = s.per_sample;
+  total_steps_ = s.total;
   plant_->begin(trajectory, scenario_, gains_fixed_, control_period());
   time_ = 0;
   steps_ = 0;

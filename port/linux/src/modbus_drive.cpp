@@ -277,6 +277,7 @@ port::PortStatus ModbusDrive::stop() {
 }
 
 port::PortStatus ModbusDrive::read_stream_format() {
+  if (stream_format_known_) return port::PortStatus::ok;
   DriveInfo info;
   if (const auto st = read_info(info); st != port::PortStatus::ok) return st;
   constexpr int kWords = mm::kRingCapacityReg + 2 - mm::kRingFormatReg;
@@ -296,6 +297,7 @@ port::PortStatus ModbusDrive::read_stream_format() {
       return port::PortStatus::rejected;
     }
   }
+  stream_format_known_ = true;
   return port::PortStatus::ok;
 }
 
@@ -323,10 +325,7 @@ port::PortStatus ModbusDrive::ring_transaction(std::uint32_t ack_seq, std::uint1
 }
 
 port::PortStatus ModbusDrive::measure_link(int transactions, double* seconds) {
-  if (!stream_format_known_) {
-    if (const auto st = read_stream_format(); st != port::PortStatus::ok) return st;
-    stream_format_known_ = true;
-  }
+  if (const auto st = read_stream_format(); st != port::PortStatus::ok) return st;
   // The acknowledgement the drive holds (the ack register), written again: it frees nothing, and
   // the drive accepts it whoever streamed last (an ack below it is refused).
   std::uint16_t held[2];
@@ -343,10 +342,8 @@ port::PortStatus ModbusDrive::measure_link(int transactions, double* seconds) {
 
 port::PortStatus ModbusDrive::read(port::DriveSample* out, int capacity, int* count) noexcept {
   *count = 0;
-  if (!stream_format_known_) {  // the sample layout depends on the drive's joint count and format
-    if (const auto st = read_stream_format(); st != port::PortStatus::ok) return st;
-    stream_format_known_ = true;
-  }
+  // The sample layout depends on the drive's joint count and format.
+  if (const auto st = read_stream_format(); st != port::PortStatus::ok) return st;
   const int per_block = mm::samples_per_block(joints_, format_);
   // Paced: after a block that was not full, wait until the rest of a block is due instead of
   // asking again at once (a block per transaction, not a sample).

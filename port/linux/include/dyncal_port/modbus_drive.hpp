@@ -201,7 +201,8 @@ class ModbusDrive final : public port::SampleSource, public port::ParameterStore
   port::PortStatus fail(const char* what);
   /// A new run's stream: seq from 0, no loss, no saturation, no pacing (start, identify_payload).
   void begin_run();
-  /// Reads the joint count (read_info), ring_format, q_resolution and tau_resolution.
+  /// Reads the joint count (read_info), ring_format, q_resolution, tau_resolution and
+  /// ring_capacity, once per connection (a no-op once they are known).
   port::PortStatus read_stream_format();
   /// After the samples jumped from seq `from` to `to`: sequence_gap if the drive's overrun counter
   /// `overruns` accounts for every sample missing so far (drive_overruns_ takes it), else
