@@ -10,9 +10,9 @@
 #include <vector>
 
 #include "dyncal_host/common/robot_description.hpp"
-#include "dyncal_host/identification/methods/objective.hpp"
-#include "dyncal_host/identification/survey_methods/physically_consistent.hpp"
-#include "dyncal_host/identification/survey_methods/standard_parameters.hpp"
+#include "dyncal_host/survey/methods/objective.hpp"
+#include "dyncal_host/survey/methods/physically_consistent.hpp"
+#include "dyncal_host/survey/methods/standard_parameters.hpp"
 #include "dyncal_host/survey/survey_data.hpp"
 
 namespace {

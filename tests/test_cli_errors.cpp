@@ -19,10 +19,11 @@ struct Run {
   std::string err;
 };
 
-/// Runs `PREFIX dyncal ARGS` with stdout discarded: its exit code (-1 if it did not exit) and stderr.
-Run run_with_prefix(const std::string& prefix, const std::string& args) {
+/// Runs `PREFIX dyncal ARGS` (the program at `binary`) with stdout discarded: its exit code (-1 if it
+/// did not exit) and stderr.
+Run run_with_prefix(const std::string& prefix, const std::string& args, const std::string& binary = DYNCAL_BINARY) {
   const std::string err_file = std::filesystem::temp_directory_path() / ("dyncal_err_" + std::to_string(::getpid()));
-  const std::string cmd = prefix + std::string(DYNCAL_BINARY) + " " + args + " >/dev/null 2>" + err_file;
+  const std::string cmd = prefix + binary + " " + args + " >/dev/null 2>" + err_file;
   const int status = std::system(cmd.c_str());
   std::ifstream in(err_file);
   std::string err((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -115,12 +116,20 @@ TEST(CliErrors, MissingTimeColumn) {
                "missing column 't'");
 }
 
-// A command-line value outside its set: CLI11's message (which adds a --help hint line), exit 2.
-TEST(CliErrors, UnknownSurveyPriorIsRefusedBeforeAnyRun) {
-  const auto r = run_dyncal("survey --prior-on cad");
+// `dyncal survey` runs the program dyncal-survey beside dyncal; without it, one line saying what to
+// build. (The study's own option errors are checked by ctest survey_unknown_prior_is_refused, which
+// runs the real program.)
+TEST(CliErrors, SurveyWithoutItsProgramIsOneLine) {
+  const auto dir = std::filesystem::temp_directory_path() / ("dyncal_test_alone_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  const auto copy = dir / "dyncal";
+  std::filesystem::copy_file(DYNCAL_BINARY, copy, std::filesystem::copy_options::overwrite_existing);
+  const auto r = run_with_prefix("", "survey --quick", copy.string());
   EXPECT_EQ(r.exit_code, 2) << r.err;
-  EXPECT_NE(r.err.find("--prior-on"), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("cad"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("not built beside " + copy.string()), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("scripts/build dyncal-survey"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  std::filesystem::remove_all(dir);
 }
 
 // Where calibrate would write its logs is checked before any drive is contacted (the URI below

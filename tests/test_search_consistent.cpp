@@ -14,8 +14,8 @@
 
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/identification/methods/consistent_least_squares.hpp"
-#include "dyncal_host/identification/methods/objective.hpp"
-#include "dyncal_host/identification/survey_methods/standard_parameters.hpp"
+#include "dyncal_host/survey/methods/objective.hpp"
+#include "dyncal_host/survey/methods/standard_parameters.hpp"
 
 namespace {
 

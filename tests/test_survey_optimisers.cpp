@@ -12,9 +12,9 @@
 #include "dyncal/generated/er20/robot.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/robot_description.hpp"
-#include "dyncal_host/identification/methods/optimisers.hpp"
-#include "dyncal_host/identification/survey_methods/standard_parameters.hpp"
 #include "dyncal_host/survey/indices.hpp"
+#include "dyncal_host/survey/methods/optimisers.hpp"
+#include "dyncal_host/survey/methods/standard_parameters.hpp"
 #include "dyncal_host/survey/survey_data.hpp"
 #include "support/survey_fixture.hpp"
 

@@ -1,13 +1,34 @@
 #include "commands.hpp"
 
+#include <iostream>
+
+#include "dyncal_host/common/input_error.hpp"
+
 namespace dyncal::app {
 
 void add_commands(CLI::App& app, Action& run) {
   for (auto add :
        {add_identify_command, add_predict_command, add_payload_command, add_monitor_command, add_diagnose_command,
-        add_excite_command, add_survey_command, add_drive_command, add_calibrate_command, add_table_command,
+        add_excite_command, add_survey_launcher, add_drive_command, add_calibrate_command, add_table_command,
         add_flash_command, add_registers_command, add_robot_command, add_export_command}) {
     add(app, run);
+  }
+}
+
+int run_cli(CLI::App& app, Action& run, int argc, char** argv) {
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  }
+  try {
+    return run ? run() : 0;
+  } catch (const host::InputError& e) {
+    std::cerr << "dyncal: error: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "dyncal: internal error: " << e.what() << "\n";
+    return 1;
   }
 }
 

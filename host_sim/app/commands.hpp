@@ -22,7 +22,13 @@ using Action = std::function<int()>;
 void add_identify_command(CLI::App& app, Action& run);
 void add_diagnose_command(CLI::App& app, Action& run);
 void add_excite_command(CLI::App& app, Action& run);
+/// The survey study itself, run in-process: the `survey` subcommand of the program dyncal-survey.
 void add_survey_command(CLI::App& app, Action& run);
+/// dyncal's `survey`: hands its arguments to the program dyncal-survey beside the running program
+/// (execv; the study and its er20-typed methods are compiled into that program alone, so that
+/// building `dyncal` does not compile them). Throws InputError (one line) when that program is not
+/// there or cannot be run.
+void add_survey_launcher(CLI::App& app, Action& run);
 void add_drive_command(CLI::App& app, Action& run);
 void add_calibrate_command(CLI::App& app, Action& run);
 void add_table_command(CLI::App& app, Action& run);
@@ -33,8 +39,13 @@ void add_predict_command(CLI::App& app, Action& run);
 void add_payload_command(CLI::App& app, Action& run);
 void add_export_command(CLI::App& app, Action& run);
 void add_monitor_command(CLI::App& app, Action& run);
-/// Adds every subcommand above to `app` (the dyncal program's, and the Python module's).
+/// Adds every subcommand above but add_survey_command to `app` (the dyncal program's, and the Python
+/// module's; the module has no `survey`: it runs commands with --report, which the study lacks).
 void add_commands(CLI::App& app, Action& run);
+/// Parses argv into `app` and runs the chosen action: a parse error is CLI11's message (exit 2, 0
+/// for --help); InputError is one line "dyncal: error: ..." (exit 2); any other exception one line
+/// "dyncal: internal error: ..." (exit 1). The main() of dyncal and of dyncal-survey.
+int run_cli(CLI::App& app, Action& run, int argc, char** argv);
 
 /// Runs codegen/import_urdf.py (the URDF work: import, check, export; orocos-kdl checks) with `args`
 /// under the Debian python3; its messages go straight to our stdout/stderr. Returns its exit code;

@@ -10,9 +10,9 @@
 
 #include "commands.hpp"
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/identification/methods/inertial_parameters.hpp"
 #include "dyncal_host/identification/pipeline/compiled_robot.hpp"
 #include "dyncal_host/identification/reports/prediction.hpp"
-#include "dyncal_host/identification/survey_methods/standard_parameters.hpp"
 
 namespace dyncal::app {
 namespace {

@@ -7,8 +7,8 @@
 #include <vector>
 
 #include "dyncal_host/common/robot_description.hpp"
-#include "dyncal_host/identification/survey_methods/methods.hpp"
-#include "dyncal_host/identification/survey_methods/standard_parameters.hpp"
+#include "dyncal_host/survey/methods/methods.hpp"
+#include "dyncal_host/survey/methods/standard_parameters.hpp"
 #include "dyncal_host/survey/survey_data.hpp"
 
 namespace dyncal::test {

@@ -3,7 +3,7 @@
 #include <cmath>
 
 #include "dyncal_host/common/input_error.hpp"
-#include "dyncal_host/identification/survey_methods/standard_parameters.hpp"
+#include "dyncal_host/survey/methods/standard_parameters.hpp"
 #include "dyncal_host/survey/survey_data.hpp"
 
 namespace dyncal::host::survey {

@@ -8,9 +8,8 @@
 #include <string>
 
 #include "dyncal_host/common/input_error.hpp"
-#include "dyncal_host/identification/methods/objective.hpp"
+#include "dyncal_host/identification/methods/inertial_parameters.hpp"
 #include "dyncal_host/identification/pipeline/identify.hpp"
-#include "dyncal_host/identification/survey_methods/standard_parameters.hpp"
 
 namespace dyncal::host {
 namespace detail {

@@ -5,7 +5,7 @@
 // out (variable projection) so the search runs over the standard parameters alone.
 
 #include "dyncal_host/identification/methods/consistent_least_squares.hpp"
-#include "search_problem.hpp"
+#include "dyncal_host/identification/methods/search_problem.hpp"
 
 namespace dyncal::host::detail {
 

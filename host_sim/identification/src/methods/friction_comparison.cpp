@@ -8,8 +8,8 @@
 #include <sstream>
 
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/identification/methods/friction_fit.hpp"
 #include "dyncal_host/identification/methods/friction_parameters.hpp"
-#include "dyncal_host/identification/methods/objective.hpp"
 
 namespace dyncal::host {
 namespace {

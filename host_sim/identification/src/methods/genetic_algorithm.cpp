@@ -5,9 +5,9 @@
 #include <cmath>
 #include <random>
 
-#include "bounded_problem.hpp"
 #include "dyncal_host/common/input_error.hpp"
-#include "dyncal_host/identification/survey_methods/standard_parameters.hpp"
+#include "dyncal_host/identification/methods/inertial_parameters.hpp"
+#include "dyncal_host/identification/methods/search_problem.hpp"
 
 namespace dyncal::host {
 namespace {
@@ -151,13 +151,5 @@ Eigen::VectorXd genetic_search(const SearchProblem& problem, const OptimiserSett
 }
 
 }  // namespace detail
-
-Estimate genetic_algorithm(const RunData& data, FrictionModel model, const MethodSettings& settings,
-                           const OptimiserSettings& options) {
-  const auto t0 = std::chrono::steady_clock::now();
-  if (options.population < 4 || options.generations < 1) throw InputError("genetic algorithm: population >= 4");
-  const detail::BoundedProblem problem(data, model, settings, options);
-  return problem.estimate(detail::genetic_search(problem, options), "genetic algorithm", t0, options.generations);
-}
 
 }  // namespace dyncal::host

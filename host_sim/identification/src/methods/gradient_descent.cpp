@@ -5,9 +5,9 @@
 #include <cmath>
 #include <nlopt.hpp>
 
-#include "bounded_problem.hpp"
 #include "dyncal_host/common/input_error.hpp"
-#include "dyncal_host/identification/survey_methods/standard_parameters.hpp"
+#include "dyncal_host/identification/methods/inertial_parameters.hpp"
+#include "dyncal_host/identification/methods/search_problem.hpp"
 
 namespace dyncal::host {
 namespace {
@@ -100,27 +100,5 @@ Eigen::VectorXd gradient_search(const SearchProblem& problem, const Eigen::Vecto
 }
 
 }  // namespace detail
-
-Estimate gradient_descent(const RunData& data, FrictionModel model, const MethodSettings& settings,
-                          const OptimiserSettings& options) {
-  const auto t0 = std::chrono::steady_clock::now();
-  int evaluations = 0;
-  // Eq. 7 from the CAD values, friction in the middle of its range.
-  const detail::BoundedProblem linear(data, FrictionModel::eq7, settings, options);
-  Eigen::VectorXd x0 = linear.full(std::vector<double>(static_cast<size_t>(linear.free_dimension()), 0.5).data());
-  x0.head(kStandard) = linear.cad();
-  const Eigen::VectorXd linear_solution =
-      detail::gradient_search(linear, x0, options.max_evaluations, detail::GradientAlgorithm::slsqp, evaluations);
-  if (model == FrictionModel::eq7) return linear.estimate(linear_solution, "gradient descent", t0, evaluations);
-  // Another model from the Eq. 7 solution's inertial parameters and each joint's friction start.
-  const detail::BoundedProblem problem(data, model, settings, options);
-  const std::vector<double> f = friction_start(data, model, linear_solution.head(kStandard));
-  Eigen::VectorXd x(kStandard + static_cast<Eigen::Index>(f.size()));
-  x.head(kStandard) = linear_solution.head(kStandard);
-  x.tail(static_cast<Eigen::Index>(f.size())) =
-      Eigen::Map<const Eigen::VectorXd>(f.data(), static_cast<Eigen::Index>(f.size()));
-  x = detail::gradient_search(problem, x, options.max_evaluations, detail::GradientAlgorithm::slsqp, evaluations);
-  return problem.estimate(x, "gradient descent", t0, evaluations);
-}
 
 }  // namespace dyncal::host

@@ -21,14 +21,13 @@
 #include <cmath>
 #include <random>
 
-#include "bounded_problem.hpp"
 #include "dyncal_host/common/input_error.hpp"
-#include "dyncal_host/identification/survey_methods/standard_parameters.hpp"
+#include "dyncal_host/identification/methods/inertial_parameters.hpp"
+#include "dyncal_host/identification/methods/search_problem.hpp"
 
 namespace dyncal::host {
 namespace {
 
-constexpr int kMovesPerStep = 5;
 constexpr double kTargetAcceptance = 0.234;
 
 /// Next inverse temperature b' > b with ESS(exp(-(b' - b) f)) = N / 2 (bisection on b' - b).
@@ -53,7 +52,7 @@ double next_inverse_temperature(const Eigen::VectorXd& f, double b) {
 namespace detail {
 
 Eigen::VectorXd particle_search(const SearchProblem& problem, const OptimiserSettings& options, int& steps) {
-  if (options.population < 4 || options.generations < kMovesPerStep) {
+  if (options.population < 4 || options.generations < kParticleMovesPerStep) {
     throw InputError("particle filter: >= 4 particles and >= 5 evaluations per particle");
   }
   const int links = problem.num_links();
@@ -112,7 +111,7 @@ Eigen::VectorXd particle_search(const SearchProblem& problem, const OptimiserSet
   const std::vector<std::vector<int>> joint_scales = problem.scale_groups();
   const bool independence_moves = !joint_scales.empty();
   double b = 0, scale = 2.38 / std::sqrt(static_cast<double>(D));
-  steps = options.generations / (kMovesPerStep + (independence_moves ? 1 : 0));
+  steps = options.generations / (kParticleMovesPerStep + (independence_moves ? 1 : 0));
   for (int step = 0; step < steps; ++step) {
     const double b_next = std::min(1.0, b < 1.0 ? next_inverse_temperature(f, b) : 1.0);
     Eigen::VectorXd w = (-(f.array() - f.minCoeff()) * (b_next - b)).exp().matrix();
@@ -159,7 +158,7 @@ Eigen::VectorXd particle_search(const SearchProblem& problem, const OptimiserSet
     };
     int accepted = 0;
     us.clear();
-    for (int move = 0; move < kMovesPerStep; ++move) {
+    for (int move = 0; move < kParticleMovesPerStep; ++move) {
       for (int i = 0; i < N; ++i) {
         Eigen::VectorXd z(D);
         for (int k = 0; k < D; ++k) z[k] = normal(rng);
@@ -172,7 +171,7 @@ Eigen::VectorXd particle_search(const SearchProblem& problem, const OptimiserSet
       }
       accepted += try_moves();
     }
-    const double rate = static_cast<double>(accepted) / (kMovesPerStep * N);
+    const double rate = static_cast<double>(accepted) / (kParticleMovesPerStep * N);
     scale *= std::exp(rate - kTargetAcceptance);
     if (independence_moves) {
       std::uniform_int_distribution<int> joint(0, static_cast<int>(joint_scales.size()) - 1);
@@ -192,17 +191,5 @@ Eigen::VectorXd particle_search(const SearchProblem& problem, const OptimiserSet
 }
 
 }  // namespace detail
-
-Estimate particle_filter(const RunData& data, FrictionModel model, const MethodSettings& settings,
-                         const OptimiserSettings& options) {
-  const auto t0 = std::chrono::steady_clock::now();
-  if (options.population < 4 || options.generations < kMovesPerStep) {
-    throw InputError("particle filter: >= 4 particles and >= 5 evaluations per particle");
-  }
-  const detail::BoundedProblem problem(data, model, settings, options);
-  int steps = 0;
-  const Eigen::VectorXd x = detail::particle_search(problem, options, steps);
-  return problem.estimate(x, "particle filter", t0, steps);
-}
 
 }  // namespace dyncal::host

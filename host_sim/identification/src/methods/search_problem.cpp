@@ -1,10 +1,9 @@
-#include "search_problem.hpp"
+#include "dyncal_host/identification/methods/search_problem.hpp"
 
 #include <algorithm>
 #include <cmath>
 
-#include "dyncal_host/identification/methods/objective.hpp"
-#include "dyncal_host/identification/survey_methods/standard_parameters.hpp"
+#include "dyncal_host/identification/methods/inertial_parameters.hpp"
 
 namespace dyncal::host::detail {
 

@@ -11,9 +11,9 @@
 #include "dyncal/payload_estimator.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/identification/methods/effect_model.hpp"
+#include "dyncal_host/identification/methods/inertial_parameters.hpp"
 #include "dyncal_host/identification/pipeline/compiled_robot.hpp"
 #include "dyncal_host/identification/pipeline/stacked_data.hpp"
-#include "dyncal_host/identification/survey_methods/standard_parameters.hpp"
 
 namespace dyncal::host {
 namespace {

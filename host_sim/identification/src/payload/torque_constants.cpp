@@ -9,7 +9,6 @@
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/identification/pipeline/compiled_robot.hpp"
 #include "dyncal_host/identification/pipeline/stacked_data.hpp"
-#include "dyncal_host/identification/survey_methods/standard_parameters.hpp"
 
 namespace dyncal::host {
 namespace {

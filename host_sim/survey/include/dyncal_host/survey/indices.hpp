@@ -6,7 +6,7 @@
 #include <array>
 
 #include "dyncal_host/drive/scenario.hpp"
-#include "dyncal_host/identification/survey_methods/estimate.hpp"
+#include "dyncal_host/survey/methods/estimate.hpp"
 
 namespace dyncal::host::survey {
 

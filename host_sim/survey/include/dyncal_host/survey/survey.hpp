@@ -9,7 +9,7 @@
 #include <string>
 
 #include "dyncal_host/common/robot_description.hpp"
-#include "dyncal_host/identification/survey_methods/standard_parameters.hpp"
+#include "dyncal_host/survey/methods/standard_parameters.hpp"
 
 namespace dyncal::host::survey {
 

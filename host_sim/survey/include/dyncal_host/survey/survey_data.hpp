@@ -12,8 +12,8 @@
 #include "dyncal_host/drive/scenario.hpp"
 #include "dyncal_host/drive/simulated_drive.hpp"
 #include "dyncal_host/identification/excitation/excitation.hpp"
-#include "dyncal_host/identification/survey_methods/idim_iv.hpp"
-#include "dyncal_host/identification/survey_methods/run_data.hpp"
+#include "dyncal_host/survey/methods/idim_iv.hpp"
+#include "dyncal_host/survey/methods/run_data.hpp"
 
 namespace dyncal::host::survey {
 

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "dyncal_host/identification/survey_methods/methods.hpp"
+#include "dyncal_host/survey/methods/methods.hpp"
 #include "dyncal_host/survey/survey_data.hpp"
 
 namespace dyncal::host::survey {

@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "dyncal_host/common/friction_model.hpp"
-#include "dyncal_host/identification/methods/objective.hpp"
+#include "dyncal_host/identification/methods/friction_fit.hpp"
 #include "dyncal_host/identification/pipeline/stacked_data.hpp"
 
 namespace dyncal::host {

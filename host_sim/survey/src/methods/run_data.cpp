@@ -1,4 +1,4 @@
-#include "dyncal_host/identification/survey_methods/run_data.hpp"
+#include "dyncal_host/survey/methods/run_data.hpp"
 
 #include <Eigen/Dense>
 #include <algorithm>

@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "dyncal_host/identification/methods/optimisers.hpp"
-#include "search_problem.hpp"
+#include "dyncal_host/identification/methods/search_problem.hpp"
+#include "dyncal_host/survey/methods/optimisers.hpp"
 
 namespace dyncal::host::detail {
 

@@ -1,4 +1,4 @@
-#include "dyncal_host/identification/survey_methods/methods.hpp"
+#include "dyncal_host/survey/methods/methods.hpp"
 
 #include <Eigen/Dense>
 #include <chrono>
@@ -11,7 +11,7 @@
 #include "dyncal/kalman_filter.hpp"
 #include "dyncal/rls_forgetting.hpp"
 #include "dyncal_host/common/input_error.hpp"
-#include "dyncal_host/identification/survey_methods/standard_parameters.hpp"
+#include "dyncal_host/survey/methods/standard_parameters.hpp"
 
 namespace dyncal::host {
 namespace {

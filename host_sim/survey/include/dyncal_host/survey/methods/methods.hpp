@@ -10,9 +10,9 @@
 
 #include "dyncal/extended_kalman_filter.hpp"
 #include "dyncal/generated/er20/robot.hpp"
-#include "dyncal_host/identification/survey_methods/estimate.hpp"
-#include "dyncal_host/identification/survey_methods/run_data.hpp"
-#include "dyncal_host/identification/survey_methods/standard_parameters.hpp"
+#include "dyncal_host/survey/methods/estimate.hpp"
+#include "dyncal_host/survey/methods/run_data.hpp"
+#include "dyncal_host/survey/methods/standard_parameters.hpp"
 
 namespace dyncal::host {
 

@@ -1,4 +1,4 @@
-#include "dyncal_host/identification/survey_methods/idim_iv.hpp"
+#include "dyncal_host/survey/methods/idim_iv.hpp"
 
 #include <Eigen/Dense>
 #include <chrono>
@@ -9,7 +9,7 @@
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/identification/pipeline/butterworth.hpp"
 #include "dyncal_host/identification/pipeline/signal.hpp"
-#include "dyncal_host/identification/survey_methods/standard_parameters.hpp"
+#include "dyncal_host/survey/methods/standard_parameters.hpp"
 
 namespace dyncal::host {
 namespace {

@@ -6,9 +6,9 @@
 // assumed noise); the last two need no initial values, only the ranges. Deterministic for a seed;
 // budgets are evaluation counts, not times.
 
-#include "dyncal_host/identification/methods/objective.hpp"
 #include "dyncal_host/identification/methods/optimiser_settings.hpp"
-#include "dyncal_host/identification/survey_methods/methods.hpp"
+#include "dyncal_host/survey/methods/methods.hpp"
+#include "dyncal_host/survey/methods/objective.hpp"
 
 namespace dyncal::host {
 

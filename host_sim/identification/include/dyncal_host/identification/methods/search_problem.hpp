@@ -1,12 +1,12 @@
 #pragma once
 // What the three optimisers (gradient descent, genetic algorithm, particle filter; survey Sec. 3.4)
-// search, private to host_sim/identification. A decision vector x: the standard parameters of every
+// search, for any robot. A decision vector x: the standard parameters of every
 // link (10 per link, Khalil-Kleinfinger order, link-major), then the problem's other parameters;
 // a box [lo, hi] whose free variables map to the unit box (linearly; logarithmically for scale
 // parameters); physical feasibility per link (pseudo-inertia positive definite, Wensing et al.
 // 2017); and a least-squares cost whose amplitudes (the parameters the torque is linear in once the
 // others are fixed) have a closed-form fit. Two problems derive from it: the survey study's
-// (BoundedProblem: the er20's RunData and a friction model of Eq. 4-9) and identify's
+// (host_sim/survey's BoundedProblem: the er20's RunData and a friction model of Eq. 4-9) and identify's
 // (CompressedProblem: any robot's weighted data compressed to their triangular factor).
 
 #include <Eigen/Core>
@@ -97,11 +97,13 @@ enum class GradientAlgorithm { slsqp, ccsaq };
 Eigen::VectorXd gradient_search(const SearchProblem& problem, const Eigen::VectorXd& x0, int max_evaluations,
                                 GradientAlgorithm algorithm, int& evaluations);
 
-/// The real-coded genetic algorithm (genetic_algorithm, optimisers.hpp); returns the best
+/// The real-coded genetic algorithm (the survey's genetic_algorithm, or identify --method ga); returns the best
 /// individual (full, amplitudes fitted).
 Eigen::VectorXd genetic_search(const SearchProblem& problem, const OptimiserSettings& options);
 
-/// The particle filter (particle_filter, optimisers.hpp); returns the posterior mean (full) and
+/// Random-walk Metropolis moves per tempering step of the particle filter.
+inline constexpr int kParticleMovesPerStep = 5;
+/// The particle filter (the survey's particle_filter, or identify --method pf); returns the posterior mean (full) and
 /// the tempering steps run into `steps`.
 Eigen::VectorXd particle_search(const SearchProblem& problem, const OptimiserSettings& options, int& steps);
 

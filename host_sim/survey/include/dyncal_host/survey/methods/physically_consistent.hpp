@@ -5,7 +5,7 @@
 // prior on the standard parameters that pulls the directions the data cannot see. A nonlinear
 // least-squares problem, solved with Eigen's Levenberg-Marquardt (MINPACK).
 
-#include "dyncal_host/identification/survey_methods/methods.hpp"
+#include "dyncal_host/survey/methods/methods.hpp"
 
 namespace dyncal::host {
 

@@ -1,4 +1,4 @@
-#include "dyncal_host/identification/survey_methods/physically_consistent.hpp"
+#include "dyncal_host/survey/methods/physically_consistent.hpp"
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -9,8 +9,8 @@
 #include "dyncal/generated/er20/robot.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/identification/methods/log_cholesky.hpp"
-#include "dyncal_host/identification/methods/objective.hpp"
-#include "dyncal_host/identification/survey_methods/standard_parameters.hpp"
+#include "dyncal_host/survey/methods/objective.hpp"
+#include "dyncal_host/survey/methods/standard_parameters.hpp"
 
 namespace dyncal::host {
 namespace {

@@ -8,8 +8,8 @@
 #include <array>
 #include <functional>
 
-#include "dyncal_host/identification/survey_methods/methods.hpp"
-#include "dyncal_host/identification/survey_methods/run_data.hpp"
+#include "dyncal_host/survey/methods/methods.hpp"
+#include "dyncal_host/survey/methods/run_data.hpp"
 
 namespace dyncal::host {
 

@@ -4,7 +4,7 @@
 #include <array>
 #include <cmath>
 
-#include "dyncal_host/identification/survey_methods/standard_parameters.hpp"
+#include "dyncal_host/survey/methods/standard_parameters.hpp"
 
 namespace dyncal::host::detail {
 
