@@ -111,6 +111,21 @@ TEST(CliErrors, NoRobotAndNoDefaultIsOneLine) {
   std::filesystem::remove_all(dir);
 }
 
+// A vendor --format without --robot takes the robot whose robot.json lists it (robots/tx40 lists
+// tx40: the Tx40Identify tests run that way); none, or two, is one line asking for --robot.
+TEST(CliErrors, VendorFormatWithoutOneRobotListingItIsOneLine) {
+  const auto dir = std::filesystem::temp_directory_path() / ("dyncal_test_formats_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir / "arm_a");
+  std::filesystem::create_directories(dir / "arm_b");
+  const std::string args =
+      "identify --format tx40 --robots-dir " + dir.string() + " --data " + std::string(DYNCAL_TX40_DATA);
+  expect_error(args, "no robot under " + dir.string() + " lists it in its log_formats");
+  std::ofstream(dir / "arm_a" / "robot.json") << R"({"name": "arm_a", "log_formats": ["tx40"]})";
+  std::ofstream(dir / "arm_b" / "robot.json") << R"({"name": "arm_b", "log_formats": ["ur-rtde", "tx40"]})";
+  expect_error(args, "robots arm_a and arm_b under " + dir.string() + " both list log format tx40");
+  std::filesystem::remove_all(dir);
+}
+
 TEST(CliErrors, MissingTimeColumn) {
   expect_error("identify --robot er20 --data " + write_csv("not", header(6, false) + rows(6, 10)),
                "missing column 't'");

@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "dyncal_host/common/input_error.hpp"
+#include "entry_points.hpp"
 
 namespace dyncal::app {
 
@@ -30,6 +31,14 @@ int run_cli(CLI::App& app, Action& run, int argc, char** argv) {
     std::cerr << "dyncal: internal error: " << e.what() << "\n";
     return 1;
   }
+}
+
+int run_dyncal(int argc, char** argv) {
+  CLI::App app{"dyncal: dynamic calibration of serial robot arms (1 to 7 joints)"};
+  app.require_subcommand(1);
+  Action run;
+  add_commands(app, run);
+  return run_cli(app, run, argc, argv);
 }
 
 }  // namespace dyncal::app

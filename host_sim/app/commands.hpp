@@ -72,8 +72,8 @@ struct RobotOption {
   host::RobotDescription load() const;
 };
 
-/// A measured log: --format csv|ur-rtde|tx40, --columns, --data, and the robot (tx40 by default
-/// with --format tx40).
+/// A measured log: --format csv|ur-rtde|tx40, --columns, --data, and the robot (by default with a
+/// vendor format, the robot whose robot.json lists it in log_formats).
 struct LogOption {
   RobotOption robot;
   std::string format = "csv";
@@ -88,7 +88,8 @@ struct LogOption {
   /// --clock) and the robot options to `cmd`; returns
   /// --data's option (required unless `data_required` is false: the command checks it then).
   CLI::Option* add_to(CLI::App* cmd, bool data_required = true);
-  /// The robot (--robot, or tx40 for --format tx40). Throws InputError (no --robot for csv, ...).
+  /// The robot: --robot, or the one robot listing --format in its robot.json's log_formats
+  /// (robot_for_log_format). Throws InputError (no --robot and no such robot, ...).
   host::RobotDescription load_robot() const;
   /// The log on the joint side (TX40 files through the robot's transmission), checked for physical
   /// plausibility against the robot's limits (log_plausibility.hpp); several --data logs stacked as

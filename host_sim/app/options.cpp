@@ -63,7 +63,9 @@ host::RobotDescription RobotOption::load() const {
 }
 
 CLI::Option* LogOption::add_to(CLI::App* cmd, bool data_required) {
-  robot.add_to(cmd, "robot name (robots/<name>/); tx40 by default with --format tx40");
+  robot.add_to(cmd,
+               "robot name (robots/<name>/); by default with a vendor --format, the robot whose robot.json lists it in "
+               "log_formats");
   cmd->add_option("--format", format,
                   "log format: csv (t,q1..qN,[qd..],[qdd..],tau1..tauN, or --columns; a ROS 2 bag given to --data "
                   "is read as one), ur-rtde (Universal Robots' RTDE recorder: timestamp, actual_q_*, actual_qd_*, "
@@ -100,10 +102,7 @@ CLI::Option* LogOption::add_to(CLI::App* cmd, bool data_required) {
 
 host::RobotDescription LogOption::load_robot() const {
   RobotOption r = robot;
-  if (r.name.empty()) {
-    if (format != "tx40") throw InputError("--robot is required for --format " + format);
-    r.name = "tx40";
-  }
+  if (r.name.empty()) r.name = host::robot_for_log_format(r.robots_dir, format);
   return r.load();
 }
 

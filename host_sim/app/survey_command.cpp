@@ -7,6 +7,7 @@
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/survey/survey.hpp"
 #include "dyncal_host/survey/survey_plots.hpp"
+#include "entry_points.hpp"
 
 namespace dyncal::app {
 namespace {
@@ -78,6 +79,14 @@ void add_survey_command(CLI::App& app, Action& run) {
   cmd->add_option("--check", s->check, "compare with a committed result JSON; exit 1 on any difference");
   cmd->add_option("--tolerance", s->tolerance, "relative tolerance of --check")->capture_default_str();
   cmd->callback([&run, s] { run = [s] { return run_survey(*s); }; });
+}
+
+int run_dyncal_survey(int argc, char** argv) {
+  CLI::App app{"dyncal: dynamic calibration of serial robot arms (1 to 7 joints)"};
+  app.require_subcommand(1);
+  Action run;
+  add_survey_command(app, run);
+  return run_cli(app, run, argc, argv);
 }
 
 }  // namespace dyncal::app

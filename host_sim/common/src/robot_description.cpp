@@ -1,5 +1,6 @@
 #include "dyncal_host/common/robot_description.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -173,6 +174,17 @@ void read_joint_names(const Reader& rd, const json& j, RobotDescription& r) {
   }
 }
 
+void read_log_formats(const Reader& rd, const json& j, RobotDescription& r) {
+  if (!j.contains("log_formats")) return;
+  const json& f = j["log_formats"];
+  if (!f.is_array()) rd.fail("log_formats", "expected a list of log format names (--format)");
+  for (size_t k = 0; k < f.size(); ++k) {
+    if (!f[k].is_string() || f[k].get<std::string>().empty())
+      rd.fail("log_formats[" + std::to_string(k + 1) + "]", "expected a log format's name (--format)");
+    r.log_formats.push_back(f[k].get<std::string>());
+  }
+}
+
 }  // namespace
 
 std::string default_robots_dir() {
@@ -195,6 +207,28 @@ std::string default_robot_name(const std::string& robots_dir) {
   throw InputError("no --robot given, and " + path + " names no default robot: give --robot");
 }
 
+std::string robot_for_log_format(const std::string& robots_dir, const std::string& format) {
+  std::vector<std::string> found;
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(robots_dir, ec)) {
+    const auto file = entry.path() / "robot.json";
+    std::ifstream in(file);
+    if (!in) continue;
+    const json j = json::parse(in, nullptr, false);
+    if (j.is_discarded() || !j.is_object() || !j.contains("log_formats") || !j["log_formats"].is_array()) continue;
+    for (const auto& f : j["log_formats"])
+      if (f.is_string() && f.get<std::string>() == format) found.push_back(entry.path().filename().string());
+  }
+  std::sort(found.begin(), found.end());
+  if (found.empty())
+    throw InputError("--robot is required for --format " + format + " (no robot under " + robots_dir +
+                     " lists it in its log_formats)");
+  if (found.size() > 1)
+    throw InputError("robots " + found[0] + " and " + found[1] + " under " + robots_dir + " both list log format " +
+                     format + ": give --robot");
+  return found[0];
+}
+
 RobotDescription load_robot(const std::string& robots_dir, const std::string& name) {
   const std::string path = robots_dir + "/" + name + "/robot.json";
   const json j = read_json(name, path);
@@ -210,6 +244,7 @@ RobotDescription load_robot(const std::string& robots_dir, const std::string& na
   read_transmission(rd, j, r);
   read_friction(rd, j, r);
   read_joint_names(rd, j, r);
+  read_log_formats(rd, j, r);
   return r;
 }
 

@@ -1,6 +1,6 @@
 // GENERATED FILE - DO NOT EDIT.
 // Generator: codegen/generate.py (dyncal codegen 4, SymPy 1.11.1)
-// Robot: tx40; inputs: robots/tx40/robot.json (sha256 bf2eacdfeaf69baf), robots/tx40/tx40.urdf (sha256 3d00cbd46279c915)
+// Robot: tx40; inputs: robots/tx40/robot.json (sha256 fdac684fe7e00f95), robots/tx40/tx40.urdf (sha256 3d00cbd46279c915)
 // Contents: inverse dynamics tau(q, qd, qdd, phi) and mass matrix M(q, phi)
 // Operation count inverse_dynamics: 360 multiplications, 299 additions (plus dyncal::sin_cos of q)
 // Operation count mass_matrix: 404 multiplications, 309 additions (plus dyncal::sin_cos of q)

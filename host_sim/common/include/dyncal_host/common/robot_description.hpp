@@ -24,6 +24,9 @@ inline constexpr double kDefaultQddPerQd = 4.0;
 struct RobotDescription {
   std::string name;
   std::string directory;
+  /// Vendor log formats (`--format`) this arm's controller writes: "--format F" without --robot
+  /// takes the robot listing F (robot_for_log_format). Empty when the file lists none.
+  std::vector<std::string> log_formats;
   int num_joints = 0;             ///< the length of limits.q_min, 1..kMaxRobotDescriptionJoints
   Eigen::VectorXd gear_ratios;    ///< motor turns per joint turn (signed); 1 without "transmission"
   Eigen::MatrixXd transmission;   ///< N: q_motor = N q_joint, tau_joint = N^T tau_motor
@@ -59,5 +62,11 @@ std::string default_robots_dir();
 /// line that is neither empty nor a # comment). Throws InputError when the file is missing or names
 /// no folder of `robots_dir`.
 std::string default_robot_name(const std::string& robots_dir);
+
+/// The one robot under `robots_dir` whose robot.json lists `format` in "log_formats": a vendor's log
+/// format that itself says which arm recorded it (e.g. tx40). Folders whose robot.json does not
+/// parse are passed over (loading them reports it). Throws InputError when no robot or several list
+/// it.
+std::string robot_for_log_format(const std::string& robots_dir, const std::string& format);
 
 }  // namespace dyncal::host
