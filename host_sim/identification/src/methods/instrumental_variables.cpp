@@ -9,6 +9,7 @@
 
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/identification/methods/consistent_least_squares.hpp"
+#include "dyncal_host/identification/methods/instrumental_iteration.hpp"
 #include "dyncal_host/identification/pipeline/compiled_robot.hpp"
 #include "dyncal_host/identification/reports/prediction.hpp"
 
@@ -23,17 +24,6 @@ using Eigen::VectorXd;
 VectorXd iv_solve(const MatrixXd& K, const MatrixXd& Z, const VectorXd& y, const VectorXd& keep) {
   const MatrixXd Zk = Z.array().colwise() * keep.array();
   return (Zk.transpose() * K).colPivHouseholderQr().solve(Zk.transpose() * y);
-}
-
-/// The length of `step` in standard errors of the IV estimate phi of the weighted system y = K phi
-/// with instruments Z: sqrt(step^T C^-1 step / P), C = s^2 (Z^T K)^-1 Z^T Z (K^T Z)^-1, s^2 the
-/// residual variance; step^T C^-1 step = |P_Z K step|^2 / s^2 (P_Z the projection onto Z's columns).
-double step_in_standard_errors(const MatrixXd& K, const MatrixXd& Z, const VectorXd& y, const VectorXd& phi,
-                               const VectorXd& step) {
-  const double P = static_cast<double>(K.cols());
-  const double s2 = (y - K * phi).squaredNorm() / (static_cast<double>(K.rows()) - P);
-  const VectorXd projected = Z * Z.colPivHouseholderQr().solve(K * step);
-  return std::sqrt(projected.squaredNorm() / s2 / P);
 }
 
 int param_index(const StackedData& d, const std::string& name) {
@@ -85,7 +75,6 @@ void fit_instrumental(const StackedData& d, const JointLog& grid, const std::vec
   // The iteration runs on the whole model (its plants need every parameter: one held at 0 would
   // pull the plant away from what the data say at the white-noise level); the reported IV estimate
   // drops the parameters the log does not determine (held at 0), with the final instruments.
-  VectorXd phi = K.colPivHouseholderQr().solve(y);
   std::vector<Index> kept;
   for (Index i = 0; i < P; ++i)
     if (std::find(dropped.begin(), dropped.end(), static_cast<int>(i)) == dropped.end()) kept.push_back(i);
@@ -112,19 +101,10 @@ void fit_instrumental(const StackedData& d, const JointLog& grid, const std::vec
   plant_problem.prior = Eigen::Map<const VectorXd>(compiled.nominal_standard.data(), compiled.num_standard);
   plant_problem.prior_relative_std = o.prior_std > 0 ? o.prior_std : kPriorRelativeStd;
   const VectorXd nominal = plant_problem.prior;
-  MatrixXd Z;
-  int simulations = 0, tripped = 0;
-  bool converged = false, relax = false;
-  double previous_step = INFINITY, last_step_se = INFINITY;
-  VectorXd simulated_from;  // the estimate whose plant gave Z
-  VectorXd estimate;        // the IV estimate of Z: what is reported
-  std::string trip;
-  while (simulations < kIvMaxSimulations && !converged) {
-    // The first plant: robot.json's inertials with the WLS friction (least squares on noisy
-    // positions underestimates the inertias, and a plant lighter than the arm can make the law's
-    // fixed-gain loop unstable); then the consistent plant nearest each iterate.
+  // Each plant simulated under the law and prepared as the log was: the instruments, weighted as K.
+  const InstrumentsOf instruments = [&](const VectorXd& phi, bool first) -> MatrixXd {
     VectorXd standard = nominal, model = phi;
-    if (Z.size() > 0) {
+    if (!first) {
       plant_problem.z = R * phi;
       plant_problem.start = phi;
       const ConsistentSolution plant = consistent_least_squares(plant_problem);
@@ -138,37 +118,24 @@ void fit_instrumental(const StackedData& d, const JointLog& grid, const std::vec
     }
     StackedData sim;
     try {
-      ++simulations;
       sim = prepare(o.closed_loop(grid, standard, Fc, Fv));
     } catch (const InputError& e) {
-      // A plant that trips the drive under the law: back half way towards the last one that did not.
-      if (Z.size() == 0)
-        throw InputError(std::string("--method iv: the first closed-loop simulation failed: ") + e.what());
-      trip = e.what();
-      ++tripped;
-      phi = 0.5 * (phi + simulated_from);
-      continue;
+      if (first) throw InputError(std::string("--method iv: the first closed-loop simulation failed: ") + e.what());
+      throw;
     }
     if (sim.W.rows() != rows || sim.W.cols() != P || !sim.t.isApprox(d.t))
       throw InputError("--method iv: the closed-loop simulation's samples are not the log's");
-    Z = sim.W.array().colwise() * w.array();
-    simulated_from = phi;
-    estimate = iv_solve(K, Z, y, VectorXd::Ones(rows));
-    const VectorXd& next = estimate;
-    if (!next.allFinite()) throw InputError("--method iv: the instrumental estimate is not finite");
-    const double step = (next - phi).norm();
-    last_step_se = step_in_standard_errors(K, Z, y, next, next - phi);
-    converged = last_step_se <= kIvTolerance;
-    // The map from plant to estimate need not contract: once a step fails to halve the previous
-    // one, half steps (Mann iteration) damp a cycle between two plants.
-    if (step > 0.5 * previous_step) relax = true;
-    previous_step = step;
-    phi = relax && !converged ? VectorXd(0.5 * (phi + next)) : next;
-  }
+    return sim.W.array().colwise() * w.array();
+  };
+  IvIterationOptions iteration;
+  iteration.max_simulations = kIvMaxSimulations;
+  iteration.tolerance = kIvTolerance;
+  iteration.retry_tripped = true;
+  const IvIteration it = iterate_instruments(K, y, K.colPivHouseholderQr().solve(y), instruments, iteration);
   // The IV estimate of the last instruments (the iterate may be a half step), of the parameters the
   // log determines.
-  Z = kept_columns(Z);
-  phi = full(iv_solve(Kk, Z, y, VectorXd::Ones(rows)));
+  const MatrixXd Z = kept_columns(it.Z);
+  const VectorXd phi = full(iv_solve(Kk, Z, y, VectorXd::Ones(rows)));
   if (!phi.allFinite()) throw InputError("--method iv: the instrumental estimate is not finite");
   res.fit_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
@@ -200,12 +167,12 @@ void fit_instrumental(const StackedData& d, const JointLog& grid, const std::vec
   std::snprintf(line, sizeof line,
                 "IDIM-IV: %s after %d closed-loop simulations of the law, last step %.2g standard errors (converged "
                 "at %.2g); instruments from the plant of the last iterate",
-                converged ? "converged" : "not converged", simulations, last_step_se, kIvTolerance);
+                it.converged ? "converged" : "not converged", it.simulations, it.last_step_se, kIvTolerance);
   res.notes.push_back(line);
-  if (tripped > 0)
-    res.notes.push_back("IDIM-IV: " + std::to_string(tripped) +
-                        " plant(s) tripped the simulated drive and were replaced by one half way back (last: " + trip +
-                        ")");
+  if (it.tripped > 0)
+    res.notes.push_back(
+        "IDIM-IV: " + std::to_string(it.tripped) +
+        " plant(s) tripped the simulated drive and were replaced by one half way back (last: " + it.trip + ")");
   std::snprintf(line, sizeof line,
                 "parameter std: the IV covariance times %.3g for the residual's autocorrelation (S / n_eff)",
                 std::sqrt(inflation));

@@ -7,6 +7,7 @@
 #include "dyncal/generated/er20/robot.hpp"
 #include "dyncal/identification_model.hpp"
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/identification/methods/instrumental_iteration.hpp"
 #include "dyncal_host/identification/pipeline/butterworth.hpp"
 #include "dyncal_host/identification/pipeline/signal.hpp"
 #include "dyncal_host/survey/methods/standard_parameters.hpp"
@@ -18,7 +19,6 @@ using Robot = dyncal::generated::er20::Robot;
 using Model7 = IdentificationModel<Robot, kFrictionEq7>;
 constexpr int P7 = Model7::kNumParams;
 using Vec6 = Eigen::Matrix<double, 6, 1>;
-using PV = Eigen::Matrix<double, P7, 1>;
 
 /// Stacked Eq. 7 regressor (6 S x 48) of states given as S x 6 matrices.
 Eigen::MatrixXd stacked(const Eigen::MatrixXd& q, const Eigen::MatrixXd& qd, const Eigen::MatrixXd& qdd) {
@@ -85,21 +85,6 @@ void measured_system(const RunData& d, const IdimIvOptions& o, const MethodSetti
   weight_rows(K, y, settings.sigma);
 }
 
-/// The length of `step` in standard errors of the instrumental-variable estimate phi (Eq. 17) of
-/// the weighted system y = K phi with instruments Z: sqrt(step^T C^-1 step / P), C = s^2 (Z^T K)^-1
-/// Z^T Z (K^T Z)^-1 its covariance, s^2 = |y - K phi|^2 / (rows - P); step^T C^-1 step = |P_Z K
-/// step|^2 / s^2 (P_Z the projection onto Z's columns). The rows' errors are taken independent:
-/// filtered, differentiated positions make them correlated, so s^2 / rows understates the variance
-/// and the step's length in standard errors is, if anything, overstated (a stricter test).
-double step_in_standard_errors(const Eigen::MatrixXd& K, const Eigen::MatrixXd& Z, const Eigen::VectorXd& y,
-                               const PV& phi, const PV& step) {
-  const double P = static_cast<double>(K.cols());
-  const double s2 = (y - K * phi).squaredNorm() / (static_cast<double>(K.rows()) - P);
-  const Eigen::VectorXd k_step = K * step;
-  const Eigen::VectorXd projected = Z * Z.colPivHouseholderQr().solve(k_step);
-  return std::sqrt(projected.squaredNorm() / s2 / P);
-}
-
 }  // namespace
 
 void measured_states(const RunData& d, const IdimIvOptions& o, Eigen::MatrixXd& q, Eigen::MatrixXd& qd,
@@ -129,18 +114,14 @@ Estimate idim_iv(const RunData& d, const MethodSettings& settings, const IdimIvO
   Eigen::MatrixXd K;
   Eigen::VectorXd y;
   measured_system(d, o, settings, K, y);
-  // The first instruments come from the CAD plant with IDIM-OLS's friction: OLS on noisy positions
-  // underestimates the inertias (errors in variables), and a plant lighter than the real one can
-  // make the drive's fixed-gain loop unstable in simulation.
-  PV phi = K.colPivHouseholderQr().solve(y);
-  int iterations = 0;
-  bool converged = false, relax = false;
-  double previous_step = INFINITY, last_step_se = INFINITY;
-  while (iterations < o.max_iterations && !converged) {
-    // The plant of this iterate: consistent standard parameters and non-negative friction.
+  // Each iterate's plant: the standard parameters most probable under the CAD prior given its base
+  // parameters, made consistent, with non-negative friction; the first is the CAD plant with
+  // IDIM-OLS's friction. Its simulated positions go through the same filter, differentiation,
+  // decimation and weights as the measured ones.
+  const InstrumentsOf instruments = [&](const Eigen::VectorXd& phi, bool first) -> Eigen::MatrixXd {
     const Estimate cur = eq7_estimate(phi, "IDIM-IV");
     const Eigen::VectorXd phi_std =
-        nearest_consistent(iterations == 0 ? settings.prior.mean : standard_from_base(cur.base, settings.prior));
+        nearest_consistent(first ? settings.prior.mean : standard_from_base(cur.base, settings.prior));
     std::array<double, 6> Fc{}, beta{};
     for (int j = 0; j < 6; ++j) {
       Fc[j] = std::max(0.0, cur.friction[static_cast<size_t>(2 * j)]);
@@ -148,9 +129,7 @@ Estimate idim_iv(const RunData& d, const MethodSettings& settings, const IdimIvO
     }
     RunData simulated;
     simulated.q = simulate(phi_std, Fc, beta);
-    ++iterations;
     if (simulated.q.rows() != d.q.rows()) throw InputError("IDIM-IV: simulation length differs");
-    // Instruments: the simulated positions through the same filter and differentiation as the measured ones.
     simulated.sample_rate_hz = d.sample_rate_hz;
     simulated.q_meas = simulated.q;
     Eigen::MatrixXd qs, qds, qdds;
@@ -159,23 +138,17 @@ Estimate idim_iv(const RunData& d, const MethodSettings& settings, const IdimIvO
     parallel_decimation(Z, nullptr, d.sample_rate_hz, o.decimation);
     Eigen::VectorXd unused = Eigen::VectorXd::Zero(Z.rows());
     weight_rows(Z, unused, settings.sigma);
-    const PV next = (Z.transpose() * K).colPivHouseholderQr().solve(Z.transpose() * y);
-    if (!next.allFinite()) throw InputError("IDIM-IV: the instrumental estimate is not finite");
-    const double step = (next - phi).norm();
-    last_step_se = step_in_standard_errors(K, Z, y, next, next - phi);
-    converged = last_step_se <= o.tolerance;
-    // The map from plant to estimate need not contract (on the two-period run it flipped between
-    // two plants for 20 iterations): once a step fails to halve the previous one, take half steps
-    // (Mann iteration), which damps such a cycle.
-    if (step > 0.5 * previous_step) relax = true;
-    previous_step = step;
-    phi = relax ? PV(0.5 * (phi + next)) : next;
-  }
-  Estimate e = eq7_estimate(phi, "IDIM-IV");
-  e.iterations = iterations;
+    return Z;
+  };
+  IvIterationOptions iteration;
+  iteration.max_simulations = o.max_iterations;
+  iteration.tolerance = o.tolerance;
+  const IvIteration it = iterate_instruments(K, y, K.colPivHouseholderQr().solve(y), instruments, iteration);
+  Estimate e = eq7_estimate(it.phi, "IDIM-IV");
+  e.iterations = it.simulations;
   char last[64];
-  std::snprintf(last, sizeof last, "last step %.2g standard errors", last_step_se);
-  e.note = (converged ? "converged, " : "not converged in " + std::to_string(iterations) + " iterations, ") +
+  std::snprintf(last, sizeof last, "last step %.2g standard errors", it.last_step_se);
+  e.note = (it.converged ? "converged, " : "not converged in " + std::to_string(it.simulations) + " iterations, ") +
            std::string(last);
   e.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   complete_estimate(e, d, settings);

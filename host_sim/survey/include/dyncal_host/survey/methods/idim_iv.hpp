@@ -45,14 +45,14 @@ void measured_states(const RunData& d, const IdimIvOptions& options, Eigen::Matr
 /// The pseudo-inverse (Eq. 15) on the measured states: the least-squares reference of Table 10.
 Estimate pseudo_inverse_measured(const RunData& d, const MethodSettings& settings, const IdimIvOptions& options);
 
-/// IDIM-IV from the pseudo-inverse's estimate. Each iteration's plant: the standard parameters
-/// most probable under the CAD prior given the base parameters (standard_from_base), projected onto
-/// the physically consistent set, with Fc, beta >= 0. Converged when an iteration moves the
-/// estimate by at most options.tolerance standard errors; once a step fails to halve the previous
-/// one, half steps (the map can cycle between two plants). Estimate::iterations: closed-loop
-/// simulations run; Estimate::note says whether it converged and the last step in standard errors.
-/// `simulate` runs the closed loop for each iterate's plant. Throws InputError if a simulation fails
-/// (the drive tripped: it left the robot's limits).
+/// IDIM-IV from the pseudo-inverse's estimate: identification's iterate_instruments
+/// (instrumental_iteration.hpp, the same iteration as identify --method iv) on the study's system. Each iteration's
+/// plant: the standard parameters most probable under the CAD prior given the base parameters (standard_from_base),
+/// projected onto the physically consistent set, with Fc, beta >= 0. Converged when an iteration moves the estimate by
+/// at most options.tolerance standard errors; once a step fails to halve the previous one, half steps (the map can
+/// cycle between two plants). Estimate::iterations: closed-loop simulations run; Estimate::note says whether it
+/// converged and the last step in standard errors. `simulate` runs the closed loop for each iterate's plant. Throws
+/// InputError if a simulation fails (the drive tripped: it left the robot's limits).
 Estimate idim_iv(const RunData& d, const MethodSettings& settings, const IdimIvOptions& options,
                  const ClosedLoopSimulation& simulate);
 
