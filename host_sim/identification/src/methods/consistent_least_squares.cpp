@@ -14,7 +14,8 @@ namespace {
 
 using Mat10 = Eigen::Matrix<double, 10, 10>;
 
-/// r = [(R [K phi(theta); x(y)] - z) / sqrt(sigma2) ; (phi(theta) - prior) / s ; 0] over
+/// r = [(R [K phi(theta); x(y)] - z) / sqrt(sigma2) ; (phi(theta) - prior) / s ; 0] (or the prior's
+/// rows W (phi(theta) - prior) with ConsistentProblem::prior_whitening W) over
 /// v = [theta (10 L) | y (P - num_base)], x_i = y_i^2 for the non-negative parameters, y_i otherwise.
 /// Without a prior there are fewer data rows (P) than unknowns (10 L + P - num_base), which Eigen's
 /// Levenberg-Marquardt refuses: zero rows pad r to the unknowns' count (they change nothing).
@@ -27,15 +28,15 @@ struct Residuals : Eigen::DenseFunctor<double> {
   double wd = 1;              // 1 / sqrt(sigma2): the data rows in units of their effective noise
   std::vector<char> squared;  // per x: held >= 0 as y^2
 
-  Residuals(const ConsistentProblem& problem, int links, const Eigen::VectorXd& inv_std)
+  Residuals(const ConsistentProblem& problem, int links, const Eigen::VectorXd& inv_std, bool prior)
       : Eigen::DenseFunctor<double>(10 * links + static_cast<int>(problem.R.cols()) - problem.num_base,
-                                    std::max(static_cast<int>(problem.R.rows()) + (inv_std.size() > 0 ? 10 * links : 0),
+                                    std::max(static_cast<int>(problem.R.rows()) + (prior ? 10 * links : 0),
                                              10 * links + static_cast<int>(problem.R.cols()) - problem.num_base)),
         p(problem),
         inv_s(inv_std),
         L(links),
         nx(static_cast<int>(problem.R.cols()) - problem.num_base),
-        with_prior(inv_std.size() > 0) {
+        with_prior(prior) {
     RK = p.R.leftCols(p.num_base) * p.K;
     wd = 1.0 / std::sqrt(p.sigma2);
     squared.assign(static_cast<size_t>(nx), 0);
@@ -64,7 +65,11 @@ struct Residuals : Eigen::DenseFunctor<double> {
     r.head(n) = RK * phi - p.z;
     if (nx > 0) r.head(n) += p.R.rightCols(nx) * x_of(v);
     r.head(n) *= wd;
-    if (with_prior) r.segment(n, 10 * L) = (phi - p.prior).cwiseProduct(inv_s);
+    if (with_prior && p.prior_whitening.size() > 0) {
+      r.segment(n, 10 * L).noalias() = p.prior_whitening * (phi - p.prior);
+    } else if (with_prior) {
+      r.segment(n, 10 * L) = (phi - p.prior).cwiseProduct(inv_s);
+    }
     r.tail(r.size() - n - (with_prior ? 10 * L : 0)).setZero();
     return 0;
   }
@@ -77,7 +82,11 @@ struct Residuals : Eigen::DenseFunctor<double> {
     for (int l = 0; l < L; ++l) {
       const Mat10& d = jac[static_cast<size_t>(l)];
       J.block(0, 10 * l, n, 10) = wd * RK.middleCols(10 * l, 10) * d;
-      if (with_prior) J.block(n + 10 * l, 10 * l, 10, 10) = inv_s.segment(10 * l, 10).asDiagonal() * d;
+      if (with_prior && p.prior_whitening.size() > 0) {
+        J.block(n + 10 * l, 10 * l, 10, 10).noalias() = p.prior_whitening.block<10, 10>(10 * l, 10 * l) * d;
+      } else if (with_prior) {
+        J.block(n + 10 * l, 10 * l, 10, 10) = inv_s.segment(10 * l, 10).asDiagonal() * d;
+      }
     }
     for (int i = 0; i < nx; ++i) {
       const double dx = squared[static_cast<size_t>(i)] ? 2.0 * v[10 * L + i] : 1.0;
@@ -125,9 +134,12 @@ ConsistentSolution consistent_least_squares(const ConsistentProblem& p) {
   const int L = static_cast<int>(p.K.cols() / 10);
   const Eigen::Index P = p.R.cols();
   const int nx = static_cast<int>(P) - p.num_base;
+  const bool whitened = p.prior_whitening.size() > 0;
+  if (whitened && (p.prior_whitening.rows() != 10 * L || p.prior_whitening.cols() != 10 * L))
+    throw InputError("physically consistent LS: the prior's whitening is not 10 L x 10 L");
   Eigen::VectorXd inv_s;
-  if (p.prior_relative_std > 0) inv_s = prior_std(p.prior, p.prior_relative_std).cwiseInverse();
-  Residuals f(p, L, inv_s);
+  if (!whitened && p.prior_relative_std > 0) inv_s = prior_std(p.prior, p.prior_relative_std).cwiseInverse();
+  Residuals f(p, L, inv_s, whitened || inv_s.size() > 0);
   // Start: the nominal inertials projected onto the consistent set, the other parameters from `start`.
   Eigen::VectorXd v = Eigen::VectorXd::Zero(10 * L + nx);
   for (int l = 0; l < L; ++l) theta_from_pseudo_inertia(pseudo_inertia(p.prior.data() + 10 * l), v.data() + 10 * l);
@@ -136,14 +148,15 @@ ConsistentSolution consistent_least_squares(const ConsistentProblem& p) {
   for (int i = 0; i < nx; ++i)
     if (f.squared[static_cast<size_t>(i)]) v[10 * L + i] = std::sqrt(std::abs(v[10 * L + i]));
   Eigen::LevenbergMarquardt<Residuals> lm(f);
-  lm.setMaxfev(400);
-  lm.setFtol(1e-12);
-  lm.setXtol(1e-12);
+  lm.setMaxfev(p.max_evaluations);
+  lm.setFtol(p.relative_tolerance);
+  lm.setXtol(p.relative_tolerance);
   const auto status = lm.minimize(v);
   if (status == Eigen::LevenbergMarquardtSpace::ImproperInputParameters || !v.allFinite())
     throw InputError("physically consistent LS: Levenberg-Marquardt failed (status " + std::to_string(status) + ")");
   ConsistentSolution s;
   s.iterations = static_cast<int>(lm.iterations());
+  s.theta = v.head(10 * L);
   std::vector<Mat10> jac;
   s.standard = f.standard(v, &jac);
   s.params.resize(P);

@@ -8,6 +8,7 @@
 
 #include "dyncal/generated/er20/robot.hpp"
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/identification/methods/consistent_least_squares.hpp"
 #include "dyncal_host/identification/methods/log_cholesky.hpp"
 #include "dyncal_host/survey/methods/objective.hpp"
 #include "dyncal_host/survey/methods/standard_parameters.hpp"
@@ -27,25 +28,22 @@ void standard_from_theta(const double* x, Eigen::VectorXd& phi, Eigen::Matrix<do
   host::standard_from_theta(x + kLinkParams * link, phi.data() + kLinkParams * link, jac);
 }
 
-/// Residuals r = [A [phi(theta_L); F] + w f(theta_F, qd) - b ; W (phi - prior)] over
-/// x = [theta_L (60) | friction]. Linear friction (Eq. 7, 8, 9): F per joint are columns of A, and
-/// A, b can be compressed to their QR factor. Nonlinear friction (Eq. 4, 5, 6): one row per joint
-/// sample with its velocity, load torque and weight; each scale parameter enters as its log
-/// (positive by construction).
+/// The nonlinear stage's residuals (Eq. 4, 5, 6; the linear models and the first stage are
+/// identification's consistent_least_squares): r = [A phi(theta_L) + w f(theta_F, qd) - b ;
+/// W (phi - prior)] over x = [theta_L (60) | friction], one row per joint sample with its velocity,
+/// load torque and weight; each scale parameter enters through a logistic map of its log range.
 struct Residuals : Eigen::DenseFunctor<double> {
   FrictionModel model = FrictionModel::eq7;
   int kf = 2;                   // friction parameters per joint
-  Eigen::MatrixXd A;            // rows x (60 [+ 12 linear friction]), scaled by 1 / sigma_j
+  Eigen::MatrixXd A;            // rows x 60, scaled by 1 / sigma_j
   Eigen::VectorXd b;            // scaled torques
-  Eigen::VectorXd qd, load, w;  // nonlinear only: velocity, load torque, 1 / sigma of each row (joint = row % 6)
+  Eigen::VectorXd qd, load, w;  // velocity, load torque, 1 / sigma of each row (joint = row % 6)
   Eigen::VectorXd prior;        // prior mean
   Eigen::MatrixXd W;            // prior whitening (block lower triangular, W^T W = P^-1)
 
   Residuals(int inputs, int values) : Eigen::DenseFunctor<double>(inputs, values) {}
 
-  bool nonlinear() const { return !is_linear(model); }
-
-  Eigen::VectorXd log_lo, log_hi;  // nonlinear only, per friction variable: a scale parameter's log range
+  Eigen::VectorXd log_lo, log_hi;  // per friction variable: a scale parameter's log range
 
   /// Friction parameters of joint j in model form from x, and d theta_k / d x_k if dth is given. A
   /// scale parameter is lo (hi / lo)^s(z), s the logistic function: inside its search range (the
@@ -55,7 +53,7 @@ struct Residuals : Eigen::DenseFunctor<double> {
     for (int k = 0; k < kf; ++k) {
       const Eigen::Index i = kf * j + k;
       const double z = x[kInertial + i];
-      if (nonlinear() && is_scale_parameter(model, k)) {
+      if (is_scale_parameter(model, k)) {
         const double sg = 1.0 / (1.0 + std::exp(-z)), span = log_hi[i] - log_lo[i];
         th[k] = std::exp(log_lo[i] + span * sg);
         if (dth) dth[k] = th[k] * span * sg * (1 - sg);
@@ -81,58 +79,16 @@ struct Residuals : Eigen::DenseFunctor<double> {
   int operator()(const InputType& x, ValueType& r) const {
     const Eigen::VectorXd phi = standard(x);
     const Eigen::Index n = b.size();
-    r.head(n) = A.leftCols(kStandard) * phi - b;
-    if (!nonlinear()) {
-      r.head(n) += A.rightCols(A.cols() - kStandard) * x.tail(x.size() - kInertial);
-    } else {
-      for (Eigen::Index i = 0; i < n; ++i) {
-        double th[6];
-        friction_of(x, static_cast<int>(i % 6), th);
-        r[i] += w[i] * friction_torque(model, th, qd[i], load[i]);
-      }
+    r.head(n) = A * phi - b;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      double th[6];
+      friction_of(x, static_cast<int>(i % 6), th);
+      r[i] += w[i] * friction_torque(model, th, qd[i], load[i]);
     }
     r.tail(kStandard).noalias() = W * (phi - prior);
     return 0;
   }
-
-  int df(const InputType& x, JacobianType& J) const {
-    J.setZero();
-    Eigen::VectorXd phi(kStandard);
-    const Eigen::Index n = b.size();
-    for (int l = 0; l < kLinks; ++l) {
-      Eigen::Matrix<double, kLinkParams, kLinkParams> jac;
-      standard_from_theta(x.data(), phi, &jac, l);
-      J.block(0, kLinkParams * l, n, kLinkParams).noalias() = A.middleCols(kLinkParams * l, kLinkParams) * jac;
-      J.block(n + kLinkParams * l, kLinkParams * l, kLinkParams, kLinkParams).noalias() =
-          W.block<kLinkParams, kLinkParams>(kLinkParams * l, kLinkParams * l) * jac;
-    }
-    if (!nonlinear()) {
-      J.block(0, kInertial, n, A.cols() - kStandard) = A.rightCols(A.cols() - kStandard);
-      return 0;
-    }
-    for (Eigen::Index i = 0; i < n; ++i) {
-      const int j = static_cast<int>(i % 6);
-      double th[6], dth[6], jf[6] = {0, 0, 0, 0, 0, 0};
-      friction_of(x, j, th, dth);
-      friction_torque(model, th, qd[i], load[i], jf);
-      for (int k = 0; k < kf; ++k) J(i, kInertial + kf * j + k) = w[i] * jf[k] * dth[k];
-    }
-    return 0;
-  }
 };
-
-/// Levenberg-Marquardt from x; returns the iterations. Throws InputError on failure.
-int solve(Residuals& p, Eigen::VectorXd& x, const ConsistentSettings& options) {
-  Eigen::LevenbergMarquardt<Residuals> lm(p);
-  lm.setMaxfev(options.max_evaluations);
-  lm.setFtol(options.relative_tolerance);
-  lm.setXtol(options.relative_tolerance);
-  const Eigen::LevenbergMarquardtSpace::Status res = lm.minimize(x);
-  if (res == Eigen::LevenbergMarquardtSpace::ImproperInputParameters || !x.allFinite()) {
-    throw InputError("physically consistent LS: Levenberg-Marquardt failed (status " + std::to_string(res) + ")");
-  }
-  return static_cast<int>(lm.iterations());
-}
 
 /// Levenberg-Marquardt on the normal equations for the nonlinear stage, using its structure: the
 /// data Jacobian is [A dphi/dtheta_L | F], A constant (A^T A formed once, 60 x 60) and F
@@ -259,22 +215,24 @@ Estimate physically_consistent_ls(const RunData& d, FrictionModel model, const M
       b[i] = w[i] * d.tau(s, j);
     }
   }
-  // Stage 1, linear friction: the data term compressed to its QR factor (60 + 6 kl rows, not 6 S).
+  // Stage 1, linear friction: identification's consistent_least_squares (the same as identify
+  // --method pcls) on the data compressed to its QR factor (60 + 6 kl rows, not 6 S), in the
+  // standard parameters themselves (K = identity), with the study's CAD prior; friction free.
   Eigen::HouseholderQR<Eigen::MatrixXd> qr(A);
   const Eigen::Index c = A.cols();
-  Residuals lin(kInertial + 6 * kl, static_cast<int>(c + kStandard));
-  lin.model = linear;
-  lin.kf = kl;
-  lin.A = qr.matrixQR().topRows(c).triangularView<Eigen::Upper>();
-  lin.b = (qr.householderQ().transpose() * b).head(c);
-  lin.prior = settings.prior.mean;
-  lin.W = settings.prior.whitening;
-  // Start: the prior projected onto the consistent set, friction zero.
-  Eigen::VectorXd x = Eigen::VectorXd::Zero(kInertial + 6 * kl);
-  for (int l = 0; l < kLinks; ++l) {
-    theta_from_pseudo_inertia(pseudo_inertia(settings.prior.mean.data() + kLinkParams * l), x.data() + kLinkParams * l);
-  }
-  int iterations = solve(lin, x, options);
+  ConsistentProblem linear_problem;
+  linear_problem.R = qr.matrixQR().topRows(c).triangularView<Eigen::Upper>();
+  linear_problem.z = (qr.householderQ().transpose() * b).head(c);
+  linear_problem.num_base = kStandard;
+  linear_problem.K = Eigen::MatrixXd::Identity(kStandard, kStandard);
+  linear_problem.prior = settings.prior.mean;
+  linear_problem.prior_whitening = settings.prior.whitening;
+  linear_problem.max_evaluations = options.max_evaluations;
+  linear_problem.relative_tolerance = options.relative_tolerance;
+  const ConsistentSolution linear_solution = consistent_least_squares(linear_problem);
+  Eigen::VectorXd x(kInertial + 6 * kl);
+  x << linear_solution.theta, linear_solution.params.tail(6 * kl);
+  int iterations = linear_solution.iterations;
   Residuals nl(kInertial + 6 * kf, static_cast<int>(6 * S + kStandard));
   if (!is_linear(model)) {
     // Stage 2, nonlinear friction from stage 1's inertial parameters and each joint's friction
@@ -331,15 +289,20 @@ Estimate physically_consistent_ls(const RunData& d, FrictionModel model, const M
     }
     x = x4;
   }
-  const Residuals& p = is_linear(model) ? lin : nl;
   Estimate e;
   e.method = "physically consistent LS";
   e.model = model;
-  e.standard = p.standard(x);
+  e.standard = is_linear(model) ? linear_solution.standard : nl.standard(x);
   e.standard_prior = e.standard;
   e.base = base_map() * e.standard;
   e.friction.resize(static_cast<size_t>(6 * kf));
-  for (int j = 0; j < 6; ++j) p.friction_of(x, j, e.friction.data() + kf * j);
+  for (int j = 0; j < 6; ++j) {
+    if (is_linear(model)) {
+      for (int k = 0; k < kf; ++k) e.friction[static_cast<size_t>(kf * j + k)] = x[kInertial + kf * j + k];
+    } else {
+      nl.friction_of(x, j, e.friction.data() + kf * j);
+    }
+  }
   e.iterations = iterations;
   for (int l = 0; l < kLinks; ++l) {
     e.pseudo_inertia_min_eigenvalue.push_back(theta_min_eigenvalue(x.data() + kLinkParams * l));

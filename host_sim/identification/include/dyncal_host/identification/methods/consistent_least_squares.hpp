@@ -27,12 +27,18 @@ struct ConsistentProblem {
   Eigen::MatrixXd K;      ///< num_base x 10 L: base parameters of the standard ones (Gautier)
   Eigen::VectorXd prior;  ///< 10 L nominal standard parameters (robot.json inertials)
   double prior_relative_std = kPriorRelativeStd;  ///< <= 0: no prior (consistency alone)
+  /// 10 L x 10 L, block diagonal (10 x 10 per link), or empty. When given, the prior is the
+  /// Gaussian N(prior, (W^T W)^-1), W = prior_whitening, its residual W (phi - prior) (the survey
+  /// study's seeded CAD prior), and prior_relative_std is not used.
+  Eigen::MatrixXd prior_whitening;
   /// Variance of the weighted residual per row: the data rows weigh 1 / sigma2 against the prior
   /// and set the parameters' standard deviations (identify: the WLS residual's variance).
   double sigma2 = 1;
   /// Indices (>= num_base) of parameters held >= 0 (friction, rotor inertia): fitted as squares.
   std::vector<int> nonnegative;
-  Eigen::VectorXd start;  ///< P: start of the non-inertial parameters (e.g. the WLS solution); empty: 0
+  Eigen::VectorXd start;              ///< P: start of the non-inertial parameters (e.g. the WLS solution); empty: 0
+  int max_evaluations = 400;          ///< Levenberg-Marquardt's cost evaluations at most
+  double relative_tolerance = 1e-12;  ///< its tolerance on the cost and on the solution (MINPACK ftol, xtol)
 };
 
 struct ConsistentSolution {
@@ -40,6 +46,8 @@ struct ConsistentSolution {
   Eigen::VectorXd params_std;          ///< their standard deviations (Gauss-Newton at the solution, sigma2)
   Eigen::VectorXd standard;            ///< 10 L consistent standard parameters
   std::vector<double> min_eigenvalue;  ///< per link, of its pseudo-inertia (> 0: consistent)
+  /// consistent_least_squares: the solution's log-Cholesky coordinates (10 L, log_cholesky.hpp).
+  Eigen::VectorXd theta;
   /// consistent_least_squares with a prior: per link, the prior's mass [kg] (robot.json's), which
   /// report_consistent compares the fitted mass with.
   std::vector<double> prior_mass;

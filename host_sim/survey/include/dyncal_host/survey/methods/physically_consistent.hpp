@@ -2,15 +2,17 @@
 // Physically consistent least squares: every link's pseudo-inertia J = L L^T (Wensing et al. 2017)
 // positive definite by construction, L lower triangular with log-diagonal (log-Cholesky, Rucker and
 // Wensing 2022); maximum a posteriori with the measured torques (noise sigma per joint) and a CAD
-// prior on the standard parameters that pulls the directions the data cannot see. A nonlinear
-// least-squares problem, solved with Eigen's Levenberg-Marquardt (MINPACK).
+// prior on the standard parameters that pulls the directions the data cannot see. The linear
+// models (and the first stage of the nonlinear ones) are identification's consistent_least_squares,
+// as identify --method pcls runs it; the nonlinear friction models' second stage (which identify
+// does not offer) is a structured Levenberg-Marquardt here.
 
 #include "dyncal_host/survey/methods/methods.hpp"
 
 namespace dyncal::host {
 
 struct ConsistentSettings {
-  int max_evaluations = 100;
+  int max_evaluations = 100;          ///< per stage (linear: cost evaluations; nonlinear: iterations)
   double relative_tolerance = 1e-10;  ///< on the cost and on x (MINPACK ftol, xtol)
 };
 
