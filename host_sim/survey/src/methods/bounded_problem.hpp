@@ -1,5 +1,5 @@
 #pragma once
-// The survey study's search problem (private to host_sim/identification): the er20's RunData with
+// The survey study's search problem (private to host_sim/survey): the er20's RunData with
 // a friction model of Eq. 4-9, decision vector [60 standard parameters | friction joint-major] in
 // TorqueObjective's order, the inertial ranges centred on the CAD values projected onto the
 // physically consistent set (search_ranges), six groups (joints), and the Estimate of a solution.

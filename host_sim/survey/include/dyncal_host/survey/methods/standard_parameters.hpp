@@ -1,6 +1,7 @@
 #pragma once
 // Standard (10 per link) and base parameters of the er20 for the survey study: the linear map
-// between them (Gautier 1990), the CAD prior, and the physical parametrisation of Table 5.
+// between them (Gautier 1990) and the CAD prior. One link's physical parametrisation (Table 5) and
+// pseudo-inertia are identification's, for any robot (inertial_parameters.hpp).
 
 #include <Eigen/Core>
 #include <array>
