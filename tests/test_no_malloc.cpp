@@ -18,7 +18,7 @@
 #include "dyncal/rls_forgetting.hpp"
 #include "dyncal/streaming_least_squares.hpp"
 #include "no_malloc/allocation_counter.hpp"
-#include "support/synthetic.hpp"
+#include "no_malloc/er20_model.hpp"
 
 namespace dyncal::test {
 std::atomic<long> allocations{0};
@@ -60,11 +60,7 @@ void operator delete(void* p, size_t) noexcept {
 
 namespace {
 
-using dyncal::test::Er20;
-constexpr unsigned kTerms = dyncal::kFrictionEq8 | dyncal::term::rotor_inertia | dyncal::term::offset;
-using Model = dyncal::IdentificationModel<Er20, kTerms>;
-constexpr int P = Model::kNumParams;
-using JointVec = Eigen::Matrix<double, 6, 1>;
+using namespace dyncal::test::no_malloc;  // the er20 model (er20_model.hpp)
 
 template <typename Scalar>
 struct Workspace {
@@ -120,13 +116,7 @@ void run_estimators(Workspace<Scalar>& w) {
 }
 
 TEST(NoMalloc, Er20EstimatorsAllocateNothing) {
-  auto wd = std::make_unique<Workspace<double>>();
-  auto wf = std::make_unique<Workspace<float>>();
-  EXPECT_EQ(dyncal::test::allocations_during([&] {
-              run_estimators(*wd);
-              run_estimators(*wf);
-            }),
-            0);
+  EXPECT_EQ(dyncal::test::allocations_in_double_and_float<Workspace>([](auto& w) { run_estimators(w); }), 0);
 }
 
 TEST(NoMalloc, TheCheckItselfWorks) {

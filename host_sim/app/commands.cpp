@@ -16,7 +16,11 @@ void add_commands(CLI::App& app, Action& run) {
   }
 }
 
-int run_cli(CLI::App& app, Action& run, int argc, char** argv) {
+int run_cli(void (*add)(CLI::App&, Action&), int argc, char** argv) {
+  CLI::App app{"dyncal: dynamic calibration of serial robot arms (1 to 7 joints)"};
+  app.require_subcommand(1);
+  Action run;
+  add(app, run);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -34,11 +38,7 @@ int run_cli(CLI::App& app, Action& run, int argc, char** argv) {
 }
 
 int run_dyncal(int argc, char** argv) {
-  CLI::App app{"dyncal: dynamic calibration of serial robot arms (1 to 7 joints)"};
-  app.require_subcommand(1);
-  Action run;
-  add_commands(app, run);
-  return run_cli(app, run, argc, argv);
+  return run_cli(add_commands, argc, argv);
 }
 
 }  // namespace dyncal::app

@@ -42,10 +42,14 @@ void add_monitor_command(CLI::App& app, Action& run);
 /// Adds every subcommand above but add_survey_command to `app` (the dyncal program's, and the Python
 /// module's; the module has no `survey`: it runs commands with --report, which the study lacks).
 void add_commands(CLI::App& app, Action& run);
-/// Parses argv into `app` and runs the chosen action: a parse error is CLI11's message (exit 2, 0
-/// for --help); InputError is one line "dyncal: error: ..." (exit 2); any other exception one line
+/// A program's command line: a CLI::App with the subcommands `add` adds (one of them required),
+/// argv parsed into it and the chosen action run. A parse error is CLI11's message (exit 2, 0 for
+/// --help); InputError is one line "dyncal: error: ..." (exit 2); any other exception one line
 /// "dyncal: internal error: ..." (exit 1). The main() of dyncal and of dyncal-survey.
-int run_cli(CLI::App& app, Action& run, int argc, char** argv);
+int run_cli(void (*add)(CLI::App&, Action&), int argc, char** argv);
+/// `survey`'s one-line help, as dyncal lists it and dyncal-survey prints it.
+inline constexpr const char* kSurveyHelp =
+    "reproduce the survey's simulation study (Sec. 6: Tables 5, 6, 8-12, Fig. 4) next to its numbers";
 
 /// Runs codegen/import_urdf.py (the URDF work: import, check, export; orocos-kdl checks) with `args`
 /// under the Debian python3; its messages go straight to our stdout/stderr. Returns its exit code;

@@ -1,4 +1,4 @@
-// dyncal survey: the survey's simulation study on the er20, beside its published numbers.
+// dyncal survey: the survey's simulation study (survey::kStudyRobot's arm), beside its published numbers.
 #include <iostream>
 #include <map>
 #include <memory>
@@ -21,8 +21,8 @@ struct SurveySettings {
 };
 
 int run_survey(const SurveySettings& s) {
-  const auto robot = host::load_robot(s.robots_dir, "er20");
-  const nlohmann::json published = read_json_file(s.robots_dir + "/er20/survey_published.json");
+  const auto robot = host::load_robot(s.robots_dir, survey::kStudyRobot);
+  const nlohmann::json published = read_json_file(robot.directory + "/survey_published.json");
   survey::SurveySeries series;
   if (!s.from_json.empty() && !s.plots.empty())
     throw host::InputError("survey: --plots needs the run's time series; it cannot take --from-json");
@@ -50,8 +50,7 @@ int run_survey(const SurveySettings& s) {
 void add_survey_command(CLI::App& app, Action& run) {
   auto s = std::make_shared<SurveySettings>();
   s->robots_dir = host::default_robots_dir();
-  auto* cmd = app.add_subcommand(
-      "survey", "reproduce the survey's simulation study on the er20 (Tables 5, 6, 8-12, Fig. 4) next to its numbers");
+  auto* cmd = app.add_subcommand("survey", kSurveyHelp);
   cmd->add_option("--robots-dir", s->robots_dir, "directory holding the robot descriptions");
   cmd->add_flag("--quick", s->options.quick, "one excitation period instead of two (CI)");
   cmd->add_option("--seed", s->options.seed, "excitation, noise and CAD-prior seed")->capture_default_str();
@@ -82,11 +81,7 @@ void add_survey_command(CLI::App& app, Action& run) {
 }
 
 int run_dyncal_survey(int argc, char** argv) {
-  CLI::App app{"dyncal: dynamic calibration of serial robot arms (1 to 7 joints)"};
-  app.require_subcommand(1);
-  Action run;
-  add_survey_command(app, run);
-  return run_cli(app, run, argc, argv);
+  return run_cli(add_survey_command, argc, argv);
 }
 
 }  // namespace dyncal::app

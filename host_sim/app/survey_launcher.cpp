@@ -36,8 +36,7 @@ int launch_survey(const std::vector<std::string>& args) {
 }  // namespace
 
 void add_survey_launcher(CLI::App& app, Action& run) {
-  auto* cmd = app.add_subcommand(
-      "survey", "reproduce the survey's simulation study on the er20 (Tables 5, 6, 8-12, Fig. 4) next to its numbers");
+  auto* cmd = app.add_subcommand("survey", kSurveyHelp);
   // Every argument, --help included, is the study's (dyncal-survey parses them).
   cmd->set_help_flag();
   cmd->prefix_command();

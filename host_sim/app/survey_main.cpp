@@ -1,4 +1,4 @@
-// dyncal-survey: the survey's simulation study on the er20 (`dyncal survey` runs this program).
+// dyncal-survey: the survey's simulation study (`dyncal survey` runs this program).
 // Invoked as `dyncal-survey survey OPTIONS`; dyncal's launcher passes "dyncal" as argv[0], so that
 // usage and help read `dyncal survey`.
 #include "entry_points.hpp"

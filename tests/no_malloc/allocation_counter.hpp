@@ -8,6 +8,7 @@
 #endif
 #include <Eigen/Core>
 #include <atomic>
+#include <memory>
 
 namespace dyncal::test {
 extern std::atomic<long> allocations;
@@ -23,5 +24,17 @@ long allocations_during(F&& f) {
   counting = false;
   Eigen::internal::set_is_malloc_allowed(true);
   return allocations.load();
+}
+
+/// allocations_during run(w) on a double and a float Workspace, both made (on the heap) before
+/// counting starts.
+template <template <typename> class Workspace, typename Run>
+long allocations_in_double_and_float(Run run) {
+  auto wd = std::make_unique<Workspace<double>>();
+  auto wf = std::make_unique<Workspace<float>>();
+  return allocations_during([&] {
+    run(*wd);
+    run(*wf);
+  });
 }
 }  // namespace dyncal::test

@@ -17,15 +17,11 @@
 #include "dyncal/payload_estimator.hpp"
 #include "dyncal/table_check.hpp"
 #include "no_malloc/allocation_counter.hpp"
-#include "support/synthetic.hpp"
+#include "no_malloc/er20_model.hpp"
 
 namespace {
 
-using dyncal::test::Er20;
-constexpr unsigned kTerms = dyncal::kFrictionEq8 | dyncal::term::rotor_inertia | dyncal::term::offset;
-using Model = dyncal::IdentificationModel<Er20, kTerms>;
-constexpr int P = Model::kNumParams;
-using JointVec = Eigen::Matrix<double, 6, 1>;
+using namespace dyncal::test::no_malloc;  // the er20 model (er20_model.hpp)
 
 template <typename Scalar>
 struct Workspace {
@@ -93,13 +89,7 @@ void run_drive_code(Workspace<Scalar>& w) {
 }
 
 TEST(NoMalloc, Er20GeneratedCodeAndDriveCodeAllocateNothing) {
-  auto wd = std::make_unique<Workspace<double>>();
-  auto wf = std::make_unique<Workspace<float>>();
-  EXPECT_EQ(dyncal::test::allocations_during([&] {
-              run_drive_code(*wd);
-              run_drive_code(*wf);
-            }),
-            0);
+  EXPECT_EQ(dyncal::test::allocations_in_double_and_float<Workspace>([](auto& w) { run_drive_code(w); }), 0);
 }
 
 }  // namespace

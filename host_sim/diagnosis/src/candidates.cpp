@@ -174,7 +174,7 @@ void stribeck(const CandidateContext& c, int i, int, std::vector<Candidate>& out
   const std::vector<Index> local = local_columns(c, joint);
   ShapeFit f = profile_search([&](double lq) { return gain_with(local, lq); }, a, b, 9, rss, n_eff);
   // A refined scale whose interval reaches the bracket has no maximum of its own there: the gain
-  // still grows towards the broad curve's polynomial in the speed (seen on the er20 drive's log:
+  // still grows towards the broad curve's polynomial in the speed (seen on a simulated six-joint drive's log:
   // 0.22 against a true 0.1 rad/s), so the first estimate stands.
   if (f.gain <= 0 || f.lo_log <= a || f.hi_log >= b) f = first;
   const double qds = std::exp(f.log_value);

@@ -6,12 +6,12 @@
 #include <sstream>
 
 #include "dyncal_host/common/input_error.hpp"
-#include "dyncal_host/survey/methods/optimisers.hpp"
+#include "dyncal_host/survey/indices.hpp"
 #include "dyncal_host/survey/methods/idim_iv.hpp"
 #include "dyncal_host/survey/methods/methods.hpp"
+#include "dyncal_host/survey/methods/optimisers.hpp"
 #include "dyncal_host/survey/methods/physically_consistent.hpp"
 #include "dyncal_host/survey/methods/standard_parameters.hpp"
-#include "dyncal_host/survey/indices.hpp"
 #include "dyncal_host/survey/parallel_runs.hpp"
 #include "dyncal_host/survey/survey.hpp"
 #include "dyncal_host/survey/survey_data.hpp"

@@ -64,7 +64,7 @@ std::string default_robots_dir();
 std::string default_robot_name(const std::string& robots_dir);
 
 /// The one robot under `robots_dir` whose robot.json lists `format` in "log_formats": a vendor's log
-/// format that itself says which arm recorded it (e.g. tx40). Folders whose robot.json does not
+/// format that itself says which arm recorded it. Folders whose robot.json does not
 /// parse are passed over (loading them reports it). Throws InputError when no robot or several list
 /// it.
 std::string robot_for_log_format(const std::string& robots_dir, const std::string& format);

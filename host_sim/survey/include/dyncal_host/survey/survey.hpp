@@ -13,6 +13,10 @@
 
 namespace dyncal::host::survey {
 
+/// The arm of the survey's study: its robot folder (robots/er20/, with survey_published.json), the
+/// one the study's er20-typed methods are compiled for.
+inline constexpr const char* kStudyRobot = "er20";
+
 struct SurveyOptions {
   bool quick = false;                          ///< one excitation period (10 s, 1 000 samples) instead of two
   std::uint64_t seed = 1;                      ///< excitation, noise and CAD-prior seed

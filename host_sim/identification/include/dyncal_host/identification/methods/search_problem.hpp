@@ -6,7 +6,7 @@
 // parameters); physical feasibility per link (pseudo-inertia positive definite, Wensing et al.
 // 2017); and a least-squares cost whose amplitudes (the parameters the torque is linear in once the
 // others are fixed) have a closed-form fit. Two problems derive from it: the survey study's
-// (host_sim/survey's BoundedProblem: the er20's RunData and a friction model of Eq. 4-9) and identify's
+// (host_sim/survey's BoundedProblem: the study's RunData and a friction model of Eq. 4-9) and identify's
 // (CompressedProblem: any robot's weighted data compressed to their triangular factor).
 
 #include <Eigen/Core>
