@@ -7,8 +7,10 @@
 # layout, generated regressor, least squares; the pipeline is compiled once, identify_pipeline.cpp),
 # the simulated drive's plant (robot_drive.cpp.in, drive_plant.hpp) and calibrate's online
 # estimators, which identify's KF and RLS share (robot_calibration.cpp.in, online_model.hpp,
-# recursive_fits_of.hpp; two units so that a robot's heaviest code compiles on two cores). Adding a
-# robot compiles only its own units. The test robots (tests/robots/) go into the test programs and
+# recursive_fits_of.hpp; two files). They compile as two unity units per robot (UNITY_GROUP
+# <robot>_plant: model, identify, drive; <robot>_online: the calibration files), so that a robot's
+# code compiles on two cores and each unit's Eigen instantiations are compiled once. Adding a robot
+# compiles only its own units. The test robots (tests/robots/) go into the test programs and
 # dyncal_test_cli, not into the dyncal program. Part `robots` of the dependency rule: it depends on
 # calibration, identification and drive.
 set(DYNCAL_ROBOTS_GENERATED ${CMAKE_BINARY_DIR}/robots_generated)
@@ -38,6 +40,10 @@ foreach(dir ${DYNCAL_ROBOT_DIRS})
     list(APPEND sources ${unit}_calibration_${DYNCAL_FIRST}.cpp)
   endforeach()
   list(APPEND sources ${unit}_model.cpp ${unit}_identify.cpp ${unit}_drive.cpp)
+  set_source_files_properties(${unit}_model.cpp ${unit}_identify.cpp ${unit}_drive.cpp PROPERTIES
+    UNITY_GROUP ${DYNCAL_ROBOT}_plant)
+  set_source_files_properties(${unit}_calibration_0.cpp ${unit}_calibration_4.cpp PROPERTIES
+    UNITY_GROUP ${DYNCAL_ROBOT}_online)
   if(DYNCAL_ROBOT_DIR MATCHES "^tests/")
     list(APPEND test_robot_sources ${sources})
   else()
@@ -61,6 +67,7 @@ foreach(target dyncal_host_robots dyncal_host_test_robots)
   target_include_directories(${target} PRIVATE ${DYNCAL_ROBOTS_GENERATED})
   target_link_libraries(${target} PUBLIC dyncal_host_identification dyncal_host_drive dyncal_host_calibration)
   target_compile_options(${target} PRIVATE ${DYNCAL_WARNINGS})
+  set_target_properties(${target} PROPERTIES UNITY_BUILD ON UNITY_BUILD_MODE GROUP)
 endforeach()
 set_property(GLOBAL PROPERTY DYNCAL_HOST_CLOSURE_robots "calibration;diagnosis;identification;drive;common")
 set_property(GLOBAL APPEND PROPERTY DYNCAL_HOST_PARTS robots)

@@ -67,9 +67,9 @@ void gains_along(const DriveTrajectory& trajectory, const Scenario& scenario, Jo
   for (int k = 0; k < kGrid; ++k) {
     Vec q, qd, qdd;
     trajectory.evaluate(trajectory.period() * k / kGrid, q, qd, qdd);
-    Eigen::Matrix<double, 6, 6> M;
-    Robot::mass_matrix(q, phi, M);
-    m_min = m_min.cwiseMin(M.diagonal());
+    Eigen::Matrix<double, 6, 6> mass;
+    Robot::mass_matrix(q, phi, mass);
+    m_min = m_min.cwiseMin(mass.diagonal());
   }
   const double w = 2.0 * M_PI * scenario.bandwidth_hz;
   for (int j = 0; j < kSurveyJoints; ++j) {

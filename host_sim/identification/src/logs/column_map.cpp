@@ -11,12 +11,6 @@
 namespace dyncal::host {
 namespace {
 
-std::string trim(const std::string& s) {
-  const auto b = s.find_first_not_of(" \t");
-  if (b == std::string::npos) return "";
-  return s.substr(b, s.find_last_not_of(" \t") - b + 1);
-}
-
 /// Splits at commas outside braces (a range's braces hold none, but a stray one is reported there).
 std::vector<std::string> entries(const std::string& spec) {
   std::vector<std::string> out;
@@ -26,13 +20,13 @@ std::vector<std::string> entries(const std::string& spec) {
     if (c == '{') ++depth;
     if (c == '}') --depth;
     if (c == ',' && depth == 0) {
-      out.push_back(trim(cur));
+      out.push_back(trim_field(cur));
       cur.clear();
     } else {
       cur += c;
     }
   }
-  out.push_back(trim(cur));
+  out.push_back(trim_field(cur));
   return out;
 }
 
@@ -106,13 +100,13 @@ ColumnMap parse_column_map(const std::string& spec, int joints) {
     const std::string where = "--columns '" + entry + "'";
     const auto eq = entry.find('=');
     if (eq == std::string::npos) throw InputError(where + ": expected signal=column[:unit]");
-    const std::string signal = trim(entry.substr(0, eq));
-    std::string names = trim(entry.substr(eq + 1)), unit;
+    const std::string signal = trim_field(entry.substr(0, eq));
+    std::string names = trim_field(entry.substr(eq + 1)), unit;
     // The unit follows the last ':' outside the range (column names may hold none).
     const auto colon = names.rfind(':');
     if (colon != std::string::npos && names.find('}', colon) == std::string::npos) {
-      unit = trim(names.substr(colon + 1));
-      names = trim(names.substr(0, colon));
+      unit = trim_field(names.substr(colon + 1));
+      names = trim_field(names.substr(0, colon));
     }
     if (signal != "t" && signal != "q" && signal != "qd" && signal != "qdd" && signal != "tau")
       throw InputError(where + ": signal '" + signal + "' is not one of t, q, qd, qdd, tau");

@@ -89,8 +89,8 @@ class Parser {
     file_end_ = in.tellg();
     in.seekg(8);
     // The data section's CRC-32 runs over every byte before the DataEnd record, magic included.
-    std::uint32_t data_crc = static_cast<std::uint32_t>(crc32(0L, Z_NULL, 0));
-    data_crc = static_cast<std::uint32_t>(crc32(data_crc, magic, 8));
+    std::uint32_t data_crc = static_cast<std::uint32_t>(::crc32(0L, Z_NULL, 0));
+    data_crc = static_cast<std::uint32_t>(::crc32(data_crc, magic, 8));
     bool data_end = false;
     std::uint64_t offset = 8;
     std::vector<std::uint8_t> body;
@@ -126,7 +126,7 @@ class Parser {
                              hex(stated) + " (the file is corrupt)");
           data_end = true;
         } else {
-          data_crc = static_cast<std::uint32_t>(crc32(data_crc, head, 9));
+          data_crc = static_cast<std::uint32_t>(::crc32(data_crc, head, 9));
           data_crc = crc_of(data_crc, body);
           if (op == kSchema) schema(body.data(), body.size(), where);
           if (op == kChannel) channel(body.data(), body.size(), where);
@@ -151,7 +151,7 @@ class Parser {
     std::size_t at = 0;
     while (at < b.size()) {
       const std::size_t n = std::min<std::size_t>(b.size() - at, 1u << 30);
-      crc = static_cast<std::uint32_t>(crc32(crc, b.data() + at, static_cast<uInt>(n)));
+      crc = static_cast<std::uint32_t>(::crc32(crc, b.data() + at, static_cast<uInt>(n)));
       at += n;
     }
     return crc;
@@ -288,7 +288,7 @@ class Parser {
     } else {
       throw InputError(where + ": compression '" + compression + "' is not one of none, zstd, lz4");
     }
-    if (crc != 0 && crc_of(static_cast<std::uint32_t>(crc32(0L, Z_NULL, 0)), plain) != crc)
+    if (crc != 0 && crc_of(static_cast<std::uint32_t>(::crc32(0L, Z_NULL, 0)), plain) != crc)
       throw InputError(where + ": the chunk's CRC-32 does not match its records (the file is corrupt)");
     // The chunk's records: Schema, Channel and Message.
     std::size_t at = 0;

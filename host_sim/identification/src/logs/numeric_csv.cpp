@@ -11,13 +11,6 @@
 namespace dyncal::host {
 namespace {
 
-std::string trim(const std::string& s) {
-  const auto b = s.find_first_not_of(" \t\r");
-  if (b == std::string::npos) return "";
-  const auto e = s.find_last_not_of(" \t\r");
-  return s.substr(b, e - b + 1);
-}
-
 /// The header's separator: a comma, else a semicolon, else a tab, else ' ' (runs of spaces or tabs
 /// separate, as in a space-aligned export).
 char separator_of(const std::string& header) {
@@ -41,7 +34,7 @@ std::vector<std::string> split(const std::string& line, char sep) {
   std::string::size_type start = 0;
   while (true) {
     const auto at = line.find(sep, start);
-    out.push_back(trim(line.substr(start, at == std::string::npos ? std::string::npos : at - start)));
+    out.push_back(trim_field(line.substr(start, at == std::string::npos ? std::string::npos : at - start)));
     if (at == std::string::npos) break;
     start = at + 1;
   }
@@ -61,7 +54,7 @@ NumericCsv read_numeric_csv(const std::string& path) {
 NumericCsv parse_numeric_csv(std::istream& in, const std::string& path) {
   NumericCsv csv;
   std::string line;
-  if (!std::getline(in, line) || trim(line).empty()) throw InputError(path + ": empty file (no header line)");
+  if (!std::getline(in, line) || trim_field(line).empty()) throw InputError(path + ": empty file (no header line)");
   // A UTF-8 byte-order mark (spreadsheet exports) is not part of the first column's name.
   if (line.compare(0, 3, "\xEF\xBB\xBF") == 0) line.erase(0, 3);
   const char sep = separator_of(line);
@@ -75,7 +68,7 @@ NumericCsv parse_numeric_csv(std::istream& in, const std::string& path) {
   long line_no = 1;
   while (std::getline(in, line)) {
     ++line_no;
-    if (trim(line).empty()) continue;
+    if (trim_field(line).empty()) continue;
     const auto fields = split(line, sep);
     if (fields.size() != cols) {
       throw InputError(path + ":" + std::to_string(line_no) + ": " + std::to_string(fields.size()) +
@@ -118,6 +111,13 @@ NumericCsv parse_numeric_csv(std::istream& in, const std::string& path) {
     std::vector<double>().swap(block);
   }
   return csv;
+}
+
+std::string trim_field(const std::string& field) {
+  const auto b = field.find_first_not_of(" \t\r");
+  if (b == std::string::npos) return "";
+  const auto e = field.find_last_not_of(" \t\r");
+  return field.substr(b, e - b + 1);
 }
 
 std::map<std::string, Eigen::Index> column_index(const NumericCsv& csv, const std::string& path) {

@@ -17,7 +17,6 @@ using Eigen::Index;
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
-constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
 /// Rank threshold of the nuisance design (columns scaled to unit norm): directions below it carry
 /// no information any data could give, not a statistical decision (Kt's std covers the rest).
 constexpr double kRankThreshold = 1e-10;
@@ -275,6 +274,7 @@ TorqueConstantFit identify_torque_constants(const RobotDescription& robot, const
   const MatrixXd cov_s = sigma2 * fit.inflation * (pr.Jp.transpose() * pr.Jp).ldlt().solve(MatrixXd::Identity(N, N));
   fit.kt.resize(N);
   fit.stdev.resize(N);
+  constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
   for (int m = 0; m < N; ++m) {
     const double kt = 1.0 / s[m], sd = std::sqrt(std::max(0.0, cov_s(m, m))) * kt * kt;
     fit.verdicts.push_back(verdict_of(sd, std::abs(kt)));

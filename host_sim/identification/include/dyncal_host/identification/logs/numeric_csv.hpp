@@ -25,6 +25,10 @@ NumericCsv read_numeric_csv(const std::string& path);
 /// Throws InputError as read_numeric_csv (the fuzz target tests/fuzz/fuzz_numeric_csv.cpp).
 NumericCsv parse_numeric_csv(std::istream& in, const std::string& name);
 
+/// `field` without its leading and trailing spaces, tabs and carriage returns (a CRLF file's line
+/// end): how a header name, a value or a column-map entry is read.
+std::string trim_field(const std::string& field);
+
 /// Each of `csv`'s columns by name: its index. Throws InputError naming `path` and a column name
 /// the header gives twice.
 std::map<std::string, Eigen::Index> column_index(const NumericCsv& csv, const std::string& path);
