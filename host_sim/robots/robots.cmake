@@ -38,12 +38,11 @@ foreach(dir ${DYNCAL_ROBOT_DIRS})
   foreach(DYNCAL_FIRST 0 4)
     configure_file(${CMAKE_CURRENT_LIST_DIR}/robot_calibration.cpp.in ${unit}_calibration_${DYNCAL_FIRST}.cpp @ONLY)
     list(APPEND sources ${unit}_calibration_${DYNCAL_FIRST}.cpp)
+    set_source_files_properties(${unit}_calibration_${DYNCAL_FIRST}.cpp PROPERTIES UNITY_GROUP ${DYNCAL_ROBOT}_online)
   endforeach()
   list(APPEND sources ${unit}_model.cpp ${unit}_identify.cpp ${unit}_drive.cpp)
   set_source_files_properties(${unit}_model.cpp ${unit}_identify.cpp ${unit}_drive.cpp PROPERTIES
     UNITY_GROUP ${DYNCAL_ROBOT}_plant)
-  set_source_files_properties(${unit}_calibration_0.cpp ${unit}_calibration_4.cpp PROPERTIES
-    UNITY_GROUP ${DYNCAL_ROBOT}_online)
   if(DYNCAL_ROBOT_DIR MATCHES "^tests/")
     list(APPEND test_robot_sources ${sources})
   else()
