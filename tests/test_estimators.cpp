@@ -273,4 +273,48 @@ TEST(RlsForgetting, CovarianceStaysBoundedWithoutExcitation) {
   EXPECT_EQ(rls->update(K, JointVec::Zero(), JointVec::Zero()), UpdateStatus::invalid_argument);
 }
 
+// The run-time size (P = Eigen::Dynamic, capacity MaxP: the host's one instantiation per N) runs
+// the same arithmetic as the fixed size: KF and RLS estimates and covariances equal bit for bit,
+// with the model's structure (runs, zero columns, the friction block) and with noise.
+TEST(RuntimeSize, KalmanAndRlsEqualFixedSizeBitForBit) {
+  constexpr int kCap = 15 * N;  // 10 N standard + 5 N term columns: any model of N joints
+  using DynCov = dyncal::PackedCovariance<double, Eigen::Dynamic, N, kCap>;
+  using DynKf = dyncal::KalmanFilter<double, Eigen::Dynamic, N, DynCov>;
+  using DynRls = dyncal::RlsForgetting<double, Eigen::Dynamic, N, DynCov>;
+  const Samples s = make_samples(400, 0.01, dyncal::test::er20_truth<kTerms>(), 0.5);
+  const auto fixed_structure = Model::structure();
+  DynKf::Structure structure = DynKf::Structure::dense(N);
+  for (int c = 0; c < P; ++c) {
+    structure.first[c] = fixed_structure.first[c];
+    structure.last[c] = fixed_structure.last[c];
+  }
+  auto kf = std::make_unique<dyncal::KalmanFilter<double, P, N>>();
+  auto rls = std::make_unique<dyncal::RlsForgetting<double, P, N>>();
+  auto dkf = std::make_unique<DynKf>();
+  auto drls = std::make_unique<DynRls>();
+  const ParamVec p0 = ParamVec::Constant(1e4);
+  ASSERT_EQ(kf->reset(ParamVec::Zero(), p0, fixed_structure), UpdateStatus::ok);
+  ASSERT_EQ(rls->reset(ParamVec::Zero(), p0, 0.99, 0.0, fixed_structure), UpdateStatus::ok);
+  const DynKf::ParamVector dp0 = p0, dzero = ParamVec::Zero();
+  ASSERT_EQ(dkf->reset(dzero, dp0, structure), UpdateStatus::ok);
+  ASSERT_EQ(drls->reset(dzero, dp0, 0.99, 0.0, structure), UpdateStatus::ok);
+  ASSERT_EQ(dkf->estimate().size(), P);
+  for (size_t i = 0; i < s.K.size(); ++i) {
+    const DynKf::Regressor K = s.K[i];
+    ASSERT_EQ(dkf->update(K, s.tau[i], JointVec::Ones()), kf->update(s.K[i], s.tau[i], JointVec::Ones()));
+    ASSERT_EQ(drls->update(K, s.tau[i]), rls->update(s.K[i], s.tau[i]));
+  }
+  for (int c = 0; c < P; ++c) {
+    EXPECT_EQ(dkf->estimate()[c], kf->estimate()[c]) << c;
+    EXPECT_EQ(drls->estimate()[c], rls->estimate()[c]) << c;
+    for (int d = 0; d < P; ++d) {
+      EXPECT_EQ(dkf->covariance()(c, d), kf->covariance()(c, d));
+      EXPECT_EQ(drls->covariance()(c, d), rls->covariance()(c, d));
+    }
+  }
+  // A size beyond the capacity, or none, is refused.
+  DynKf::ParamVector none(0);
+  EXPECT_EQ(dkf->reset(none, none, structure), UpdateStatus::invalid_argument);
+}
+
 }  // namespace

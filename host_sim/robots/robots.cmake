@@ -4,13 +4,11 @@
 # folder or the generator changes) and translation units made from the templates in this
 # folder, which register the robot's operations by name at start-up: the model (robot_model.cpp.in,
 # compiled_robot.hpp), the identification models of the built term sets (robot_identify.cpp.in:
-# layout, generated regressor, least squares; the pipeline is compiled once, identify_pipeline.cpp),
-# the simulated drive's plant (robot_drive.cpp.in, drive_plant.hpp) and calibrate's online
-# estimators, which identify's KF and RLS share (robot_calibration.cpp.in, online_model.hpp,
-# recursive_fits_of.hpp; two files). They compile as two unity units per robot (UNITY_GROUP
-# <robot>_plant: model, identify, drive; <robot>_online: the calibration files), so that a robot's
-# code compiles on two cores and each unit's Eigen instantiations are compiled once. Adding a robot
-# compiles only its own units. The test robots (tests/robots/) go into the test programs and
+# layout, generated regressor, least squares; the pipeline is compiled once, identify_pipeline.cpp,
+# and so are the KF and RLS, at the model's run-time size: recursive_fit.cpp) and the simulated
+# drive's plant (robot_drive.cpp.in, drive_plant.hpp). The three compile as one unity unit per robot
+# (UNITY_GROUP <robot>), so that their Eigen instantiations are compiled once. Adding a robot
+# compiles only its own unit. The test robots (tests/robots/) go into the test programs and
 # dyncal_test_cli, not into the dyncal program. Part `robots` of the dependency rule: it depends on
 # calibration, identification and drive.
 set(DYNCAL_ROBOTS_GENERATED ${CMAKE_BINARY_DIR}/robots_generated)
@@ -35,14 +33,9 @@ foreach(dir ${DYNCAL_ROBOT_DIRS})
   configure_file(${CMAKE_CURRENT_LIST_DIR}/robot_model.cpp.in ${unit}_model.cpp @ONLY)
   configure_file(${CMAKE_CURRENT_LIST_DIR}/robot_drive.cpp.in ${unit}_drive.cpp @ONLY)
   configure_file(${CMAKE_CURRENT_LIST_DIR}/robot_identify.cpp.in ${unit}_identify.cpp @ONLY)
-  foreach(DYNCAL_FIRST 0 4)
-    configure_file(${CMAKE_CURRENT_LIST_DIR}/robot_calibration.cpp.in ${unit}_calibration_${DYNCAL_FIRST}.cpp @ONLY)
-    list(APPEND sources ${unit}_calibration_${DYNCAL_FIRST}.cpp)
-    set_source_files_properties(${unit}_calibration_${DYNCAL_FIRST}.cpp PROPERTIES UNITY_GROUP ${DYNCAL_ROBOT}_online)
-  endforeach()
   list(APPEND sources ${unit}_model.cpp ${unit}_identify.cpp ${unit}_drive.cpp)
   set_source_files_properties(${unit}_model.cpp ${unit}_identify.cpp ${unit}_drive.cpp PROPERTIES
-    UNITY_GROUP ${DYNCAL_ROBOT}_plant)
+    UNITY_GROUP ${DYNCAL_ROBOT})
   if(DYNCAL_ROBOT_DIR MATCHES "^tests/")
     list(APPEND test_robot_sources ${sources})
   else()

@@ -13,7 +13,7 @@
 #include <ostream>
 #include <random>
 
-#include "dyncal_host/calibration/online_model.hpp"
+#include "dyncal_host/calibration/online_estimators.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/model_terms.hpp"
 #include "dyncal_host/common/number_text.hpp"
@@ -292,8 +292,8 @@ CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions&
   const auto t0 = SteadyClock::now();
   check_run_options(o);
   const CompiledRobot& compiled = compiled_robot_for(robot);
-  const OnlineModel& online = online_model(robot.name);
   const int term_set = built_term_set_index(o.terms);
+  const TermSetModel& model = compiled.models[static_cast<size_t>(term_set)];
   if (!std::filesystem::is_directory(o.fault_dir))
     throw InputError("fault directory '" + o.fault_dir + "' is not a directory");
   for (const auto& [what, path] : {std::pair{"log", o.save_log}, std::pair{"law", o.save_law}}) {
@@ -348,7 +348,7 @@ CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions&
            << " Hz" << (o.excitation ? " (designed)" : "") << ", " << o.periods << " periods at " << o.sample_rate_hz
            << " Hz, cond(K) = " << std::setprecision(3) << r.trajectory_cond << "\n";
   SampleSink sink;
-  online.online[static_cast<size_t>(term_set)](robot.qd_max, o, sink);
+  start_online_estimators(model, robot.qd_max, o, sink);
   std::vector<std::uint8_t> feed_forward;  // the table active during the excitation (--save-law)
   if (!o.save_law.empty()) {
     feed_forward.resize(kTableMaxBytes);
@@ -391,7 +391,9 @@ CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions&
   const bool trace_verification = plan("verification", fresh, o.verify_periods);
   progress << "verification run with the drive's current table\n";
   const JointLog vlog = verification_run(*drive, fresh, o, trace_verification, prog, &r.lost, r.drive_error_before);
-  const OnlineModel::VerifyFn verify = online.verify[static_cast<size_t>(term_set)];
+  const auto verify = [&model](const JointLog& run, const std::vector<double>& phi,
+                               const std::vector<EffectTerm>& effects,
+                               double cutoff) { return verify_parameters(model, run, phi, effects, cutoff); };
   {
     // The batch estimate as the drive would apply it: the table's parameters and effect terms.
     const DriveTableContent batch_table = drive_table_content(batch_set, robot);

@@ -28,18 +28,25 @@ namespace dyncal {
 /// Covariance: PackedCovariance (default; fast, uses K's structure) or UdCovariance<Scalar, P>
 /// (Bierman UD factors; slower, but holds variance ranges beyond float's precision — see there).
 ///
-/// Memory (packed): P(P+1)/2 + (N + 2) P scalars; no heap, no exceptions.
+/// Size: P fixed, or P = Eigen::Dynamic with Covariance = PackedCovariance<Scalar, Eigen::Dynamic,
+/// N, MaxP>: then reset() sets the size to phi0's (1..MaxP), and the vectors and K are Eigen's
+/// fixed-capacity dynamic matrices (the host's KF for any robot; the arithmetic is the same).
+///
+/// Memory (packed): P(P+1)/2 + (N + 2) P scalars (MaxP for the run-time size); no heap, no exceptions.
 template <typename Scalar, int P, int N, class Covariance = PackedCovariance<Scalar, P, N>>
 class KalmanFilter {
  public:
-  using ParamVector = Eigen::Matrix<Scalar, P, 1>;
+  using ParamVector = ParamVectorOf<Scalar, P, Covariance::kCapacity>;
   using MeasVector = Eigen::Matrix<Scalar, N, 1>;
-  using Regressor = Eigen::Matrix<Scalar, N, P>;
+  using Regressor = RegressorOf<Scalar, N, P, Covariance::kCapacity>;
+  using Structure = RegressorStructure<Covariance::kCapacity>;
 
   /// Initial estimate phi0, initial covariance diag(p0) (all > 0) and the structure of K
-  /// (default: dense). invalid_argument / rejected_non_finite leave the filter unchanged.
+  /// (default: dense). invalid_argument (also: phi0 and p0 of different or unsupported run-time
+  /// sizes) / rejected_non_finite leave the filter unchanged.
   UpdateStatus reset(const ParamVector& phi0, const ParamVector& p0,
-                     const RegressorStructure<P>& structure = RegressorStructure<P>::dense(N)) noexcept {
+                     const Structure& structure = Structure::dense(N)) noexcept {
+    if (phi0.size() != p0.size()) return UpdateStatus::invalid_argument;  // the run-time size only
     if (!all_finite(phi0) || !all_finite(p0)) return UpdateStatus::rejected_non_finite;
     const UpdateStatus s = cov_.template reset<N>(p0, structure);
     if (s != UpdateStatus::ok) return s;
@@ -67,7 +74,7 @@ class KalmanFilter {
 
  private:
   Covariance cov_;
-  ParamVector phi_ = ParamVector::Zero();
+  ParamVector phi_ = initial_params<ParamVector>();
   Scalar gate_ = Scalar(0);
 };
 

@@ -28,6 +28,27 @@
 
 namespace dyncal {
 
+/// The parameter vector (P entries) and the regressor (N x P) of an estimator with P parameters
+/// fixed at compile time, or P = Eigen::Dynamic with capacity MaxP (no heap either way).
+template <typename Scalar, int P, int MaxP>
+using ParamVectorOf = std::conditional_t<P == Eigen::Dynamic, Eigen::Matrix<Scalar, Eigen::Dynamic, 1, 0, MaxP, 1>,
+                                         Eigen::Matrix<Scalar, P, 1>>;
+template <typename Scalar, int N, int P, int MaxP>
+using RegressorOf =
+    std::conditional_t<P == Eigen::Dynamic,
+                       Eigen::Matrix<Scalar, N, Eigen::Dynamic, N == 1 ? Eigen::RowMajor : Eigen::ColMajor, N, MaxP>,
+                       Eigen::Matrix<Scalar, N, P>>;
+
+/// A parameter vector's initial value: zeros, or empty for the run-time size (reset() sizes it).
+template <class Vector>
+Vector initial_params() noexcept {
+  if constexpr (Vector::SizeAtCompileTime == Eigen::Dynamic) {
+    return Vector();
+  } else {
+    return Vector::Zero();
+  }
+}
+
 /// Covariance P (P x P, symmetric) in packed storage — the upper triangle row by row, P(P+1)/2
 /// scalars — with the Kalman measurement update of a whole sample of N measurements at once
 /// (survey Eq. 19, 21, 23, 24):
@@ -43,27 +64,53 @@ namespace dyncal {
 /// Safeguards (every failure leaves phi and P exactly as they were): non-finite input, an entry
 /// of H outside its declared structure, r <= 0, S not positive definite, a diagonal entry of the
 /// updated P not positive (checked before P is written), and optional innovation gating.
-template <typename Scalar, int P, int N>
+///
+/// Size: P parameters fixed at compile time (the firmware), or P = Eigen::Dynamic with at most MaxP
+/// set by reset() from p0's size (the host's one instantiation per N for every robot and term
+/// set). The run-time size stores P in the packed layout of MaxP (row i at index(i, i)), without
+/// heap: the vectors are Eigen's fixed-capacity dynamic matrices. The same loops run either way.
+template <typename Scalar, int P, int N, int MaxP = P>
 class PackedCovariance {
  public:
-  static constexpr int kPacked = P * (P + 1) / 2;
-  using ParamVector = Eigen::Matrix<Scalar, P, 1>;
+  static constexpr bool kDynamic = P == Eigen::Dynamic;
+  /// Compile-time bound on the number of parameters (storage size).
+  static constexpr int kCapacity = kDynamic ? MaxP : P;
+  static_assert(kCapacity >= 1 && (kDynamic || MaxP == P), "P >= 1, or P = Eigen::Dynamic with MaxP >= 1");
+  static_assert(kCapacity <= 255, "run bounds are stored in 8 bits");
+  static constexpr int kPacked = kCapacity * (kCapacity + 1) / 2;
+  using ParamVector = ParamVectorOf<Scalar, P, kCapacity>;
   using MeasVector = Eigen::Matrix<Scalar, N, 1>;
-  using Regressor = Eigen::Matrix<Scalar, N, P>;
+  using Regressor = RegressorOf<Scalar, N, P, kCapacity>;
+  using Structure = RegressorStructure<kCapacity>;
+  using DenseMatrix = std::conditional_t<kDynamic, Eigen::Matrix<Scalar, Eigen::Dynamic, Eigen::Dynamic, 0, MaxP, MaxP>,
+                                         Eigen::Matrix<Scalar, P, P>>;
+
+  /// Number of parameters: P, or the size of the p0 given to reset() (0 before it).
+  int size() const noexcept {
+    if constexpr (kDynamic) {
+      return n_;
+    } else {
+      return P;
+    }
+  }
 
   /// Position of P(i, j), i <= j, in the packed array.
-  static constexpr int index(int i, int j) noexcept { return i * P - (i * (i - 1)) / 2 + (j - i); }
+  static constexpr int index(int i, int j) noexcept { return i * kCapacity - (i * (i - 1)) / 2 + (j - i); }
 
   /// P = diag(p0) (every p0_i > 0 and finite) and the structure of H (rows within 0..N-1).
   /// invalid_argument otherwise, and nothing changes.
   template <int Rows = N>
-  UpdateStatus reset(const ParamVector& p0, const RegressorStructure<P>& structure) noexcept {
+  UpdateStatus reset(const ParamVector& p0, const Structure& structure) noexcept {
     static_assert(Rows == N, "PackedCovariance is sized for N rows");
-    for (int i = 0; i < P; ++i) {
+    if constexpr (kDynamic) {
+      if (p0.size() < 1 || p0.size() > MaxP) return UpdateStatus::invalid_argument;
+      n_ = static_cast<int>(p0.size());
+    }
+    for (int i = 0; i < size(); ++i) {
       if (!(p0[i] > Scalar(0)) || !std::isfinite(p0[i])) return UpdateStatus::invalid_argument;
     }
     int runs = 0;
-    for (int c = 0; c < P; ++c) {
+    for (int c = 0; c < size(); ++c) {
       const int f = structure.first[c], l = structure.last[c];
       if (f > l) continue;  // an all-zero column
       if (f < 0 || l >= N) return UpdateStatus::invalid_argument;
@@ -82,10 +129,10 @@ class PackedCovariance {
     term_columns_ = 0;
     num_base_runs_ = runs;
     for (int m = kMaxTermColumns; m >= 1; --m) {
-      const int b = P - m * N;
+      const int b = size() - m * N;
       if (b < 0) continue;
       bool block = true;
-      for (int c = b; c < P && block; ++c)
+      for (int c = b; c < size() && block; ++c)
         block = structure.first[c] == (c - b) / m && structure.last[c] == (c - b) / m;
       if (!block) continue;
       int r = 0;
@@ -97,12 +144,12 @@ class PackedCovariance {
       break;
     }
     num_zero_columns_ = 0;
-    for (int c = 0; c < P; ++c) {
+    for (int c = 0; c < size(); ++c) {
       if (structure.first[c] > structure.last[c]) zero_columns_[num_zero_columns_++] = static_cast<std::uint8_t>(c);
     }
     structure_ = structure;
     for (int k = 0; k < kPacked; ++k) p_[k] = Scalar(0);
-    for (int i = 0; i < P; ++i) p_[index(i, i)] = p0[i];
+    for (int i = 0; i < size(); ++i) p_[index(i, i)] = p0[i];
     return UpdateStatus::ok;
   }
 
@@ -160,7 +207,7 @@ class PackedCovariance {
         });
       }
       if (term_columns_ > 0) {
-        const int b = P - term_columns_ * N;
+        const int b = size() - term_columns_ * N;
         s_terms_float6(packed, v_[b], h + b * N, term_columns_);
       }
       for (int k = 0; k < N; ++k) {
@@ -209,8 +256,8 @@ class PackedCovariance {
         for (int t = 0; t < k; ++t) c[k * (k + 1) / 2 + t] = S[k][t];
         c[k * (k + 1) / 2 + k] = inv_d_[k];
       }
-      if (!w_rows_float6(&v_[0][0], c, p_, P, P)) return UpdateStatus::not_positive_definite;
-      if (!std::isfinite(dot_rows_float6(&v_[0][0], z, dphi_, P))) return UpdateStatus::not_positive_definite;
+      if (!w_rows_float6(&v_[0][0], c, p_, kCapacity, kCapacity)) return UpdateStatus::not_positive_definite;
+      if (!std::isfinite(dot_rows_float6(&v_[0][0], z, dphi_, kCapacity))) return UpdateStatus::not_positive_definite;
     } else if (!w_rows(S, z)) {
       return UpdateStatus::not_positive_definite;
     }
@@ -219,7 +266,7 @@ class PackedCovariance {
     } else {
       downdate<true>(scale);
     }
-    for (int i = 0; i < P; ++i) phi[i] += dphi_[i];
+    for (int i = 0; i < size(); ++i) phi[i] += dphi_[i];
     return UpdateStatus::ok;
   }
 
@@ -228,17 +275,19 @@ class PackedCovariance {
 
   /// Diagonal of P (parameter variances).
   void diagonal(ParamVector& out) const noexcept {
-    for (int i = 0; i < P; ++i) out[i] = p_[index(i, i)];
+    if constexpr (kDynamic) out.resize(size());
+    for (int i = 0; i < size(); ++i) out[i] = p_[index(i, i)];
   }
   Scalar trace() const noexcept {
     Scalar t(0);
-    for (int i = 0; i < P; ++i) t += p_[index(i, i)];
+    for (int i = 0; i < size(); ++i) t += p_[index(i, i)];
     return t;
   }
   /// The full P into `out` (host-side diagnostics and tests).
-  void to_dense(Eigen::Matrix<Scalar, P, P>& out) const noexcept {
-    for (int i = 0; i < P; ++i) {
-      for (int j = i; j < P; ++j) out(i, j) = out(j, i) = p_[index(i, j)];
+  void to_dense(DenseMatrix& out) const noexcept {
+    if constexpr (kDynamic) out.resize(size(), size());
+    for (int i = 0; i < size(); ++i) {
+      for (int j = i; j < size(); ++j) out(i, j) = out(j, i) = p_[index(i, j)];
     }
   }
 
@@ -246,7 +295,7 @@ class PackedCovariance {
   /// The first entry of H outside the structure that is not zero: invalid_argument if finite,
   /// rejected_non_finite otherwise (ok if there is none).
   UpdateStatus outside_status(const Scalar* h) const noexcept {
-    for (int c = 0; c < P; ++c) {
+    for (int c = 0; c < size(); ++c) {
       for (int k = 0; k < N; ++k) {
         const Scalar x = h[c * N + k];
         if ((k < structure_.first[c] || k > structure_.last[c]) && x != Scalar(0))
@@ -288,7 +337,7 @@ class PackedCovariance {
   /// W = V L^-T row by row (in place, L in S's lower triangle) and dphi = W z; false if some
   /// updated diagonal p_ii - |w_i|^2 is not positive or some dphi_i is not finite.
   bool w_rows(const Scalar (&S)[N][N], const Scalar (&z)[N]) noexcept {
-    for (int i = 0; i < P; ++i) {
+    for (int i = 0; i < size(); ++i) {
       Scalar* w = v_[i];
       Scalar dphi = Scalar(0), ww = Scalar(0);
       DYNCAL_UNROLL
@@ -308,14 +357,14 @@ class PackedCovariance {
   }
 
   /// The ARMv7E-M float kernels for S, W, dphi and the downdate (six measurements).
-  static constexpr bool kAsmW = kArmFloatKernels && std::is_same_v<Scalar, float> && N == 6;
+  static constexpr bool kAsmW = kArmFloatKernels && std::is_same_v<Scalar, float> && N == 6 && !kDynamic;
 
   struct Run {
     std::uint8_t begin, end, code;
   };
   /// The ARMv7E-M float kernels for V's runs (four rows, six measurements).
   template <int B>
-  static constexpr bool kAsmV = (kArmFloatKernels && std::is_same_v<Scalar, float> && N == 6 && B == 4);
+  static constexpr bool kAsmV = (kArmFloatKernels && std::is_same_v<Scalar, float> && N == 6 && B == 4 && !kDynamic);
 
   /// Rows of P per block in V = P H^T: the accumulators (kBlock x N) stay in FPU registers
   /// (32 single-precision on the M4F; 16 double on the M7).
@@ -337,12 +386,12 @@ class PackedCovariance {
   template <int B, int R0, int R1>
   DYNCAL_ALWAYS_INLINE void run_left(int i, int b, int e, const Scalar* H, Scalar (&a)[B][N]) const noexcept {
     if constexpr (kAsmV<B>) {
-      v_left_float6<R0, R1>(&a[0][0], p_ + row_[b] + i, P - 1 - b, H + b * N, e - b);
+      v_left_float6<R0, R1>(&a[0][0], p_ + row_[b] + i, kCapacity - 1 - b, H + b * N, e - b);
       return;
     }
     const Scalar* h = H + b * N;
     const Scalar* q = p_ + row_[b] + i;
-    int stride = P - 1 - b;
+    int stride = kCapacity - 1 - b;
     for (int n = e - b; n > 0; --n, h += N) {
       Scalar p[B];
       DYNCAL_UNROLL
@@ -414,7 +463,7 @@ class PackedCovariance {
   /// The term block (right of rows i..i+B-1, M columns per joint) added to those rows of V.
   template <int B, int M>
   DYNCAL_ALWAYS_INLINE void terms(int i, const Scalar* H, Scalar (&a)[B][N]) const noexcept {
-    constexpr int b = P - M * N;
+    const int b = size() - M * N;
     const Scalar* q[B];
     DYNCAL_UNROLL
     for (int r = 0; r < B; ++r) q[r] = p_ + row_[i + r] + b;
@@ -461,7 +510,7 @@ class PackedCovariance {
     for (int r = 0; r < B; ++r) {
       for (int s = r; s < B; ++s) corner[s][r] = corner[r][s] = p_[row_[i + r] + i + s];
     }
-    const int term_begin = P - term_columns_ * N;
+    const int term_begin = size() - term_columns_ * N;
     const bool fast_terms = term_columns_ > 0 && i + B <= term_begin;
     const int runs = fast_terms ? num_base_runs_ : num_runs_;
     // Runs are in column order: wholly left of the block, overlapping it, wholly right of it.
@@ -487,9 +536,9 @@ class PackedCovariance {
     if constexpr (kAsmV<B>) {
       if (fast_terms && term_columns_ <= 2) {
         if (term_columns_ == 1) {
-          v_terms_float6<1>(&a[0][0], p_ + row_[i] + term_begin, P - 1 - i, h_terms_);
+          v_terms_float6<1>(&a[0][0], p_ + row_[i] + term_begin, kCapacity - 1 - i, h_terms_);
         } else {
-          v_terms_float6<2>(&a[0][0], p_ + row_[i] + term_begin, P - 1 - i, h_terms_);
+          v_terms_float6<2>(&a[0][0], p_ + row_[i] + term_begin, kCapacity - 1 - i, h_terms_);
         }
         return;
       }
@@ -518,13 +567,13 @@ class PackedCovariance {
       std::memset(v_, 0, sizeof v_);
       // The term block's nonzero entries, joint by joint: H(j, b + j M + t) at h_terms_[j M + t]
       // (v_terms_float6 takes one or two columns per joint; wider blocks use the portable pass).
-      const int b = P - term_columns_ * N;
+      const int b = size() - term_columns_ * N;
       if (term_columns_ <= 2)
         for (int c = 0; c < term_columns_ * N; ++c) h_terms_[c] = H[(b + c) * N + c / term_columns_];
     }
     int i = 0;
-    for (; i + kBlock <= P; i += kBlock) block_v<kBlock>(i, H);
-    for (; i < P; ++i) block_v<1>(i, H);
+    for (; i + kBlock <= size(); i += kBlock) block_v<kBlock>(i, H);
+    for (; i < size(); ++i) block_v<1>(i, H);
   }
 
   /// P <- s (P - W W^T) over the upper triangle, three rows at a time (W_i of three rows in
@@ -532,11 +581,11 @@ class PackedCovariance {
   template <bool Scaled>
   void downdate(Scalar s) noexcept {
     if constexpr (kAsmW) {
-      downdate_float6<Scaled>(p_, &v_[0][0], P, s);
+      downdate_float6<Scaled>(p_, &v_[0][0], kCapacity, s);
       return;
     }
     int i = 0;
-    for (; i + 2 < P; i += 3) {
+    for (; i + 2 < size(); i += 3) {
       Scalar w0[N], w1[N], w2[N];
       DYNCAL_UNROLL
       for (int k = 0; k < N; ++k) {
@@ -568,7 +617,7 @@ class PackedCovariance {
       r1 += 2;
       r2 += 1;
       const Scalar* wj = v_[i + 3];
-      for (int j = i + 3; j < P; ++j, wj += N) {
+      for (int j = i + 3; j < size(); ++j, wj += N) {
         Scalar x0 = *r0, x1 = *r1, x2 = *r2;
         DYNCAL_UNROLL
         for (int k = 0; k < N; ++k) {
@@ -582,8 +631,8 @@ class PackedCovariance {
         *r2++ = Scaled ? x2 * s : x2;
       }
     }
-    for (; i < P; ++i) {  // the last rows when P is not a multiple of 3
-      for (int j = i; j < P; ++j) {
+    for (; i < size(); ++i) {  // the last rows when P is not a multiple of 3
+      for (int j = i; j < size(); ++j) {
         Scalar x = p_[index(i, j)];
         DYNCAL_UNROLL
         for (int k = 0; k < N; ++k) x -= v_[i][k] * v_[j][k];
@@ -594,24 +643,25 @@ class PackedCovariance {
 
   static constexpr int kMaxTermColumns = 4;
   Scalar p_[kPacked] = {};
-  Scalar v_[P][N] = {};  ///< V = P H^T, then W = V L^-T
-  Scalar dphi_[P] = {};
+  Scalar v_[kCapacity][N] = {};  ///< V = P H^T, then W = V L^-T
+  Scalar dphi_[kCapacity] = {};
   Scalar inv_d_[N] = {};
-  RegressorStructure<P> structure_ = RegressorStructure<P>::dense(N);
-  Run runs_[P] = {};
+  RegressorStructure<kCapacity> structure_ = RegressorStructure<kCapacity>::dense(N);
+  Run runs_[kCapacity] = {};
   int num_runs_ = 0;
   int num_base_runs_ = 0;  ///< runs before the term block
   int term_columns_ = 0;   ///< columns per joint in the trailing term block (0: none)
   /// row_[i] = index(i, i) - i: P(i, j) = p_[row_[i] + j] for j >= i.
   static constexpr struct RowOffsets {
-    int v[P];
+    int v[kCapacity];
     constexpr RowOffsets() : v() {
-      for (int i = 0; i < P; ++i) v[i] = index(i, i) - i;
+      for (int i = 0; i < kCapacity; ++i) v[i] = index(i, i) - i;
     }
     constexpr int operator[](int i) const { return v[i]; }
   } row_{};
-  std::uint8_t zero_columns_[P] = {};  ///< columns of H that the structure declares all zero
+  std::uint8_t zero_columns_[kCapacity] = {};  ///< columns of H that the structure declares all zero
   int num_zero_columns_ = 0;
+  int n_ = 0;  ///< size() when P is Eigen::Dynamic
   /// The term block's nonzero entries (ARM kernels only).
   Scalar h_terms_[kAsmV<kBlock> ? kMaxTermColumns * N : 1] = {};
 };

@@ -23,18 +23,23 @@ namespace dyncal {
 ///
 /// Covariance: PackedCovariance (default) or UdCovariance<Scalar, P>, as for KalmanFilter.
 ///
-/// Memory (packed): P(P+1)/2 + (N + 2) P scalars; no heap, no exceptions.
+/// Size: P fixed, or P = Eigen::Dynamic with a PackedCovariance of capacity MaxP, as for KalmanFilter.
+///
+/// Memory (packed): P(P+1)/2 + (N + 2) P scalars (MaxP for the run-time size); no heap, no exceptions.
 template <typename Scalar, int P, int N, class Covariance = PackedCovariance<Scalar, P, N>>
 class RlsForgetting {
  public:
-  using ParamVector = Eigen::Matrix<Scalar, P, 1>;
+  using ParamVector = ParamVectorOf<Scalar, P, Covariance::kCapacity>;
   using MeasVector = Eigen::Matrix<Scalar, N, 1>;
-  using Regressor = Eigen::Matrix<Scalar, N, P>;
+  using Regressor = RegressorOf<Scalar, N, P, Covariance::kCapacity>;
+  using Structure = RegressorStructure<Covariance::kCapacity>;
 
   /// mu in (0, 1]; p0 > 0 (initial covariance diag(p0)); trace_max <= 0 selects trace(diag(p0));
-  /// structure of K (default dense).
+  /// structure of K (default dense). invalid_argument (also: phi0 and p0 of different or
+  /// unsupported run-time sizes) / rejected_non_finite leave the filter unchanged.
   UpdateStatus reset(const ParamVector& phi0, const ParamVector& p0, Scalar mu, Scalar trace_max = Scalar(0),
-                     const RegressorStructure<P>& structure = RegressorStructure<P>::dense(N)) noexcept {
+                     const Structure& structure = Structure::dense(N)) noexcept {
+    if (phi0.size() != p0.size()) return UpdateStatus::invalid_argument;  // the run-time size only
     if (!all_finite(phi0) || !all_finite(p0)) return UpdateStatus::rejected_non_finite;
     if (!(mu > Scalar(0)) || !(mu <= Scalar(1))) return UpdateStatus::invalid_argument;
     const UpdateStatus s = cov_.template reset<N>(p0, structure);
@@ -67,7 +72,7 @@ class RlsForgetting {
 
  private:
   Covariance cov_;
-  ParamVector phi_ = ParamVector::Zero();
+  ParamVector phi_ = initial_params<ParamVector>();
   MeasVector r_ = MeasVector::Ones();
   Scalar mu_ = Scalar(1);
   Scalar trace_max_ = Scalar(0);

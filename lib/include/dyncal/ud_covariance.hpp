@@ -23,6 +23,7 @@ namespace dyncal {
 template <typename Scalar, int P>
 class UdCovariance {
  public:
+  static constexpr int kCapacity = P;  ///< fixed size only (PackedCovariance also takes a run-time size)
   using Vector = Eigen::Matrix<Scalar, P, 1>;
 
   /// P = diag(p0) (every p0_i > 0, else invalid_argument and nothing changes).

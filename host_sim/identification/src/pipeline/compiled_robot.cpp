@@ -28,13 +28,7 @@ bool register_robot(const CompiledRobot& robot) {
   }
   for (int i = 0; i < kBuiltTermSets; ++i) {
     const auto k = static_cast<size_t>(i);
-    const TermSetModel& m = robot.models[k];
-    TermSetModel& e = entry.models[k];
-    const auto kf = m.make_kalman_filter ? m.make_kalman_filter : e.make_kalman_filter;
-    const auto rls = m.make_rls ? m.make_rls : e.make_rls;
-    if (m.regressor) e = m;  // the model's unit; the recursive fits come from the calibration units
-    e.make_kalman_filter = kf;
-    e.make_rls = rls;
+    if (robot.models[k].regressor) entry.models[k] = robot.models[k];
   }
   if (robot.excitation_regressor) entry.excitation_regressor = robot.excitation_regressor;
   if (robot.inverse_dynamics) entry.inverse_dynamics = robot.inverse_dynamics;

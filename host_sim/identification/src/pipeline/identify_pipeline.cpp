@@ -13,6 +13,7 @@
 #include "dyncal_host/identification/methods/sign_constrained.hpp"
 #include "dyncal_host/identification/pipeline/compiled_robot.hpp"
 #include "dyncal_host/identification/pipeline/parameter_scales.hpp"
+#include "dyncal_host/identification/pipeline/recursive_fit.hpp"
 #include "dyncal_host/identification/pipeline/signal.hpp"
 #include "dyncal_host/identification/reports/prediction.hpp"
 
@@ -383,12 +384,9 @@ void IdentifyPipeline::fit(const StackedData& data, const std::vector<char>& tra
       }
     }
   } else if (m == "kf" || m == "rls") {
-    auto make_kf = model_.make_kalman_filter;
-    auto make_rls = model_.make_rls;
-    if (!make_kf || !make_rls)
-      throw InputError("identify --method " + m + ": not compiled for this robot: build again");
     UpdateStatus status = UpdateStatus::ok;
-    std::unique_ptr<RecursiveFit> f = m == "kf" ? make_kf(opt_.p0, &status) : make_rls(opt_.p0, opt_.rls_mu, &status);
+    std::unique_ptr<RecursiveFit> f =
+        m == "kf" ? make_kalman_filter(model_, opt_.p0, &status) : make_rls(model_, opt_.p0, opt_.rls_mu, &status);
     check(status);
     // KF: the measurement variance sigma^2; RLS: the weight 1 / sigma.
     const Eigen::VectorXd noise =

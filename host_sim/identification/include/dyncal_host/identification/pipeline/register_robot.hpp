@@ -145,7 +145,7 @@ bool register_robot_model(const double (&nominal_standard)[Robot::kNumStandard])
 
 /// Registers the identification models (TermSetModel) of every built term set: layout, generated
 /// regressor and lib/ least squares of each model's size, the only per-robot code of identify (its
-/// KF and RLS: recursive_fits_of.hpp, in the calibration units).
+/// KF and RLS run at the model's run-time size: recursive_fit.hpp).
 template <class Robot, int... I>
 bool register_identification(std::integer_sequence<int, I...>) {
   CompiledRobot c;

@@ -2,8 +2,9 @@
 // One compiled robot's identification model for one built term set (lib/ IdentificationModel<Robot,
 // Terms>) as run-time data and operations. This is all the identification pipeline needs of a
 // robot: the pipeline (identify_pipeline.hpp) is compiled once against it, and only what must be
-// fixed-size per robot -- the generated regressor and the lib/ estimators of its size -- is
-// compiled per robot and term set (term_set_model_of.hpp, in the robots' units).
+// fixed-size per robot -- the generated regressor and lib/ least squares of its size -- is
+// compiled per robot and term set (term_set_model_of.hpp, in the robots' units). The KF and RLS run
+// at the model's run-time size (recursive_fit.hpp).
 
 #include <Eigen/Core>
 #include <memory>
@@ -34,8 +35,8 @@ class LeastSquaresFit {
   virtual Eigen::VectorXd rotated_rhs() const = 0;
 };
 
-/// lib/ KalmanFilter<double, P, N> (survey Eq. 19) or RlsForgetting<double, P, N> (Eq. 23) of one
-/// model's size behind a run-time interface.
+/// lib/ KalmanFilter (survey Eq. 19) or RlsForgetting (Eq. 23) of one model's size behind a
+/// run-time interface (recursive_fit.hpp makes them).
 class RecursiveFit {
  public:
   virtual ~RecursiveFit() = default;
@@ -61,12 +62,9 @@ struct TermSetModel {
   /// K = IdentificationModel::regressor(q, qd, qdd, tau_load = 0) (N x P, column-major into K);
   /// q, qd, qdd: N joint values [rad, rad/s, rad/s^2].
   void (*regressor)(const double* q, const double* qd, const double* qdd, double* K) = nullptr;
-  /// Fresh lib/ estimators of this model's size: least squares; KF reset to phi 0 with covariance
-  /// diag(p0); RLS reset to phi 0, diag(p0), forgetting factor mu. Null on a bad argument (the
-  /// status in *status).
+  /// Fresh lib/ least squares of this model's size (its KF and RLS: recursive_fit.hpp, compiled
+  /// once for every robot).
   std::unique_ptr<LeastSquaresFit> (*make_least_squares)() = nullptr;
-  std::unique_ptr<RecursiveFit> (*make_kalman_filter)(double p0, UpdateStatus* status) = nullptr;
-  std::unique_ptr<RecursiveFit> (*make_rls)(double p0, double mu, UpdateStatus* status) = nullptr;
 
   /// Column of term t of joint joint0 (0-based), or -1 (IdentificationModel::column).
   int column(unsigned t, int joint0) const {

@@ -1,8 +1,6 @@
 #pragma once
 // TermSetModel of IdentificationModel<Robot, Terms>: its layout, the generated regressor and lib/
-// least squares of its size. Included only by the robots' translation units (register_robot.hpp);
-// the recursive estimators are added by recursive_fits_of.hpp in the units that compile them for
-// calibrate already.
+// least squares of its size. Included only by the robots' translation units (register_robot.hpp).
 
 #include <memory>
 
@@ -41,8 +39,7 @@ class LeastSquaresOf final : public LeastSquaresFit {
   StreamingLeastSquares<double, P> ls_;
 };
 
-/// The TermSetModel of IdentificationModel<Robot, Terms> without its recursive estimators
-/// (make_kalman_filter, make_rls: recursive_fits_of.hpp).
+/// The TermSetModel of IdentificationModel<Robot, Terms>.
 template <class Robot, unsigned Terms>
 TermSetModel term_set_model_of() {
   using Model = IdentificationModel<Robot, Terms>;

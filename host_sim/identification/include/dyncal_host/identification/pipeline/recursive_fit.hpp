@@ -1,0 +1,30 @@
+#pragma once
+// The recursive estimators of any robot's identification model (identify --method kf | rls, and
+// calibrate's online path): lib/ KalmanFilter and RlsForgetting at the model's run-time size,
+// compiled once per joint count for every robot and term set.
+
+#include <memory>
+
+#include "dyncal/status.hpp"
+#include "dyncal_host/identification/pipeline/term_set_model.hpp"
+
+namespace dyncal::host {
+
+/// Most parameters of a model of `num_joints` joints: 10 standard parameters and one column per
+/// term (dyncal::kNumTerms) a joint. The run-time filters' capacity.
+constexpr int max_model_params(int num_joints) {
+  return (10 + kNumTerms) * num_joints;
+}
+
+/// lib/ KalmanFilter<double, Eigen::Dynamic, N> (survey Eq. 19) of `model`'s size (N =
+/// model.num_joints, P = model.num_params, dense regressor structure), reset to phi = 0 with
+/// covariance diag(p0). Null with the filter's status in *status when reset refuses p0 (not
+/// positive or not finite).
+std::unique_ptr<RecursiveFit> make_kalman_filter(const TermSetModel& model, double p0, UpdateStatus* status);
+
+/// lib/ RlsForgetting<double, Eigen::Dynamic, N> (survey Eq. 23) of `model`'s size, reset to
+/// phi = 0, covariance diag(p0) and forgetting factor mu in (0, 1]. Null with the status in *status
+/// when reset refuses p0 or mu.
+std::unique_ptr<RecursiveFit> make_rls(const TermSetModel& model, double p0, double mu, UpdateStatus* status);
+
+}  // namespace dyncal::host
