@@ -312,9 +312,24 @@ TEST(RuntimeSize, KalmanAndRlsEqualFixedSizeBitForBit) {
       EXPECT_EQ(drls->covariance()(c, d), rls->covariance()(c, d));
     }
   }
-  // A size beyond the capacity, or none, is refused.
-  DynKf::ParamVector none(0);
+  // No size, a bad p0, a bad structure or phi0 and p0 of different sizes are refused and change nothing:
+  // the filters go on equal.
+  DynKf::ParamVector none(0), bad_p0 = dp0;
+  bad_p0[P - 1] = -1.0;
+  // Dense (other runs than the model's) up to a last column with a row beyond the regressor's.
+  DynKf::Structure bad_structure = DynKf::Structure::dense(N);
+  bad_structure.last[P - 1] = N;
   EXPECT_EQ(dkf->reset(none, none, structure), UpdateStatus::invalid_argument);
+  EXPECT_EQ(dkf->reset(dzero, dp0, bad_structure), UpdateStatus::invalid_argument);
+  EXPECT_EQ(dkf->reset(dzero.head(P - 1), dp0, structure), UpdateStatus::invalid_argument);  // phi0, p0 sizes
+  EXPECT_EQ(dkf->reset(dzero, bad_p0, structure), UpdateStatus::invalid_argument);
+  EXPECT_EQ(drls->reset(dzero, dp0, 0.99, 0.0, bad_structure), UpdateStatus::invalid_argument);
+  ASSERT_EQ(dkf->update(s.K[0], s.tau[0], JointVec::Ones()), kf->update(s.K[0], s.tau[0], JointVec::Ones()));
+  ASSERT_EQ(drls->update(s.K[0], s.tau[0]), rls->update(s.K[0], s.tau[0]));
+  for (int c = 0; c < P; ++c) {
+    EXPECT_EQ(dkf->estimate()[c], kf->estimate()[c]) << c;
+    EXPECT_EQ(drls->estimate()[c], rls->estimate()[c]) << c;
+  }
 }
 
 }  // namespace

@@ -102,18 +102,22 @@ class PackedCovariance {
   template <int Rows = N>
   UpdateStatus reset(const ParamVector& p0, const Structure& structure) noexcept {
     static_assert(Rows == N, "PackedCovariance is sized for N rows");
+    // Every check before anything is written: a refused reset leaves the covariance as it was.
+    int n = P;
     if constexpr (kDynamic) {
       if (p0.size() < 1 || p0.size() > MaxP) return UpdateStatus::invalid_argument;
-      n_ = static_cast<int>(p0.size());
+      n = static_cast<int>(p0.size());
     }
-    for (int i = 0; i < size(); ++i) {
+    for (int i = 0; i < n; ++i) {
       if (!(p0[i] > Scalar(0)) || !std::isfinite(p0[i])) return UpdateStatus::invalid_argument;
+      const int f = structure.first[i], l = structure.last[i];
+      if (f <= l && (f < 0 || l >= N)) return UpdateStatus::invalid_argument;
     }
+    if constexpr (kDynamic) n_ = n;
     int runs = 0;
     for (int c = 0; c < size(); ++c) {
       const int f = structure.first[c], l = structure.last[c];
       if (f > l) continue;  // an all-zero column
-      if (f < 0 || l >= N) return UpdateStatus::invalid_argument;
       // A column is accumulated either as rows 0..l (code l) or as the single row f (code N + f).
       const int code = (f == l && f > 0) ? N + f : l;
       if (runs > 0 && runs_[runs - 1].end == c && runs_[runs - 1].code == code) {
