@@ -17,6 +17,7 @@
 #include "dyncal_host/drive/ground_truth.hpp"
 #include "dyncal_host/drive/scenario.hpp"
 #include "support/drive_uri.hpp"
+#include "support/test_paths.hpp"
 
 namespace {
 
@@ -34,7 +35,8 @@ TEST(CalibrateCoupledMotor, PerMotorFitRecoversMotor6AndItsTableCutsTheModelErro
   const std::string uri = fixture_drive_uri("DYNCAL_DRIVE_TX40_READY");
   ASSERT_FALSE(uri.empty()) << "run through ctest (fixture drive_tx40)";
   const RobotDescription robot = load_robot(default_robots_dir(), "tx40");
-  const Scenario scenario = load_scenario(DYNCAL_SOURCE_DIR "/tests/data/scenarios/tx40_published.json", robot);
+  const Scenario scenario =
+      load_scenario(std::string(dyncal::test::source_dir()) + "/tests/data/scenarios/tx40_published.json", robot);
   const CalibrateOptions o = options(uri);
   std::ostringstream progress;
   // The per-joint fit first, not flashed: the drive keeps its factory table for the runs after it.

@@ -4,6 +4,7 @@
 // the fit meets the same bounds as with the random excitation.
 #include "dyncal_host/identification/excitation/excitation.hpp"
 #include "support/calibration_check.hpp"
+#include "support/test_paths.hpp"
 
 namespace {
 
@@ -11,8 +12,8 @@ TEST(CalibrateDrive, DesignedExcitationRecoversTheSetParameters) {
   const auto robot = dyncal::host::load_robot(dyncal::host::default_robots_dir(), "er20");
   const auto designed = dyncal::host::design_excitation(robot, {});
   dyncal::host::calibrate_and_compare("DYNCAL_DRIVE_DESIGNED_READY",
-                                      DYNCAL_SOURCE_DIR "/tests/data/scenarios/noise_free.json", 0.02, 0.05,
-                                      designed.trajectory);
+                                      std::string(dyncal::test::source_dir()) + "/tests/data/scenarios/noise_free.json",
+                                      0.02, 0.05, designed.trajectory);
 }
 
 }  // namespace

@@ -22,6 +22,7 @@
 #include "dyncal_host/drive/ground_truth.hpp"
 #include "dyncal_host/drive/scenario.hpp"
 #include "dyncal_host/identification/pipeline/compiled_robot.hpp"
+#include "support/test_paths.hpp"
 #include "support/torque_share.hpp"
 
 namespace {
@@ -41,8 +42,9 @@ void idim_iv_on_saved_law(const std::string& name, const Scenario& scenario, con
   ASSERT_TRUE(law.contains("feed_forward_table"));
   auto identify_run = [&](const std::string& method) {
     const std::string report = (out / (method + ".json")).string();
-    const std::string cmd = std::string(DYNCAL_BINARY) + " identify --robots-dir " + DYNCAL_SOURCE_DIR "/tests/robots" +
-                            " --robot " + name + " --data " + log + " --model eq7 --min-speed 0.02 --method " + method +
+    const std::string cmd = std::string(dyncal::test::dyncal_binary()) + " identify --robots-dir " +
+                            std::string(dyncal::test::source_dir()) + "/tests/robots" + " --robot " + name +
+                            " --data " + log + " --model eq7 --min-speed 0.02 --method " + method +
                             (method == "iv" ? " --law " + law_file : std::string()) + " --report " + report +
                             " > /dev/null";
     EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
@@ -82,9 +84,10 @@ void calibrate_test_robot(const std::string& name) {
   std::string uri;
   std::getline(std::ifstream(std::string(dir) + "/" + name + ".ready"), uri);
   ASSERT_FALSE(uri.empty()) << "the " << name << " drive fixture is not running";
-  RobotDescription robot = load_robot(DYNCAL_SOURCE_DIR "/tests/robots", name);
+  RobotDescription robot = load_robot(std::string(dyncal::test::source_dir()) + "/tests/robots", name);
   derive_tau_max(robot);
-  const Scenario scenario = load_scenario(DYNCAL_SOURCE_DIR "/tests/data/scenarios/" + name + "_friction.json", robot);
+  const Scenario scenario = load_scenario(
+      std::string(dyncal::test::source_dir()) + "/tests/data/scenarios/" + name + "_friction.json", robot);
   CalibrateOptions o;
   o.uri = uri;
   o.terms = dyncal::kFrictionEq7;

@@ -12,6 +12,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "support/test_paths.hpp"
+
 namespace {
 
 struct Run {
@@ -21,7 +23,8 @@ struct Run {
 
 /// Runs `PREFIX dyncal ARGS` (the program at `binary`) with stdout discarded: its exit code (-1 if it
 /// did not exit) and stderr.
-Run run_with_prefix(const std::string& prefix, const std::string& args, const std::string& binary = DYNCAL_BINARY) {
+Run run_with_prefix(const std::string& prefix, const std::string& args,
+                    const std::string& binary = dyncal::test::dyncal_binary()) {
   const std::string err_file = std::filesystem::temp_directory_path() / ("dyncal_err_" + std::to_string(::getpid()));
   const std::string cmd = prefix + binary + " " + args + " >/dev/null 2>" + err_file;
   const int status = std::system(cmd.c_str());
@@ -31,12 +34,12 @@ Run run_with_prefix(const std::string& prefix, const std::string& args, const st
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, err};
 }
 
-Run run_dyncal(const std::string& args) {
+Run run_stderr(const std::string& args) {
   return run_with_prefix("", args);
 }
 
-/// As run_dyncal, killed after `seconds` (exit code 124 then, as timeout(1) reports it).
-Run run_dyncal_timeout(const std::string& args, int seconds) {
+/// As run_stderr, killed after `seconds` (exit code 124 then, as timeout(1) reports it).
+Run run_stderr_timeout(const std::string& args, int seconds) {
   return run_with_prefix("timeout " + std::to_string(seconds) + " ", args);
 }
 
@@ -64,7 +67,7 @@ std::string rows(int joints, int count, double dt = 0.01) {
 }
 
 void expect_error(const std::string& args, const std::string& needle) {
-  const Run r = run_dyncal(args);
+  const Run r = run_stderr(args);
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_NE(r.err.find(needle), std::string::npos) << "stderr: " << r.err;
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << "one line expected: " << r.err;
@@ -118,7 +121,7 @@ TEST(CliErrors, VendorFormatWithoutOneRobotListingItIsOneLine) {
   std::filesystem::create_directories(dir / "arm_a");
   std::filesystem::create_directories(dir / "arm_b");
   const std::string args =
-      "identify --format tx40 --robots-dir " + dir.string() + " --data " + std::string(DYNCAL_TX40_DATA);
+      "identify --format tx40 --robots-dir " + dir.string() + " --data " + std::string(dyncal::test::tx40_data());
   expect_error(args, "no robot under " + dir.string() + " lists it in its log_formats");
   std::ofstream(dir / "arm_a" / "robot.json") << R"({"name": "arm_a", "log_formats": ["tx40"]})";
   std::ofstream(dir / "arm_b" / "robot.json") << R"({"name": "arm_b", "log_formats": ["ur-rtde", "tx40"]})";
@@ -138,7 +141,7 @@ TEST(CliErrors, SurveyWithoutItsProgramIsOneLine) {
   const auto dir = std::filesystem::temp_directory_path() / ("dyncal_test_alone_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   const auto copy = dir / "dyncal";
-  std::filesystem::copy_file(DYNCAL_BINARY, copy, std::filesystem::copy_options::overwrite_existing);
+  std::filesystem::copy_file(dyncal::test::dyncal_binary(), copy, std::filesystem::copy_options::overwrite_existing);
   const auto r = run_with_prefix("", "survey --quick", copy.string());
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_NE(r.err.find("not built beside " + copy.string()), std::string::npos) << r.err;
@@ -167,9 +170,9 @@ TEST(CliErrors, TrajectoryFileBeyondALimitIsRefused) {
   expect_error("calibrate --drive tcp://127.0.0.1:1 --trajectory " + path.string(), "joint 2 exceeds its");
   expect_error("calibrate --drive tcp://127.0.0.1:1 --trajectory /nonexistent/t.json", "cannot read");
   // A designed file passes the check: the error is then the missing drive.
-  const auto made = run_dyncal("excite --evaluations 20 --out " + path.string());
+  const auto made = run_stderr("excite --evaluations 20 --out " + path.string());
   ASSERT_EQ(made.exit_code, 0) << made.err;
-  const auto played = run_dyncal("calibrate --drive tcp://127.0.0.1:1 --trajectory " + path.string());
+  const auto played = run_stderr("calibrate --drive tcp://127.0.0.1:1 --trajectory " + path.string());
   EXPECT_EQ(played.exit_code, 2);
   EXPECT_EQ(played.err.find("trajectory"), std::string::npos) << played.err;
   std::filesystem::remove(path);
@@ -180,7 +183,7 @@ TEST(CliErrors, TrajectoryFileBeyondALimitIsRefused) {
 TEST(CliErrors, LawFileFaultsNameTheField) {
   const auto dir = std::filesystem::temp_directory_path() / ("dyncal_test_law_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
-  const auto made = run_dyncal("excite --evaluations 20 --out " + (dir / "t.json").string());
+  const auto made = run_stderr("excite --evaluations 20 --out " + (dir / "t.json").string());
   ASSERT_EQ(made.exit_code, 0) << made.err;
   const std::string iv =
       "identify --robot er20 --data " + (dir / "none.csv").string() + " --model eq7 --method iv --law ";
@@ -209,7 +212,7 @@ TEST(CliErrors, LawFileFaultsNameTheField) {
 // one-sample folds, a validated tail of one sample, a filter order that runs for minutes and a
 // cut-off that overflows the edge computation were all accepted with exit 0.
 TEST(CliErrors, IdentifyOptionsOutsideTheirRangeAreRefused) {
-  const std::string tx40 = std::string("identify --format tx40 --data ") + DYNCAL_TX40_DATA + " ";
+  const std::string tx40 = std::string("identify --format tx40 --data ") + dyncal::test::tx40_data() + " ";
   expect_error(tx40 + "--block 0", "--block 0 s must be at least one cut-off period");
   expect_error(tx40 + "--block -1", "--block -1 s must be at least one cut-off period");
   expect_error(tx40 + "--block 0.01", "must be at least one cut-off period (0.05 s)");
@@ -270,7 +273,7 @@ TEST(CliErrors, FlashChecksTheParameterFileAgainstItsModel) {
   std::filesystem::create_directories(dir);
   const std::string good = (dir / "tx40.json").string();
   // Friction per joint, as the drive's feed-forward applies it.
-  const auto made = run_dyncal(std::string("identify --format tx40 --data ") + DYNCAL_TX40_DATA +
+  const auto made = run_stderr(std::string("identify --format tx40 --data ") + dyncal::test::tx40_data() +
                                " --friction-per-joint --params " + good);
   ASSERT_EQ(made.exit_code, 0) << made.err;
   std::ifstream in(good);
@@ -285,7 +288,7 @@ TEST(CliErrors, FlashChecksTheParameterFileAgainstItsModel) {
     return "flash --drive tcp://127.0.0.1:1 --params " + path;
   };
   // The unmodified file passes every check: the error is the missing drive.
-  const auto passed = run_dyncal("flash --drive tcp://127.0.0.1:1 --params " + good);
+  const auto passed = run_stderr("flash --drive tcp://127.0.0.1:1 --params " + good);
   EXPECT_EQ(passed.exit_code, 2);
   EXPECT_NE(passed.err.find("cannot connect to the drive"), std::string::npos) << passed.err;
   expect_error(variant("renamed", "\"name\": \"Fc1\"", "\"name\": \"Fv1\""), "is 'Fv1', parameter");
@@ -321,7 +324,7 @@ std::string corrupt_tx40(const std::string& name, const std::string& file, int r
   const auto dir = std::filesystem::temp_directory_path() / ("dyncal_tx40_" + name + "_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   for (const char* f : {"pos_read_data.csv", "curr_data.csv"}) {
-    std::ifstream in(std::string(DYNCAL_TX40_DATA) + "/" + f);
+    std::ifstream in(std::string(dyncal::test::tx40_data()) + "/" + f);
     std::ofstream out(dir / f);
     std::string line;
     for (int n = 0; std::getline(in, line); ++n) {
@@ -354,8 +357,9 @@ TEST(CliErrors, ACorruptCellInARealLogIsRefusedOrDroppedWithItsRow) {
   // --drop-outliers: the cell is replaced and named in the report; the fit equals the clean log's
   // to the digits the report prints on every joint but the corrupted one's neighbourhood.
   const auto out_file = std::filesystem::temp_directory_path() / ("dyncal_drop_" + std::to_string(::getpid()));
-  const std::string cmd = std::string(DYNCAL_BINARY) + " identify --format tx40 --drop-outliers --data " + tau_bad +
-                          " > " + out_file.string() + " 2>&1";
+  const std::string cmd = std::string(dyncal::test::dyncal_binary()) +
+                          " identify --format tx40 --drop-outliers --data " + tau_bad + " > " + out_file.string() +
+                          " 2>&1";
   ASSERT_EQ(std::system(cmd.c_str()), 0);
   std::ifstream in(out_file);
   const std::string report((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -374,11 +378,11 @@ TEST(CliErrors, MisleadingCsvMessagesAreFixed) {
                "is a directory, not a CSV file");
   // With the mark stripped the file reads on to the next problem (too few samples), not "missing column 't'".
   const auto bom =
-      run_dyncal("identify --robot er20 --data " + write_csv("bom", "\xEF\xBB\xBF" + header(6) + rows(6, 2)));
+      run_stderr("identify --robot er20 --data " + write_csv("bom", "\xEF\xBB\xBF" + header(6) + rows(6, 2)));
   EXPECT_EQ(bom.exit_code, 2);
   EXPECT_EQ(bom.err.find("missing column"), std::string::npos) << bom.err;
   EXPECT_NE(bom.err.find("fewer than 3 samples"), std::string::npos) << bom.err;
-  const auto tiny = run_dyncal("identify --robot er20 --data " +
+  const auto tiny = run_stderr("identify --robot er20 --data " +
                                write_csv("subnormal", header(6) + rows(6, 5) + "0.05,1e-320,2,3,4,5,6,1,2,3,4,5,6\n"));
   EXPECT_EQ(tiny.err.find("is not a number"), std::string::npos) << tiny.err;
   expect_error("identify --robot er20 --data " +
@@ -389,11 +393,12 @@ TEST(CliErrors, MisleadingCsvMessagesAreFixed) {
 TEST(CliErrors, MonitorRefusesBadStatisticsRatesAndGainsWithOneLine) {
   const auto dir = std::filesystem::temp_directory_path() / ("dyncal_monitor_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
-  const std::string params = (dir / "p.json").string(), data = std::string(" --format tx40 --data ") + DYNCAL_TX40_DATA;
-  ASSERT_EQ(run_dyncal("identify" + data + " --params " + params).exit_code, 0);
+  const std::string params = (dir / "p.json").string(),
+                    data = std::string(" --format tx40 --data ") + dyncal::test::tx40_data();
+  ASSERT_EQ(run_stderr("identify" + data + " --params " + params).exit_code, 0);
   nlohmann::json file = nlohmann::json::parse(std::ifstream(params));
   ASSERT_TRUE(file.contains("monitor"));
-  EXPECT_EQ(run_dyncal("monitor" + data + " --params " + params + " --plots " + (dir / "plots").string()).exit_code, 0);
+  EXPECT_EQ(run_stderr("monitor" + data + " --params " + params + " --plots " + (dir / "plots").string()).exit_code, 0);
   for (int j = 1; j <= 6; ++j)
     EXPECT_GT(std::filesystem::file_size(dir / "plots" / ("joint" + std::to_string(j) + "_residual.svg")), 1000u);
   // The file without its statistics, and with a negative std.
@@ -409,14 +414,15 @@ TEST(CliErrors, MonitorRefusesBadStatisticsRatesAndGainsWithOneLine) {
       {"monitor" + data + " --params " + bare, "has no residual statistics"},
       {"monitor" + data + " --params " + bad, "\"std\" is missing or not a positive number"},
       {"monitor" + data + " --params " + params + " --alarms-per-hour -1", "false-alarm rate"},
-      {"monitor" + data + " --params " + params + " --reference " + DYNCAL_TX40_DATA + " --gain 6000", "K dt <= 1"},
+      {"monitor" + data + " --params " + params + " --reference " + dyncal::test::tx40_data() + " --gain 6000",
+       "K dt <= 1"},
       {"monitor" + data + " --params " + params + " --gain 100", "--gain sets the observer of --reference"},
       {"monitor" + data + " --params " + params + " --drive tcp://127.0.0.1:1", "one or the other"},
       {"monitor --format tx40 --params " + params, "--data LOG is required (or --drive URI)"},
       {"monitor --format tx40 --params " + params + " --drive tcp://127.0.0.1:1", "127.0.0.1"},
   };
   for (const auto& c : cases) {
-    const auto r = run_dyncal(c.args);
+    const auto r = run_stderr(c.args);
     EXPECT_EQ(r.exit_code, 2) << c.args;
     EXPECT_NE(r.err.find(c.message), std::string::npos) << r.err;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
@@ -437,7 +443,7 @@ TEST(CliErrors, ADriveTableThatIsNotARegularFileIsRefused) {
   ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
   for (const std::string& table : {fifo, std::string("/dev/zero"), (dir / "folder").string()}) {
     SCOPED_TRACE(table);
-    const auto r = run_dyncal_timeout("drive --robot er20 --tcp 127.0.0.1:0 --table " + table, 20);
+    const auto r = run_stderr_timeout("drive --robot er20 --tcp 127.0.0.1:0 --table " + table, 20);
     EXPECT_EQ(r.exit_code, 2) << r.err;
     EXPECT_NE(r.err.find(table + ": the drive's table file is not a regular file"), std::string::npos) << r.err;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;

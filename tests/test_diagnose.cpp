@@ -13,6 +13,7 @@
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/diagnosis/diagnose.hpp"
 #include "dyncal_host/drive/simulated_drive.hpp"
+#include "support/test_paths.hpp"
 
 namespace {
 
@@ -20,7 +21,7 @@ using namespace dyncal::host;
 
 TEST(Diagnose, Tx40FindsTheWristCouplingAndLiftsJoint5) {
   const auto robot = load_robot(default_robots_dir(), "tx40");
-  const auto log = read_tx40_log(DYNCAL_TX40_DATA, robot.transmission, robot.joint_offsets);
+  const auto log = read_tx40_log(dyncal::test::tx40_data(), robot.transmission, robot.joint_offsets);
   DiagnoseOptions o;
   o.identify.terms = parse_model("eq7");
   o.identify.friction_per_joint = true;  // the coupling robot.json declares left out: found from the data

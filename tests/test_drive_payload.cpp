@@ -26,6 +26,7 @@
 #include "support/dyncal_cli.hpp"
 #include "support/payload_load.hpp"
 #include "support/simulated_log.hpp"
+#include "support/test_paths.hpp"
 
 namespace {
 
@@ -157,7 +158,7 @@ class DrivePayloadFixture : public ::testing::Test {
     std::string error;
     drive_ = ModbusDrive::connect(uri_, &error);
     ASSERT_TRUE(drive_) << error;
-    sc_ = load_scenario(std::string(DYNCAL_SOURCE_DIR) + "/tests/data/scenarios/cobot7_payload.json", robot_);
+    sc_ = load_scenario(std::string(dyncal::test::source_dir()) + "/tests/data/scenarios/cobot7_payload.json", robot_);
   }
   const RobotDescription robot_ = dyncal::test::test_robot("cobot7");
   std::string uri_;
@@ -235,7 +236,7 @@ TEST_F(DrivePayloadCli, PayloadOnTheDriveFromTheCommandLine) {
   drive_.reset();  // this connection closed before the command line's
   const auto dir = std::filesystem::temp_directory_path() / ("dyncal_payload_cli_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
-  const std::string base = "payload --robot cobot7 --robots-dir " + std::string(DYNCAL_SOURCE_DIR) +
+  const std::string base = "payload --robot cobot7 --robots-dir " + std::string(dyncal::test::source_dir()) +
                            "/tests/robots --drive " + uri_ + " --report ";
   ASSERT_EQ(dyncal::test::run_dyncal(base + (dir / "first.json").string()), 0);
   const nlohmann::json first = dyncal::test::read_json(dir / "first.json");

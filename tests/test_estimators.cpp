@@ -11,7 +11,9 @@
 #include "dyncal/ud_covariance.hpp"
 #include "support/synthetic.hpp"
 
+// The suite in a namespace of its own: the program's suites compile as one unit (tests/CMakeLists.txt).
 namespace {
+namespace estimators_suite {
 
 using dyncal::UpdateStatus;
 using dyncal::test::Er20;
@@ -73,7 +75,7 @@ TEST(StreamingLeastSquares, MergeEqualsSingleAccumulator) {
     all->update(s.K[i], s.tau[i]);
     (i % 3 == 0 ? *a : *b).update(s.K[i], s.tau[i]);
   }
-  a->merge(*b);
+  ASSERT_EQ(a->merge(*b), UpdateStatus::ok);
   ParamVec p1, p2;
   ASSERT_EQ(all->solve(p1), UpdateStatus::ok);
   ASSERT_EQ(a->solve(p2), UpdateStatus::ok);
@@ -332,4 +334,61 @@ TEST(RuntimeSize, KalmanAndRlsEqualFixedSizeBitForBit) {
   }
 }
 
+// StreamingLeastSquares at the run-time size (the host's identify: one instantiation for every model)
+// folds the same rows into the same R, z and residual as the fixed size, bit for bit; sizes it cannot
+// take are refused and change nothing.
+TEST(RuntimeSize, StreamingLeastSquaresEqualsFixedSizeBitForBit) {
+  using DynLs = dyncal::StreamingLeastSquares<double, Eigen::Dynamic, 15 * N>;
+  const Samples s = make_samples(400, 0.01, dyncal::test::er20_truth<kTerms>(), 0.5);
+  auto ls = std::make_unique<dyncal::StreamingLeastSquares<double, P>>();
+  auto a = std::make_unique<dyncal::StreamingLeastSquares<double, P>>();
+  auto dls = std::make_unique<DynLs>();
+  auto da = std::make_unique<DynLs>();
+  EXPECT_EQ(dls->size(), 0);
+  EXPECT_FALSE(dls->full_rank());
+  EXPECT_EQ(dls->reset(0), UpdateStatus::invalid_argument);
+  EXPECT_EQ(dls->reset(15 * N + 1), UpdateStatus::invalid_argument);
+  EXPECT_EQ(ls->reset(P - 1), UpdateStatus::invalid_argument);  // a fixed size takes only its own
+  ASSERT_EQ(ls->reset(P), UpdateStatus::ok);
+  ASSERT_EQ(dls->reset(P), UpdateStatus::ok);
+  ASSERT_EQ(da->reset(P), UpdateStatus::ok);
+  for (size_t i = 0; i < s.K.size(); ++i) {
+    const DynLs::Regressor<N> K = s.K[i];
+    ASSERT_EQ(dls->update(K, s.tau[i]), ls->update(s.K[i], s.tau[i]));
+    if (i % 4 == 0) {  // every 4th sample row by row, weighted, into a second pair: merged below
+      for (int j = 0; j < N; ++j) {
+        const double w = 1.0 + 0.1 * j;
+        ASSERT_EQ(da->add_row(K.row(j).transpose(), s.tau[i][j], w), UpdateStatus::ok);
+        ASSERT_EQ(a->add_row(s.K[i].row(j).transpose(), s.tau[i][j], w), UpdateStatus::ok);
+      }
+    }
+  }
+  // A row of another size is refused, as is merging accumulators of different sizes.
+  const Eigen::VectorXd short_row = Eigen::VectorXd::Ones(P - 1);
+  EXPECT_EQ(dls->add_row(short_row, 1.0), UpdateStatus::invalid_argument);
+  DynLs other;
+  ASSERT_EQ(other.reset(P - 1), UpdateStatus::ok);
+  EXPECT_EQ(dls->merge(other), UpdateStatus::invalid_argument);
+  ASSERT_EQ(dls->merge(*da), UpdateStatus::ok);
+  ASSERT_EQ(ls->merge(*a), UpdateStatus::ok);
+  ASSERT_EQ(dls->rows(), ls->rows());
+  EXPECT_EQ(dls->residual_sum_of_squares(), ls->residual_sum_of_squares());
+  for (int r = 0; r < P; ++r) {
+    EXPECT_EQ(dls->rotated_rhs()[r], ls->rotated_rhs()[r]) << r;
+    for (int c = 0; c < P; ++c) EXPECT_EQ(dls->r_factor()(r, c), ls->r_factor()(r, c)) << r << ", " << c;
+  }
+  ParamVec phi, diag;
+  DynLs::Vector dphi, ddiag;
+  ASSERT_EQ(ls->solve(phi), UpdateStatus::ok);
+  ASSERT_EQ(dls->solve(dphi), UpdateStatus::ok);
+  ASSERT_EQ(ls->inverse_gram_diagonal(diag), UpdateStatus::ok);
+  ASSERT_EQ(dls->inverse_gram_diagonal(ddiag), UpdateStatus::ok);
+  ASSERT_EQ(dphi.size(), P);
+  for (int c = 0; c < P; ++c) {
+    EXPECT_EQ(dphi[c], phi[c]) << c;
+    EXPECT_EQ(ddiag[c], diag[c]) << c;
+  }
+}
+
+}  // namespace estimators_suite
 }  // namespace

@@ -17,6 +17,7 @@
 #include "dyncal_host/identification/pipeline/compiled_robot.hpp"
 #include "support/dyncal_cli.hpp"
 #include "support/simulated_log.hpp"
+#include "support/test_paths.hpp"
 
 namespace {
 
@@ -37,7 +38,7 @@ TEST_P(ExportUrdf, RoundTripsThroughKdlAndRobotImport) {
   const auto dir = std::filesystem::temp_directory_path() / ("dyncal_export_" + name + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir / "robots");
-  std::filesystem::copy(std::string(DYNCAL_SOURCE_DIR) + "/tests/robots/" + name, dir / "robots" / name);
+  std::filesystem::copy(std::string(dyncal::test::source_dir()) + "/tests/robots/" + name, dir / "robots" / name);
   const std::string robots = " --robots-dir " + (dir / "robots").string();
   const RobotDescription robot = test_robot(name);
   write_csv_log((dir / "log.csv").string(), simulate(robot, uniform_times(500.0, 40.0), MotionClock{}, 31, 3).log);
@@ -54,7 +55,7 @@ TEST_P(ExportUrdf, RoundTripsThroughKdlAndRobotImport) {
   // Re-import the written file as a new robot: its merged chain must pass the importer's KDL check.
   ASSERT_EQ(run_dyncal("robot import " + out.string() + " --name roundtrip" + robots), 0);
   const std::string samples = (dir / "samples.json").string();
-  ASSERT_EQ(std::system(("/usr/bin/python3 " + std::string(DYNCAL_SOURCE_DIR) +
+  ASSERT_EQ(std::system(("/usr/bin/python3 " + std::string(dyncal::test::source_dir()) +
                          "/codegen/import_urdf.py samples roundtrip" + robots + " --out " + samples)
                             .c_str()),
             0);
@@ -97,7 +98,7 @@ TEST(ExportUrdfErrors, BaseParametersAloneAreRefused) {
   std::filesystem::create_directories(dir);
   const RobotDescription robot = test_robot("arm3");
   write_csv_log((dir / "log.csv").string(), simulate(robot, uniform_times(500.0, 20.0), MotionClock{}, 31, 3).log);
-  const std::string robots = " --robots-dir " + std::string(DYNCAL_SOURCE_DIR) + "/tests/robots";
+  const std::string robots = " --robots-dir " + std::string(dyncal::test::source_dir()) + "/tests/robots";
   ASSERT_EQ(run_dyncal("identify --robot arm3 --model eq7 --data " + (dir / "log.csv").string() + " --params " +
                        (dir / "p.json").string() + robots),
             0);

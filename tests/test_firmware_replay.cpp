@@ -10,7 +10,9 @@
 #include "er20_replay_data.hpp"
 #include "replay.hpp"
 
+// The suite in a namespace of its own: the program's suites compile as one unit (tests/CMakeLists.txt).
 namespace {
+namespace firmware_replay_suite {
 
 using dyncal::replay::Updater;
 namespace data = dyncal::replay::data;
@@ -51,4 +53,5 @@ TEST(FirmwareReplay, HostDoubleRunReproducesTheCommittedReference) {
   EXPECT_LT(r_kf, 0.1);
 }
 
+}  // namespace firmware_replay_suite
 }  // namespace

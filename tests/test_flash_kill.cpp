@@ -19,6 +19,8 @@
 #include "dyncal/generated/er20/robot.hpp"
 #include "dyncal/table_check.hpp"
 #include "dyncal_port/modbus_drive.hpp"
+#include "support/encoded_table.hpp"
+#include "support/test_paths.hpp"
 
 extern char** environ;
 
@@ -37,8 +39,17 @@ DriveProcess start_drive(const fs::path& dir, int delay_ms) {
   const fs::path ready = dir / "drive.ready";
   fs::remove(ready);
   const std::string table = (dir / "drive.table").string(), ready_s = ready.string(), delay = std::to_string(delay_ms);
-  std::vector<std::string> args = {DYNCAL_BINARY, "drive",        "--tcp", "127.0.0.1:0",      "--lockstep", "--table",
-                                   table,         "--ready-file", ready_s, "--flash-delay-ms", delay};
+  std::vector<std::string> args = {dyncal::test::dyncal_binary(),
+                                   "drive",
+                                   "--tcp",
+                                   "127.0.0.1:0",
+                                   "--lockstep",
+                                   "--table",
+                                   table,
+                                   "--ready-file",
+                                   ready_s,
+                                   "--flash-delay-ms",
+                                   delay};
   std::vector<char*> argv;
   for (auto& a : args) argv.push_back(a.data());
   argv.push_back(nullptr);
@@ -79,13 +90,6 @@ std::vector<std::uint8_t> active_bytes(const std::string& uri) {
   return std::vector<std::uint8_t>(b, b + size);
 }
 
-std::vector<std::uint8_t> encoded(const dyncal::ParameterTable& t) {
-  std::uint8_t b[dyncal::kTableMaxBytes];
-  int size = 0;
-  EXPECT_EQ(dyncal::encode_table(t, b, sizeof b, &size), dyncal::TableStatus::ok);
-  return std::vector<std::uint8_t>(b, b + size);
-}
-
 TEST(FlashKill, RestartAlwaysYieldsTheOldOrTheNewTable) {
   const fs::path dir = fs::temp_directory_path() / ("dyncal_flash_kill_" + std::to_string(getpid()));
   fs::create_directories(dir);
@@ -94,7 +98,7 @@ TEST(FlashKill, RestartAlwaysYieldsTheOldOrTheNewTable) {
   dyncal::make_table<Model>(phi, a);
   phi.setConstant(2.0);
   dyncal::make_table<Model>(phi, b);
-  const auto bytes_a = encoded(a), bytes_b = encoded(b);
+  const auto bytes_a = dyncal::test::encoded_table(a), bytes_b = dyncal::test::encoded_table(b);
   constexpr int kDelayMs = 3;  // per 64 bytes written: a flash takes a few tens of ms
 
   // Table A, flashed to completion; measure how long a flash takes.

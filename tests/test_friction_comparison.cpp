@@ -13,6 +13,7 @@
 #include "dyncal_host/identification/methods/friction_comparison.hpp"
 #include "dyncal_host/identification/pipeline/identify.hpp"
 #include "dyncal_host/identification/pipeline/stacked_data.hpp"
+#include "support/test_paths.hpp"
 
 namespace {
 
@@ -21,7 +22,7 @@ using namespace dyncal::host;
 const std::vector<FrictionModelFit>& fits() {
   static const std::vector<FrictionModelFit> f = [] {
     const auto robot = load_robot(default_robots_dir(), "tx40");
-    const JointLog log = read_tx40_log(DYNCAL_TX40_DATA, robot.transmission, robot.joint_offsets);
+    const JointLog log = read_tx40_log(dyncal::test::tx40_data(), robot.transmission, robot.joint_offsets);
     IdentifyOptions o;
     o.terms = parse_model("eq7,rotor_inertia,offset");
     return compare_friction_models(prepare_stacked(robot, log, o), 0.3);
@@ -85,7 +86,7 @@ TEST(FrictionComparison, NonlinearModelsReportTheirScaleParametersWithIntervals)
 
 TEST(FrictionComparison, RefusesAnEmptyValidationPart) {
   const auto robot = load_robot(default_robots_dir(), "tx40");
-  const JointLog log = read_tx40_log(DYNCAL_TX40_DATA, robot.transmission, robot.joint_offsets);
+  const JointLog log = read_tx40_log(dyncal::test::tx40_data(), robot.transmission, robot.joint_offsets);
   IdentifyOptions o;
   o.terms = parse_model("eq7");
   const StackedData d = prepare_stacked(robot, log, o);

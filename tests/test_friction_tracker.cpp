@@ -8,7 +8,9 @@
 
 #include "dyncal/friction_tracker.hpp"
 
+// The suite in a namespace of its own: the program's suites compile as one unit (tests/CMakeLists.txt).
 namespace {
+namespace friction_tracker_suite {
 
 using dyncal::FrictionTracker;
 using dyncal::LinearFrictionAmplitudes;
@@ -138,4 +140,5 @@ TEST(FrictionTracker, BadInputIsRejectedAndChangesNothing) {
   EXPECT_EQ(tracker->parameters(), copy.parameters());
 }
 
+}  // namespace friction_tracker_suite
 }  // namespace

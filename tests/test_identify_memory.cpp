@@ -12,19 +12,20 @@
 
 #include "dyncal_host/identification/pipeline/kept_samples.hpp"
 #include "support/simulated_log.hpp"
+#include "support/test_paths.hpp"
 
 namespace dyncal::test {
 namespace {
 
 /// Peak resident set [bytes] of `dyncal ARGS` run as a child (wait4's ru_maxrss); -1 if it failed.
 long peak_rss_of_dyncal(const std::vector<std::string>& args) {
-  std::vector<char*> argv{const_cast<char*>(DYNCAL_BINARY)};
+  std::vector<char*> argv{const_cast<char*>(dyncal::test::dyncal_binary())};
   for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
   argv.push_back(nullptr);
   const pid_t pid = fork();
   if (pid == 0) {
     if (!freopen("/dev/null", "w", stdout)) _exit(127);
-    execv(DYNCAL_BINARY, argv.data());
+    execv(dyncal::test::dyncal_binary(), argv.data());
     _exit(127);
   }
   int status = 0;
@@ -52,7 +53,7 @@ void expect_peak_within_three_times_the_log(const std::vector<std::string>& extr
   double small_size = 0, large_size = 0;
   const std::string small = write_log(dir, 20.0, &small_size);
   const std::string large = write_log(dir, 200.0, &large_size);
-  std::vector<std::string> common{"identify", "--robots-dir", std::string(DYNCAL_SOURCE_DIR) + "/tests/robots",
+  std::vector<std::string> common{"identify", "--robots-dir", std::string(dyncal::test::source_dir()) + "/tests/robots",
                                   "--robot",  "arm6",         "--model",
                                   "eq7"};
   common.insert(common.end(), extra.begin(), extra.end());

@@ -18,6 +18,7 @@
 #include "dyncal_host/identification/excitation/excitation.hpp"
 #include "dyncal_host/identification/pipeline/compiled_robot.hpp"
 #include "support/simulated_log.hpp"
+#include "support/test_paths.hpp"
 #include "support/torque_share.hpp"
 
 namespace {
@@ -31,10 +32,10 @@ class IdimIv : public ::testing::TestWithParam<const char*> {};
 
 nlohmann::json identify(const std::string& robot, const std::filesystem::path& dir, const std::string& method) {
   const auto report = dir / (method + ".json");
-  std::string cmd = std::string(DYNCAL_BINARY) + " identify --robots-dir " + DYNCAL_SOURCE_DIR +
-                    "/tests/robots --robot " + robot + " --data " + (dir / "log.csv").string() +
-                    " --model eq7 --method " + method + " --report " + report.string() + " > " +
-                    (dir / (method + ".txt")).string();
+  std::string cmd = std::string(dyncal::test::dyncal_binary()) + " identify --robots-dir " +
+                    dyncal::test::source_dir() + "/tests/robots --robot " + robot + " --data " +
+                    (dir / "log.csv").string() + " --model eq7 --method " + method + " --report " + report.string() +
+                    " > " + (dir / (method + ".txt")).string();
   if (method == "iv") cmd += " --law " + (dir / "law.json").string();
   EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
   std::ifstream in(report);

@@ -13,8 +13,11 @@
 #include "dyncal/generated/er20/robot.hpp"
 #include "dyncal/generated/tx40/robot.hpp"
 #include "support/random_physical.hpp"
+#include "support/test_paths.hpp"
 
+// The suite in a namespace of its own: the program's suites compile as one unit (tests/CMakeLists.txt).
 namespace {
+namespace kdl_oracle_suite {
 
 using dyncal::test::Body;
 
@@ -41,7 +44,7 @@ KDL::Chain chain_from_origins(const Origins& origins, const std::vector<Body>& b
 
 // Chain built independently from robots/er20/robot.json with KDL's own modified-DH frames.
 KDL::Chain er20_chain_from_mdh(const std::vector<Body>& bodies) {
-  std::ifstream in(std::string(DYNCAL_SOURCE_DIR) + "/robots/er20/robot.json");
+  std::ifstream in(std::string(dyncal::test::source_dir()) + "/robots/er20/robot.json");
   const auto desc = nlohmann::json::parse(in);
   KDL::Chain chain;
   for (size_t i = 0; i < bodies.size(); ++i) {
@@ -137,4 +140,5 @@ TEST(KdlOracle, BaseParametersAreFewerAndTheMapDropsNoEffect) {
   EXPECT_LT(Robot::kNumBase, Robot::kNumStandard);
 }
 
+}  // namespace kdl_oracle_suite
 }  // namespace

@@ -12,7 +12,9 @@
 #include "dyncal/kalman_filter.hpp"
 #include "support/synthetic.hpp"
 
+// The suite in a namespace of its own: the program's suites compile as one unit (tests/CMakeLists.txt).
 namespace {
+namespace long_run_float_suite {
 
 using Er20 = dyncal::generated::er20::Robot;
 constexpr unsigned kTerms = dyncal::kFrictionEq7;
@@ -70,4 +72,5 @@ TEST(LongRunFloat, MillionUpdatesStayPositiveDefiniteAndNearDouble) {
   EXPECT_LT(rel, 1e-3);
 }
 
+}  // namespace long_run_float_suite
 }  // namespace

@@ -23,6 +23,7 @@
 #include "dyncal_host/identification/reports/prediction.hpp"
 #include "support/dyncal_cli.hpp"
 #include "support/simulated_log.hpp"
+#include "support/test_paths.hpp"
 
 namespace {
 
@@ -335,7 +336,7 @@ TEST(EffectModelCli, ParameterFileWithEffectsPredictsAnotherLog) {
                 simulate(robot, uniform_times(500.0, 40.0), MotionClock{}, 31, 3, truth.torque()).log);
   const SimulatedLog b = simulate(robot, uniform_times(500.0, 40.0), MotionClock{}, 32, 4, truth.torque());
   write_csv_log((dir / "b.csv").string(), b.log);
-  const std::string robots = std::string(" --robot arm3 --robots-dir ") + DYNCAL_SOURCE_DIR + "/tests/robots";
+  const std::string robots = std::string(" --robot arm3 --robots-dir ") + dyncal::test::source_dir() + "/tests/robots";
   ASSERT_EQ(run_dyncal("identify" + robots + " --model eq7,position_periodic:2:3,coupling:1-2 --data " +
                        (dir / "a.csv").string() + " --validate-on " + (dir / "b.csv").string() + " --report " +
                        (dir / "rep.json").string() + " --params " + (dir / "p.json").string()),
@@ -367,7 +368,7 @@ TEST(EffectModelCli, ParameterFileWithEffectsPredictsAnotherLog) {
 // (from below 0.7 on joint 5), every joint's R^2 within 0.02 of the diagnosis's.
 TEST(EffectModelCli, Tx40DiagnosisReportFedBackToIdentify) {
   const auto dir = temp_dir("dyncal_tx40_effects");
-  const std::string data = std::string(" --format tx40 --data ") + DYNCAL_TX40_DATA + " --friction-per-joint";
+  const std::string data = std::string(" --format tx40 --data ") + dyncal::test::tx40_data() + " --friction-per-joint";
   ASSERT_EQ(run_dyncal("diagnose" + data + " --model eq7 --max-effects 3 --report " + (dir / "d.json").string()), 0);
   ASSERT_EQ(run_dyncal("identify" + data + " --model eq7 --effects " + (dir / "d.json").string() + " --report " +
                        (dir / "i.json").string()),
@@ -399,7 +400,7 @@ TEST(EffectModelCli, Tx40DiagnosisReportFedBackToIdentify) {
 // must be far off: the check can fail.
 void expect_table_gives_identifys_torque(const IdentifyOptions& o, double ratio) {
   const RobotDescription robot = load_robot(default_robots_dir(), "tx40");
-  const JointLog log = read_tx40_log(DYNCAL_TX40_DATA, robot.transmission, robot.joint_offsets);
+  const JointLog log = read_tx40_log(dyncal::test::tx40_data(), robot.transmission, robot.joint_offsets);
   const IdentifyResult r = identify(robot, log, o);
   const ParameterSet p = parameter_set(r);
   const DriveTableContent table = drive_table_content(p, robot);

@@ -30,7 +30,9 @@
 #include "dyncal/momentum_observer.hpp"
 #include "dyncal/table_check.hpp"
 
+// The suite in a namespace of its own: the program's suites compile as one unit (tests/CMakeLists.txt).
 namespace {
+namespace momentum_observer_suite {
 
 using dyncal::UpdateStatus;
 
@@ -327,8 +329,6 @@ TEST(ContactThreshold, CrossingRateMatchesTheCountOnGaussianProcesses) {
   EXPECT_TRUE(std::isnan(dyncal::contact_threshold(1.0, 1.0, dt, 1, 0.0)));
 }
 
-}  // namespace
-
 TEST(CentredSlope, IsTheLeastSquaresLineAndParabolaThroughTheWindowDSamplesLate) {
   using Slope = dyncal::CentredSlope<double, 3, 8>;
   using V = Slope::Vec;
@@ -503,3 +503,6 @@ TEST(FrictionUncertainty, OneAtRestAndReversalsThenTheObserversDecay) {
   for (int k = 0; k < 400; ++k) u.update(U::Vec(0.3, 0.0), moving, w);
   EXPECT_EQ(w[0], 0.0);  // forgotten, no denormal
 }
+
+}  // namespace momentum_observer_suite
+}  // namespace

@@ -8,7 +8,9 @@
 #include "dyncal/nonlinear_friction.hpp"
 #include "support/synthetic.hpp"
 
+// The suite in a namespace of its own: the program's suites compile as one unit (tests/CMakeLists.txt).
 namespace {
+namespace nonlinear_friction_suite {
 
 using dyncal::NonlinearFriction;
 using dyncal::NonlinearFrictionModel;
@@ -165,4 +167,5 @@ TEST(ExtendedKalmanFilter, BadSamplesLeaveStateUntouched) {
   EXPECT_GE(ekf->estimate()[Ekf::column(2, 0)], 1e-3);
 }
 
+}  // namespace nonlinear_friction_suite
 }  // namespace

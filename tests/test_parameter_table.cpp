@@ -11,7 +11,9 @@
 #include "dyncal/parameter_table.hpp"
 #include "dyncal/table_check.hpp"
 
+// The suite in a namespace of its own: the program's suites compile as one unit (tests/CMakeLists.txt).
 namespace {
+namespace parameter_table_suite {
 
 using Er20 = dyncal::generated::er20::Robot;
 using Model = dyncal::IdentificationModel<Er20, dyncal::kFrictionEq7 | dyncal::term::rotor_inertia>;
@@ -191,4 +193,5 @@ TEST(ModbusMap, FieldsDoNotOverlapAndBytesRoundTrip) {
   EXPECT_EQ(mm::get_f32(f), 1.5f);
 }
 
+}  // namespace parameter_table_suite
 }  // namespace

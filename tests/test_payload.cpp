@@ -20,6 +20,7 @@
 #include "support/dyncal_cli.hpp"
 #include "support/payload_load.hpp"
 #include "support/simulated_log.hpp"
+#include "support/test_paths.hpp"
 
 namespace {
 
@@ -161,7 +162,8 @@ TEST(PayloadCli, SavedLoadedModelPredictsAFreshLoadedRun) {
                 simulate(robot, uniform_times(500.0, 40.0), MotionClock{}, 13, 3, load_torque(c, truth)).log);
   write_csv_log((dir / "fresh.csv").string(),
                 simulate(robot, uniform_times(500.0, 40.0), MotionClock{}, 14, 5, load_torque(c, truth)).log);
-  const std::string robot_args = " --robots-dir " + std::string(DYNCAL_SOURCE_DIR) + "/tests/robots --robot arm6";
+  const std::string robot_args =
+      " --robots-dir " + std::string(dyncal::test::source_dir()) + "/tests/robots --robot arm6";
   const std::string d = dir.string() + "/";
   ASSERT_EQ(
       run_dyncal("identify" + robot_args + " --model eq7 --data " + d + "unloaded.csv --params " + d + "arm.json"), 0);
@@ -190,7 +192,7 @@ TEST(PayloadCli, SavedLoadedModelPredictsAFreshLoadedRun) {
     EXPECT_LT(a, b);
   }
   // One line, exit 2: a parameter file for another robot, and a log with no load.
-  EXPECT_EQ(run_dyncal("payload --robots-dir " + std::string(DYNCAL_SOURCE_DIR) +
+  EXPECT_EQ(run_dyncal("payload --robots-dir " + std::string(dyncal::test::source_dir()) +
                        "/tests/robots --robot arm3 --params " + d + "arm.json --data " + d + "loaded.csv"),
             2);
   EXPECT_EQ(run_dyncal("payload" + robot_args + " --params " + d + "arm.json --data " + d + "unloaded.csv"), 2);

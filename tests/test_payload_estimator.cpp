@@ -15,7 +15,9 @@
 #include "dyncal/payload_estimator.hpp"
 #include "support/random_physical.hpp"
 
+// The suite in a namespace of its own: the program's suites compile as one unit (tests/CMakeLists.txt).
 namespace {
+namespace payload_estimator_suite {
 
 using Tx40 = dyncal::generated::tx40::Robot;
 using V6 = Eigen::Matrix<double, 6, 1>;
@@ -128,4 +130,5 @@ TEST(PayloadEstimator, BadInputLeavesTheEstimateUnchanged) {
   EXPECT_EQ(est.estimate(), before);
 }
 
+}  // namespace payload_estimator_suite
 }  // namespace

@@ -24,6 +24,7 @@
 #include "dyncal_host/identification/pipeline/stacked_data.hpp"
 #include "support/dyncal_cli.hpp"
 #include "support/simulated_log.hpp"
+#include "support/test_paths.hpp"
 #include "support/torque_share.hpp"
 
 namespace {
@@ -240,7 +241,7 @@ TEST(RealLogsCli, ValidateOnAndPredictAgree) {
   const SimulatedLog b = simulate(robot, logger_times(kRate, kSeconds, 0.1, 0.05, 8), MotionClock{}, 12, 4);
   write_csv_log((dir / "a.csv").string(), a.log);
   write_csv_log((dir / "b.csv").string(), b.log);
-  const std::string robots = std::string(" --robots-dir ") + DYNCAL_SOURCE_DIR + "/tests/robots";
+  const std::string robots = std::string(" --robots-dir ") + dyncal::test::source_dir() + "/tests/robots";
   ASSERT_EQ(run_dyncal("identify --robot arm3" + robots + " --model eq7 --method wls --data " +
                        (dir / "a.csv").string() + " --validate-on " + (dir / "b.csv").string() + " --report " +
                        (dir / "rep.json").string() + " --params " + (dir / "p.json").string()),
@@ -276,7 +277,7 @@ TEST(RealLogsCli, MotorCurrentLogGivesTheTorqueLogsModel) {
   const auto dir = std::filesystem::temp_directory_path() / ("dyncal_current_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir / "robots");
-  std::filesystem::copy(std::string(DYNCAL_SOURCE_DIR) + "/tests/robots/arm3", dir / "robots" / "arm3");
+  std::filesystem::copy(std::string(dyncal::test::source_dir()) + "/tests/robots/arm3", dir / "robots" / "arm3");
   nlohmann::json desc = read_json(dir / "robots" / "arm3" / "robot.json");
   const std::vector<double> gear{100.0, -80.0, 50.0}, kt{0.12, -0.09, 0.05};
   desc["transmission"] = {
@@ -415,7 +416,7 @@ TEST(RealLogsCli, UrRtdeRecorderCsvIsReadWithoutAConverter) {
   const auto dir = std::filesystem::temp_directory_path() / ("dyncal_rtde_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir / "robots");
-  std::filesystem::copy(std::string(DYNCAL_SOURCE_DIR) + "/tests/robots/arm3", dir / "robots" / "arm3");
+  std::filesystem::copy(std::string(dyncal::test::source_dir()) + "/tests/robots/arm3", dir / "robots" / "arm3");
   nlohmann::json desc = read_json(dir / "robots" / "arm3" / "robot.json");
   const std::vector<double> gear{101.0, 121.0, 81.0}, kt{0.125, 0.11, 0.092};
   desc["transmission"] = {{"gear_ratios", gear}, {"torque_constants", kt}};

@@ -20,13 +20,14 @@
 #include "dyncal_host/common/robot_description.hpp"
 #include "dyncal_host/identification/logs/joint_log.hpp"
 #include "support/dyncal_cli.hpp"
+#include "support/test_paths.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 using dyncal::test::read_json;
 
-const std::string kWriter = std::string(DYNCAL_SOURCE_DIR) + "/tests/tools/write_ros2_bag.py";
+const std::string kWriter = std::string(dyncal::test::source_dir()) + "/tests/tools/write_ros2_bag.py";
 const std::string kModel = " --robot tx40 --model eq7,rotor_inertia,offset";
 
 struct CliRun {
@@ -43,8 +44,8 @@ std::string slurp(const fs::path& p) {
 
 /// `dyncal ARGS` with stdout and stderr captured.
 CliRun dyncal(const std::string& args, const fs::path& dir) {
-  const std::string cmd =
-      std::string(DYNCAL_BINARY) + " " + args + " >" + (dir / "out.txt").string() + " 2>" + (dir / "err.txt").string();
+  const std::string cmd = std::string(dyncal::test::dyncal_binary()) + " " + args + " >" + (dir / "out.txt").string() +
+                          " 2>" + (dir / "err.txt").string();
   const int status = std::system(cmd.c_str());
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(dir / "out.txt"), slurp(dir / "err.txt")};
 }
@@ -79,7 +80,8 @@ class Ros2Bags : public ::testing::Test {
   /// The TX40 log on the joint side as dyncal's CSV, its first `rows` samples (0: all).
   fs::path tx40_csv(Eigen::Index rows = 0) {
     const auto robot = dyncal::host::load_robot(dyncal::host::default_robots_dir(), "tx40");
-    dyncal::host::JointLog log = dyncal::host::read_tx40_log(DYNCAL_TX40_DATA, robot.transmission, robot.joint_offsets);
+    dyncal::host::JointLog log =
+        dyncal::host::read_tx40_log(dyncal::test::tx40_data(), robot.transmission, robot.joint_offsets);
     if (rows > 0) {
       log.t.conservativeResize(rows);
       log.q.conservativeResize(rows, Eigen::NoChange);

@@ -7,7 +7,9 @@
 
 #include "dyncal/sin_cos.hpp"
 
+// The suite in a namespace of its own: the program's suites compile as one unit (tests/CMakeLists.txt).
 namespace {
+namespace sin_cos_suite {
 
 // Largest error in units of the scalar's epsilon, measured against long double sin/cos; the error
 // is taken relative to max(|reference|, 2^-10) so that values near a zero are held to an absolute bound.
@@ -62,4 +64,5 @@ TEST(SinCos, OutOfRangeAndNonFiniteFallBackToLibm) {
   EXPECT_TRUE(std::isnan(inf.sin) && std::isnan(inf.cos));
 }
 
+}  // namespace sin_cos_suite
 }  // namespace

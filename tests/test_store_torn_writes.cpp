@@ -16,18 +16,11 @@
 #include "dyncal_host/common/robot_description.hpp"
 #include "dyncal_host/drive/scenario.hpp"
 #include "dyncal_host/drive/simulated_drive.hpp"
+#include "support/encoded_table.hpp"
 
 namespace {
 
 using namespace dyncal::host;
-
-std::vector<std::uint8_t> encoded(const dyncal::ParameterTable& t) {
-  std::vector<std::uint8_t> b(dyncal::kTableMaxBytes);
-  int size = 0;
-  EXPECT_EQ(dyncal::encode_table(t, b.data(), static_cast<int>(b.size()), &size), dyncal::TableStatus::ok);
-  b.resize(static_cast<size_t>(size));
-  return b;
-}
 
 class StoreTornWrites : public ::testing::Test {
  protected:
@@ -42,8 +35,8 @@ class StoreTornWrites : public ::testing::Test {
       fc_new[j] = 20.0 + j;
       beta[j] = 5.0;
     }
-    old_ = encoded(nominal_table("er20", fc_old, beta));
-    new_ = encoded(nominal_table("er20", fc_new, beta));
+    old_ = dyncal::test::encoded_table(nominal_table("er20", fc_old, beta));
+    new_ = dyncal::test::encoded_table(nominal_table("er20", fc_new, beta));
     ASSERT_NE(old_, new_);
   }
   void TearDown() override { std::filesystem::remove_all(dir_); }

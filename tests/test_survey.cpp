@@ -22,6 +22,7 @@
 #include "dyncal_host/survey/survey_plots.hpp"
 #include "dyncal_host/survey/tracking.hpp"
 #include "support/survey_fixture.hpp"
+#include "support/test_paths.hpp"
 
 namespace {
 
@@ -30,15 +31,9 @@ using namespace dyncal::host::survey;
 using Robot = dyncal::generated::er20::Robot;
 using Vec6 = Eigen::Matrix<double, 6, 1>;
 
-const std::array<double, 6>& kTauMax = dyncal::test::kEr20TauMax;
-
-const SurveyData& data(FrictionModel model) {
-  return dyncal::test::survey_data(model);
-}
-
-MethodSettings settings() {
-  return dyncal::test::survey_settings();
-}
+using dyncal::test::kEr20TauMax;
+using dyncal::test::survey_data;
+using dyncal::test::survey_settings;
 
 TEST(SurveyParameters, BaseMapReproducesTheBaseRegressorTorque) {
   // Y_std phi == Y_b (G phi) at random states and random standard parameters.
@@ -65,7 +60,7 @@ TEST(SurveyParameters, PriorAnchoredStandardParametersHaveTheGivenBaseParameters
 }
 
 TEST(SurveyParameters, PhysicalParametersOfLink3AreTheSurveysTable5SetColumn) {
-  std::ifstream in(std::string(DYNCAL_SOURCE_DIR) + "/robots/er20/survey_published.json");
+  std::ifstream in(std::string(dyncal::test::source_dir()) + "/robots/er20/survey_published.json");
   const nlohmann::json pub = nlohmann::json::parse(in);
   const auto& set = pub["table5_joint3_linear"]["set"];
   const Eigen::VectorXd phi = set_standard();
@@ -128,14 +123,14 @@ TEST(SurveyParameters, CadPriorOnTable5ParametersIsWithinItsErrorOfTheSetValues)
 }
 
 TEST(SurveyIndices, PerfectEstimateHasZeroErrorAndNoiseShowsInTheStd) {
-  const SurveyData& d = data(FrictionModel::eq7);
+  const SurveyData& d = survey_data(FrictionModel::eq7);
   Estimate e;
   e.model = FrictionModel::eq7;
   e.base = base_map() * set_standard();
   e.standard = e.standard_prior = set_standard();
   e.friction = set_friction(d.scenario, FrictionModel::eq7);
-  complete_estimate(e, d, settings());
-  const Indices x = evaluate(e, d.scenario, d.tau_cmd, kTauMax);
+  complete_estimate(e, d, survey_settings());
+  const Indices x = evaluate(e, d.scenario, d.tau_cmd, kEr20TauMax);
   EXPECT_LT(x.J_e, 1e-9);
   EXPECT_LT(x.e_b, 1e-9);
   // tau_cmd of the drive is exactly Eq. 2 + Eq. 7 at the plant state: e_T_Std is the model error.
@@ -145,10 +140,10 @@ TEST(SurveyIndices, PerfectEstimateHasZeroErrorAndNoiseShowsInTheStd) {
 TEST(SurveyMethods, PseudoInverseKalmanAndForgettingRecoverBaseParametersFromNoiseFreeData) {
   for (FrictionModel m : {FrictionModel::eq7, FrictionModel::eq8, FrictionModel::eq9}) {
     SCOPED_TRACE(model_key(m));
-    const SurveyData& d = data(m);
-    for (const Estimate& e : {pseudo_inverse(d, settings(), m), kalman_filter(d, settings(), m),
-                              exponential_forgetting(d, settings(), m)}) {
-      const Indices x = evaluate(e, d.scenario, d.tau, kTauMax);
+    const SurveyData& d = survey_data(m);
+    for (const Estimate& e : {pseudo_inverse(d, survey_settings(), m), kalman_filter(d, survey_settings(), m),
+                              exponential_forgetting(d, survey_settings(), m)}) {
+      const Indices x = evaluate(e, d.scenario, d.tau, kEr20TauMax);
       EXPECT_LT(x.e_b, 1e-4) << e.method;  // base parameters: identifiable, so recovered
       EXPECT_LT(x.e_f, 1e-4) << e.method;
       EXPECT_LT(x.e_T_std, 1e-6) << e.method;
@@ -160,18 +155,19 @@ TEST(SurveyMethods, PseudoInverseKalmanAndForgettingRecoverBaseParametersFromNoi
 }
 
 TEST(SurveyMethods, LinearMethodsRefuseNonlinearModelsAndTheEkfLinearOnes) {
-  EXPECT_THROW(pseudo_inverse(data(FrictionModel::eq7), settings(), FrictionModel::eq4), InputError);
-  EXPECT_THROW(kalman_filter(data(FrictionModel::eq7), settings(), FrictionModel::eq5), InputError);
-  EXPECT_THROW(extended_kalman_filter(data(FrictionModel::eq4), settings(), 1.0, FrictionModel::eq7), InputError);
+  EXPECT_THROW(pseudo_inverse(survey_data(FrictionModel::eq7), survey_settings(), FrictionModel::eq4), InputError);
+  EXPECT_THROW(kalman_filter(survey_data(FrictionModel::eq7), survey_settings(), FrictionModel::eq5), InputError);
+  EXPECT_THROW(extended_kalman_filter(survey_data(FrictionModel::eq4), survey_settings(), 1.0, FrictionModel::eq7),
+               InputError);
 }
 
 TEST(SurveyMethods, EkfOnEq5AndEq6FitsTheTorqueOfNoiseFreeData) {
   for (FrictionModel m : {FrictionModel::eq5, FrictionModel::eq6}) {
     SCOPED_TRACE(model_key(m));
-    const SurveyData& d = data(m);
-    const Estimate e = extended_kalman_filter(d, settings(), 1.0, m);
+    const SurveyData& d = survey_data(m);
+    const Estimate e = extended_kalman_filter(d, survey_settings(), 1.0, m);
     EXPECT_TRUE(e.note.empty()) << e.note;  // no sample rejected
-    const Indices x = evaluate(e, d.scenario, d.tau, kTauMax);
+    const Indices x = evaluate(e, d.scenario, d.tau, kEr20TauMax);
     // Torque fitted (measured: 5.0e-4 on Eq. 5, 0.011 on Eq. 6, whose tanh steepness f4 starts at
     // 3.3 s/rad against the set 20 and converges slowly); Eq. 5's base parameters recovered (0.036).
     EXPECT_LT(x.e_T_std, 0.02) << e.method;
@@ -182,9 +178,9 @@ TEST(SurveyMethods, EkfOnEq5AndEq6FitsTheTorqueOfNoiseFreeData) {
 }
 
 TEST(SurveyMethods, ForgettingEkfFitsStribeckFrictionFromNoiseFreeData) {
-  const SurveyData& d = data(FrictionModel::eq4);
-  const Estimate e = extended_kalman_filter(d, settings(), 0.999);
-  const Indices x = evaluate(e, d.scenario, d.tau, kTauMax);
+  const SurveyData& d = survey_data(FrictionModel::eq4);
+  const Estimate e = extended_kalman_filter(d, survey_settings(), 0.999);
+  const Indices x = evaluate(e, d.scenario, d.tau, kEr20TauMax);
   // 1 000 samples only: torque fitted, friction within 50 % on average, beta within 3 % (worst
   // measured: joint 1, 2.1 %, on the designed Eq. 4 excitation).
   EXPECT_LT(x.e_T_std, 0.005);
@@ -199,15 +195,15 @@ TEST(SurveyMethods, PhysicallyConsistentLsHasPositiveDefinitePseudoInertiasAndFi
   for (FrictionModel m : {FrictionModel::eq7, FrictionModel::eq8, FrictionModel::eq9, FrictionModel::eq4,
                           FrictionModel::eq5, FrictionModel::eq6}) {
     SCOPED_TRACE(model_key(m));
-    const SurveyData& d = data(m);
-    const Estimate e = physically_consistent_ls(d, m, settings());
+    const SurveyData& d = survey_data(m);
+    const Estimate e = physically_consistent_ls(d, m, survey_settings());
     // Positive definite by construction (J = L L^T, diag(L) = exp(.)): from the factor itself, and
     // from the standard parameters it is expressed in up to their rounding.
     ASSERT_EQ(e.pseudo_inertia_min_eigenvalue.size(), 6u);
     for (double ev : e.pseudo_inertia_min_eigenvalue) EXPECT_GT(ev, 0.0);
     const auto from_standard = pseudo_inertia_min_eigenvalues(e.standard);
     for (int l = 0; l < 6; ++l) EXPECT_GT(from_standard[l], -1e-12 * e.standard.segment(10 * l, 10).norm()) << l;
-    const Indices x = evaluate(e, d.scenario, d.tau, kTauMax);
+    const Indices x = evaluate(e, d.scenario, d.tau, kEr20TauMax);
     // The set link 3 is not physically consistent (robots/er20), so the fit cannot be exact.
     EXPECT_LT(x.e_T_std, 1e-3);
     // Every joint's friction curve within 2 % (RMS) of the set one. The parameters themselves on the
@@ -236,7 +232,7 @@ TEST(SurveyMethods, PhysicallyConsistentLsHasPositiveDefinitePseudoInertiasAndFi
     EXPECT_LT(x.e_d, 0.2);  // survey Table 2 level A
     EXPECT_LT(x.J_e, 1.0);  // survey Table 2 level A
     // The prior alone, projected onto the consistent set, is worse than the estimate.
-    EXPECT_LT(x.e_d, inertial_parameter_error(nearest_consistent(settings().prior.mean)));
+    EXPECT_LT(x.e_d, inertial_parameter_error(nearest_consistent(survey_settings().prior.mean)));
   }
   // The set parameters themselves are not consistent: link 3's pseudo-inertia is indefinite.
   EXPECT_LT(pseudo_inertia_min_eigenvalues(set_standard())[2], 0.0);
@@ -252,7 +248,7 @@ TEST(SurveyMethods, PhysicallyConsistentLsStribeckVelocitiesLieInTheirScanInterv
   o.periods = 1;
   o.torque_noise = true;
   const SurveyData d = simulate_survey_data(load_robot(default_robots_dir(), "er20"), o);
-  const Estimate e = physically_consistent_ls(d, FrictionModel::eq4, settings());
+  const Estimate e = physically_consistent_ls(d, FrictionModel::eq4, survey_settings());
   std::vector<std::vector<ScaleInterval>> intervals;
   friction_start(d, FrictionModel::eq4, e.standard, &intervals);
   int bounded = 0;
@@ -276,7 +272,7 @@ TEST(SurveyTracking, ForgettingFollowsASlopeChangeTheKalmanFilterLagsBehind) {
   o.periods = 4;  // as dyncal survey: the change spans 2 000 samples
   const SurveyData d = simulate_survey_data(load_robot(default_robots_dir(), "er20"), o);
   for (ChangeProfile p : {ChangeProfile::ramp, ChangeProfile::second_order, ChangeProfile::step}) {
-    const auto r = track_viscous_friction(d, settings(), p, 3, 0.98);
+    const auto r = track_viscous_friction(d, survey_settings(), p, 3, 0.98);
     ASSERT_EQ(r.size(), 2u);
     const TrackingResult& kf = r[0];
     const TrackingResult& rls = r[1];
@@ -300,7 +296,7 @@ TEST(SurveyTracking, ForgettingFollowsASlopeChangeTheKalmanFilterLagsBehind) {
   // Eq. 4 run: the extended Kalman filter (Eq. 21) and its forgetting form (Eq. 24) on a step.
   o.friction = FrictionModel::eq4;
   const SurveyData d4 = simulate_survey_data(load_robot(default_robots_dir(), "er20"), o);
-  const auto r4 = track_viscous_friction(d4, settings(), ChangeProfile::step, 3, 0.98);
+  const auto r4 = track_viscous_friction(d4, survey_settings(), ChangeProfile::step, 3, 0.98);
   ASSERT_EQ(r4.size(), 2u);
   EXPECT_EQ(r4[0].method, "extended Kalman");
   EXPECT_LT(r4[1].relative_lag, 0.2);
@@ -324,9 +320,10 @@ TEST(SurveyTracking, ConsistentCalibrationPlusForgettingFollowsASlopeChangeWithL
       o.periods = 4;
       o.torque_noise = noise;
       const SurveyData d = simulate_survey_data(robot, o);
-      const Estimate calibration = physically_consistent_ls(sample_rows(d, 0, d.q.rows() / 2), model, settings());
+      const Estimate calibration =
+          physically_consistent_ls(sample_rows(d, 0, d.q.rows() / 2), model, survey_settings());
       const TrackingResult ramp =
-          track_friction_after_calibration(d, calibration, settings(), ChangeProfile::ramp, 3, 0.98);
+          track_friction_after_calibration(d, calibration, survey_settings(), ChangeProfile::ramp, 3, 0.98);
       EXPECT_EQ(ramp.method.rfind(kConsistentForgetting, 0), 0u);
       ASSERT_EQ(ramp.beta_hat.size(), static_cast<size_t>(d.q.rows()));
       EXPECT_LT(ramp.relative_lag, 0.2) << model_key(model) << " noise " << noise;
@@ -339,15 +336,15 @@ TEST(SurveyTracking, ConsistentCalibrationPlusForgettingFollowsASlopeChangeWithL
       // in the simulated data flip: a change of the drive's code elsewhere moved the compiler's
       // FMA contractions in its integrator and this scatter went from 0.37 to 0.18 (docs/survey.md).
       if (model != FrictionModel::eq7) continue;
-      const auto full = track_viscous_friction(d, settings(), ChangeProfile::ramp, 3, 0.98);
+      const auto full = track_viscous_friction(d, survey_settings(), ChangeProfile::ramp, 3, 0.98);
       EXPECT_LT(ramp.relative_scatter, 0.8 * full[1].relative_scatter) << model_key(model);
     }
   }
-  Estimate wrong = physically_consistent_ls(data(FrictionModel::eq7), FrictionModel::eq7, settings());
+  Estimate wrong = physically_consistent_ls(survey_data(FrictionModel::eq7), FrictionModel::eq7, survey_settings());
   wrong.friction.pop_back();
-  EXPECT_THROW(
-      track_friction_after_calibration(data(FrictionModel::eq7), wrong, settings(), ChangeProfile::ramp, 3, 0.98),
-      InputError);
+  EXPECT_THROW(track_friction_after_calibration(survey_data(FrictionModel::eq7), wrong, survey_settings(),
+                                                ChangeProfile::ramp, 3, 0.98),
+               InputError);
 }
 
 /// Table 10's data: one period of the Eq. 7 platform, Table 7 torque noise, 1e-4 rad on the positions.
@@ -367,18 +364,20 @@ TEST(SurveyIdimIv, BeatsLeastSquaresOnNoisyPositions) {
   const SurveyData d = noisy_positions_run(robot);
   IdimIvOptions raw;
   raw.filter = false;
-  const Estimate ols = pseudo_inverse_measured(d, settings(), raw),
-                 iv = idim_iv(d, settings(), raw, survey::closed_loop_of(robot, d));
+  const Estimate ols = pseudo_inverse_measured(d, survey_settings(), raw),
+                 iv = idim_iv(d, survey_settings(), raw, survey::closed_loop_of(robot, d));
   // Converged in the estimate's own standard errors (IdimIvOptions::tolerance).
   ASSERT_EQ(iv.note.rfind("converged, last step ", 0), 0u) << iv.note;
   EXPECT_LE(std::stod(iv.note.substr(std::string("converged, last step ").size())), raw.tolerance) << iv.note;
-  const Indices x_ols = evaluate(ols, d.scenario, d.tau, kTauMax), x_iv = evaluate(iv, d.scenario, d.tau, kTauMax);
+  const Indices x_ols = evaluate(ols, d.scenario, d.tau, kEr20TauMax),
+                x_iv = evaluate(iv, d.scenario, d.tau, kEr20TauMax);
   EXPECT_LT(x_iv.e_b, 0.6 * x_ols.e_b);
   EXPECT_LT(x_iv.J_e_prior, 0.6 * x_ols.J_e_prior);
   IdimIvOptions filtered;
-  const Indices f_ols = evaluate(pseudo_inverse_measured(d, settings(), filtered), d.scenario, d.tau, kTauMax);
-  const Indices f_iv =
-      evaluate(idim_iv(d, settings(), filtered, survey::closed_loop_of(robot, d)), d.scenario, d.tau, kTauMax);
+  const Indices f_ols =
+      evaluate(pseudo_inverse_measured(d, survey_settings(), filtered), d.scenario, d.tau, kEr20TauMax);
+  const Indices f_iv = evaluate(idim_iv(d, survey_settings(), filtered, survey::closed_loop_of(robot, d)), d.scenario,
+                                d.tau, kEr20TauMax);
   // Delta J_e (without filter against with): IDIM-IV's is the smaller by far (survey: 0.08 vs 3.6).
   const double d_ols = (x_ols.J_e_prior - f_ols.J_e_prior) / f_ols.J_e_prior;
   const double d_iv = (x_iv.J_e_prior - f_iv.J_e_prior) / f_iv.J_e_prior;
@@ -397,8 +396,8 @@ TEST(SurveyIdimIv, ParallelDecimationFiltersTheRegressorOfUnfilteredPositions) {
   IdimIvOptions raw, decimated;
   raw.filter = decimated.filter = false;
   decimated.decimation = 5;
-  const auto e_b = [&](const Estimate& e) { return evaluate(e, d.scenario, d.tau, kTauMax).e_b; };
-  const MethodSettings ms = settings();
+  const auto e_b = [&](const Estimate& e) { return evaluate(e, d.scenario, d.tau, kEr20TauMax).e_b; };
+  const MethodSettings ms = survey_settings();
   EXPECT_LT(e_b(pseudo_inverse_measured(d, ms, decimated)), 0.5 * e_b(pseudo_inverse_measured(d, ms, raw)));
   const Estimate iv = idim_iv(d, ms, decimated, closed_loop_of(robot, d));
   EXPECT_EQ(iv.note.rfind("converged", 0), 0u) << iv.note;
@@ -408,7 +407,7 @@ TEST(SurveyIdimIv, ParallelDecimationFiltersTheRegressorOfUnfilteredPositions) {
 // The closed loop IDIM-IV builds its instruments from (issue 5): the drive's known control law on
 // a plant with the set parameters must retrace the recorded states exactly.
 TEST(SurveyClosedLoop, SimulationWithTheSetParametersRetracesTheRecordedStates) {
-  const SurveyData& d = data(FrictionModel::eq7);
+  const SurveyData& d = survey_data(FrictionModel::eq7);
   JointArray Fc{}, beta{};
   for (int j = 0; j < 6; ++j) {
     Fc[j] = d.scenario.friction[j].Fc;

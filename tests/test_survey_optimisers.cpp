@@ -25,20 +25,14 @@ using namespace dyncal::host::survey;
 using Robot = dyncal::generated::er20::Robot;
 using Vec6 = Eigen::Matrix<double, 6, 1>;
 
-const std::array<double, 6>& kTauMax = dyncal::test::kEr20TauMax;
+using dyncal::test::kEr20TauMax;
+using dyncal::test::survey_data;
+using dyncal::test::survey_settings;
 const std::array<double, 6> kSigma{10, 10, 10, 1.78, 1.78, 1.78};
-
-const SurveyData& data(FrictionModel model) {
-  return dyncal::test::survey_data(model);
-}
-
-MethodSettings settings() {
-  return dyncal::test::survey_settings();
-}
 
 /// A decision vector near the set values (CAD inertials, friction 10 % off the set values).
 Eigen::VectorXd near_set(FrictionModel m) {
-  const auto f = set_friction(data(m).scenario, m);
+  const auto f = set_friction(survey_data(m).scenario, m);
   Eigen::VectorXd x(kStandard + static_cast<Eigen::Index>(f.size()));
   x.head(kStandard) = cad_prior(0.2, 7).mean;
   for (size_t i = 0; i < f.size(); ++i) x[kStandard + static_cast<Eigen::Index>(i)] = 1.1 * f[i];
@@ -51,7 +45,7 @@ constexpr FrictionModel kAllModels[] = {FrictionModel::eq7, FrictionModel::eq8, 
 TEST(SurveyObjective, MomentsEqualTheResidualComputedSampleBySample) {
   for (FrictionModel m : kAllModels) {
     SCOPED_TRACE(model_key(m));
-    const SurveyData& d = data(m);
+    const SurveyData& d = survey_data(m);
     const TorqueObjective obj(d, m, kSigma);
     const Eigen::VectorXd x = near_set(m);
     const int kf = obj.friction_per_joint();
@@ -85,7 +79,7 @@ TEST(SurveyObjective, MomentsEqualTheResidualComputedSampleBySample) {
 TEST(SurveyObjective, GradientsMatchCentralDifferences) {
   for (FrictionModel m : kAllModels) {
     SCOPED_TRACE(model_key(m));
-    const TorqueObjective obj(data(m), m, kSigma);
+    const TorqueObjective obj(survey_data(m), m, kSigma);
     const Eigen::VectorXd x = near_set(m);
     Eigen::VectorXd g_ls(x.size()), g_25(x.size());
     obj.least_squares(x.data(), g_ls.data());
@@ -107,7 +101,7 @@ TEST(SurveyObjective, GradientsMatchCentralDifferences) {
 TEST(SurveyObjective, FittedAmplitudesAreTheLeastSquaresOnesGivenTheRest) {
   for (FrictionModel m : kAllModels) {
     SCOPED_TRACE(model_key(m));
-    const TorqueObjective obj(data(m), m, kSigma);
+    const TorqueObjective obj(survey_data(m), m, kSigma);
     Eigen::VectorXd x = near_set(m);
     const Eigen::VectorXd before = x;
     std::array<double, 6> mean{}, var{}, mean_ref{}, var_ref{};
@@ -161,8 +155,8 @@ TEST(SurveyObjective, FittedAmplitudesAreTheLeastSquaresOnesGivenTheRest) {
 TEST(SurveyObjective, BatchFitEqualsOneByOneBitForBit) {
   for (FrictionModel m : kAllModels) {
     SCOPED_TRACE(model_key(m));
-    const TorqueObjective obj(data(m), m, kSigma);
-    const SearchRanges r = search_ranges(data(m), m, cad_prior(0.2, 7).mean, 0.4);
+    const TorqueObjective obj(survey_data(m), m, kSigma);
+    const SearchRanges r = search_ranges(survey_data(m), m, cad_prior(0.2, 7).mean, 0.4);
     std::mt19937_64 rng(5);
     std::uniform_real_distribution<double> U(0.0, 1.0);
     std::vector<Eigen::VectorXd> batch, single, drawn;
@@ -275,10 +269,10 @@ void expect_feasible_in_ranges(const Estimate& e, const SurveyData& d, FrictionM
 TEST(SurveyOptimisers, GradientDescentRecoversFrictionAndFitsNoiseFreeData) {
   for (FrictionModel m : kAllModels) {
     SCOPED_TRACE(model_key(m));
-    const SurveyData& d = data(m);
-    const Estimate e = gradient_descent(d, m, settings());
-    expect_feasible_in_ranges(e, d, m, settings());
-    const Indices x = evaluate(e, d.scenario, d.tau, kTauMax);
+    const SurveyData& d = survey_data(m);
+    const Estimate e = gradient_descent(d, m, survey_settings());
+    expect_feasible_in_ranges(e, d, m, survey_settings());
+    const Indices x = evaluate(e, d.scenario, d.tau, kEr20TauMax);
     const auto f = set_friction(d.scenario, m);
     // Each joint's friction curve over the run's velocities within 2 % (RMS) of the set one, also
     // where parameters trade off (Eq. 5's f1 and f4, Eq. 8's Fc and fp).
@@ -306,8 +300,8 @@ TEST(SurveyOptimisers, GradientDescentRecoversFrictionAndFitsNoiseFreeData) {
 // where the search stopped in its box. With the CAD prior in those directions (standard_prior, the
 // same base parameters and torques) link 3 is close again.
 TEST(SurveyOptimisers, Link3ErrorLiesInTheDirectionsNoTorqueDetermines) {
-  const SurveyData& d = data(FrictionModel::eq7);
-  const Estimate e = gradient_descent(d, FrictionModel::eq7, settings());
+  const SurveyData& d = survey_data(FrictionModel::eq7);
+  const Estimate e = gradient_descent(d, FrictionModel::eq7, survey_settings());
   const Eigen::MatrixXd& G = base_map();
   const Eigen::MatrixXd row_space = G.completeOrthogonalDecomposition().pseudoInverse() * G;
   const Eigen::VectorXd set = set_standard(), err = e.standard - set;
@@ -321,24 +315,24 @@ TEST(SurveyOptimisers, Link3ErrorLiesInTheDirectionsNoTorqueDetermines) {
 
 TEST(SurveyOptimisers, GeneticAlgorithmAndParticleFilterFitNoiseFreeDataWithinTheirRanges) {
   const FrictionModel m = FrictionModel::eq7;
-  const SurveyData& d = data(m);
+  const SurveyData& d = survey_data(m);
   const auto f = set_friction(d.scenario, m);
   // No initial values, only ranges. Tolerances: J_e level A (survey: GA 0.87, PF 0.65); the GA
   // (elitist) recovers each Fc and beta within 10 % (5 % on average), the particle filter's friction within 30 % on
   // average (it samples the tempered posterior; its spread in the flat directions is the price).
-  const Estimate ga = genetic_algorithm(d, m, settings()), pf = particle_filter(d, m, settings());
+  const Estimate ga = genetic_algorithm(d, m, survey_settings()), pf = particle_filter(d, m, survey_settings());
   for (const Estimate* e : {&ga, &pf}) {
-    expect_feasible_in_ranges(*e, d, m, settings());
-    const Indices x = evaluate(*e, d.scenario, d.tau, kTauMax);
+    expect_feasible_in_ranges(*e, d, m, survey_settings());
+    const Indices x = evaluate(*e, d.scenario, d.tau, kEr20TauMax);
     EXPECT_LT(x.e_T_std, 0.02) << e->method;
     EXPECT_LT(x.J_e, 1.0) << e->method;
     EXPECT_LT(x.e_f, e == &ga ? 0.05 : 0.3) << e->method;
   }
   for (int i = 0; i < 12; ++i) EXPECT_NEAR(ga.friction[i], f[i], 0.1 * f[i]) << "GA friction " << i;
   // Both beat the CAD values with mid-range friction on the Eq. 25 objective by far.
-  const TorqueObjective obj(d, m, settings().sigma);
+  const TorqueObjective obj(d, m, survey_settings().sigma);
   Eigen::VectorXd start(kStandard + 12), x_ga(kStandard + 12), x_pf(kStandard + 12);
-  const SearchRanges r = search_ranges(d, m, nearest_consistent(settings().prior.mean), 0.4);
+  const SearchRanges r = search_ranges(d, m, nearest_consistent(survey_settings().prior.mean), 0.4);
   start = 0.5 * (r.lo + r.hi);
   x_ga << ga.standard, Eigen::Map<const Eigen::VectorXd>(ga.friction.data(), 12);
   x_pf << pf.standard, Eigen::Map<const Eigen::VectorXd>(pf.friction.data(), 12);
@@ -347,16 +341,17 @@ TEST(SurveyOptimisers, GeneticAlgorithmAndParticleFilterFitNoiseFreeDataWithinTh
 }
 
 TEST(SurveyOptimisers, StochasticOptimisersAreDeterministicForASeed) {
-  const SurveyData& d = data(FrictionModel::eq7);
+  const SurveyData& d = survey_data(FrictionModel::eq7);
   OptimiserSettings o;
   o.generations = 50;
   o.population = 24;
   for (auto run : {genetic_algorithm, particle_filter}) {
-    const Estimate a = run(d, FrictionModel::eq7, settings(), o), b = run(d, FrictionModel::eq7, settings(), o);
+    const Estimate a = run(d, FrictionModel::eq7, survey_settings(), o),
+                   b = run(d, FrictionModel::eq7, survey_settings(), o);
     EXPECT_EQ(a.standard, b.standard);
     EXPECT_EQ(a.friction, b.friction);
     o.seed = 2;
-    EXPECT_NE(run(d, FrictionModel::eq7, settings(), o).standard, a.standard);
+    EXPECT_NE(run(d, FrictionModel::eq7, survey_settings(), o).standard, a.standard);
     o.seed = 1;
   }
 }
@@ -364,8 +359,9 @@ TEST(SurveyOptimisers, StochasticOptimisersAreDeterministicForASeed) {
 TEST(SurveyOptimisers, RejectsTooSmallBudgets) {
   OptimiserSettings o;
   o.population = 2;
-  EXPECT_THROW(genetic_algorithm(data(FrictionModel::eq7), FrictionModel::eq7, settings(), o), InputError);
-  EXPECT_THROW(particle_filter(data(FrictionModel::eq7), FrictionModel::eq7, settings(), o), InputError);
+  EXPECT_THROW(genetic_algorithm(survey_data(FrictionModel::eq7), FrictionModel::eq7, survey_settings(), o),
+               InputError);
+  EXPECT_THROW(particle_filter(survey_data(FrictionModel::eq7), FrictionModel::eq7, survey_settings(), o), InputError);
 }
 
 }  // namespace

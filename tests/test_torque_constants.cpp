@@ -18,6 +18,7 @@
 #include "support/dyncal_cli.hpp"
 #include "support/payload_load.hpp"
 #include "support/simulated_log.hpp"
+#include "support/test_paths.hpp"
 
 namespace {
 
@@ -197,7 +198,7 @@ TEST(TorqueConstantsCli, IdentifyWithALoadedRunReportsKt) {
   const auto dir = std::filesystem::temp_directory_path() / ("dyncal_kt_" + std::to_string(::getpid()));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir / "robots");
-  std::filesystem::copy(std::string(DYNCAL_SOURCE_DIR) + "/tests/robots/arm6", dir / "robots" / "arm6");
+  std::filesystem::copy(std::string(dyncal::test::source_dir()) + "/tests/robots/arm6", dir / "robots" / "arm6");
   const CurrentArm a = current_arm("arm6");
   const int n = a.robot.num_joints;
   nlohmann::json desc = read_json(dir / "robots" / "arm6" / "robot.json");

@@ -13,13 +13,15 @@
 #include <nlohmann/json.hpp>
 #include <utility>
 
+#include "support/test_paths.hpp"
+
 namespace {
 
 nlohmann::json identify(const std::string& method, const std::string& extra = "") {
   const auto report = std::filesystem::temp_directory_path() / ("dyncal_tx40_" + method + ".json");
-  const std::string cmd = std::string(DYNCAL_BINARY) + " identify --format tx40 --data " + DYNCAL_TX40_DATA +
-                          " --model eq7,rotor_inertia,offset --method " + method + " --report " + report.string() +
-                          extra + " > /dev/null";
+  const std::string cmd = std::string(dyncal::test::dyncal_binary()) + " identify --format tx40 --data " +
+                          dyncal::test::tx40_data() + " --model eq7,rotor_inertia,offset --method " + method +
+                          " --report " + report.string() + extra + " > /dev/null";
   EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
   std::ifstream in(report);
   return nlohmann::json::parse(in);
@@ -76,7 +78,8 @@ TEST(Tx40Identify, DeclaredCouplingInTheModelLiftsTheWrist) {
 TEST(Tx40Identify, ParameterFileSaysHowFrictionIsApplied) {
   const auto dir = std::filesystem::temp_directory_path() / ("dyncal_tx40_files_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
-  const std::string bin = DYNCAL_BINARY, data = std::string(" --format tx40 --data ") + DYNCAL_TX40_DATA;
+  const std::string bin = dyncal::test::dyncal_binary(),
+                    data = std::string(" --format tx40 --data ") + dyncal::test::tx40_data();
   const auto motor = dir / "motor.json", joint = dir / "joint.json", pred = dir / "pred.json";
   ASSERT_EQ(std::system((bin + " identify" + data + " --params " + motor.string() + " > /dev/null").c_str()), 0);
   ASSERT_EQ(
@@ -122,8 +125,9 @@ TEST(Tx40Identify, PhysicallyConsistentLsFitsAsWellAsWls) {
 // the same effects on every joint.
 TEST(Tx40Identify, DiagnosedEffectsFitPhysicallyConsistently) {
   const auto diagnosis = std::filesystem::temp_directory_path() / "dyncal_tx40_diagnosis.json";
-  const std::string cmd = std::string(DYNCAL_BINARY) + " diagnose --format tx40 --data " + DYNCAL_TX40_DATA +
-                          " --friction-per-joint --report " + diagnosis.string() + " > /dev/null";
+  const std::string cmd = std::string(dyncal::test::dyncal_binary()) + " diagnose --format tx40 --data " +
+                          dyncal::test::tx40_data() + " --friction-per-joint --report " + diagnosis.string() +
+                          " > /dev/null";
   ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
   const std::string extra = " --friction-per-joint --effects " + diagnosis.string();
   const auto w = identify("wls", extra);

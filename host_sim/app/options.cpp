@@ -1,7 +1,4 @@
 // Options and files several subcommands share.
-#include <spawn.h>
-#include <sys/wait.h>
-
 #include <fstream>
 #include <optional>
 #include <utility>
@@ -15,26 +12,9 @@
 #include "dyncal_host/identification/logs/uniform_grid.hpp"
 #include "dyncal_host/identification/pipeline/compiled_robot.hpp"
 
-extern char** environ;
-
 namespace dyncal::app {
 
 using host::InputError;
-
-int run_urdf_tool(const std::vector<std::string>& args) {
-  const std::string python = "/usr/bin/python3";
-  std::vector<std::string> all{python, std::string(DYNCAL_SOURCE_DIR) + "/codegen/import_urdf.py"};
-  all.insert(all.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  for (std::string& a : all) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  pid_t pid = 0;
-  if (posix_spawn(&pid, python.c_str(), nullptr, nullptr, argv.data(), environ) != 0)
-    throw InputError("cannot run " + python + " (scripts/setup installs it)");
-  int status = 0;
-  if (waitpid(pid, &status, 0) < 0 || !WIFEXITED(status)) throw InputError("the URDF tool did not finish");
-  return WEXITSTATUS(status);
-}
 
 void write_json_file(const std::string& path, const nlohmann::json& j) {
   std::ofstream out(path);

@@ -25,9 +25,10 @@ using dyncal::test::counting;
 // (relative), the recursive ones to that or their prior's bias. Float with N = 1 is not built:
 // g++ 12 -O3 rejects PackedCovariance<float, 12, 1>::compute_v ("iteration 2147483635 invokes
 // undefined behavior", -Werror=aggressive-loop-optimizations; see the closing note of issue 20).
-// The KF and RLS at a run-time size (P = Eigen::Dynamic, capacity 16), as the host runs them for
-// any robot, allocate nothing either and equal the fixed-size ones bit for bit: double with N = 1,
-// whose regressor is a row-major row (test_estimators.cpp compares N = 6 with the model's structure).
+// The streaming LS, KF and RLS at a run-time size (P = Eigen::Dynamic, capacity 16), as the host
+// runs them for any robot, allocate nothing either and equal the fixed-size ones bit for bit: double
+// with N = 1, whose regressor is a row-major row (test_estimators.cpp compares N = 6 with the
+// model's structure).
 template <typename Scalar, int N>
 struct RunTimeSize {
   static constexpr bool kBuilt = std::is_same_v<Scalar, double> && N == 1;
@@ -35,8 +36,11 @@ struct RunTimeSize {
   using Covariance = dyncal::PackedCovariance<Scalar, Eigen::Dynamic, N, kCapacity>;
   using Kf = dyncal::KalmanFilter<Scalar, Eigen::Dynamic, N, Covariance>;
   using Rls = dyncal::RlsForgetting<Scalar, Eigen::Dynamic, N, Covariance>;
+  using Ls = dyncal::StreamingLeastSquares<Scalar, Eigen::Dynamic, kCapacity>;
   Kf kf;
   Rls rls;
+  Ls ls;
+  typename Ls::Vector phi;
   typename Kf::ParamVector zero, p0;
   typename Kf::Regressor k;
 };
@@ -77,6 +81,7 @@ void run_generic(GenericWorkspace<Scalar, N>& w, double tolerance) {
     w.run_time.p0 = PV::Constant(Scalar(1e4));
     ASSERT_EQ(w.run_time.kf.reset(w.run_time.zero, w.run_time.p0), dyncal::UpdateStatus::ok);
     ASSERT_EQ(w.run_time.rls.reset(w.run_time.zero, w.run_time.p0, Scalar(0.999)), dyncal::UpdateStatus::ok);
+    ASSERT_EQ(w.run_time.ls.reset(W::kP), dyncal::UpdateStatus::ok);
   }
   ASSERT_EQ(w.diff.reset(Scalar(0.01), Scalar(20)), dyncal::UpdateStatus::ok);
   for (int i = 0; i < 300; ++i) {
@@ -90,12 +95,16 @@ void run_generic(GenericWorkspace<Scalar, N>& w, double tolerance) {
       w.run_time.k = K;
       ASSERT_EQ(w.run_time.kf.update(w.run_time.k, tau, V::Ones()), dyncal::UpdateStatus::ok);
       ASSERT_EQ(w.run_time.rls.update(w.run_time.k, tau), dyncal::UpdateStatus::ok);
+      ASSERT_EQ(w.run_time.ls.update(w.run_time.k, tau), dyncal::UpdateStatus::ok);
     }
     V fq, fqd, fqdd, ftau;
     const auto ds = w.diff.update(tau, tau, fq, fqd, fqdd, ftau);
     ASSERT_TRUE(ds == dyncal::UpdateStatus::ok || ds == dyncal::UpdateStatus::not_ready);
   }
   ASSERT_EQ(w.ls.solve(w.phi), dyncal::UpdateStatus::ok);
+  if constexpr (RunTimeSize<Scalar, N>::kBuilt) {
+    ASSERT_EQ(w.run_time.ls.solve(w.run_time.phi), dyncal::UpdateStatus::ok);
+  }
   counting = false;
   const double scale = static_cast<double>(w.truth.norm());
   EXPECT_LT(static_cast<double>((w.phi - w.truth).norm()) / scale, tolerance) << "LS, N = " << N;
@@ -110,6 +119,7 @@ void run_generic(GenericWorkspace<Scalar, N>& w, double tolerance) {
     for (int c = 0; c < W::kP; ++c) {
       EXPECT_EQ(w.run_time.kf.estimate()[c], w.kf.estimate()[c]) << "run-time KF, N = " << N;
       EXPECT_EQ(w.run_time.rls.estimate()[c], w.rls.estimate()[c]) << "run-time RLS, N = " << N;
+      EXPECT_EQ(w.run_time.phi[c], w.phi[c]) << "run-time LS, N = " << N;
     }
   }
 }

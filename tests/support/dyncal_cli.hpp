@@ -8,11 +8,14 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "support/test_paths.hpp"
+
 namespace dyncal::test {
 
-/// Runs `dyncal ARGS` (DYNCAL_BINARY) with its output discarded; its exit code, -1 if it did not exit.
+/// Runs `dyncal ARGS` (dyncal_binary()) with its output discarded; its exit code, -1 if it did not exit.
 inline int run_dyncal(const std::string& args) {
-  const int status = std::system((std::string(DYNCAL_BINARY) + " " + args + " >/dev/null 2>&1").c_str());
+  const int status =
+      std::system((std::string(dyncal::test::dyncal_binary()) + " " + args + " >/dev/null 2>&1").c_str());
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 

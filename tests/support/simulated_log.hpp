@@ -14,6 +14,7 @@
 #include "dyncal_host/identification/excitation/excitation.hpp"
 #include "dyncal_host/identification/logs/joint_log.hpp"
 #include "dyncal_host/identification/pipeline/compiled_robot.hpp"
+#include "support/test_paths.hpp"
 
 namespace dyncal::test {
 
@@ -22,7 +23,7 @@ using host::RobotDescription;
 
 /// A test robot from tests/robots/ with its tau_max derived when robot.json gives none.
 inline RobotDescription test_robot(const std::string& name) {
-  RobotDescription r = host::load_robot(std::string(DYNCAL_SOURCE_DIR) + "/tests/robots", name);
+  RobotDescription r = host::load_robot(std::string(dyncal::test::source_dir()) + "/tests/robots", name);
   host::derive_tau_max(r);
   return r;
 }

@@ -9,6 +9,7 @@
 
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/json_file.hpp"
+#include "dyncal_host/common/source_tree.hpp"
 
 namespace dyncal::host {
 namespace {
@@ -189,7 +190,7 @@ void read_log_formats(const Reader& rd, const json& j, RobotDescription& r) {
 
 std::string default_robots_dir() {
   if (const char* env = std::getenv("DYNCAL_ROBOTS")) return env;
-  return DYNCAL_SOURCE_ROBOTS_DIR;
+  return source_tree_dir() + "/robots";
 }
 
 std::string default_robot_name(const std::string& robots_dir) {

@@ -296,7 +296,7 @@ void IdentifyPipeline::fit(const StackedData& data, const std::vector<char>& tra
                            Eigen::VectorXd& stdev, FitDetails* details, const FitDetails* decided) const {
   const std::vector<int>* dropped = decided ? &decided->decision.dropped : nullptr;
   const Eigen::Index S = data.t.size();
-  std::unique_ptr<LeastSquaresFit> ls = model_.make_least_squares();
+  std::unique_ptr<LeastSquaresFit> ls = make_least_squares(model_);
   Eigen::MatrixXd K;
   Eigen::VectorXd row(P);
   // Every fitted row of the training samples, its weight from `weight` (joint).

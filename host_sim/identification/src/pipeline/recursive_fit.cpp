@@ -5,10 +5,43 @@
 #include "dyncal/kalman_filter.hpp"
 #include "dyncal/rls_forgetting.hpp"
 #include "dyncal/robot_model.hpp"
+#include "dyncal/streaming_least_squares.hpp"
 #include "dyncal_host/common/input_error.hpp"
 
 namespace dyncal::host {
 namespace {
+
+/// lib/ StreamingLeastSquares at the run-time size behind LeastSquaresFit: the same updater and
+/// arithmetic as at a fixed size.
+class RunTimeLeastSquares final : public LeastSquaresFit {
+ public:
+  using Ls = StreamingLeastSquares<double, Eigen::Dynamic, max_model_params(kMaxRobotJoints)>;
+  /// invalid_argument for a size beyond the capacity.
+  UpdateStatus resize(int num_params) { return ls_.reset(num_params); }
+  void reset() override { ls_.reset(); }
+  UpdateStatus add_row(const double* k, double y, double w) override {
+    return ls_.add_row(Eigen::Map<const Eigen::VectorXd>(k, ls_.size()), y, w);
+  }
+  UpdateStatus solve(Eigen::VectorXd& phi) const override {
+    Ls::Vector x;
+    const UpdateStatus s = ls_.solve(x);
+    if (s == UpdateStatus::ok) phi = x;
+    return s;
+  }
+  UpdateStatus inverse_gram_diagonal(Eigen::VectorXd& diag) const override {
+    Ls::Vector d;
+    const UpdateStatus s = ls_.inverse_gram_diagonal(d);
+    if (s == UpdateStatus::ok) diag = d;
+    return s;
+  }
+  double residual_sum_of_squares() const override { return ls_.residual_sum_of_squares(); }
+  long rows() const override { return ls_.rows(); }
+  Eigen::MatrixXd r_factor() const override { return ls_.r_factor(); }
+  Eigen::VectorXd rotated_rhs() const override { return ls_.rotated_rhs(); }
+
+ private:
+  Ls ls_;
+};
 
 template <int N>
 using RunTimeCovariance = PackedCovariance<double, Eigen::Dynamic, N, max_model_params(N)>;
@@ -66,6 +99,15 @@ std::unique_ptr<RecursiveFit> make_for_joints(const TermSetModel& m, double p0, 
 }
 
 }  // namespace
+
+std::unique_ptr<LeastSquaresFit> make_least_squares(const TermSetModel& model) {
+  auto ls = std::make_unique<RunTimeLeastSquares>();
+  if (ls->resize(model.num_params) != UpdateStatus::ok)
+    throw InputError("least squares: a model of " + std::to_string(model.num_params) +
+                     " parameters is beyond the compiled capacity of " +
+                     std::to_string(max_model_params(kMaxRobotJoints)));
+  return ls;
+}
 
 std::unique_ptr<RecursiveFit> make_kalman_filter(const TermSetModel& model, double p0, UpdateStatus* status) {
   return make_for_joints(model, p0, 1.0, false, status, std::make_integer_sequence<int, kMaxRobotJoints>());

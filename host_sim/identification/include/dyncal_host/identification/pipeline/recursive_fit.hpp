@@ -1,7 +1,8 @@
 #pragma once
-// The recursive estimators of any robot's identification model (identify --method kf | rls, and
-// calibrate's online path): lib/ KalmanFilter and RlsForgetting at the model's run-time size,
-// compiled once per joint count for every robot and term set.
+// The streaming estimators of any robot's identification model at the model's run-time size,
+// compiled once for every robot and term set: lib/ StreamingLeastSquares (identify's IDIM-OLS / WLS),
+// and KalmanFilter and RlsForgetting (identify --method kf | rls, calibrate's online path), these
+// once per joint count.
 
 #include <memory>
 
@@ -15,6 +16,11 @@ namespace dyncal::host {
 constexpr int max_model_params(int num_joints) {
   return (10 + kNumTerms) * num_joints;
 }
+
+/// lib/ StreamingLeastSquares<double, Eigen::Dynamic> (IDIM-OLS / WLS, survey Eq. 15) of `model`'s
+/// size P = model.num_params, capacity max_model_params(kMaxRobotJoints), with no rows. Throws
+/// InputError for a model beyond that capacity.
+std::unique_ptr<LeastSquaresFit> make_least_squares(const TermSetModel& model);
 
 /// lib/ KalmanFilter<double, Eigen::Dynamic, N> (survey Eq. 19) of `model`'s size (N =
 /// model.num_joints, P = model.num_params, dense regressor structure), reset to phi = 0 with

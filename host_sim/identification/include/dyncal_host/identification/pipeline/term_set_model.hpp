@@ -2,9 +2,9 @@
 // One compiled robot's identification model for one built term set (lib/ IdentificationModel<Robot,
 // Terms>) as run-time data and operations. This is all the identification pipeline needs of a
 // robot: the pipeline (identify_pipeline.hpp) is compiled once against it, and only what must be
-// fixed-size per robot -- the generated regressor and lib/ least squares of its size -- is
-// compiled per robot and term set (term_set_model_of.hpp, in the robots' units). The KF and RLS run
-// at the model's run-time size (recursive_fit.hpp).
+// fixed-size per robot -- the generated regressor -- is compiled per robot and term set
+// (term_set_model_of.hpp, in the robots' units). The least squares, KF and RLS run at the model's
+// run-time size (recursive_fit.hpp).
 
 #include <Eigen/Core>
 #include <memory>
@@ -16,8 +16,8 @@
 
 namespace dyncal::host {
 
-/// lib/ StreamingLeastSquares<double, P> (IDIM-OLS / WLS, survey Eq. 15) of one model's size P
-/// behind a run-time interface: the same updater, the same arithmetic.
+/// lib/ StreamingLeastSquares (IDIM-OLS / WLS, survey Eq. 15) of one model's size P behind a
+/// run-time interface: the same updater, the same arithmetic (recursive_fit.hpp makes it).
 class LeastSquaresFit {
  public:
   virtual ~LeastSquaresFit() = default;
@@ -62,9 +62,6 @@ struct TermSetModel {
   /// K = IdentificationModel::regressor(q, qd, qdd, tau_load = 0) (N x P, column-major into K);
   /// q, qd, qdd: N joint values [rad, rad/s, rad/s^2].
   void (*regressor)(const double* q, const double* qd, const double* qdd, double* K) = nullptr;
-  /// Fresh lib/ least squares of this model's size (its KF and RLS: recursive_fit.hpp, compiled
-  /// once for every robot).
-  std::unique_ptr<LeastSquaresFit> (*make_least_squares)() = nullptr;
 
   /// Column of term t of joint joint0 (0-based), or -1 (IdentificationModel::column).
   int column(unsigned t, int joint0) const {
