@@ -146,19 +146,12 @@ std::string joined(const std::vector<std::string>& v) {
   return s;
 }
 
-double median_step(const std::vector<std::int64_t>& ns) {
-  std::vector<std::int64_t> d(ns.size() - 1);
-  for (std::size_t i = 1; i < ns.size(); ++i) d[i - 1] = ns[i] - ns[i - 1];
-  std::nth_element(d.begin(), d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2), d.end());
-  return static_cast<double>(d[d.size() / 2]) * 1e-9;
-}
-
 /// "period 0.2000 ms, jitter 0.003 periods, 2 ticks without a sample" of strictly increasing stamps.
 std::string clock_summary(const std::vector<std::int64_t>& ns) {
   Eigen::VectorXd t(static_cast<Eigen::Index>(ns.size()));
   for (std::size_t i = 0; i < ns.size(); ++i)
     t[static_cast<Eigen::Index>(i)] = static_cast<double>(ns[i] - ns[0]) * 1e-9;
-  const SampleClock c = estimate_sample_clock(t, {{0, t.size()}}, median_step(ns));
+  const SampleClock c = estimate_sample_clock(t, {{0, t.size()}}, median_step(t, {{0, t.size()}}));
   char s[160];
   std::snprintf(s, sizeof s, "period %.6g ms, stamp jitter %.3f periods RMS, %ld ticks without a sample",
                 c.period * 1e3, c.stamp_jitter, c.missing);

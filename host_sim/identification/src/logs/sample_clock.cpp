@@ -5,6 +5,18 @@
 
 namespace dyncal::host {
 
+double median_step(const Eigen::VectorXd& t, const std::vector<std::pair<Eigen::Index, Eigen::Index>>& segments) {
+  std::vector<double> steps;
+  steps.reserve(static_cast<size_t>(t.size()));
+  for (const auto& [a, b] : segments) {
+    for (Eigen::Index i = a + 1; i < b; ++i) steps.push_back(t[i] - t[i - 1]);
+  }
+  if (steps.empty()) return 0.0;
+  auto mid = steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2);
+  std::nth_element(steps.begin(), mid, steps.end());
+  return *mid;
+}
+
 SampleClock estimate_sample_clock(const Eigen::VectorXd& t,
                                   const std::vector<std::pair<Eigen::Index, Eigen::Index>>& segments, double period) {
   SampleClock c;

@@ -14,18 +14,6 @@ namespace {
 
 using Index = Eigen::Index;
 
-double median_step(const Eigen::VectorXd& t, const std::vector<std::pair<Index, Index>>& segments) {
-  std::vector<double> steps;
-  steps.reserve(static_cast<size_t>(t.size()));
-  for (const auto& [a, b] : segments) {
-    for (Index i = a + 1; i < b; ++i) steps.push_back(t[i] - t[i - 1]);
-  }
-  if (steps.empty()) return 0.0;
-  auto mid = steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2);
-  std::nth_element(steps.begin(), mid, steps.end());
-  return *mid;
-}
-
 /// Natural cubic spline through (x_i, Y.row(i)) for every column of Y at once (Thomas algorithm on
 /// the tridiagonal system of the second derivatives; M_0 = M_n = 0).
 class NaturalCubicSpline {

@@ -19,6 +19,10 @@ struct SampleClock {
   long missing = 0;         ///< clock ticks without a sample (dropped rows), summed over the segments
 };
 
+/// The median step between consecutive stamps `t` inside each of `segments` ([first, end) rows)
+/// [s]: the period estimate estimate_sample_clock starts from. 0 when no segment has two samples.
+double median_step(const Eigen::VectorXd& t, const std::vector<std::pair<Eigen::Index, Eigen::Index>>& segments);
+
 /// Estimates the clock of stamps `t` (strictly increasing) in each of `segments` ([first, end) rows)
 /// from the period estimate `period`: each sample's tick n (n_0 = 0, every step at least one tick,
 /// the nearest whole number of periods from the previous sample's clock time), then offset and
