@@ -104,7 +104,8 @@ PushResult pushes_detected(const std::vector<double>& times, const Monitor& moni
   std::vector<Push> pushes;
   for (int i = 0; i < 40; ++i) {
     const int j = joint(rng);
-    pushes.push_back({1.0 + 1.4 * i, j, (sign(rng) > 0 ? 1 : -1) * size(rng) * c.robot.tau_max[j]});
+    const double direction = sign(rng) > 0 ? 1 : -1;  // drawn before the size: one order on every compiler
+    pushes.push_back({1.0 + 1.4 * i, j, direction * size(rng) * c.robot.tau_max[j]});
   }
   long k = -1;
   const test::ExtraTorque external = [&](const Eigen::VectorXd&, const Eigen::VectorXd&, const Eigen::VectorXd&,

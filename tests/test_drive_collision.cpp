@@ -39,6 +39,7 @@
 #include "dyncal_host/identification/pipeline/identify.hpp"
 #include "dyncal_host/identification/reports/drive_table.hpp"
 #include "dyncal_host/identification/reports/prediction.hpp"
+#include "support/random_physical.hpp"
 #include "support/simulated_log.hpp"
 
 namespace {
@@ -256,7 +257,7 @@ TEST_P(DriveCollision, ContactsStopTheDriveWithin20msAndUnseenMotionRaisesNoAlar
     ExternalContact e;
     e.link = 1 + static_cast<int>(unit(rng) * n) % n;
     e.point = {0.2 * (unit(rng) - 0.5), 0.2 * (unit(rng) - 0.5), 0.2 * (unit(rng) - 0.5)};
-    Eigen::Vector3d dir(normal(rng), normal(rng), normal(rng));
+    Eigen::Vector3d dir = dyncal::test::draws_last_first<3>(rng, normal);
     dir.normalize();
     e.start = 1.0 + 8.0 * unit(rng);
     e.duration = kContactSeconds;

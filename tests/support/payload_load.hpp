@@ -23,13 +23,12 @@ inline Body random_load(std::mt19937& rng, double mass) {
   std::uniform_real_distribution<double> u(0.0, 1.0);
   Body b;
   b.m = mass;
-  b.c = Eigen::Vector3d(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5) * 0.2;
+  b.c = (draws_last_first<3>(rng, u).array() - 0.5).matrix() * 0.2;
   // Second moments about the centre of mass of a box of half sides h: m h^2 / 3 each.
-  const Eigen::Vector3d h(0.01 + 0.05 * u(rng), 0.01 + 0.05 * u(rng), 0.01 + 0.05 * u(rng));
+  const Eigen::Vector3d h = (0.01 + 0.05 * draws_last_first<3>(rng, u).array()).matrix();
   const Eigen::Vector3d j = mass * h.cwiseAbs2() / 3.0;
   const Eigen::Matrix3d principal = (Eigen::Vector3d::Constant(j.sum()) - j).asDiagonal();
-  const Eigen::Matrix3d R =
-      Eigen::Quaterniond(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5).normalized().toRotationMatrix();
+  const Eigen::Matrix3d R = random_rotation(rng, u);
   b.Ic = R * principal * R.transpose();
   return b;
 }

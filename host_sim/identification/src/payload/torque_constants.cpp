@@ -274,13 +274,13 @@ TorqueConstantFit identify_torque_constants(const RobotDescription& robot, const
   const MatrixXd cov_s = sigma2 * fit.inflation * (pr.Jp.transpose() * pr.Jp).ldlt().solve(MatrixXd::Identity(N, N));
   fit.kt.resize(N);
   fit.stdev.resize(N);
-  constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
+  constexpr double kNotShown = std::numeric_limits<double>::quiet_NaN();
   for (int m = 0; m < N; ++m) {
     const double kt = 1.0 / s[m], sd = std::sqrt(std::max(0.0, cov_s(m, m))) * kt * kt;
     fit.verdicts.push_back(verdict_of(sd, std::abs(kt)));
     const bool shown = fit.verdicts.back() != Verdict::not_determined;
-    fit.kt[m] = shown ? kt : kNan;
-    fit.stdev[m] = shown ? sd : kNan;
+    fit.kt[m] = shown ? kt : kNotShown;
+    fit.stdev[m] = shown ? sd : kNotShown;
   }
   return fit;
 }
