@@ -18,8 +18,8 @@ struct Body {
 /// constructor's arguments `v(d(rng), d(rng), d(rng))` are evaluated in an order C++ leaves
 /// unspecified (GCC: last first; clang: first first), and the same seed then gave a compiler its own
 /// data. Last first keeps the data these tests were written against (GCC's).
-template <int K, class Dist>
-Eigen::Matrix<double, K, 1> draws_last_first(std::mt19937& rng, Dist& dist) {
+template <int K, class Engine, class Dist>
+Eigen::Matrix<double, K, 1> draws_last_first(Engine& rng, Dist& dist) {
   Eigen::Matrix<double, K, 1> v;
   for (int i = K - 1; i >= 0; --i) v[i] = dist(rng);
   return v;
