@@ -61,5 +61,10 @@ foreach(target dyncal_host_robots dyncal_host_test_robots)
   target_compile_options(${target} PRIVATE ${DYNCAL_WARNINGS})
   set_target_properties(${target} PROPERTIES UNITY_BUILD ON UNITY_BUILD_MODE GROUP)
 endforeach()
+# One precompiled header for every robot's unit: the headers all of them parse (Eigen, the drive
+# plant's and the registry's templates).
+target_precompile_headers(dyncal_host_robots PRIVATE <Eigen/Dense> <dyncal_host/drive/drive_plant_of.hpp>
+  <dyncal_host/identification/pipeline/register_robot.hpp> <utility>)
+target_precompile_headers(dyncal_host_test_robots REUSE_FROM dyncal_host_robots)
 set_property(GLOBAL PROPERTY DYNCAL_HOST_CLOSURE_robots "calibration;diagnosis;identification;drive;common")
 set_property(GLOBAL APPEND PROPERTY DYNCAL_HOST_PARTS robots)
