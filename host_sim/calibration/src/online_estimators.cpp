@@ -1,6 +1,7 @@
 #include "dyncal_host/calibration/online_estimators.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <memory>
 #include <string>
