@@ -19,6 +19,16 @@ wait_for() {  # wait_for FILE PID: poll the handshake file while the process liv
     sleep 0.05
   done
 }
+claim() {  # claim: refuse a name whose fixture still runs (two fixtures sharing DIR/NAME.* files would
+  # overwrite each other's pid file, and the first one's stop would then leave its process running)
+  if [ -e "$dir/$name.pid" ] && kill -0 "$(cat "$dir/$name.pid")" 2>/dev/null; then
+    echo "fixture $name is already running (pid $(cat "$dir/$name.pid"), $dir/$name.pid): two fixtures share a name, or a run left it" >&2
+    exit 1
+  fi
+}
+case "$action" in
+  start | pty | relay) claim ;;
+esac
 case "$action" in
   start)
     dyncal=$1
@@ -52,5 +62,6 @@ case "$action" in
       if [ "$i" -gt 200 ]; then kill -9 "$pid" 2>/dev/null || true; fi
       sleep 0.05
     done
+    rm -f "$dir/$name.pid"
     ;;
 esac
