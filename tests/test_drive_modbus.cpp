@@ -316,6 +316,11 @@ TEST_F(DriveModbus, ACommitWritesOnlyWhatItsOwnSessionStaged) {
   }
   EXPECT_EQ(modbus_write_register(b, mm::kUnlockReg, mm::kUnlockKey), -1);  // a's session is open: busy
   EXPECT_EQ(errno, EMBXSBUSY);
+  // The host's flash says whose the session is, not just "busy" (issue 67).
+  dyncal::TableStatus why = dyncal::TableStatus::ok;
+  EXPECT_NE(drive_->write(staged, &why), dyncal::port::PortStatus::ok);
+  EXPECT_NE(drive_->error().find("another connection holds the drive's staging session"), std::string::npos)
+      << drive_->error();
   EXPECT_EQ(modbus_write_register(b, mm::kCommandReg, static_cast<int>(mm::Command::commit_table)), -1);
   EXPECT_EQ(errno, EMBXILFUN);
   // a leaves without committing; b's own session starts empty, so its commit has nothing to write.
@@ -406,6 +411,117 @@ TEST_F(DriveModbus, CollisionMonitorIsSetInASessionAndAResidualBeyondItStopsTheR
   ASSERT_EQ(drive_->read_monitor_state(state), dyncal::port::PortStatus::ok);
   EXPECT_EQ(state, mm::MonitorState::off);
   ASSERT_EQ(drive_->stop(), dyncal::port::PortStatus::ok);
+}
+
+// Issue 67: the ring's samples are the run owner's. Another connection's ack (a monitoring tool
+// reading the ring) is refused with 06 busy, and the owner's stream goes on undisturbed; it used to
+// free the owner's unread samples and end its stream with "Illegal data value".
+TEST_F(DriveModbus, AnotherConnectionsAckDoesNotDisturbTheRunOwner) {
+  dyncal::linux_port::Trajectory t;  // zero coefficients: the arm holds q0 = 0
+  t.f_f = 1;
+  t.harmonics = 1;
+  ASSERT_EQ(drive_->write_trajectory(t, 1, 1000), dyncal::port::PortStatus::ok) << drive_->error();
+  ASSERT_EQ(drive_->start(), dyncal::port::PortStatus::ok) << drive_->error();
+  dyncal::port::DriveSample block[mm::kMaxSamplesPerBlock];
+  long received = 0;
+  bool acked_by_other = false;
+  modbus_t* other = raw();
+  for (int k = 0; k < 100000; ++k) {
+    int n = 0;
+    const dyncal::port::PortStatus st = drive_->read(block, mm::kMaxSamplesPerBlock, &n);
+    if (st == dyncal::port::PortStatus::end_of_stream) break;
+    ASSERT_TRUE(st == dyncal::port::PortStatus::ok || st == dyncal::port::PortStatus::no_data) << drive_->error();
+    received += n;
+    if (received > 0 && !acked_by_other) {
+      std::uint16_t ack[2];
+      mm::set_u32(ack, static_cast<std::uint32_t>(received + 50));
+      EXPECT_EQ(modbus_write_registers(other, mm::kAckReg, 2, ack), -1);
+      EXPECT_EQ(errno, EMBXSBUSY);
+      acked_by_other = true;
+    }
+  }
+  modbus_close(other);
+  modbus_free(other);
+  EXPECT_TRUE(acked_by_other);
+  EXPECT_EQ(received, 1000);
+  EXPECT_EQ(drive_->lost(), 0U);
+}
+
+// Every monitor setting the drive acknowledges is the one it runs with (issue 67, symptom 1: a
+// negative gain with every threshold 0 was answered OK and read back, while the next start tripped
+// with the previous settings). Each hostile value goes into one field over settings that trip at
+// once; then: acknowledged => read back as written and the run behaves by it (thresholds 0 where it
+// was written: no trip); refused (exception 03) => the registers and the behaviour are the previous
+// settings' (the run trips at once).
+TEST_F(DriveModbus, EveryMonitorSettingTheDriveAcknowledgesIsTheOneItRuns) {
+  const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+  const double hostile[] = {nan, inf, -inf, -1.0, -1e-30, 0.0, 1e-40, 3e38, 1e308, 200.0};
+  dyncal::linux_port::DriveMonitor tripping;  // thresholds far below the torque noise
+  tripping.gain = 200;
+  for (int j = 0; j < 6; ++j) tripping.threshold[static_cast<size_t>(j)] = 1e-6;
+  tripping.band.fill(1e-3);
+  dyncal::linux_port::Trajectory t;  // zero coefficients: the arm holds q0 = 0
+  t.f_f = 0.1;
+  t.harmonics = 1;
+  ASSERT_EQ(drive_->write_trajectory(t, 1, 1000), dyncal::port::PortStatus::ok) << drive_->error();
+  constexpr int kWords = mm::kMonitorBandReg + 2 * mm::kMaxJoints - mm::kMonitorGainReg;
+  int acknowledged = 0, refused = 0;
+  for (int field = 0; field < 4; ++field) {
+    for (const double v : hostile) {
+      ASSERT_EQ(drive_->write_monitor(tripping), dyncal::port::PortStatus::ok) << drive_->error();
+      dyncal::linux_port::DriveMonitor m = tripping;
+      if (field == 0) {  // the gain, with every threshold 0: the symptom's case
+        m.gain = v;
+        m.threshold.fill(0);
+      } else if (field == 1) {
+        m.threshold[1] = v;
+      } else if (field == 2) {
+        m.mean[2] = v;
+      } else {
+        m.band[3] = v;
+      }
+      const dyncal::port::PortStatus st = drive_->write_monitor(m);
+      ASSERT_NE(st, dyncal::port::PortStatus::transport_error) << drive_->error();
+      std::uint16_t back[kWords];
+      ASSERT_EQ(drive_->read_holding(mm::kMonitorGainReg, kWords, back), dyncal::port::PortStatus::ok);
+      const dyncal::linux_port::DriveMonitor& expect = st == dyncal::port::PortStatus::ok ? m : tripping;
+      const auto same = [](float a, double b) {  // bit for bit, as the float register holds it
+        const float fb = static_cast<float>(b);
+        return std::memcmp(&a, &fb, sizeof a) == 0;
+      };
+      EXPECT_TRUE(same(mm::get_f32(back), expect.gain)) << "field " << field << " value " << v;
+      EXPECT_TRUE(same(mm::get_f32(back + (mm::kMonitorThresholdReg - mm::kMonitorGainReg) + 2), expect.threshold[1]));
+      EXPECT_TRUE(same(mm::get_f32(back + (mm::kMonitorMeanReg - mm::kMonitorGainReg) + 4), expect.mean[2]));
+      EXPECT_TRUE(same(mm::get_f32(back + (mm::kMonitorBandReg - mm::kMonitorGainReg) + 6), expect.band[3]));
+      // The run: the settings read back trip at once unless they watch nothing.
+      bool watches = expect.gain > 0;
+      bool any_threshold = false;
+      for (int j = 0; j < 6; ++j) any_threshold = any_threshold || expect.threshold[static_cast<size_t>(j)] > 0;
+      watches = watches && any_threshold;
+      ASSERT_EQ(drive_->start(), dyncal::port::PortStatus::ok)
+          << drive_->error() << " field " << field << " value " << v;
+      dyncal::linux_port::DriveInfo info;
+      for (int k = 0; k < 30; ++k) {
+        ASSERT_EQ(drive_->read_info(info), dyncal::port::PortStatus::ok);
+        if (info.state != mm::DriveState::playing) break;
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+      }
+      if (watches) {
+        EXPECT_EQ(info.state, mm::DriveState::fault) << "field " << field << " value " << v;
+        EXPECT_EQ(info.fault, mm::DriveFault::collision);
+        ASSERT_EQ(drive_->reset(), dyncal::port::PortStatus::ok);
+      } else {  // the fixture's lockstep drive plays the 10 s run to its end, or holds at a full ring
+        EXPECT_NE(info.state, mm::DriveState::fault)
+            << "field " << field << " value " << v << ": the drive ran other settings than it acknowledged";
+        ASSERT_EQ(drive_->stop(), dyncal::port::PortStatus::ok);
+        if (info.state == mm::DriveState::fault) ASSERT_EQ(drive_->reset(), dyncal::port::PortStatus::ok);
+      }
+      (st == dyncal::port::PortStatus::ok ? acknowledged : refused) += 1;
+    }
+  }
+  EXPECT_GT(acknowledged, 0);
+  EXPECT_GT(refused, 0);
+  ASSERT_EQ(drive_->write_monitor({}), dyncal::port::PortStatus::ok) << drive_->error();
 }
 
 }  // namespace

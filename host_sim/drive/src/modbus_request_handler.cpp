@@ -129,12 +129,25 @@ bool overlaps(int address, int count, std::uint16_t reg, int words) {
   return address < reg + words && reg < address + count;
 }
 
+/// The collision monitor's settings as the holding registers hold them.
+MonitorSettings monitor_from_registers(const std::uint16_t* h) {
+  MonitorSettings m;
+  m.gain = mm::get_f32(h + mm::kMonitorGainReg);
+  for (int j = 0; j < mm::kMaxJoints; ++j) {
+    m.threshold[static_cast<size_t>(j)] = mm::get_f32(h + mm::kMonitorThresholdReg + 2 * j);
+    m.mean[static_cast<size_t>(j)] = mm::get_f32(h + mm::kMonitorMeanReg + 2 * j);
+    m.band[static_cast<size_t>(j)] = mm::get_f32(h + mm::kMonitorBandReg + 2 * j);
+  }
+  return m;
+}
+
 /// Checks the holding registers after a write (applied to a scratch copy) against the access and
 /// state rules (docs/modbus.md "Access and states"). `session`: the writing connection holds an
-/// open staging session; `session_elsewhere`: another connection does. Returns a Modbus exception
-/// code or 0.
+/// open staging session; `session_elsewhere`: another connection does; `stream_elsewhere`: another
+/// connection started the run (and is still connected): the ring's ack is its alone. Returns a
+/// Modbus exception code or 0.
 int check_holding(const SimulatedDrive& d, const std::uint16_t* h, int address, int count, double control_rate,
-                  bool session, bool session_elsewhere) {
+                  bool session, bool session_elsewhere, bool stream_elsewhere) {
   const bool playing = d.state() == mm::DriveState::playing;
   const bool fault = d.state() == mm::DriveState::fault;
   // Staging and committing: only in a session, only while no trajectory plays and no fault stands.
@@ -176,20 +189,21 @@ int check_holding(const SimulatedDrive& d, const std::uint16_t* h, int address, 
   if (overlaps(address, count, mm::kStagingSizeReg, mm::kRingReg - mm::kStagingSizeReg)) {
     if (const int e = staging_rule()) return e;
   }
-  if (overlaps(address, count, mm::kMonitorGainReg, 2)) {
-    const double k = mm::get_f32(h + mm::kMonitorGainReg);
-    // K dt <= 1, and a velocity window of at most 2 kMonitorMaxHalfWidth + 1 periods.
-    if (!(k == 0 || (k <= control_rate && centred_slope_half_width(k, 1.0 / control_rate) <= mm::kMonitorMaxHalfWidth)))
+  // The collision monitor's settings: the rule the drive applies them by (monitor_settings_error),
+  // when written and again when a run starts with them.
+  const bool starts = overlaps(address, count, mm::kCommandReg, 1) &&
+                      (h[mm::kCommandReg] == static_cast<std::uint16_t>(mm::Command::start) ||
+                       h[mm::kCommandReg] == static_cast<std::uint16_t>(mm::Command::identify_payload) ||
+                       h[mm::kCommandReg] == static_cast<std::uint16_t>(mm::Command::trace));
+  if (starts ||
+      overlaps(address, count, mm::kMonitorGainReg, mm::kMonitorBandReg + 2 * mm::kMaxJoints - mm::kMonitorGainReg)) {
+    if (!monitor_settings_error(monitor_from_registers(h), 1.0 / control_rate).empty())
       return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
   }
-  for (int k = 0; k < 2 * mm::kMaxJoints; k += 2) {
-    for (const std::uint16_t reg : {mm::kMonitorThresholdReg, mm::kMonitorMeanReg, mm::kMonitorBandReg}) {
-      if (!overlaps(address, count, static_cast<std::uint16_t>(reg + k), 2)) continue;
-      const float v = mm::get_f32(h + reg + k);
-      if (!std::isfinite(v) || (reg != mm::kMonitorMeanReg && v < 0)) return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
-    }
-  }
   if (overlaps(address, count, mm::kAckReg, 2)) {
+    // The ring's samples are the run owner's to acknowledge: another connection's ack would free
+    // samples the owner has not read, and end its stream with a gap it did not cause.
+    if (stream_elsewhere) return MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY;
     const std::uint32_t a = mm::get_u32(h + mm::kAckReg);
     if (a < d.acked() || a > d.produced()) return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
   }
@@ -225,16 +239,13 @@ int check_holding(const SimulatedDrive& d, const std::uint16_t* h, int address, 
   return 0;
 }
 
-/// The collision monitor's settings from the holding registers (checked when written).
-void load_monitor(SimulatedDrive& d, const std::uint16_t* h) {
-  MonitorSettings m;
-  m.gain = mm::get_f32(h + mm::kMonitorGainReg);
-  for (int j = 0; j < mm::kMaxJoints; ++j) {
-    m.threshold[static_cast<size_t>(j)] = mm::get_f32(h + mm::kMonitorThresholdReg + 2 * j);
-    m.mean[static_cast<size_t>(j)] = mm::get_f32(h + mm::kMonitorMeanReg + 2 * j);
-    m.band[static_cast<size_t>(j)] = mm::get_f32(h + mm::kMonitorBandReg + 2 * j);
-  }
-  d.set_monitor(m);  // values checked by check_holding: accepted
+/// Applies the monitor settings the registers hold before a run starts. check_holding applied the
+/// same rule (monitor_settings_error) before the reply, so a refusal here means the drive's state
+/// changed in between: the run does not start, and the log says why.
+bool take_monitor(SimulatedDrive& d, const std::uint16_t* h, std::FILE* log) {
+  const std::string why = d.set_monitor(monitor_from_registers(h));
+  if (!why.empty() && log) std::fprintf(log, "dyncal drive: run not started: collision monitor: %s\n", why.c_str());
+  return why.empty();
 }
 
 void load_trajectory(SimulatedDrive& d, const std::uint16_t* h) {
@@ -430,7 +441,8 @@ bool ModbusRequestHandler::answer(const std::uint8_t* query, int rc, int client)
       exception = MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS;
     } else {
       exception = check_holding(drive_, scratch.data(), write_address, write_count, 1.0 / drive_.control_period(),
-                                session_open(), session_held_by_another());
+                                session_open(), session_held_by_another(),
+                                owner_client_ != kNoClient && owner_client_ != current_client_);
     }
   }
   if (exception) {
@@ -468,7 +480,7 @@ void ModbusRequestHandler::apply_write(int address, int count) {
     case mm::Command::start:
     case mm::Command::trace:  // the same run: the start check made sure the ring holds all of it
       load_trajectory(drive_, h);
-      load_monitor(drive_, h);
+      if (!take_monitor(drive_, h, log_)) break;
       drive_.start();
       started_ = Clock::now();
       owner_client_ = current_client_;
@@ -478,7 +490,7 @@ void ModbusRequestHandler::apply_write(int address, int count) {
     case mm::Command::identify_payload:
       session_client_ = kNoClient;  // the table write it ends with uses the session
       load_trajectory(drive_, h);
-      load_monitor(drive_, h);
+      if (!take_monitor(drive_, h, log_)) break;
       drive_.start_payload();
       started_ = Clock::now();
       owner_client_ = current_client_;
@@ -501,7 +513,7 @@ void ModbusRequestHandler::apply_write(int address, int count) {
         st = drive_.commit(bytes.data(), size);
       } catch (const std::exception& e) {
         if (log_) std::fprintf(log_, "dyncal drive: flash write failed: %s\n", e.what());
-        st = TableStatus::bad_size;
+        st = TableStatus::store_failed;  // the store's own failure, not the table's (the active one stays)
       }
       map_->tab_input_registers[mm::kCommitResultReg] = static_cast<std::uint16_t>(st);
       ++map_->tab_input_registers[mm::kCommitCounterReg];

@@ -49,6 +49,7 @@ enum class TableStatus : std::uint8_t {
   non_finite,    ///< a value is NaN or infinite
   out_of_range,  ///< a value is outside the drive's accepted range
   bad_effect,    ///< an effect term is malformed (kind, joints, sign, shape) or too many
+  store_failed,  ///< the table is valid, but the drive could not write it to its flash store
 };
 
 constexpr const char* to_string(TableStatus s) noexcept {
@@ -75,6 +76,8 @@ constexpr const char* to_string(TableStatus s) noexcept {
       return "a value is outside the accepted range";
     case TableStatus::bad_effect:
       return "an effect term is malformed";
+    case TableStatus::store_failed:
+      return "the drive could not write it to its flash store";
   }
   return "unknown";
 }

@@ -59,6 +59,14 @@ struct MonitorSettings {
   JointArray band{};       ///< the friction terms' standstill band [rad/s]: |qd| below it counts as 0
 };
 
+/// The one rule for monitor settings, which the register check (exception 03 when written, and
+/// again at start) and DrivePlant::set_monitor both apply, so that a setting the drive acknowledges
+/// is the setting it runs (docs/modbus.md "Collision monitor"): gain 0 (off) or 0 < K with K dt <= 1
+/// and a centred-slope window of at most 2 modbus_map::kMonitorMaxHalfWidth + 1 periods (dt: the
+/// control period [s]); every joint slot's threshold and band finite and >= 0, its mean finite.
+/// Returns an empty string when the settings are taken, else why not (one line).
+std::string monitor_settings_error(const MonitorSettings& m, double dt);
+
 /// The drive's payload estimate (docs/payload.md "On the drive"): the last link's 10 standard
 /// parameters dphi [XX XY XZ YY YZ ZZ (kg m^2) MX MY MZ (kg m) M (kg)], link frame, about its origin.
 struct PayloadFit {

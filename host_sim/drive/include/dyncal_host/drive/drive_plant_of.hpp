@@ -268,20 +268,7 @@ class DrivePlantOf final : public DrivePlant {
   }
 
   std::string set_monitor(const MonitorSettings& m, double dt) override {
-    if (!(m.gain >= 0) || !std::isfinite(m.gain)) return "the observer gain must be a number >= 0";
-    for (int j = 0; j < N; ++j) {
-      const double values[3] = {m.threshold[j], m.mean[j], m.band[j]};
-      if (!std::isfinite(values[0]) || !std::isfinite(values[1]) || !std::isfinite(values[2]) || values[0] < 0 ||
-          values[2] < 0)
-        return "joint " + std::to_string(j + 1) + ": threshold and band must be numbers >= 0, the mean a number";
-    }
-    if (m.gain > 0) {
-      if (!(m.gain * dt <= 1.0))
-        return "observer gain " + std::to_string(m.gain) + " 1/s: the discrete observer needs K dt <= 1";
-      if (centred_slope_half_width(m.gain, dt) > kMaxSlopeHalfWidth)
-        return "observer gain " + std::to_string(m.gain) + " 1/s: its velocity window is longer than the drive's " +
-               std::to_string(2 * kMaxSlopeHalfWidth + 1) + " samples";
-    }
+    if (std::string why = monitor_settings_error(m, dt); !why.empty()) return why;
     monitor_ = m;
     return {};
   }
