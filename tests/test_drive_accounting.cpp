@@ -12,6 +12,8 @@
 #include <thread>
 
 #include "dyncal/modbus_map.hpp"
+#include "dyncal_host/calibration/calibrate.hpp"
+#include "dyncal_host/common/input_error.hpp"
 #include "dyncal_port/modbus_drive.hpp"
 #include "support/drive_uri.hpp"
 #include "support/one_harmonic_run.hpp"
@@ -181,6 +183,34 @@ TEST(DriveAccounting, ATraceIsRecordedWholeOrRefusedBeforeItStarts) {
   std::this_thread::sleep_for(std::chrono::milliseconds(800));
   EXPECT_EQ(read_to_end(*drive, &lost), 50);
   EXPECT_EQ(lost, 0u);
+}
+
+}  // namespace
+
+namespace {
+
+// Issue 67: a host that ends on an error stops the motion it started. A run streamed by the host's
+// stream_run whose reader is too slow for the 50-sample ring ends in "drive overrun"; the drive is
+// then stopped at once (state finished), not playing on until its 2 s watchdog trips fault 4.
+TEST(DriveAccounting, AHostEndingOnAnOverrunStopsTheRunItStarted) {
+  auto drive = connect();
+  ASSERT_NE(drive, nullptr);
+  DriveInfo info;
+  ASSERT_EQ(drive->read_info(info), PortStatus::ok) << drive->error();
+  if (info.state == mm::DriveState::fault) ASSERT_EQ(drive->reset(), PortStatus::ok);
+  dyncal::linux_port::Trajectory t;  // zero coefficients: 10 s of holding still, far beyond the ring
+  t.f_f = 0.1;
+  t.harmonics = 1;
+  dyncal::host::StreamRun run;
+  run.name = "overrun";
+  run.periods = 1;
+  run.sample_rate_hz = 1000;
+  const auto slow = [](const dyncal::port::DriveSample&) { std::this_thread::sleep_for(std::chrono::milliseconds(2)); };
+  EXPECT_THROW(dyncal::host::stream_run(*drive, t, run, nullptr, nullptr, nullptr, slow), dyncal::host::InputError);
+  ASSERT_EQ(drive->read_info(info), PortStatus::ok) << drive->error();
+  EXPECT_EQ(info.state, mm::DriveState::finished) << "the drive plays on after the host gave up (state 1), or "
+                                                     "its watchdog tripped (state 3)";
+  EXPECT_GT(info.overruns, 0U);
 }
 
 }  // namespace

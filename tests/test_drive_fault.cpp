@@ -3,13 +3,21 @@
 // the samples recorded before the trip in a CSV that dyncal identify reads, and flashes the table
 // that was active before back.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <regex>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "dyncal/generated/er20/robot.hpp"
@@ -21,6 +29,7 @@
 #include "dyncal_host/identification/logs/joint_log.hpp"
 #include "dyncal_port/modbus_drive.hpp"
 #include "support/drive_uri.hpp"
+#include "support/test_paths.hpp"
 
 namespace {
 
@@ -190,6 +199,68 @@ TEST_F(DriveFault, InFaultOnlyAResetIsTakenAndAnAbsurdTableIsRefusedBeforeItPlay
   ASSERT_EQ(drive_->read_info(info), dyncal::port::PortStatus::ok);
   EXPECT_EQ(info.state, mm::DriveState::idle);
   ASSERT_EQ(drive_->write(previous, &reason), dyncal::port::PortStatus::ok) << drive_->error();
+}
+
+}  // namespace
+
+namespace {
+
+// Issue 67: SIGINT or SIGTERM to `dyncal calibrate` mid-run stops the drive's trajectory before the
+// program exits (it used to play on until the drive's 2 s watchdog tripped fault 4); measured from
+// the signal to the drive's state leaving playing, over Modbus from this test's own connection. The
+// fixture's drive runs in lockstep: with no host reading, it holds "playing" until its watchdog; the
+// excitation (20 periods of 10 s) lasts far longer than the 0.5 s it plays before the signal.
+TEST_F(DriveFault, ASignalToCalibrateStopsTheDriveWithinHalfASecond) {
+  for (const int signal : {SIGINT, SIGTERM}) {
+    dyncal::linux_port::DriveInfo info;
+    ASSERT_EQ(drive_->read_info(info), dyncal::port::PortStatus::ok) << drive_->error();
+    if (info.state == mm::DriveState::fault) ASSERT_EQ(drive_->reset(), dyncal::port::PortStatus::ok);
+    const std::string err = (dir_ / "err.txt").string();
+    const std::string uri = fixture_drive_uri("DYNCAL_DRIVE_FAULT_READY");
+    const pid_t pid = fork();
+    if (pid == 0) {
+      if (!freopen("/dev/null", "w", stdout) || !freopen(err.c_str(), "w", stderr)) _exit(127);
+      execl(dyncal::test::dyncal_binary(), "dyncal", "calibrate", "--drive", uri.c_str(), "--no-flash", "--periods",
+            "20", "--stream", "live", "--fault-dir", dir_.c_str(), static_cast<char*>(nullptr));
+      _exit(127);
+    }
+    ASSERT_GT(pid, 0);
+    // Wait until the excitation plays, then let it play a while.
+    bool playing = false;
+    for (int k = 0; k < 6000 && !playing; ++k) {
+      ASSERT_EQ(drive_->read_info(info), dyncal::port::PortStatus::ok) << drive_->error();
+      playing = info.state == mm::DriveState::playing;
+      if (!playing) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    ASSERT_TRUE(playing) << "calibrate never started the excitation";
+    std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    ASSERT_EQ(drive_->read_info(info), dyncal::port::PortStatus::ok) << drive_->error();
+    ASSERT_EQ(info.state, mm::DriveState::playing) << "the excitation ended before the signal: the test tests nothing";
+    const auto t0 = std::chrono::steady_clock::now();
+    ASSERT_EQ(::kill(pid, signal), 0);
+    double stopped_after = -1;
+    for (int k = 0; k < 2000; ++k) {
+      ASSERT_EQ(drive_->read_info(info), dyncal::port::PortStatus::ok) << drive_->error();
+      if (info.state != mm::DriveState::playing) {
+        stopped_after = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        break;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    int status = 0;
+    ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+    std::ifstream in(err);
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::printf("%s: the drive left playing %.3f s after the signal\n", strsignal(signal), stopped_after);
+    EXPECT_GE(stopped_after, 0) << "still playing 2 s after the signal";
+    EXPECT_LT(stopped_after, 0.5);
+    EXPECT_EQ(info.state, mm::DriveState::finished) << "stopped by the host, not by its watchdog (fault 4)";
+    ASSERT_TRUE(WIFEXITED(status));
+    EXPECT_EQ(WEXITSTATUS(status), 128 + signal) << text;
+    EXPECT_NE(text.find("interrupted by " + std::string(signal == SIGINT ? "SIGINT" : "SIGTERM")), std::string::npos)
+        << text;
+    EXPECT_NE(text.find("the drive was stopped"), std::string::npos) << text;
+  }
 }
 
 }  // namespace

@@ -150,3 +150,30 @@ TEST(FlashKill, RestartAlwaysYieldsTheOldOrTheNewTable) {
 }
 
 }  // namespace
+
+namespace {
+
+// Issue 67: a flash store the drive cannot write (its folder gone: "cannot create ..." in its log)
+// is reported as the store's failure, commit_result 11, not as the table's ("size does not match
+// the parameter count"); the active table stays.
+TEST(FlashKill, AStoreTheDriveCannotWriteIsNamedAndTheActiveTableStays) {
+  const fs::path dir = fs::temp_directory_path() / ("dyncal_store_fail_" + std::to_string(getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  DriveProcess p = start_drive(dir, 0);
+  ASSERT_FALSE(p.uri.empty());
+  const auto before = active_bytes(p.uri);
+  fs::remove_all(dir);  // the store's folder: the next write cannot create its temporary file
+  dyncal::ParameterTable t;
+  dyncal::make_table<Model>(Model::ParamVector<double>::Constant(1.0), t);
+  std::string error;
+  auto d = ModbusDrive::connect(p.uri, &error);
+  ASSERT_TRUE(d) << error;
+  dyncal::TableStatus reason = dyncal::TableStatus::ok;
+  EXPECT_EQ(d->write(t, &reason), dyncal::port::PortStatus::rejected) << d->error();
+  EXPECT_EQ(reason, dyncal::TableStatus::store_failed) << dyncal::to_string(reason);
+  EXPECT_EQ(active_bytes(p.uri), before);
+  kill_drive(p);
+}
+
+}  // namespace

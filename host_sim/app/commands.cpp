@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/common/interrupt.hpp"
 #include "entry_points.hpp"
 
 namespace dyncal::app {
@@ -28,6 +29,9 @@ int run_cli(void (*add)(CLI::App&, Action&), int argc, char** argv) {
   }
   try {
     return run ? run() : 0;
+  } catch (const host::Interrupted& e) {
+    std::cerr << "dyncal: " << e.what() << "\n";
+    return 128 + e.signal();
   } catch (const host::InputError& e) {
     std::cerr << "dyncal: error: " << e.what() << "\n";
     return 2;

@@ -15,8 +15,10 @@
 
 #include "dyncal_host/calibration/online_estimators.hpp"
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/common/interrupt.hpp"
 #include "dyncal_host/common/model_terms.hpp"
 #include "dyncal_host/common/number_text.hpp"
+#include "dyncal_host/common/output_file.hpp"
 #include "dyncal_host/identification/excitation/excitation.hpp"
 #include "dyncal_host/identification/pipeline/compiled_robot.hpp"
 #include "dyncal_host/identification/reports/drive_table.hpp"
@@ -88,6 +90,32 @@ JointLog samples_to_log(const std::vector<port::DriveSample>& samples, double sa
   return log;
 }
 
+/// Stops the run the host started unless it ends by itself (disarm): an exception or a signal that
+/// ends stream_run early leaves the drive stopped, not playing until its watchdog trips.
+class StopOnExit {
+ public:
+  explicit StopOnExit(linux_port::ModbusDrive& drive) : drive_(drive) {}
+  ~StopOnExit() {
+    if (armed_) stop_now();
+  }
+  StopOnExit(const StopOnExit&) = delete;
+  StopOnExit& operator=(const StopOnExit&) = delete;
+  void disarm() { armed_ = false; }
+  /// Sends stop (twice more after a transport error) and disarms; says how it went.
+  std::string stop_now() {
+    armed_ = false;
+    for (int attempt = 0; attempt < 3; ++attempt) {
+      if (drive_.stop() == port::PortStatus::ok) return "the drive was stopped";
+    }
+    return "the stop command did not reach the drive (" + drive_.error() +
+           "); its communication watchdog stops the run";
+  }
+
+ private:
+  linux_port::ModbusDrive& drive_;
+  bool armed_ = true;
+};
+
 JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory& trajectory, const StreamRun& run,
                     std::ostream* progress, std::uint32_t* lost, double* seconds,
                     const std::function<void(const port::DriveSample&)>& on_sample) {
@@ -101,6 +129,7 @@ JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory
   if (drive.write_trajectory(trajectory, run.periods, run.sample_rate_hz) != port::PortStatus::ok)
     throw InputError("drive: " + drive.error());
   const auto t0 = SteadyClock::now();
+  const InterruptScope interrupts;  // SIGINT, SIGTERM from here on: stop the run, then exit
   const port::PortStatus started = run.identify_payload ? drive.identify_payload()
                                    : run.trace          ? drive.trace()
                                                         : drive.start();
@@ -109,6 +138,7 @@ JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory
                      "): its ring cannot hold every sample the run records (its scenario's rests included); "
                      "use fewer --periods or --stream live");
   if (started != port::PortStatus::ok) throw InputError("drive: " + drive.error());
+  StopOnExit stop_on_exit(drive);
   const long expected = std::lround(run.periods * trajectory.period() * run.sample_rate_hz);
   std::vector<port::DriveSample> samples;
   samples.reserve(static_cast<size_t>(expected));
@@ -119,9 +149,17 @@ JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory
   constexpr double kStallSeconds = 10.0;
   auto last_progress = SteadyClock::now();
   for (;;) {
+    if (const int signal = interrupt_signal()) {
+      const std::string stopped = stop_on_exit.stop_now();
+      throw Interrupted(signal, "interrupted by " + signal_name(signal) + " during the " + run.name + " run after " +
+                                    std::to_string(samples.size()) + " samples: " + stopped);
+    }
     int n = 0;
     const port::PortStatus st = drive.read(block, mm::kMaxSamplesPerBlock, &n);
-    if (st == port::PortStatus::end_of_stream) break;
+    if (st == port::PortStatus::end_of_stream) {
+      stop_on_exit.disarm();  // the run ended by itself
+      break;
+    }
     if (n > 0) {
       last_progress = SteadyClock::now();
     } else if (std::chrono::duration<double>(SteadyClock::now() - last_progress).count() > kStallSeconds) {
@@ -141,6 +179,7 @@ JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory
     }
     if (st == port::PortStatus::transport_error) throw InputError("drive: " + drive.error());
     if (st == port::PortStatus::device_fault) {
+      stop_on_exit.disarm();  // the drive stopped the run itself; its fault stands until a reset
       if (progress) *progress << "\n";
       if (samples.empty()) throw DriveFaultError(drive.error() + "; no sample was recorded before it");
       const std::string path = fault_log_path(run);
@@ -197,7 +236,11 @@ FlashOutcome flash_and_verify(linux_port::ModbusDrive& drive, const ParameterTab
   const port::PortStatus st = drive.write(table, &f.status);
   if (st == port::PortStatus::transport_error) throw InputError("flash failed: " + drive.error());
   if (st != port::PortStatus::ok) {
-    f.message = std::string("drive rejected the table: ") + to_string(f.status);
+    f.message = f.status == TableStatus::store_failed
+                    ? std::string(
+                          "the drive could not write the table to its flash store (a storage fault on the "
+                          "drive); its active table is unchanged")
+                    : std::string("drive rejected the table: ") + to_string(f.status);
     return f;
   }
   f.flashed = true;
@@ -276,14 +319,9 @@ void write_law_file(const std::string& path, const RobotDescription& robot, cons
     j["kd"].push_back(law.kd[k]);
   }
   j["feed_forward_table"] = table_path.filename().string();
-  {
-    std::ofstream out(table_path, std::ios::binary);
-    out.write(reinterpret_cast<const char*>(table.data()), static_cast<std::streamsize>(table.size()));
-    if (!out) throw InputError("cannot write " + table_path.string());
-  }
-  std::ofstream out(path);
-  out << j.dump(2) << "\n";
-  if (!out) throw InputError("cannot write " + path);
+  write_output_file(table_path.string(), std::string_view(reinterpret_cast<const char*>(table.data()), table.size()),
+                    "feed-forward table");
+  write_output_file(path, j.dump(2) + "\n", "drive law");
 }
 
 }  // namespace

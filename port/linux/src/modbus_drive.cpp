@@ -437,7 +437,15 @@ port::PortStatus ModbusDrive::write(const ParameterTable& table, TableStatus* re
   // A staging session for this connection (docs/modbus.md "Access and states"); the commit ends it.
   // The drive refuses staging while it plays (busy) or stands in fault (device failure).
   const std::uint16_t key = mm::kUnlockKey;
-  if (write_holding(mm::kUnlockReg, 1, &key) != port::PortStatus::ok) return port::PortStatus::transport_error;
+  if (write_holding(mm::kUnlockReg, 1, &key) != port::PortStatus::ok) {
+    // One staging session at a time (docs/modbus.md "Access and states"): busy names who holds it.
+    if (errno == EMBXSBUSY)
+      error_ =
+          "another connection holds the drive's staging session (another host flashing or writing the "
+          "collision monitor); it ends with that connection's commit, when it closes, or " +
+          std::to_string(static_cast<int>(mm::kSessionSeconds)) + " s after it opened: try again then";
+    return port::PortStatus::transport_error;
+  }
   if (write_holding(mm::kStagingSizeReg, 1 + (size + 1) / 2, regs) != port::PortStatus::ok) {
     if (errno == EMBXSFAIL) error_ = "the drive is in fault: it takes no table until reset (docs/modbus.md)";
     if (errno == EMBXSBUSY) error_ = "the drive is playing a trajectory: it takes a table only when idle";

@@ -150,7 +150,9 @@ JointLog samples_to_log(const std::vector<port::DriveSample>& samples, double sa
 /// sample to `on_sample` (if set) as it arrives. Throws InputError on transport errors or lost
 /// samples, and DriveFaultError when the drive stops on a fault: the samples recorded before it are
 /// first written (write_csv_log) to run.fault_dir/dyncal-fault-NAME-YYYYmmddTHHMMSS.csv (-2, -3 ...
-/// appended rather than overwrite), which the message names.
+/// appended rather than overwrite), which the message names. Whatever ends it before the run ends
+/// by itself (an exception; SIGINT or SIGTERM, caught while it runs: host::Interrupted) first sends
+/// the drive's stop command (docs/modbus.md "A host that stops stops the motion").
 JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory& trajectory, const StreamRun& run,
                     std::ostream* progress, std::uint32_t* lost, double* seconds,
                     const std::function<void(const port::DriveSample&)>& on_sample);
