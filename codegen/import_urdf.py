@@ -266,7 +266,7 @@ def do_export(args):
         if os.path.exists(tmp):
             os.remove(tmp)
     merged = sum(len(b["merged"]) for b in urdf_export.lumped_links(source, src.get("base"), src.get("tip")))
-    print(f"{args.name}: wrote {args.out} from {src['file']}: {len(chain.joints)} links' inertials replaced"
+    print(f"{args.name}: exported from {src['file']}: {len(chain.joints)} links' inertials replaced"
           + (f" ({merged} links merged into them emptied)" if merged else "") + f"; {check}")
     return 0
 

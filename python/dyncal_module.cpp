@@ -19,6 +19,7 @@
 
 #include "../host_sim/app/commands.hpp"
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/common/interrupt.hpp"
 #include "dyncal_host/common/robot_description.hpp"
 #include "dyncal_host/identification/pipeline/compiled_robot.hpp"
 
@@ -38,9 +39,8 @@ struct Robot {
 Robot load(const std::string& name, const std::string& robots_dir) {
   Robot r;
   r.robots_dir = robots_dir.empty() ? dyncal::host::default_robots_dir() : robots_dir;
-  r.description = dyncal::host::load_robot(r.robots_dir, name);
+  r.description = dyncal::host::load_checked_robot(r.robots_dir, name);  // the CLI's one check
   r.model = &dyncal::host::compiled_robot_for(r.description);
-  dyncal::host::derive_tau_max(r.description);
   return r;
 }
 
@@ -183,6 +183,10 @@ py::dict run_command(const std::string& command, const py::kwargs& kwargs) {
   for (const auto& a : args) argv.push_back(a.c_str());
   try {
     app.parse(static_cast<int>(argv.size()), const_cast<char**>(argv.data()));
+  } catch (const CLI::CallForHelp&) {  // help=True: the command's help text, as `dyncal COMMAND --help` prints it
+    py::dict out;
+    out["help"] = app.get_subcommand(command)->help();
+    return out;
   } catch (const CLI::ParseError& e) {
     throw InputError(e.what());
   }
@@ -214,6 +218,8 @@ PYBIND11_MODULE(dyncal, m) {
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
+    } catch (const dyncal::host::Interrupted& e) {  // the drive was stopped first (stream_run)
+      PyErr_SetString(PyExc_KeyboardInterrupt, e.what());
     } catch (const InputError& e) {
       PyErr_SetString(input_error.ptr(), e.what());
     }

@@ -5,6 +5,7 @@
 // compiled model's base regressor must recover the parameter file's base parameters (Gautier's
 // base parameters are what the data determine: the same file, the same model).
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <Eigen/Dense>
@@ -48,6 +49,13 @@ TEST_P(ExportUrdf, RoundTripsThroughKdlAndRobotImport) {
   const std::filesystem::path out = dir / (name + "_identified.urdf");
   ASSERT_EQ(run_dyncal("export urdf --params " + (dir / "p.json").string() + " --out " + out.string() + robots), 0);
   const std::string text = read_text(out);
+  {  // issue 67: the exported file's mode follows the umask (it was always 0600)
+    const mode_t mask = ::umask(022);
+    ::umask(mask);
+    struct stat st {};
+    ASSERT_EQ(::stat(out.c_str(), &st), 0);
+    EXPECT_EQ(st.st_mode & 0777, 0666u & ~mask);
+  }
   EXPECT_NE(text.find("<dynamics damping="), std::string::npos);
   EXPECT_NE(text.find("<dyncal "), std::string::npos);
   EXPECT_NE(text.find("offset=\""), std::string::npos);  // the default model's offsets, in <dyncal>

@@ -19,6 +19,7 @@ struct CalibrateSettings {
 };
 
 int run_calibrate(CalibrateSettings& s) {
+  check_outputs({{s.report, "report"}});
   const auto robot = s.robot.load();
   host::CalibrateOptions& o = s.options;
   o.uri = s.uri;
@@ -29,7 +30,7 @@ int run_calibrate(CalibrateSettings& s) {
   if (!s.trajectory.empty()) o.excitation = host::trajectory_from_json(robot, read_json_file(s.trajectory));
   const auto r = host::calibrate(robot, o, std::cerr);
   host::print_calibrate_report(std::cout, r);
-  if (!s.report.empty()) write_json_file(s.report, host::calibrate_report_json(r));
+  if (!s.report.empty()) write_json_file(s.report, host::calibrate_report_json(r), "report");
   return r.flashed || s.no_flash ? 0 : 3;
 }
 

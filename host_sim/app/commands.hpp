@@ -5,9 +5,11 @@
 
 #include <CLI/CLI.hpp>
 #include <functional>
+#include <initializer_list>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "dyncal_host/common/json_file.hpp"
@@ -57,8 +59,14 @@ inline constexpr const char* kSurveyHelp =
 int run_urdf_tool(const std::vector<std::string>& args);
 
 using host::read_json_file;  ///< json_file.hpp: one-line errors naming the file
-/// Writes `j` (indented) to `path`. Throws InputError when the file cannot be written.
-void write_json_file(const std::string& path, const nlohmann::json& j);
+/// Writes `j` (indented) to `path` through write_output_file (output_file.hpp: all or nothing, a
+/// regular file or a new name only; `what` names it in the error). Throws InputError, one line.
+void write_json_file(const std::string& path, const nlohmann::json& j, const char* what = "output file");
+
+/// Checks each non-empty output path as write_output_file will write it (a regular file or a new name
+/// in an existing folder; output_file.hpp), before a command's work: a FIFO, a device, a folder or a
+/// missing folder is refused at once, not after the fit. Each entry: the path and what it is.
+void check_outputs(std::initializer_list<std::pair<const std::string&, const char*>> outputs);
 
 /// The drive at `uri` (tcp://HOST:PORT or rtu:DEVICE). Throws InputError when it cannot be reached.
 std::unique_ptr<linux_port::ModbusDrive> connect_drive(const std::string& uri);

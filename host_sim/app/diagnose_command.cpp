@@ -15,6 +15,7 @@ struct DiagnoseSettings {
 };
 
 int run_diagnose(DiagnoseSettings& s) {
+  check_outputs({{s.report, "report"}});
   const auto robot = s.log.load_robot();
   const host::ModelSpec spec = host::parse_model_spec(s.model, robot.num_joints);
   s.options.identify.terms = spec.terms;
@@ -25,7 +26,7 @@ int run_diagnose(DiagnoseSettings& s) {
   auto result = host::diagnose(robot, log, s.options);
   result.notes.insert(result.notes.begin(), dropped.begin(), dropped.end());
   host::print_diagnose_report(std::cout, result);
-  if (!s.report.empty()) write_json_file(s.report, host::diagnose_report_json(result));
+  if (!s.report.empty()) write_json_file(s.report, host::diagnose_report_json(result), "report");
   if (!s.plots.empty()) {
     const auto files = host::write_diagnose_plots(result, s.plots);
     std::cout << "\nplots: " << files.size() << " SVG files in " << s.plots << "\n";

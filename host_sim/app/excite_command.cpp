@@ -31,6 +31,7 @@ void print_design(const host::RobotDescription& robot, const ExciteSettings& s, 
 }
 
 int run_excite(ExciteSettings& s) {
+  check_outputs({{s.out, "trajectory"}});
   const auto robot = s.robot.load();
   s.options.criterion = s.criterion == "logdet" ? host::ExcitationCriterion::logdet : host::ExcitationCriterion::cond;
   s.options.model = s.model == "eq4" ? host::FrictionModel::eq4 : host::FrictionModel::eq7;
@@ -39,7 +40,7 @@ int run_excite(ExciteSettings& s) {
   j["design"] = {{"criterion", s.criterion},  {"model", s.model},           {"cond", r.cond},
                  {"logdet", r.logdet},        {"start_cond", r.start_cond}, {"evaluations", r.evaluations},
                  {"margin", s.options.margin}};
-  write_json_file(s.out, j);
+  write_json_file(s.out, j, "trajectory");
   print_design(robot, s, r);
   return 0;
 }

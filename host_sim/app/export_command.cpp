@@ -6,10 +6,14 @@
 
 #include <Eigen/Core>
 #include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <iterator>
 #include <random>
 
 #include "commands.hpp"
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/common/output_file.hpp"
 #include "dyncal_host/identification/methods/inertial_parameters.hpp"
 #include "dyncal_host/identification/pipeline/compiled_robot.hpp"
 #include "dyncal_host/identification/reports/prediction.hpp"
@@ -27,12 +31,13 @@ struct ExportSettings {
 };
 
 int run_export_urdf(const ExportSettings& s) {
+  host::check_output_path(s.out, "URDF");  // before the work: a FIFO, a device, a folder, a missing folder
   const host::ParameterSet p = host::read_parameter_file(s.params);
   if (p.links.empty())
     throw InputError(s.params +
                      ": export urdf needs each link's inertials and the file has none: the base parameters do not "
                      "determine them; identify with --method pcls (physically consistent, Wensing et al.) writes them");
-  const host::RobotDescription robot = host::load_robot(s.robots_dir, p.robot);
+  const host::RobotDescription robot = host::load_checked_robot(s.robots_dir, p.robot);
   const host::CompiledRobot& c = host::compiled_robot(p.robot);
   const int n = c.num_joints;
   Eigen::VectorXd phi = Eigen::VectorXd::Zero(c.num_standard);
@@ -74,19 +79,28 @@ int run_export_urdf(const ExportSettings& s) {
       {"samples", samples},
       {"provenance",
        {{"params", std::filesystem::path(s.params).filename().string()}, {"robot", p.robot}, {"model", p.model}}}};
-  const std::string file =
-      (std::filesystem::temp_directory_path() / ("dyncal-export-" + p.robot + "-" + std::to_string(getpid()) + ".json"))
-          .string();
-  write_json_file(file, input);
-  int rc = 0;
-  try {
-    rc = run_urdf_tool({"export", p.robot, "--robots-dir", s.robots_dir, "--input", file, "--out", s.out});
-  } catch (...) {
-    std::filesystem::remove(file);
-    throw;
-  }
-  std::filesystem::remove(file);
-  return rc;
+  // The tool writes and checks the URDF in a folder of our own; the user's --out is then written by
+  // the host's one writer (output_file.hpp): all or nothing, a regular file or a new name only.
+  std::string folder = (std::filesystem::temp_directory_path() / "dyncal-export-XXXXXX").string();
+  if (::mkdtemp(folder.data()) == nullptr) throw InputError("cannot create a temporary folder for the export");
+  struct RemoveFolder {
+    std::string path;
+    ~RemoveFolder() {
+      std::error_code ignored;
+      std::filesystem::remove_all(path, ignored);
+    }
+  } remove_folder{folder};
+  const std::string input_file = folder + "/input.json", urdf_file = folder + "/" + p.robot + ".urdf";
+  write_json_file(input_file, input);
+  const int rc =
+      run_urdf_tool({"export", p.robot, "--robots-dir", s.robots_dir, "--input", input_file, "--out", urdf_file});
+  if (rc != 0) return rc;
+  std::ifstream in(urdf_file, std::ios::binary);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (!in.good() && !in.eof()) throw InputError("cannot read the exported URDF back from " + urdf_file);
+  host::write_output_file(s.out, text, "URDF");
+  std::cout << p.robot << ": wrote " << s.out << "\n";
+  return 0;
 }
 
 }  // namespace

@@ -31,7 +31,7 @@ int run_flash(const FlashSettings& s) {
   std::vector<std::string> notes;
   ParameterTable t;
   try {
-    t = host::parameter_table(p, host::load_robot(s.robots_dir, p.robot), &notes);
+    t = host::parameter_table(p, host::load_checked_robot(s.robots_dir, p.robot), &notes);
   } catch (const InputError& e) {
     throw InputError(s.params + ": " + e.what());
   }
@@ -41,7 +41,11 @@ int run_flash(const FlashSettings& s) {
   TableStatus reason = TableStatus::ok;
   const auto st = d->write(t, &reason);
   if (st == port::PortStatus::rejected) {
-    std::cerr << "dyncal: the drive rejected the table: " << to_string(reason) << "; its active table is unchanged\n";
+    if (reason == TableStatus::store_failed)  // the table passed; the drive's flash did not take it
+      std::cerr << "dyncal: the drive took the table but could not write it to its flash store (a storage fault on "
+                   "the drive; its log says why); its active table is unchanged\n";
+    else
+      std::cerr << "dyncal: the drive rejected the table: " << to_string(reason) << "; its active table is unchanged\n";
     return 3;
   }
   if (st != port::PortStatus::ok) throw InputError("flash failed: " + d->error());

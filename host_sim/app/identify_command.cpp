@@ -116,6 +116,7 @@ host::JointLog simulate_law(const host::RobotDescription& robot, const host::Dri
 }
 
 int run_identify(IdentifySettings& s) {
+  check_outputs({{s.report, "report"}, {s.params, "parameters"}});
   auto robot = s.log.load_robot();
   std::vector<std::string> dropped;
   host::ModelSpec spec = host::parse_model_spec(s.model, robot.num_joints);
@@ -172,7 +173,7 @@ int run_identify(IdentifySettings& s) {
   if (!s.report.empty()) {
     nlohmann::json report = host::identify_report_json(result);
     if (!torque_constants.is_null()) report["torque_constants"] = torque_constants;
-    write_json_file(s.report, report);
+    write_json_file(s.report, report, "report");
   }
   if (!s.params.empty()) {
     nlohmann::json file = host::parameter_table_json(result);
@@ -184,7 +185,7 @@ int run_identify(IdentifySettings& s) {
     } catch (const host::InputError& e) {
       std::cout << "note: no contact-detection statistics in " << s.params << ": " << e.what() << "\n";
     }
-    write_json_file(s.params, file);
+    write_json_file(s.params, file, "parameters");
   }
   return 0;
 }

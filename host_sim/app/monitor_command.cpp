@@ -99,6 +99,7 @@ int write_drive_monitor(const MonitorSettings& s, const host::RobotDescription& 
 }
 
 int run_monitor(MonitorSettings& s) {
+  check_outputs({{s.report, "report"}});
   const host::ParameterSet params = host::read_parameter_file(s.params);
   if (s.log.robot.name.empty()) s.log.robot.name = params.robot;
   if (s.log.robot.name != params.robot)

@@ -5,6 +5,7 @@
 
 #include "commands.hpp"
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/common/output_file.hpp"
 #include "dyncal_host/common/robot_description.hpp"
 #include "dyncal_host/identification/logs/column_map.hpp"
 #include "dyncal_host/identification/logs/log_plausibility.hpp"
@@ -16,10 +17,13 @@ namespace dyncal::app {
 
 using host::InputError;
 
-void write_json_file(const std::string& path, const nlohmann::json& j) {
-  std::ofstream out(path);
-  if (!out) throw InputError("cannot write '" + path + "'");
-  out << j.dump(2) << "\n";
+void write_json_file(const std::string& path, const nlohmann::json& j, const char* what) {
+  host::write_output_file(path, j.dump(2) + "\n", what);
+}
+
+void check_outputs(std::initializer_list<std::pair<const std::string&, const char*>> outputs) {
+  for (const auto& [path, what] : outputs)
+    if (!path.empty()) host::check_output_path(path, what);
 }
 
 std::unique_ptr<linux_port::ModbusDrive> connect_drive(const std::string& uri) {
@@ -37,9 +41,7 @@ void RobotOption::add_to(CLI::App* cmd, const std::string& help) {
 
 host::RobotDescription RobotOption::load() const {
   if (name.empty() && !default_robot) throw InputError("--robot is required (robots/<name>/; docs/robots.md)");
-  host::RobotDescription r = host::load_robot(robots_dir, name.empty() ? host::default_robot_name(robots_dir) : name);
-  host::derive_tau_max(r);
-  return r;
+  return host::load_checked_robot(robots_dir, name.empty() ? host::default_robot_name(robots_dir) : name);
 }
 
 CLI::Option* LogOption::add_to(CLI::App* cmd, bool data_required) {

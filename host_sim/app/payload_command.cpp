@@ -79,6 +79,7 @@ int run_drive_payload(const PayloadSettings& s) {
 }
 
 int run_payload(PayloadSettings& s) {
+  check_outputs({{s.report, "report"}, {s.save_params, "parameters"}});
   if (!s.drive.empty()) {
     if (!s.log.data.empty() || !s.params.empty())
       throw host::InputError("--drive identifies on the drive with its own table: no --data or --params");
@@ -96,10 +97,10 @@ int run_payload(PayloadSettings& s) {
   host::PayloadResult r = host::identify_payload(robot, log, arm, s.options);
   r.notes.insert(r.notes.begin(), dropped.begin(), dropped.end());
   host::print_payload_report(std::cout, r);
-  if (!s.report.empty()) write_json_file(s.report, host::payload_report_json(r));
+  if (!s.report.empty()) write_json_file(s.report, host::payload_report_json(r), "report");
   if (!s.save_params.empty()) {
     const host::ParameterSet loaded = host::with_payload(arm, robot, r.standard);
-    write_json_file(s.save_params, host::loaded_parameter_file_json(loaded, r));
+    write_json_file(s.save_params, host::loaded_parameter_file_json(loaded, r), "parameters");
     std::cout << "loaded model written to " << s.save_params << " (the arm's parameters with the payload on link "
               << r.link << ")\n";
   }

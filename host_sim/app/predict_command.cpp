@@ -17,6 +17,7 @@ struct PredictSettings {
 };
 
 int run_predict(PredictSettings& s) {
+  check_outputs({{s.report, "report"}});
   const host::ParameterSet p = host::read_parameter_file(s.params);
   if (s.log.robot.name.empty()) s.log.robot.name = p.robot;  // the robot the parameters were identified for
   if (s.log.robot.name != p.robot)
@@ -33,7 +34,7 @@ int run_predict(PredictSettings& s) {
     j["robot"] = robot.name;
     j["model"] = p.model;
     j["params"] = p.source;
-    write_json_file(s.report, j);
+    write_json_file(s.report, j, "report");
   }
   return 0;
 }

@@ -82,17 +82,21 @@ bool compare_with_kdl(const RobotSettings& s, const host::CompiledRobot& c) {
 }
 
 int run_check(const RobotSettings& s) {
+  // First the check every command runs when it loads the robot (load_checked_robot), so that the
+  // first error is the only line and "valid" means the tools take it; then the schema, KDL and
+  // URDF checks of the import tool.
+  const auto names = host::compiled_robot_names();
+  const bool compiled = std::find(names.begin(), names.end(), s.name) != names.end();
+  host::RobotDescription robot =
+      compiled ? host::load_checked_robot(s.robots_dir, s.name) : host::load_robot(s.robots_dir, s.name);
   const int rc = run_urdf_tool({"check", s.name, "--robots-dir", s.robots_dir});
   if (rc != 0) return rc;
-  host::RobotDescription robot = host::load_robot(s.robots_dir, s.name);
   std::cout << s.name << ": the tools read robot.json (" << robot.num_joints << " joints)";
-  const auto names = host::compiled_robot_names();
-  if (std::find(names.begin(), names.end(), s.name) == names.end()) {
+  if (!compiled) {
     std::cout << "; not compiled into this build yet: cmake --build --preset release\n";
     return 0;
   }
   const host::CompiledRobot& c = host::compiled_robot_for(robot);
-  host::derive_tau_max(robot);
   std::cout << "; compiled: " << c.num_base << " base parameters of " << c.num_standard << " standard";
   if (!compare_with_kdl(s, c)) return 2;
   if (robot.tau_max_derived) {

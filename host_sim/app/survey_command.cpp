@@ -29,7 +29,7 @@ int run_survey(const SurveySettings& s) {
   const nlohmann::json result = s.from_json.empty()
                                     ? survey::run_survey(robot, s.options, s.plots.empty() ? nullptr : &series)
                                     : read_json_file(s.from_json);
-  if (!s.json.empty()) write_json_file(s.json, result);
+  if (!s.json.empty()) write_json_file(s.json, result, "survey results");
   survey::print_survey(std::cout, result, published);
   if (!s.plots.empty()) {
     const std::vector<std::string> files = survey::write_survey_plots(result, series, s.plots);

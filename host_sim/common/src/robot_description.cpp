@@ -102,6 +102,55 @@ void read_limits(const Reader& rd, const json& j, RobotDescription& r) {
   r.tau_max = rd.vector(lim, "tau_max", n, "limits.tau_max", false, true);
 }
 
+/// kinematics and, for an MDH robot, its rows and links: the fields' types and counts, finite
+/// values, a mass >= 0 and no inertia without mass (codegen/dyncal_codegen/schema.py's rules; the
+/// values themselves are then compared with the compiled model, compiled_robot_for).
+void read_kinematics(const Reader& rd, const json& j, RobotDescription& r) {
+  const json& kin = *rd.object(j, "kinematics", "kinematics", true);
+  if (!kin.contains("format") || !kin["format"].is_string() || (kin["format"] != "mdh" && kin["format"] != "urdf"))
+    rd.fail("kinematics.format",
+            "expected \"mdh\" or \"urdf\", got " + (kin.contains("format") ? kin["format"].dump() : "nothing"));
+  r.kinematics_format = kin["format"].get<std::string>();
+  const int n = r.num_joints;
+  if (r.kinematics_format == "urdf") {
+    std::error_code ec;
+    if (!kin.contains("file") || !kin["file"].is_string() ||
+        !std::filesystem::is_regular_file(r.directory + "/" + kin["file"].get<std::string>(), ec))
+      rd.fail("kinematics.file", "expected the name of a URDF file in " + r.directory);
+    return;
+  }
+  if (!kin.contains("joints") || !kin["joints"].is_array() || static_cast<int>(kin["joints"].size()) != n)
+    rd.fail("kinematics.joints",
+            "expected a list of " + std::to_string(n) + " {alpha, a, d, theta} rows (one per joint)");
+  for (int k = 0; k < n; ++k) {
+    const json& row = kin["joints"][static_cast<size_t>(k)];
+    const std::string field = "kinematics.joints[" + std::to_string(k + 1) + "]";
+    if (!row.is_object()) rd.fail(field, "expected an object {alpha, a, d, theta}");
+    for (const char* key : {"alpha", "a", "d", "theta"}) {
+      if (!row.contains(key)) rd.fail(field + "." + key, "missing");
+      rd.number(row[key], field + "." + key);
+    }
+  }
+  if (!j.contains("links") || !j["links"].is_array() || static_cast<int>(j["links"].size()) != n)
+    rd.fail("links",
+            "expected one {mass, com, inertia} entry per joint (" + std::to_string(n) + ") for an mdh description");
+  for (int k = 0; k < n; ++k) {
+    const json& l = j["links"][static_cast<size_t>(k)];
+    const std::string field = "links[" + std::to_string(k + 1) + "]";
+    if (!l.is_object()) rd.fail(field, "expected an object {mass, com, inertia}");
+    LinkInertialSpec spec;
+    if (!l.contains("mass")) rd.fail(field + ".mass", "missing");
+    spec.mass = rd.number(l["mass"], field + ".mass");
+    if (spec.mass < 0) rd.fail(field + ".mass", "must be >= 0 kg, got " + l["mass"].dump());
+    const Eigen::VectorXd com = rd.vector(l, "com", 3, field + ".com", true);
+    const Eigen::VectorXd inertia = rd.vector(l, "inertia", 6, field + ".inertia", true);
+    for (int i = 0; i < 3; ++i) spec.com[static_cast<size_t>(i)] = com[i];
+    for (int i = 0; i < 6; ++i) spec.inertia[static_cast<size_t>(i)] = inertia[i];
+    if (spec.mass == 0 && inertia.cwiseAbs().maxCoeff() > 0) rd.fail(field + ".inertia", "an inertia without mass");
+    r.links.push_back(spec);
+  }
+}
+
 void read_transmission(const Reader& rd, const json& j, RobotDescription& r) {
   const int n = r.num_joints;
   r.gear_ratios = Eigen::VectorXd::Ones(n);
@@ -242,6 +291,7 @@ RobotDescription load_robot(const std::string& robots_dir, const std::string& na
   if (j["name"].get<std::string>() != name)
     rd.fail("name", "'" + j["name"].get<std::string>() + "' differs from the folder name '" + name + "'");
   read_limits(rd, j, r);
+  read_kinematics(rd, j, r);
   read_transmission(rd, j, r);
   read_friction(rd, j, r);
   read_joint_names(rd, j, r);

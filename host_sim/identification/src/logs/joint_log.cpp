@@ -5,10 +5,12 @@
 #include <cstdio>
 #include <fstream>
 #include <map>
+#include <sstream>
 #include <utility>
 #include <vector>
 
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/common/output_file.hpp"
 #include "dyncal_host/identification/logs/numeric_csv.hpp"
 
 namespace dyncal::host {
@@ -24,8 +26,7 @@ void check_log_time(const Eigen::VectorXd& t, const std::string& path) {
 }
 
 void write_csv_log(const std::string& path, const JointLog& log) {
-  std::ofstream out(path);
-  if (!out) throw InputError("cannot write '" + path + "'");
+  std::ostringstream out;
   const int n = log.joints();
   std::vector<std::pair<const Eigen::MatrixXd*, std::string>> blocks{{&log.q, "q"}};
   if (log.has_qd) blocks.emplace_back(&log.qd, "qd");
@@ -48,8 +49,7 @@ void write_csv_log(const std::string& path, const JointLog& log) {
     }
     out << '\n';
   }
-  out.flush();
-  if (!out) throw InputError("cannot write '" + path + "'");
+  write_output_file(path, out.str(), "log");
 }
 
 namespace {

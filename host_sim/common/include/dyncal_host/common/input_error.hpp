@@ -1,5 +1,6 @@
 #pragma once
 
+#include <cstddef>
 #include <stdexcept>
 #include <string>
 
@@ -18,5 +19,13 @@ class DriveFaultError : public InputError {
  public:
   explicit DriveFaultError(const std::string& what) : InputError(what) {}
 };
+
+/// A piece of the user's input as a message quotes it: at most `max_chars` characters of it, then
+/// "... (N bytes)", so that one line stays one readable line whatever the input holds (a 50 MB CSV
+/// cell is not echoed whole).
+inline std::string excerpt(const std::string& text, std::size_t max_chars = 64) {
+  if (text.size() <= max_chars) return text;
+  return text.substr(0, max_chars) + "... (" + std::to_string(text.size()) + " bytes)";
+}
 
 }  // namespace dyncal::host

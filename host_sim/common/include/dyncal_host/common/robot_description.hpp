@@ -1,6 +1,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <string>
 #include <vector>
 
@@ -11,6 +12,14 @@ namespace dyncal::host {
 /// velocity qds [rad/s].
 struct NominalFriction {
   double Fc = 0, beta = 0, Fs = 0, qds = 0.1;
+};
+
+/// A link's inertial as an MDH robot.json states it ("links"; docs/robots.md): mass [kg], centre of
+/// mass [m] in the link frame, inertia [kg m^2] about the centre of mass (ixx ixy ixz iyy iyz izz).
+struct LinkInertialSpec {
+  double mass = 0;
+  std::array<double, 3> com{};
+  std::array<double, 6> inertia{};
 };
 
 /// Joints a robot may have (the register map's and the firmware's kMaxJoints).
@@ -24,6 +33,10 @@ inline constexpr double kDefaultQddPerQd = 4.0;
 struct RobotDescription {
   std::string name;
   std::string directory;
+  std::string kinematics_format;  ///< kinematics.format: "mdh" or "urdf"
+  /// An MDH robot's links (one per joint), checked against its compiled model (compiled_robot_for);
+  /// empty for a URDF robot, whose inertials are in its URDF (robot check compares it with KDL).
+  std::vector<LinkInertialSpec> links;
   /// Vendor log formats (`--format`) this arm's controller writes: "--format F" without --robot
   /// takes the robot listing F (robot_for_log_format). Empty when the file lists none.
   std::vector<std::string> log_formats;
