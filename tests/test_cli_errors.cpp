@@ -390,6 +390,27 @@ TEST(CliErrors, MisleadingCsvMessagesAreFixed) {
                "'1e400' is beyond the range of a double");
 }
 
+// Issue 67: messages that name the real cause, in a line of readable length.
+TEST(CliErrors, MessagesNameTheRealCauseInAReadableLine) {
+  // A 1 MB cell is quoted to 64 characters and its size (a 50 MB one was echoed whole).
+  const std::string big(1 << 20, '7');
+  const auto cell =
+      run_stderr("identify --robot er20 --data " +
+                 write_csv("bigcell", header(6) + rows(6, 5) + "0.05,x" + big + ",2,3,4,5,6,1,2,3,4,5,6\n"));
+  EXPECT_EQ(cell.exit_code, 2);
+  EXPECT_LT(cell.err.size(), 400u) << cell.err.substr(0, 400);
+  EXPECT_NE(cell.err.find("... (1048577 bytes)"), std::string::npos) << cell.err.substr(0, 400);
+  // A range bound beyond a long is no joint number (it became 9223372036854775807).
+  expect_error("identify --robot er20 --data " + write_csv("range", header(6) + rows(6, 5)) +
+                   " --columns 't=t,q=q{1..99999999999999999999},tau=tau{1..6}'",
+               "a range is {a..b} with integers a <= b, a >= 0");
+  // A text file named .mcap is named as such (it was read as a CSV).
+  const auto mcap = std::filesystem::temp_directory_path() / ("dyncal_text_" + std::to_string(::getpid()) + ".mcap");
+  std::ofstream(mcap) << header(6) << rows(6, 5);
+  expect_error("identify --robot er20 --data " + mcap.string(), "named .mcap but not an MCAP file");
+  std::filesystem::remove(mcap);
+}
+
 TEST(CliErrors, MonitorRefusesBadStatisticsRatesAndGainsWithOneLine) {
   const auto dir = std::filesystem::temp_directory_path() / ("dyncal_monitor_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);

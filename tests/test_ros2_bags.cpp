@@ -5,6 +5,7 @@
 // compression, a bag's file or its folder read alike;
 // corrupt, truncated and ambiguous bags are refused with one line and exit 2.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -207,6 +208,23 @@ TEST_F(Ros2Bags, CorruptTruncatedAndAmbiguousBagsAreRefusedOnOneLine) {
   refused("--data " + (dir_ / "renamed").string() + " --effort torque", "with the robot's joints (joint_1");
   // Motor currents without torque constants.
   refused("--data " + mcap.string() + " --effort current", "no transmission.torque_constants");
+  // Issue 67: the real cause, named. A text file named .mcap (it was read as a CSV, and refused for
+  // its columns, even without --effort).
+  std::ofstream(dir_ / "text.mcap") << "t,q1\n0,1\n";
+  refused("--data " + (dir_ / "text.mcap").string(), "named .mcap but not an MCAP file");
+  // A metadata.yaml entry that is a FIFO (it "was missing").
+  fs::copy(dir_ / "good", dir_ / "fifo_bag");
+  fs::remove(dir_ / "fifo_bag" / "bag_0.mcap");
+  ASSERT_EQ(::mkfifo((dir_ / "fifo_bag" / "bag_0.mcap").c_str(), 0644), 0);
+  refused("--data " + (dir_ / "fifo_bag").string() + " --effort torque", "is not a regular file (a folder, FIFO");
+  // A .db3 message whose timestamp is text (it was read as 0).
+  write_bag(csv, dir_ / "db_text", "--storage sqlite3");
+  const std::string db3 = (dir_ / "db_text" / "bag_0.db3").string();
+  ASSERT_EQ(std::system(("/usr/bin/python3 -c \"import sqlite3; c = sqlite3.connect('" + db3 +
+                         "'); c.execute(\\\"UPDATE messages SET timestamp = 'abc'\\\"); c.commit()\"")
+                            .c_str()),
+            0);
+  refused("--data " + db3 + " --effort torque", "its timestamp is not an integer number of nanoseconds ('abc')");
 }
 
 }  // namespace

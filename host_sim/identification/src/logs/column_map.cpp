@@ -1,5 +1,6 @@
 #include "dyncal_host/identification/logs/column_map.hpp"
 
+#include <cerrno>
 #include <cmath>
 #include <cstdlib>
 #include <map>
@@ -34,8 +35,9 @@ std::vector<std::string> entries(const std::string& spec) {
 bool integer(const std::string& s, long& v) {
   if (s.empty()) return false;
   char* end = nullptr;
+  errno = 0;
   v = std::strtol(s.c_str(), &end, 10);
-  return end == s.c_str() + s.size();
+  return end == s.c_str() + s.size() && errno != ERANGE;  // 99999999999999999999 is no joint number
 }
 
 /// The column names of `names`: one name, or a pattern with one {a..b} expanded to `joints` names
@@ -58,9 +60,9 @@ std::vector<std::string> column_names(const std::string& names, bool expand, int
     throw InputError(where + ": a range is {a..b}, once in a name");
   long a = 0, b = 0;
   if (!integer(names.substr(open + 1, dots - open - 1), a) || !integer(names.substr(dots + 2, close - dots - 2), b) ||
-      a > b)
-    throw InputError(where + ": a range is {a..b} with integers a <= b");
-  if (b - a + 1 != joints)
+      a < 0 || a > b)
+    throw InputError(where + ": a range is {a..b} with integers a <= b, a >= 0 (within a long's range)");
+  if (b - a != joints - 1)
     throw InputError(where + ": {" + std::to_string(a) + ".." + std::to_string(b) + "} names " +
                      std::to_string(b - a + 1) + " columns, the robot has " + std::to_string(joints) + " joints");
   std::vector<std::string> out;

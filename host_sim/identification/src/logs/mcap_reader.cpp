@@ -11,6 +11,7 @@
 #include <memory>
 
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/identification/logs/decompression_budget.hpp"
 
 namespace dyncal::host {
 namespace {
@@ -87,6 +88,7 @@ class Parser {
       throw InputError(name_ + ": not an MCAP file (no MCAP magic at byte 0)");
     in.seekg(0, std::ios::end);
     file_end_ = in.tellg();
+    budget_ = DecompressionBudget(static_cast<std::uint64_t>(std::max<std::streamoff>(0, file_end_)), name_);
     in.seekg(8);
     // The data section's CRC-32 runs over every byte before the DataEnd record, magic included.
     std::uint32_t data_crc = static_cast<std::uint32_t>(::crc32(0L, Z_NULL, 0));
@@ -245,6 +247,7 @@ class Parser {
                          std::to_string(size) + " stated");
       plain.assign(src, src + stored);
     } else if (compression == "zstd" || compression == "lz4") {
+      budget_.check(size, where);  // a stated size beyond the file's budget: refused before any allocation
       // Streamed into a buffer that grows with what actually decompresses (never more than the stated
       // size), so that a chunk stating a huge size allocates nothing it does not fill.
       const bool zstd = compression == "zstd";
@@ -281,6 +284,7 @@ class Parser {
           throw InputError(where + ": the " + compression + " chunk ends before its " + std::to_string(size) +
                            " bytes (truncated or corrupt)");
       }
+      budget_.take(out_at, where);
       if (out_at != size)
         throw InputError(where + ": the " + compression + " chunk decompresses to " + std::to_string(out_at) +
                          " bytes, not its stated " + std::to_string(size));
@@ -313,6 +317,7 @@ class Parser {
   std::map<std::uint16_t, std::string> schemas_;
   std::map<std::uint16_t, int> channels_;  ///< channel id -> topic index, or -1 - index when not kept
   std::streampos file_end_ = 0;
+  DecompressionBudget budget_{0, ""};  ///< what the chunks may decompress to, from the file's size
 };
 
 }  // namespace

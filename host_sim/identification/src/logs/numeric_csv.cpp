@@ -85,18 +85,18 @@ NumericCsv parse_numeric_csv(std::istream& in, const std::string& path) {
       errno = 0;
       const double v = std::strtod(f.c_str(), &end);
       if (f.empty() || end != f.c_str() + f.size()) {
-        throw InputError(path + ":" + std::to_string(line_no) + ": column '" + csv.header[c] + "': '" + f +
-                         "' is not a number");
+        throw InputError(path + ":" + std::to_string(line_no) + ": column '" + excerpt(csv.header[c]) + "': '" +
+                         excerpt(f) + "' is not a number");
       }
       // ERANGE: overflow gives +-HUGE_VAL (refused below as non-finite, with its own words);
       // underflow (1e-320) gives the nearest subnormal or zero, a faithful reading of the text.
       if (errno == ERANGE && std::isinf(v)) {
-        throw InputError(path + ":" + std::to_string(line_no) + ": column '" + csv.header[c] + "': '" + f +
-                         "' is beyond the range of a double");
+        throw InputError(path + ":" + std::to_string(line_no) + ": column '" + excerpt(csv.header[c]) + "': '" +
+                         excerpt(f) + "' is beyond the range of a double");
       }
       if (!std::isfinite(v)) {
-        throw InputError(path + ":" + std::to_string(line_no) + ": column '" + csv.header[c] + "': non-finite value '" +
-                         f + "'");
+        throw InputError(path + ":" + std::to_string(line_no) + ": column '" + excerpt(csv.header[c]) +
+                         "': non-finite value '" + excerpt(f) + "'");
       }
       blocks.back().push_back(v);
     }
@@ -124,7 +124,7 @@ std::map<std::string, Eigen::Index> column_index(const NumericCsv& csv, const st
   std::map<std::string, Eigen::Index> col;
   for (size_t i = 0; i < csv.header.size(); ++i) {
     if (!col.emplace(csv.header[i], static_cast<Eigen::Index>(i)).second)
-      throw InputError(path + ": duplicate column '" + csv.header[i] + "'");
+      throw InputError(path + ": duplicate column '" + excerpt(csv.header[i]) + "'");
   }
   return col;
 }

@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/identification/logs/decompression_budget.hpp"
 #include "dyncal_host/identification/logs/joint_state_cdr.hpp"
 #include "dyncal_host/identification/logs/mcap_reader.hpp"
 #include "dyncal_host/identification/logs/sample_clock.hpp"
@@ -71,7 +72,9 @@ BagLayout layout_of(const std::string& path) {
     if (!files || !files.IsSequence() || files.size() == 0) throw InputError(meta + ": no relative_file_paths");
     for (const auto& f : files) {
       const std::string file = (fs::path(path) / f.as<std::string>()).string();
-      if (!fs::is_regular_file(file, ec)) throw InputError(meta + ": its file " + file + " is missing");
+      if (!fs::exists(file, ec)) throw InputError(meta + ": its file " + file + " is missing");
+      if (!fs::is_regular_file(file, ec))
+        throw InputError(meta + ": its file " + file + " is not a regular file (a folder, FIFO or device)");
       layout.files.push_back({file, zstd_files});
     }
     return layout;
@@ -100,6 +103,9 @@ void unzstd_file(const std::string& path, TempFile& out) {
   if (!o) throw InputError(out.path + ": cannot be written");
   const std::unique_ptr<ZSTD_DCtx, decltype(&ZSTD_freeDCtx)> ctx(ZSTD_createDCtx(), &ZSTD_freeDCtx);
   std::vector<char> ibuf(ZSTD_DStreamInSize()), obuf(ZSTD_DStreamOutSize());
+  std::error_code size_error;
+  const std::uintmax_t file_bytes = fs::file_size(path, size_error);
+  DecompressionBudget budget(size_error ? 0 : file_bytes, path);
   std::size_t last = 0;
   while (in) {
     in.read(ibuf.data(), static_cast<std::streamsize>(ibuf.size()));
@@ -109,6 +115,7 @@ void unzstd_file(const std::string& path, TempFile& out) {
       last = ZSTD_decompressStream(ctx.get(), &output, &input);
       if (ZSTD_isError(last))
         throw InputError(path + ": does not decompress as zstd (" + ZSTD_getErrorName(last) + ")");
+      budget.take(output.pos, path);  // the temporary file is bounded by the bag's size
       o.write(obuf.data(), static_cast<std::streamsize>(output.pos));
     }
   }
@@ -116,11 +123,12 @@ void unzstd_file(const std::string& path, TempFile& out) {
   if (!o) throw InputError(out.path + ": cannot be written");
 }
 
-/// Undoes compression_mode MESSAGE on one message's data.
-void unzstd_message(std::vector<std::uint8_t>& data, const std::string& where) {
+/// Undoes compression_mode MESSAGE on one message's data, within the bag's decompression budget.
+void unzstd_message(std::vector<std::uint8_t>& data, const std::string& where, DecompressionBudget& budget) {
   const unsigned long long size = ZSTD_getFrameContentSize(data.data(), data.size());
-  if (size == ZSTD_CONTENTSIZE_ERROR || size == ZSTD_CONTENTSIZE_UNKNOWN || size > (1ull << 30))
+  if (size == ZSTD_CONTENTSIZE_ERROR || size == ZSTD_CONTENTSIZE_UNKNOWN)
     throw InputError(where + ": not a zstd frame (the bag's metadata says its messages are compressed)");
+  budget.take(size, where);  // before the allocation: the bag's budget bounds every message's stated size
   std::vector<std::uint8_t> plain(static_cast<std::size_t>(size));
   const std::size_t got = ZSTD_decompress(plain.data(), plain.size(), data.data(), data.size());
   if (ZSTD_isError(got) || got != size) throw InputError(where + ": does not decompress as zstd");
@@ -170,6 +178,13 @@ bool is_ros2_bag(const std::string& path) {
   std::error_code ec;
   if (fs::is_directory(path, ec)) return fs::is_regular_file(fs::path(path) / "metadata.yaml", ec);
   if (!fs::is_regular_file(path, ec)) return false;
+  // Named as a bag's storage but without its magic: the real cause, not a CSV's "columns".
+  const std::string ext = fs::path(path).extension().string();
+  const Storage named = storage_of_file(path);
+  if (ext == ".mcap" && named != Storage::mcap)
+    throw InputError(path + ": named .mcap but not an MCAP file (no MCAP magic at byte 0: damaged, or not a bag)");
+  if (ext == ".db3" && named != Storage::sqlite3)
+    throw InputError(path + ": named .db3 but not a SQLite3 file (no SQLite magic at byte 0: damaged, or not a bag)");
   const Storage s = storage_of_file(path);
   return s == Storage::mcap || (s == Storage::sqlite3 && fs::path(path).extension() == ".db3");
 }
@@ -227,6 +242,13 @@ BagLog read_ros2_bag_log(const std::string& path, const BagLogOptions& options) 
   const int topic_index = static_cast<int>(topic_at - topics.begin());
 
   // Decode, and match the robot's joints by name.
+  std::uint64_t bag_bytes = 0;
+  for (const StorageFile& f : layout.files) {
+    std::error_code size_error;
+    const std::uintmax_t file_bytes = fs::file_size(f.path, size_error);
+    if (!size_error) bag_bytes += file_bytes;
+  }
+  DecompressionBudget message_budget(bag_bytes, path);
   const auto& names = options.joint_names;
   const int n = static_cast<int>(names.size());
   struct Sample {
@@ -245,7 +267,7 @@ BagLog read_ros2_bag_log(const std::string& path, const BagLogOptions& options) 
     if (m.topic != topic_index) continue;
     ++index;
     const std::string where = path + ": " + topic + " message " + std::to_string(index);
-    if (layout.zstd_messages) unzstd_message(m.data, where);
+    if (layout.zstd_messages) unzstd_message(m.data, where, message_budget);
     if (!decode_joint_state(m.data.data(), m.data.size(), msg, error))
       throw InputError(where + " is not a JointState: " + error);
     if (msg.name != last_names) {

@@ -66,6 +66,10 @@ BagMessages read_sqlite_bag(const std::string& path, const KeepTopic& keep) {
     if (t->second < 0) continue;
     BagMessage m;
     m.topic = t->second;
+    // rosbag2's timestamp column is an INTEGER [ns]: text ('abc') or a real is a corrupt row, not 0.
+    if (sqlite3_column_type(s.get(), 2) != SQLITE_INTEGER)
+      throw InputError(path + ": message " + std::to_string(sqlite3_column_int64(s.get(), 0)) +
+                       ": its timestamp is not an integer number of nanoseconds ('" + excerpt(text(s.get(), 2)) + "')");
     m.log_time = sqlite3_column_int64(s.get(), 2);
     const auto* data = static_cast<const std::uint8_t*>(sqlite3_column_blob(s.get(), 3));
     const int n = sqlite3_column_bytes(s.get(), 3);

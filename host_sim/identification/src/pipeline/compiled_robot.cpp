@@ -1,9 +1,14 @@
 #include "dyncal_host/identification/pipeline/compiled_robot.hpp"
 
+#include <algorithm>
+#include <array>
+#include <cmath>
 #include <map>
 #include <random>
 
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/common/number_text.hpp"
+#include "dyncal_host/identification/methods/inertial_parameters.hpp"
 
 namespace dyncal::host {
 namespace {
@@ -62,7 +67,40 @@ const CompiledRobot& compiled_robot_for(const RobotDescription& robot) {
     throw InputError(robot.directory + "/robot.json lists " + std::to_string(robot.num_joints) +
                      " joints, its compiled model has " + std::to_string(c.num_joints) + ": build again");
   }
+  // An MDH robot's inertials are compiled from robot.json: an edit since the build is named, not
+  // silently replaced by the compiled values (a URDF robot's are checked against KDL by robot check).
+  static const char* kFields[10] = {"mass",       "com[1]",     "com[2]",     "com[3]",     "inertia[1]",
+                                    "inertia[2]", "inertia[3]", "inertia[4]", "inertia[5]", "inertia[6]"};
+  for (size_t k = 0; k < robot.links.size() && 10 * (k + 1) <= c.nominal_standard.size(); ++k) {
+    const LinkInertialSpec& l = robot.links[k];
+    const std::array<double, 10> stated = {l.mass,       l.com[0],     l.com[1],     l.com[2],     l.inertia[0],
+                                           l.inertia[1], l.inertia[2], l.inertia[3], l.inertia[4], l.inertia[5]};
+    std::array<double, 10> phi{};
+    standard_from_physical(stated, phi.data());
+    const std::array<double, 10> compiled = physical_parameters(c.nominal_standard.data() + 10 * k);
+    double worst = 0;
+    for (size_t i = 0; i < 10; ++i)
+      worst = std::max(worst, std::abs(phi[i] - c.nominal_standard[10 * k + i]) /
+                                  std::max(1.0, std::abs(c.nominal_standard[10 * k + i])));
+    if (!(worst <= 1e-9)) {
+      size_t field = 0;
+      for (size_t i = 1; i < 10; ++i)
+        if (std::abs(stated[i] - compiled[i]) > std::abs(stated[field] - compiled[field])) field = i;
+      throw InputError(robot.directory + "/robot.json: links[" + std::to_string(k + 1) + "]." + kFields[field] + " " +
+                       number_text(stated[field], 12) + " differs from the compiled model's " +
+                       number_text(compiled[field], 12) +
+                       " (this build compiled an earlier robot.json): build again "
+                       "(scripts/build) after robot check, or undo the edit");
+    }
+  }
   return c;
+}
+
+RobotDescription load_checked_robot(const std::string& robots_dir, const std::string& name) {
+  RobotDescription r = load_robot(robots_dir, name);
+  compiled_robot_for(r);
+  derive_tau_max(r);
+  return r;
 }
 
 void derive_tau_max(RobotDescription& robot) {

@@ -698,6 +698,18 @@ IdentifyResult run_identify(const RobotDescription& robot, const TermSetModel& m
                           model.names[static_cast<size_t>(into)]);
     }
   }
+  // R^2 < 0 on data a fit never saw: the model predicts worse than the joint's mean torque. Its
+  // parameters fit noise or a too short log, and are not to be used as they are.
+  for (const JointMetrics& m : res.joints) {
+    if (!(m.r2 < 0)) continue;
+    char line[300];
+    std::snprintf(line, sizeof line,
+                  "joint %d: validation R^2 %.3g < 0 (RMS %.3g Nm against a measured RMS of %.3g Nm): the model "
+                  "predicts unseen data worse than a constant; the log cannot carry this model (too short, too "
+                  "little motion, or too many parameters for it): do not use these parameters",
+                  m.joint, m.r2, m.rms, m.rms_tau);
+    res.notes.push_back(line);
+  }
   return res;
 }
 

@@ -28,6 +28,8 @@ struct BagLog {
 };
 
 /// True when `path` is an MCAP file, a SQLite3 file named .db3, or a folder with a metadata.yaml.
+/// Throws InputError for a file named .mcap or .db3 without that storage's magic (the real cause,
+/// rather than reading it as a CSV).
 bool is_ros2_bag(const std::string& path);
 
 /// Reads the bag at `path`. Each message's joints are matched by name to `options.joint_names`

@@ -84,7 +84,9 @@ const CompiledRobot& compiled_robot(const std::string& name);
 /// Names of the compiled robots, sorted.
 std::vector<std::string> compiled_robot_names();
 
-/// The operations of `robot` checked against its description (joint count). Throws InputError.
+/// The operations of `robot` checked against its description: the joint count, and an MDH robot's
+/// links (robot.json's inertials) against the compiled kNominalStandard to 1e-9 relative (an edit
+/// since the build is named with its field). Throws InputError.
 const CompiledRobot& compiled_robot_for(const RobotDescription& robot);
 
 /// The identification model of `robot` for the built term set `terms` (model_terms.hpp). Throws
@@ -93,6 +95,12 @@ const TermSetModel& term_set_model(const CompiledRobot& robot, unsigned terms);
 
 /// The base map K (num_base x num_standard): phi_b = K phi (Gautier), from standard_to_base.
 Eigen::MatrixXd base_map(const CompiledRobot& robot);
+
+/// The robot `name` under `robots_dir` as every command loads it, and robot check checks it first
+/// (docs/robots.md "Checks"): robot.json read and checked (load_robot), checked against its compiled
+/// model (compiled_robot_for: joint count, an MDH robot's links), tau_max derived where absent.
+/// Throws InputError: the first error, one line.
+RobotDescription load_checked_robot(const std::string& robots_dir, const std::string& name);
 
 /// Samples and seed of derive_tau_max.
 inline constexpr int kDerivedTauMaxSamples = 4096;
