@@ -11,27 +11,17 @@
 #include <vector>
 
 #include "dyncal_host/identification/pipeline/kept_samples.hpp"
+#include "support/dyncal_cli.hpp"
 #include "support/simulated_log.hpp"
 #include "support/test_paths.hpp"
 
 namespace dyncal::test {
 namespace {
 
-/// Peak resident set [bytes] of `dyncal ARGS` run as a child (wait4's ru_maxrss); -1 if it failed.
+/// Peak resident set [bytes] of `dyncal ARGS` run as a child; -1 if it failed or exited non-zero.
 long peak_rss_of_dyncal(const std::vector<std::string>& args) {
-  std::vector<char*> argv{const_cast<char*>(dyncal::test::dyncal_binary())};
-  for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
-  const pid_t pid = fork();
-  if (pid == 0) {
-    if (!freopen("/dev/null", "w", stdout)) _exit(127);
-    execv(dyncal::test::dyncal_binary(), argv.data());
-    _exit(127);
-  }
-  int status = 0;
-  rusage usage{};
-  if (pid < 0 || wait4(pid, &status, 0, &usage) != pid || !WIFEXITED(status) || WEXITSTATUS(status) != 0) return -1;
-  return usage.ru_maxrss * 1024L;
+  const auto [rss, code] = peak_rss_and_exit_code(args);
+  return code == 0 ? rss : -1;
 }
 
 /// A simulated 1 kHz log of arm6 lasting `seconds`, as a CSV of t, q1..6, tau1..6; its numeric

@@ -10,7 +10,6 @@
 //   bounded peak memory.
 #include <gtest/gtest.h>
 #include <sys/mount.h>
-#include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/sysmacros.h>
 #include <sys/wait.h>
@@ -27,6 +26,7 @@
 #include <vector>
 
 #include "dyncal_host/identification/logs/joint_log.hpp"
+#include "support/dyncal_cli.hpp"
 #include "support/simulated_log.hpp"
 #include "support/test_paths.hpp"
 
@@ -223,29 +223,12 @@ TEST_F(TruthfulOutputs, ARobotDescriptionIsCheckedAlikeByEveryCommand) {
   EXPECT_EQ(o.code, 0) << o.err;
 }
 
-/// Peak resident set [bytes] and exit code of `dyncal ARGS` run as a child (wait4's ru_maxrss).
-std::pair<long, int> peak_rss_and_code(const std::vector<std::string>& args) {
-  std::vector<char*> argv{const_cast<char*>(dyncal_binary())};
-  for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
-  const pid_t pid = fork();
-  if (pid == 0) {
-    if (!freopen("/dev/null", "w", stdout) || !freopen("/dev/null", "w", stderr)) _exit(127);
-    execv(dyncal_binary(), argv.data());
-    _exit(127);
-  }
-  int status = 0;
-  rusage usage{};
-  if (pid < 0 || wait4(pid, &status, 0, &usage) != pid || !WIFEXITED(status)) return {-1, -1};
-  return {usage.ru_maxrss * 1024L, WEXITSTATUS(status)};
-}
-
 TEST_F(TruthfulOutputs, ABagWhoseChunkExpandsToGigabytesIsRefusedWithBoundedMemory) {
   const fs::path bomb = dir_ / "bomb.mcap";
   const std::string writer = std::string(source_dir()) + "/tests/tools/write_mcap_bomb.py";
   ASSERT_EQ(std::system(("/usr/bin/python3 " + writer + " " + bomb.string() + " --expands-to 2147483648").c_str()), 0);
   const auto [rss, code] =
-      peak_rss_and_code({"identify", "--robot", "tx40", "--effort", "torque", "--data", bomb.string()});
+      peak_rss_and_exit_code({"identify", "--robot", "tx40", "--effort", "torque", "--data", bomb.string()});
   EXPECT_EQ(code, 2);
   EXPECT_GT(rss, 0);
   EXPECT_LT(rss, 100L << 20) << "peak RSS " << rss << " bytes for a " << fs::file_size(bomb) << "-byte file";

@@ -1,12 +1,17 @@
 #pragma once
 // Running the dyncal command line from a test and reading the JSON it writes.
+#include <sys/resource.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "support/test_paths.hpp"
 
@@ -17,6 +22,24 @@ inline int run_dyncal(const std::string& args) {
   const int status =
       std::system((std::string(dyncal::test::dyncal_binary()) + " " + args + " >/dev/null 2>&1").c_str());
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+/// Runs `dyncal ARGS` (dyncal_binary()) as a child with stdout and stderr discarded: its peak
+/// resident set [bytes] (wait4's ru_maxrss) and exit code; {-1, -1} if it did not exit.
+inline std::pair<long, int> peak_rss_and_exit_code(const std::vector<std::string>& args) {
+  std::vector<char*> argv{const_cast<char*>(dyncal_binary())};
+  for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  const pid_t pid = fork();
+  if (pid == 0) {
+    if (!std::freopen("/dev/null", "w", stdout) || !std::freopen("/dev/null", "w", stderr)) _exit(127);
+    execv(dyncal_binary(), argv.data());
+    _exit(127);
+  }
+  int status = 0;
+  rusage usage{};
+  if (pid < 0 || wait4(pid, &status, 0, &usage) != pid || !WIFEXITED(status)) return {-1, -1};
+  return {usage.ru_maxrss * 1024L, WEXITSTATUS(status)};
 }
 
 /// The JSON document of a file dyncal wrote.
