@@ -26,17 +26,18 @@ const char* model_title(const std::string& model) {
 
 std::vector<std::string> write_survey_plots(const nlohmann::json& result, const SurveySeries& series,
                                             const std::string& dir) {
-  std::filesystem::create_directories(dir);
+  PlotFolder folder(dir);
+  const std::string& w = folder.work();
   std::vector<std::string> files;
-  std::ofstream gp = open_data(dir + "/plots.gp");
+  std::ofstream gp = open_data(w + "/plots.gp");
   gp << "set terminal svg size 900,600 dynamic background rgb 'white' noenhanced\nset grid\n";
   auto out = [&](const std::string& name) {
-    files.push_back(dir + "/" + name);
-    gp << "set output '" << dir << "/" << name << "'\n";
+    files.push_back(name);
+    gp << "set output '" << name << "'\n";
   };
   for (const SurveySeries::Trajectory& tr : series.trajectories) {
-    const std::string data = dir + "/trajectory_" + tr.model + ".dat";
-    std::ofstream f = open_data(data);
+    const std::string data = "trajectory_" + tr.model + ".dat";
+    std::ofstream f = open_data(w + "/" + data);
     f << "# t [s], q1..q6 [rad]: the designed excitation (Eq. 27) as the drive played it\n";
     for (Eigen::Index s = 0; s < tr.t.size(); ++s) {
       f << tr.t[s];
@@ -51,8 +52,8 @@ std::vector<std::string> write_survey_plots(const nlohmann::json& result, const 
   for (const char* model : {"eq7", "eq4"}) {
     if (!result.contains("models") || !result["models"].contains(model)) continue;
     const nlohmann::json& methods = result["models"][model]["methods"];
-    const std::string data = dir + std::string("/residual_rms_") + model + ".dat";
-    std::ofstream f = open_data(data);
+    const std::string data = std::string("residual_rms_") + model + ".dat";
+    std::ofstream f = open_data(w + "/" + data);
     std::vector<std::string> names;
     for (auto& [name, m] : methods.items()) names.push_back(name);
     for (const char* noise : {"without_noise", "with_noise"}) {
@@ -85,8 +86,8 @@ std::vector<std::string> write_survey_plots(const nlohmann::json& result, const 
        << "set terminal svg size 900,600 dynamic background rgb 'white' noenhanced\n";
   }
   for (const SurveySeries::Tracking& tk : series.tracking) {
-    const std::string data = dir + "/tracking_" + tk.model + ".dat";
-    std::ofstream f = open_data(data);
+    const std::string data = "tracking_" + tk.model + ".dat";
+    std::ofstream f = open_data(w + "/" + data);
     // One block per profile: N, beta, then every method's beta_hat.
     std::vector<std::string> profiles, methods;
     for (const TrackingResult& t : tk.runs) {
@@ -126,8 +127,7 @@ std::vector<std::string> write_survey_plots(const nlohmann::json& result, const 
        << "set terminal svg size 900,600 dynamic background rgb 'white' noenhanced\n";
   }
   gp.close();
-  run_gnuplot(dir);
-  return files;
+  return folder.draw(files);
 }
 
 }  // namespace dyncal::host::survey

@@ -12,12 +12,11 @@ namespace dyncal::host {
 std::vector<std::string> write_contact_plots(const ObserverRun& run, const ResidualStatistics& s,
                                              const std::vector<ContactThreshold>& thresholds,
                                              const std::vector<Contact>& contacts, const std::string& dir) {
-  namespace fs = std::filesystem;
-  fs::create_directories(dir);
+  PlotFolder folder(dir);
+  const std::string& w = folder.work();
   const Eigen::Index N = run.r.cols();
   {
-    std::ofstream data(dir + "/residual.dat");
-    if (!data) throw InputError("cannot write into '" + dir + "'");
+    std::ofstream data(w + "/residual.dat");
     data << "# t, then per joint: r - mean, the threshold at that sample (widened at rest) [Nm]\n";
     for (const auto& [a, b] : run.segments) {
       for (Eigen::Index k = a; k < b; ++k) {
@@ -33,7 +32,7 @@ std::vector<std::string> write_contact_plots(const ObserverRun& run, const Resid
     }
   }
   std::vector<std::string> files;
-  std::ofstream gp(dir + "/plots.gp");
+  std::ofstream gp(w + "/plots.gp");
   gp << "set terminal svg size 1000,450 dynamic background rgb 'white' noenhanced\nset grid\nset key outside\n"
         "set xlabel 't [s]'\nset ylabel '[Nm]'\n";
   for (const auto& c : contacts)
@@ -42,15 +41,14 @@ std::vector<std::string> write_contact_plots(const ObserverRun& run, const Resid
   for (Eigen::Index j = 0; j < N; ++j) {
     const Eigen::Index col = 2 + 2 * j;
     const std::string J = std::to_string(j + 1), name = "joint" + J + "_residual.svg";
-    files.push_back(dir + "/" + name);
-    gp << "set output '" << dir << "/" << name << "'\nset title 'joint " << J
-       << ": momentum observer residual r - mean and the contact threshold (contacts shaded)'\nplot '" << dir
-       << "/residual.dat' u 1:" << col << " w l t 'r - mean', '' u 1:" << col + 1
-       << " w l lw 2 t 'threshold', '' u 1:(-$" << col + 1 << ") w l lw 2 t ''\n";
+    files.push_back(name);
+    gp << "set output '" << name << "'\nset title 'joint " << J
+       << ": momentum observer residual r - mean and the contact threshold (contacts shaded)'\nplot 'residual.dat' u 1:"
+       << col << " w l t 'r - mean', '' u 1:" << col + 1 << " w l lw 2 t 'threshold', '' u 1:(-$" << col + 1
+       << ") w l lw 2 t ''\n";
   }
   gp.close();
-  run_gnuplot(dir);
-  return files;
+  return folder.draw(files);
 }
 
 }  // namespace dyncal::host
