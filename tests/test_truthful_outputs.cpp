@@ -21,6 +21,7 @@
 #include <fstream>
 #include <functional>
 #include <nlohmann/json.hpp>
+#include <random>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -221,6 +222,33 @@ TEST_F(TruthfulOutputs, ARobotDescriptionIsCheckedAlikeByEveryCommand) {
   const fs::path robots = er20_edited(dir_, [](nlohmann::json&) {});
   const Outcome o = dyncal_run("robot check er20 --robots-dir " + robots.string(), dir_);
   EXPECT_EQ(o.code, 0) << o.err;
+}
+
+// A log that cannot carry the model (3 s, and joint 2's torque pure noise, unrelated to the motion):
+// the fit predicts joint 2's unseen samples worse than a constant (validation R^2 < 0). It used to
+// exit 0 with R^2 -2e7 and no word; the report now says so in a note naming the joint.
+TEST_F(TruthfulOutputs, AJointTheFitPredictsWorseThanAConstantIsNamed) {
+  JointLog log = simulate(test_robot("arm3"), uniform_times(200.0, 3.0), MotionClock{}, 5, 3).log;
+  std::mt19937_64 rng(67);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  for (Eigen::Index k = 0; k < log.samples(); ++k) log.tau(k, 1) = noise(rng);
+  const std::string path = (dir_ / "noise.csv").string(), report = (dir_ / "r.json").string();
+  write_csv_log(path, log);
+  const Outcome o =
+      dyncal_run("identify --robot arm3" + arm3_robots() + " --data " + path + " --report " + report, dir_);
+  ASSERT_EQ(o.code, 0) << o.err;
+  const nlohmann::json r = nlohmann::json::parse(slurp_file(report));
+  std::string notes;
+  for (const auto& n : r["notes"]) notes += n.get<std::string>() + "\n";
+  double r2 = 0;
+  for (const auto& j : r["joints"])
+    if (j["joint"] == 2) r2 = j["r2_validation"].get<double>();
+  ASSERT_LT(r2, 0) << "the test's log does not produce the case";
+  EXPECT_NE(notes.find("joint 2: validation R^2"), std::string::npos) << notes;
+  EXPECT_NE(notes.find("predicts unseen data worse than a constant"), std::string::npos) << notes;
+  for (const auto& j : r["joints"])
+    if (j["r2_validation"].get<double>() >= 0)
+      EXPECT_EQ(notes.find("joint " + std::to_string(j["joint"].get<int>()) + ": validation R^2"), std::string::npos);
 }
 
 TEST_F(TruthfulOutputs, ABagWhoseChunkExpandsToGigabytesIsRefusedWithBoundedMemory) {
