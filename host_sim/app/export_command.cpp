@@ -6,14 +6,13 @@
 
 #include <Eigen/Core>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
-#include <iterator>
 #include <random>
 
 #include "commands.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/output_file.hpp"
+#include "dyncal_host/common/temporary_folder.hpp"
 #include "dyncal_host/identification/methods/inertial_parameters.hpp"
 #include "dyncal_host/identification/pipeline/compiled_robot.hpp"
 #include "dyncal_host/identification/reports/prediction.hpp"
@@ -81,23 +80,13 @@ int run_export_urdf(const ExportSettings& s) {
        {{"params", std::filesystem::path(s.params).filename().string()}, {"robot", p.robot}, {"model", p.model}}}};
   // The tool writes and checks the URDF in a folder of our own; the user's --out is then written by
   // the host's one writer (output_file.hpp): all or nothing, a regular file or a new name only.
-  std::string folder = (std::filesystem::temp_directory_path() / "dyncal-export-XXXXXX").string();
-  if (::mkdtemp(folder.data()) == nullptr) throw InputError("cannot create a temporary folder for the export");
-  struct RemoveFolder {
-    std::string path;
-    ~RemoveFolder() {
-      std::error_code ignored;
-      std::filesystem::remove_all(path, ignored);
-    }
-  } remove_folder{folder};
-  const std::string input_file = folder + "/input.json", urdf_file = folder + "/" + p.robot + ".urdf";
+  const host::TemporaryFolder folder("dyncal-export");
+  const std::string input_file = folder.path() + "/input.json", urdf_name = p.robot + ".urdf";
   write_json_file(input_file, input);
-  const int rc =
-      run_urdf_tool({"export", p.robot, "--robots-dir", s.robots_dir, "--input", input_file, "--out", urdf_file});
+  const int rc = run_urdf_tool({"export", p.robot, "--robots-dir", s.robots_dir, "--input", input_file, "--out",
+                                folder.path() + "/" + urdf_name});
   if (rc != 0) return rc;
-  std::ifstream in(urdf_file, std::ios::binary);
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (!in.good() && !in.eof()) throw InputError("cannot read the exported URDF back from " + urdf_file);
+  const std::string text = folder.read(urdf_name);
   host::write_output_file(s.out, text, "URDF");
   std::cout << p.robot << ": wrote " << s.out << "\n";
   return 0;

@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include "dyncal_host/common/temporary_folder.hpp"
+
 namespace dyncal::host {
 
 /// A --plots folder, drawn all or nothing per file. The data files and the script plots.gp are
@@ -18,17 +20,17 @@ namespace dyncal::host {
 class PlotFolder {
  public:
   explicit PlotFolder(std::string dir);
-  ~PlotFolder();
   PlotFolder(const PlotFolder&) = delete;
   PlotFolder& operator=(const PlotFolder&) = delete;
   /// The private folder the data and plots.gp go to.
-  const std::string& work() const { return work_; }
+  const std::string& work() const { return work_.path(); }
   /// Runs gnuplot on work()/plots.gp in work(), then writes every file of work() but gnuplot's log
   /// into the folder. Returns the paths there of `svg_names` (bare names the script wrote).
   std::vector<std::string> draw(const std::vector<std::string>& svg_names);
 
  private:
-  std::string dir_, work_;
+  std::string dir_;
+  TemporaryFolder work_;
 };
 
 }  // namespace dyncal::host
