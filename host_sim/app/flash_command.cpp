@@ -4,6 +4,7 @@
 #include <memory>
 
 #include "commands.hpp"
+#include "dyncal_host/calibration/calibrate.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/model_terms.hpp"
 #include "dyncal_host/common/robot_description.hpp"
@@ -41,11 +42,7 @@ int run_flash(const FlashSettings& s) {
   TableStatus reason = TableStatus::ok;
   const auto st = d->write(t, &reason);
   if (st == port::PortStatus::rejected) {
-    if (reason == TableStatus::store_failed)  // the table passed; the drive's flash did not take it
-      std::cerr << "dyncal: the drive took the table but could not write it to its flash store (a storage fault on "
-                   "the drive; its log says why); its active table is unchanged\n";
-    else
-      std::cerr << "dyncal: the drive rejected the table: " << to_string(reason) << "; its active table is unchanged\n";
+    std::cerr << "dyncal: " << host::table_refusal(reason) << "; its active table is unchanged\n";
     return 3;
   }
   if (st != port::PortStatus::ok) throw InputError("flash failed: " + d->error());

@@ -224,6 +224,13 @@ JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory
   return samples_to_log(samples, run.sample_rate_hz, joints);
 }
 
+std::string table_refusal(TableStatus status) {
+  if (status == TableStatus::store_failed)  // the table passed; the drive's flash did not take it
+    return "the drive took the table but could not write it to its flash store (a storage fault on the drive; its "
+           "log says why)";
+  return std::string("the drive rejected the table: ") + to_string(status);
+}
+
 FlashOutcome flash_and_verify(linux_port::ModbusDrive& drive, const ParameterTable& table,
                               const std::function<void()>& verify) {
   ParameterTable previous;
@@ -236,11 +243,7 @@ FlashOutcome flash_and_verify(linux_port::ModbusDrive& drive, const ParameterTab
   const port::PortStatus st = drive.write(table, &f.status);
   if (st == port::PortStatus::transport_error) throw InputError("flash failed: " + drive.error());
   if (st != port::PortStatus::ok) {
-    f.message = f.status == TableStatus::store_failed
-                    ? std::string(
-                          "the drive could not write the table to its flash store (a storage fault on the "
-                          "drive); its active table is unchanged")
-                    : std::string("drive rejected the table: ") + to_string(f.status);
+    f.message = table_refusal(f.status);
     return f;
   }
   f.flashed = true;

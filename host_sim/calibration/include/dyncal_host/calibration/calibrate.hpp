@@ -113,6 +113,11 @@ void print_calibrate_report(std::ostream& out, const CalibrateResult& r);
 /// The `--report` JSON document of `dyncal calibrate` (schema in docs/cli.md).
 nlohmann::json calibrate_report_json(const CalibrateResult& r);
 
+/// Why the drive did not take a table, in words (its active table is unchanged either way): the
+/// table's fault ("the drive rejected the table: a value is NaN or infinite"), or, for
+/// TableStatus::store_failed, the drive's own: it took the table but could not write its flash.
+std::string table_refusal(TableStatus status);
+
 /// Outcome of flash_and_verify: flashed (and read back identical), else the drive's reason.
 struct FlashOutcome {
   bool flashed = false;
