@@ -177,6 +177,10 @@ int check_holding(const SimulatedDrive& d, const std::uint16_t* h, int address, 
       if (c == static_cast<std::uint16_t>(mm::Command::trace) &&
           !(f_f > 0 && fs > 0 && d.run_samples(h[mm::kPeriodsReg], 1.0 / f_f, fs) <= d.ring_capacity))
         return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+      // The run starts with the monitor settings the registers hold: the rule the drive applies
+      // them by (monitor_settings_error), checked again here as when they were written.
+      if (!monitor_settings_error(monitor_from_registers(h), 1.0 / control_rate).empty())
+        return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
     }
   }
   if (overlaps(address, count, mm::kUnlockReg, 1)) {
@@ -189,17 +193,10 @@ int check_holding(const SimulatedDrive& d, const std::uint16_t* h, int address, 
   if (overlaps(address, count, mm::kStagingSizeReg, mm::kRingReg - mm::kStagingSizeReg)) {
     if (const int e = staging_rule()) return e;
   }
-  // The collision monitor's settings: the rule the drive applies them by (monitor_settings_error),
-  // when written and again when a run starts with them.
-  const bool starts = overlaps(address, count, mm::kCommandReg, 1) &&
-                      (h[mm::kCommandReg] == static_cast<std::uint16_t>(mm::Command::start) ||
-                       h[mm::kCommandReg] == static_cast<std::uint16_t>(mm::Command::identify_payload) ||
-                       h[mm::kCommandReg] == static_cast<std::uint16_t>(mm::Command::trace));
-  if (starts ||
-      overlaps(address, count, mm::kMonitorGainReg, mm::kMonitorBandReg + 2 * mm::kMaxJoints - mm::kMonitorGainReg)) {
-    if (!monitor_settings_error(monitor_from_registers(h), 1.0 / control_rate).empty())
-      return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
-  }
+  // The collision monitor's settings when written: the rule the drive applies them by.
+  if (overlaps(address, count, mm::kMonitorGainReg, mm::kMonitorBandReg + 2 * mm::kMaxJoints - mm::kMonitorGainReg) &&
+      !monitor_settings_error(monitor_from_registers(h), 1.0 / control_rate).empty())
+    return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
   if (overlaps(address, count, mm::kAckReg, 2)) {
     // The ring's samples are the run owner's to acknowledge: another connection's ack would free
     // samples the owner has not read, and end its stream with a gap it did not cause.
