@@ -92,6 +92,13 @@ struct TempFile {
   }
 };
 
+/// The size of the file at `path` [bytes], 0 when it cannot be read (the budget is then the slack).
+std::uint64_t file_bytes(const std::string& path) {
+  std::error_code ec;
+  const std::uintmax_t n = fs::file_size(path, ec);
+  return ec ? 0 : static_cast<std::uint64_t>(n);
+}
+
 /// Decompresses the zstd file `path` (compression_mode FILE) into a temporary file.
 void unzstd_file(const std::string& path, TempFile& out) {
   std::ifstream in(path, std::ios::binary);
@@ -103,9 +110,7 @@ void unzstd_file(const std::string& path, TempFile& out) {
   if (!o) throw InputError(out.path + ": cannot be written");
   const std::unique_ptr<ZSTD_DCtx, decltype(&ZSTD_freeDCtx)> ctx(ZSTD_createDCtx(), &ZSTD_freeDCtx);
   std::vector<char> ibuf(ZSTD_DStreamInSize()), obuf(ZSTD_DStreamOutSize());
-  std::error_code size_error;
-  const std::uintmax_t file_bytes = fs::file_size(path, size_error);
-  DecompressionBudget budget(size_error ? 0 : file_bytes, path);
+  DecompressionBudget budget(file_bytes(path), path);
   std::size_t last = 0;
   while (in) {
     in.read(ibuf.data(), static_cast<std::streamsize>(ibuf.size()));
@@ -126,7 +131,7 @@ void unzstd_file(const std::string& path, TempFile& out) {
 /// Undoes compression_mode MESSAGE on one message's data, within the bag's decompression budget.
 void unzstd_message(std::vector<std::uint8_t>& data, const std::string& where, DecompressionBudget& budget) {
   const unsigned long long size = ZSTD_getFrameContentSize(data.data(), data.size());
-  if (size == ZSTD_CONTENTSIZE_ERROR || size == ZSTD_CONTENTSIZE_UNKNOWN)
+  if (size == ZSTD_CONTENTSIZE_ERROR || size == ZSTD_CONTENTSIZE_UNKNOWN || size > (1ull << 30))
     throw InputError(where + ": not a zstd frame (the bag's metadata says its messages are compressed)");
   budget.take(size, where);  // before the allocation: the bag's budget bounds every message's stated size
   std::vector<std::uint8_t> plain(static_cast<std::size_t>(size));
@@ -243,11 +248,7 @@ BagLog read_ros2_bag_log(const std::string& path, const BagLogOptions& options) 
 
   // Decode, and match the robot's joints by name.
   std::uint64_t bag_bytes = 0;
-  for (const StorageFile& f : layout.files) {
-    std::error_code size_error;
-    const std::uintmax_t file_bytes = fs::file_size(f.path, size_error);
-    if (!size_error) bag_bytes += file_bytes;
-  }
+  for (const StorageFile& f : layout.files) bag_bytes += file_bytes(f.path);
   DecompressionBudget message_budget(bag_bytes, path);
   const auto& names = options.joint_names;
   const int n = static_cast<int>(names.size());
