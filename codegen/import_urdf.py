@@ -5,14 +5,16 @@ Usage:
   import_urdf.py import ARM.urdf --name NAME [--base LINK] [--tip LINK] [--robots-dir DIR] [--force]
   import_urdf.py check NAME [--robots-dir DIR]
   import_urdf.py export NAME --robots-dir DIR --input MODEL.json --out ARM.urdf
+  import_urdf.py mjcf NAME --robots-dir DIR --input MODEL.json --out ARM.xml
 
 import: writes DIR/NAME/source.urdf (the input, unchanged), DIR/NAME/NAME.urdf (the normalised
 chain: fixed joints merged, every joint about +z) and DIR/NAME/robot.json, after checking the
 normalised chain against the input with orocos-kdl (frames and torques to 1e-9). Nothing is written
 when a check fails. check: validates robots/NAME/robot.json and, for an imported robot, repeats the
 KDL comparison. export (dyncal export urdf): the source URDF with the identified model written in
-(urdf_export.py), after KDL reproduces dyncal's torques on the written file. Errors: one line on
-stderr, exit 2.
+(urdf_export.py), after KDL reproduces dyncal's torques on the written file. mjcf (dyncal export
+mjcf): the MJCF of the identified model (mjcf_export.py); the host checks it with MuJoCo. Errors:
+one line on stderr, exit 2.
 """
 import argparse
 import json
@@ -271,6 +273,19 @@ def do_export(args):
     return 0
 
 
+def do_mjcf(args):
+    """The MJCF of the identified model (mjcf_export.py) written to --out; dyncal export mjcf checks
+    it with MuJoCo before the user's file is written."""
+    from dyncal_codegen import mjcf_export
+
+    with open(args.input) as f:
+        inp = json.load(f)
+    text = mjcf_export.export(os.path.join(args.robots_dir, args.name), inp)
+    with open(args.out, "w", encoding="utf-8") as f:
+        f.write(text)
+    return 0
+
+
 def main():
     parser = argparse.ArgumentParser(prog="dyncal robot", description="import or check a robot description")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -293,8 +308,14 @@ def main():
     exp.add_argument("--robots-dir", required=True)
     exp.add_argument("--input", required=True)
     exp.add_argument("--out", required=True)
+    mj = sub.add_parser("mjcf", help="write the identified model as MJCF")
+    mj.add_argument("name")
+    mj.add_argument("--robots-dir", required=True)
+    mj.add_argument("--input", required=True)
+    mj.add_argument("--out", required=True)
     args = parser.parse_args()
-    prog = "dyncal export urdf" if args.command == "export" else f"dyncal robot {args.command}"
+    prog = {"export": "dyncal export urdf", "mjcf": "dyncal export mjcf"}.get(args.command,
+                                                                           f"dyncal robot {args.command}")
     try:
         if args.command == "import":
             if not args.name.replace("_", "a").isalnum() or not args.name[0].isalpha():
@@ -304,6 +325,8 @@ def main():
             return do_samples(args)
         if args.command == "export":
             return do_export(args)
+        if args.command == "mjcf":
+            return do_mjcf(args)
         return do_check(args)
     except urdf_import.ImportError_ as e:
         print(f"{prog}: {e}", file=sys.stderr)

@@ -24,6 +24,24 @@ inline int run_dyncal(const std::string& args) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
+/// What a dyncal run printed (stdout and stderr together) and its exit code (-1: it did not exit).
+struct CliResult {
+  int exit_code = -1;
+  std::string output;
+};
+
+/// Runs `dyncal ARGS` (dyncal_binary()) with stdout and stderr read into the result.
+inline CliResult run_dyncal_captured(const std::string& args) {
+  CliResult r;
+  FILE* pipe = ::popen((std::string(dyncal::test::dyncal_binary()) + " " + args + " 2>&1").c_str(), "r");
+  if (pipe == nullptr) return r;
+  char buffer[4096];
+  for (size_t got; (got = std::fread(buffer, 1, sizeof buffer, pipe)) > 0;) r.output.append(buffer, got);
+  const int status = ::pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
 /// Runs `dyncal ARGS` (dyncal_binary()) as a child with stdout and stderr discarded: its peak
 /// resident set [bytes] (wait4's ru_maxrss) and exit code; {-1, -1} if it did not exit.
 inline std::pair<long, int> peak_rss_and_exit_code(const std::vector<std::string>& args) {
