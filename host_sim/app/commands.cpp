@@ -5,6 +5,7 @@
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/interrupt.hpp"
 #include "entry_points.hpp"
+#include "report_outputs.hpp"
 
 namespace dyncal::app {
 
@@ -22,6 +23,7 @@ int run_cli(void (*add)(CLI::App&, Action&), int argc, char** argv) {
   app.require_subcommand(1);
   Action run;
   add(app, run);
+  set_command_line(argc, argv);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

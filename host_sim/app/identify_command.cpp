@@ -17,6 +17,8 @@
 #include "dyncal_host/identification/pipeline/stacked_data.hpp"
 #include "dyncal_host/identification/reports/identify_report.hpp"
 #include "dyncal_host/identification/reports/prediction.hpp"
+#include "dyncal_host/report/torque_series.hpp"
+#include "report_outputs.hpp"
 
 namespace dyncal::app {
 namespace {
@@ -24,7 +26,8 @@ namespace {
 struct IdentifySettings {
   LogOption log;
   host::IdentifyOptions options;
-  std::string model = "eq7,rotor_inertia,offset", report, params, effects, law;
+  std::string model = "eq7,rotor_inertia,offset", params, effects, law;
+  ReportOutputs out;
   std::vector<std::string> validate_on;
   bool compare_friction = false;
   std::vector<std::string> loaded;  ///< --loaded-data: the known-load run of a current-logging arm
@@ -116,7 +119,8 @@ host::JointLog simulate_law(const host::RobotDescription& robot, const host::Dri
 }
 
 int run_identify(IdentifySettings& s) {
-  check_outputs({{s.report, "report"}, {s.params, "parameters"}});
+  prepare_report_outputs(s.out);
+  check_outputs({{s.params, "parameters"}});
   auto robot = s.log.load_robot();
   std::vector<std::string> dropped;
   host::ModelSpec spec = host::parse_model_spec(s.model, robot.num_joints);
@@ -170,10 +174,15 @@ int run_identify(IdentifySettings& s) {
   const host::ParameterSet fitted = host::parameter_set(result);
   for (const auto& other : others) result.other_logs.push_back(host::predict(robot, other, s.options, fitted));
   host::print_identify_report(std::cout, result);
-  if (!s.report.empty()) {
-    nlohmann::json report = host::identify_report_json(result);
+  nlohmann::json report;
+  if (s.out.wanted()) {
+    report = host::identify_report_json(result);
+    host::add_cad_values(report, robot.name);
     if (!torque_constants.is_null()) report["torque_constants"] = torque_constants;
-    write_json_file(s.report, report, "report");
+    if (s.out.page()) {  // the fitted log's torque and the final fit's prediction; the log is read again
+      const host::TorqueTrace trace = host::predicted_trace(robot, s.log.load_log(robot), s.options, fitted);
+      report["series"] = host::torque_series_json(trace.t, trace.measured, trace.predicted);
+    }
   }
   if (!s.params.empty()) {
     nlohmann::json file = host::parameter_table_json(result);
@@ -187,7 +196,10 @@ int run_identify(IdentifySettings& s) {
     }
     write_json_file(s.params, file, "parameters");
   }
-  return 0;
+  if (!s.out.wanted()) return 0;
+  std::vector<std::string> inputs = s.log.data;
+  inputs.insert(inputs.end(), s.validate_on.begin(), s.validate_on.end());
+  return finish_report(s.out, std::move(report), inputs);
 }
 
 }  // namespace
@@ -268,7 +280,7 @@ void add_identify_command(CLI::App& app, Action& run) {
                   "--loaded-data: the load's centre of mass x y z [m] in the last link's frame (robot.json's), if "
                   "known; else fitted")
       ->expected(3);
-  cmd->add_option("--report", s->report, "write the report as JSON");
+  add_report_options(cmd, s->out, "identify", "write the report as JSON");
   cmd->add_option("--params", s->params, "write the identified parameter table as JSON");
   cmd->add_flag("--compare-friction", s->compare_friction,
                 "fit each friction model (survey Eq. 4-9) with the --model's other terms and compare their "

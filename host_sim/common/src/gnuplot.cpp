@@ -9,6 +9,22 @@
 namespace dyncal::host {
 namespace fs = std::filesystem;
 
+bool run_gnuplot(const TemporaryFolder& work) {
+  const std::string cmd = "cd '" + work.path() + "' && gnuplot plots.gp 2>gnuplot.log";
+  return std::system(cmd.c_str()) == 0;
+}
+
+std::vector<std::string> SvgPlots::draw(const std::vector<std::string>& svg_names) {
+  if (!run_gnuplot(work_)) {
+    const std::string log = work_.read("gnuplot.log");
+    throw InputError("gnuplot failed or is missing (scripts/setup installs gnuplot-nox): " +
+                     log.substr(0, log.find('\n')));
+  }
+  std::vector<std::string> texts;
+  for (const std::string& name : svg_names) texts.push_back(work_.read(name));
+  return texts;
+}
+
 PlotFolder::PlotFolder(std::string dir) : dir_(std::move(dir)), work_("dyncal-plots") {
   std::error_code ec;
   if (fs::exists(dir_, ec) && !fs::is_directory(dir_, ec))
@@ -18,8 +34,7 @@ PlotFolder::PlotFolder(std::string dir) : dir_(std::move(dir)), work_("dyncal-pl
 }
 
 std::vector<std::string> PlotFolder::draw(const std::vector<std::string>& svg_names) {
-  const std::string cmd = "cd '" + work_.path() + "' && gnuplot plots.gp 2>gnuplot.log";
-  if (std::system(cmd.c_str()) != 0) {
+  if (!run_gnuplot(work_)) {
     write_output_file(dir_ + "/gnuplot.log", work_.read("gnuplot.log"), "gnuplot log");
     throw InputError("gnuplot failed or is missing (scripts/setup installs gnuplot-nox); see " + dir_ + "/gnuplot.log");
   }

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
 #include "dyncal_host/identification/reports/prediction.hpp"
 
 namespace dyncal::host {
@@ -129,6 +130,24 @@ nlohmann::json identify_report_json(const IdentifyResult& r) {
   j["other_logs"] = nlohmann::json::array();
   for (const auto& o : r.other_logs) j["other_logs"].push_back(log_prediction_json(o));
   return j;
+}
+
+void add_cad_values(nlohmann::json& report, const std::string& robot) {
+  const CompiledRobot& c = compiled_robot(robot);
+  const Eigen::VectorXd nominal = Eigen::Map<const Eigen::VectorXd>(
+      c.nominal_standard.data(), static_cast<Eigen::Index>(c.nominal_standard.size()));
+  if (nominal.size() != c.num_standard) return;
+  const Eigen::VectorXd base = c.standard_to_base(nominal);
+  nlohmann::json& params = report["params"];
+  for (Eigen::Index i = 0; i < c.num_base && i < static_cast<Eigen::Index>(params.size()); ++i)
+    params[static_cast<size_t>(i)]["cad"] = base[i];
+  for (auto& l : report["links"]) {
+    const Eigen::Index k = l.value("link", 0) - 1;
+    if (k < 0 || 10 * k + 9 >= nominal.size()) continue;
+    const double m = nominal[10 * k + 9];
+    l["cad_mass"] = m;
+    if (m > 0) l["cad_com"] = {nominal[10 * k + 6] / m, nominal[10 * k + 7] / m, nominal[10 * k + 8] / m};
+  }
 }
 
 nlohmann::json parameter_table_json(const IdentifyResult& r) {

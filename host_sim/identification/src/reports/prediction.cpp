@@ -246,4 +246,18 @@ LogPrediction predict(const RobotDescription& robot, const JointLog& log, Identi
   return p;
 }
 
+TorqueTrace predicted_trace(const RobotDescription& robot, const JointLog& log, IdentifyOptions options,
+                            const ParameterSet& params) {
+  const StackedData d = prepare_stacked(robot, log, prediction_options(robot, std::move(options), params));
+  const Eigen::VectorXd prediction = predicted_torque(d, params);
+  const Eigen::Index S = d.t.size(), N = robot.num_joints;
+  TorqueTrace trace{d.t, Eigen::MatrixXd(S, N), Eigen::MatrixXd(S, N)};
+  for (Eigen::Index s = 0; s < S; ++s)
+    for (Eigen::Index j = 0; j < N; ++j) {
+      trace.measured(s, j) = d.y[s * N + j];
+      trace.predicted(s, j) = prediction[s * N + j];
+    }
+  return trace;
+}
+
 }  // namespace dyncal::host

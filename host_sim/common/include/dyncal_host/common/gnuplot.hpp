@@ -9,6 +9,23 @@
 
 namespace dyncal::host {
 
+/// Runs gnuplot on `work`/plots.gp in `work` (its log in work/gnuplot.log). Returns false when
+/// gnuplot fails or is missing (scripts/setup installs gnuplot-nox).
+bool run_gnuplot(const TemporaryFolder& work);
+
+/// SVG plots drawn into memory (an HTML page embeds them): write the data and plots.gp into work(),
+/// then draw() runs gnuplot and returns each SVG's text. Throws InputError (one line): gnuplot failed
+/// or is missing, with the first line of its log.
+class SvgPlots {
+ public:
+  SvgPlots() : work_("dyncal-svg") {}
+  const std::string& work() const { return work_.path(); }
+  std::vector<std::string> draw(const std::vector<std::string>& svg_names);
+
+ private:
+  TemporaryFolder work_;
+};
+
 /// A --plots folder, drawn all or nothing per file. The data files and the script plots.gp are
 /// written into work(), a private temporary folder, naming each other by bare file names (so the
 /// published script redraws in its own folder: `cd DIR && gnuplot plots.gp`); draw() runs gnuplot

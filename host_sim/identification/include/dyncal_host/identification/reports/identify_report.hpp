@@ -22,6 +22,11 @@ nlohmann::json log_prediction_json(const LogPrediction& p);
 /// The `--report` JSON document (schema in docs/cli.md).
 nlohmann::json identify_report_json(const IdentifyResult& r);
 
+/// Adds the robot's CAD values (robot.json's inertials, the compiled kNominalStandard) to an
+/// identify report: "cad" to each base parameter (Gautier's map of the CAD standard parameters),
+/// "cad_mass" [kg] and "cad_com" [m] to each link. The terms (friction, Ia, offsets) have none.
+void add_cad_values(nlohmann::json& report, const std::string& robot);
+
 /// The `--params` JSON parameter table (schema in docs/cli.md).
 nlohmann::json parameter_table_json(const IdentifyResult& r);
 

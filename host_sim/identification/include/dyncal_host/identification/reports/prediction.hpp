@@ -77,4 +77,16 @@ Eigen::VectorXd predicted_torque(const StackedData& d, const ParameterSet& param
 LogPrediction predict(const RobotDescription& robot, const JointLog& log, IdentifyOptions options,
                       const ParameterSet& params);
 
+/// A log's torque and its prediction, sample by sample, for plots (report pages).
+struct TorqueTrace {
+  Eigen::VectorXd t;                    ///< S kept samples' times [s]
+  Eigen::MatrixXd measured, predicted;  ///< S x N [Nm]; predicted NaN where the model predicts nothing
+};
+
+/// The torque of `log` and its prediction by `params`, prepared exactly as predict() prepares it (the
+/// same samples, filter and decimation, so the figures predict() reports are these samples'). Throws
+/// as predict().
+TorqueTrace predicted_trace(const RobotDescription& robot, const JointLog& log, IdentifyOptions options,
+                            const ParameterSet& params);
+
 }  // namespace dyncal::host
