@@ -6,6 +6,8 @@
 
 #include "commands.hpp"
 #include "dyncal_host/calibration/calibrate.hpp"
+#include "dyncal_host/identification/reports/identify_report.hpp"
+#include "report_outputs.hpp"
 
 namespace dyncal::app {
 namespace {
@@ -14,12 +16,13 @@ struct CalibrateSettings {
   RobotOption robot;
   std::string uri = "tcp://127.0.0.1:1502";
   host::CalibrateOptions options;
-  std::string model = "eq7,rotor_inertia,offset", report, trajectory, stream = "auto";
+  std::string model = "eq7,rotor_inertia,offset", trajectory, stream = "auto";
+  ReportOutputs out;
   bool no_flash = false, quiet = false;
 };
 
 int run_calibrate(CalibrateSettings& s) {
-  check_outputs({{s.report, "report"}});
+  prepare_report_outputs(s.out);
   const auto robot = s.robot.load();
   host::CalibrateOptions& o = s.options;
   o.uri = s.uri;
@@ -30,8 +33,14 @@ int run_calibrate(CalibrateSettings& s) {
   if (!s.trajectory.empty()) o.excitation = host::trajectory_from_json(robot, read_json_file(s.trajectory));
   const auto r = host::calibrate(robot, o, std::cerr);
   host::print_calibrate_report(std::cout, r);
-  if (!s.report.empty()) write_json_file(s.report, host::calibrate_report_json(r), "report");
-  return r.flashed || s.no_flash ? 0 : 3;
+  const int rc = r.flashed || s.no_flash ? 0 : 3;
+  if (!s.out.wanted()) return rc;
+  nlohmann::json report = host::calibrate_report_json(r);
+  host::add_cad_values(report["batch"], robot.name);
+  const int gate =
+      finish_report(s.out, std::move(report),
+                    s.trajectory.empty() ? std::vector<std::string>{} : std::vector<std::string>{s.trajectory});
+  return rc != 0 ? rc : gate;
 }
 
 }  // namespace
@@ -74,7 +83,7 @@ void add_calibrate_command(CLI::App& app, Action& run) {
                   "uploads it); live; trace")
       ->capture_default_str();
   cmd->add_flag("--quiet", s->quiet, "no progress output");
-  cmd->add_option("--report", s->report, "write the report as JSON");
+  add_report_options(cmd, s->out, "calibrate", "write the report as JSON");
   cmd->callback([&run, s] { run = [s] { return run_calibrate(*s); }; });
 }
 

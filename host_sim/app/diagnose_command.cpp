@@ -4,6 +4,8 @@
 
 #include "commands.hpp"
 #include "dyncal_host/diagnosis/diagnose.hpp"
+#include "dyncal_host/report/torque_series.hpp"
+#include "report_outputs.hpp"
 
 namespace dyncal::app {
 namespace {
@@ -11,11 +13,12 @@ namespace {
 struct DiagnoseSettings {
   LogOption log;
   host::DiagnoseOptions options;
-  std::string model = "eq7,rotor_inertia,offset", report, plots;  // identify's default model
+  std::string model = "eq7,rotor_inertia,offset", plots;  // identify's default model
+  ReportOutputs out;
 };
 
 int run_diagnose(DiagnoseSettings& s) {
-  check_outputs({{s.report, "report"}});
+  prepare_report_outputs(s.out);
   const auto robot = s.log.load_robot();
   const host::ModelSpec spec = host::parse_model_spec(s.model, robot.num_joints);
   s.options.identify.terms = spec.terms;
@@ -26,12 +29,17 @@ int run_diagnose(DiagnoseSettings& s) {
   auto result = host::diagnose(robot, log, s.options);
   result.notes.insert(result.notes.begin(), dropped.begin(), dropped.end());
   host::print_diagnose_report(std::cout, result);
-  if (!s.report.empty()) write_json_file(s.report, host::diagnose_report_json(result), "report");
   if (!s.plots.empty()) {
     const auto files = host::write_diagnose_plots(result, s.plots);
     std::cout << "\nplots: " << files.size() << " SVG files in " << s.plots << "\n";
   }
-  return 0;
+  if (!s.out.wanted()) return 0;
+  nlohmann::json report = host::diagnose_report_json(result);
+  if (s.out.page()) {  // the torque, the declared model's prediction and the one with the effects found
+    const auto& tr = result.traces;
+    report["series"] = host::torque_series_json(tr.t, tr.tau, tr.tau_before, &tr.tau_after);
+  }
+  return finish_report(s.out, std::move(report), s.log.data);
 }
 
 }  // namespace
@@ -56,7 +64,7 @@ void add_diagnose_command(CLI::App& app, Action& run) {
                 "friction and rotor inertia per joint, ignoring a coupling robot.json's transmission declares (so "
                 "that the diagnosis can find it)");
   cmd->add_option("--bic", s->options.bic_threshold, "BIC drop an effect needs")->capture_default_str();
-  cmd->add_option("--report", s->report, "write the report as JSON");
+  add_report_options(cmd, s->out, "diagnose", "write the report as JSON");
   cmd->add_option("--plots", s->plots, "write SVG plots (gnuplot) into this directory");
   cmd->callback([&run, s] { run = [s] { return run_diagnose(*s); }; });
 }

@@ -11,14 +11,17 @@
 #include "dyncal_host/identification/monitoring/contact_monitor.hpp"
 #include "dyncal_host/identification/pipeline/compiled_robot.hpp"
 #include "dyncal_host/identification/reports/prediction.hpp"
+#include "dyncal_host/report/torque_series.hpp"
 #include "dyncal_port/modbus_drive.hpp"
+#include "report_outputs.hpp"
 
 namespace dyncal::app {
 namespace {
 
 struct MonitorSettings {
   LogOption log;
-  std::string params, reference, report, plots, drive;
+  std::string params, reference, plots, drive;
+  ReportOutputs out;
   double alarms_per_hour = 0.01;
   double gain = 0;
 };
@@ -87,19 +90,19 @@ int write_drive_monitor(const MonitorSettings& s, const host::RobotDescription& 
     throw host::InputError("drive: the collision monitor was not written: " + drive->error());
   std::cout << "written to the drive's collision monitor: it watches the runs started from now on (a collision "
                "stops the trajectory with fault 5, docs/modbus.md)\n";
-  if (!s.report.empty()) {
-    write_json_file(s.report, {{"robot", robot.name},
-                               {"drive", s.drive},
-                               {"params", s.params},
-                               {"alarms_per_hour", s.alarms_per_hour},
-                               {"statistics", host::residual_statistics_json(stats)},
-                               {"thresholds", threshold_list}});
-  }
-  return 0;
+  if (!s.out.wanted()) return 0;
+  return finish_report(s.out,
+                       {{"robot", robot.name},
+                        {"drive", s.drive},
+                        {"params", s.params},
+                        {"alarms_per_hour", s.alarms_per_hour},
+                        {"statistics", host::residual_statistics_json(stats)},
+                        {"thresholds", threshold_list}},
+                       {s.params});
 }
 
 int run_monitor(MonitorSettings& s) {
-  check_outputs({{s.report, "report"}});
+  prepare_report_outputs(s.out);
   const host::ParameterSet params = host::read_parameter_file(s.params);
   if (s.log.robot.name.empty()) s.log.robot.name = params.robot;
   if (s.log.robot.name != params.robot)
@@ -159,17 +162,28 @@ int run_monitor(MonitorSettings& s) {
     const auto files = host::write_contact_plots(run, stats, thresholds, contacts, s.plots);
     std::cout << "plots: " << files.size() << " SVG files in " << s.plots << "\n";
   }
-  if (!s.report.empty()) {
-    write_json_file(s.report, {{"robot", robot.name},
-                               {"data", s.log.data},
-                               {"params", s.params},
-                               {"alarms_per_hour", s.alarms_per_hour},
-                               {"statistics", host::residual_statistics_json(stats)},
-                               {"thresholds", threshold_list},
-                               {"notes", run.notes},
-                               {"contacts", list}});
+  if (!s.out.wanted()) return 0;
+  nlohmann::json report = {{"robot", robot.name},
+                           {"data", s.log.data},
+                           {"params", s.params},
+                           {"alarms_per_hour", s.alarms_per_hour},
+                           {"statistics", host::residual_statistics_json(stats)},
+                           {"thresholds", threshold_list},
+                           {"notes", run.notes},
+                           {"contacts", list}};
+  if (s.out.page()) {  // |r - mean| against the bound it is compared with, over the log
+    Eigen::MatrixXd residual(run.r.rows(), run.r.cols()), bound(run.r.rows(), run.r.cols());
+    for (Eigen::Index k = 0; k < run.r.rows(); ++k)
+      for (int j = 0; j < static_cast<int>(run.r.cols()); ++j) {
+        residual(k, j) = std::abs(run.r(k, j) - stats.mean[static_cast<size_t>(j)]);
+        bound(k, j) = host::contact_limit(run, thresholds, k, j);
+      }
+    report["residual_series"] = host::residual_envelope_json(run.t, residual, bound);
   }
-  return 0;
+  std::vector<std::string> inputs = s.log.data;
+  inputs.push_back(s.params);
+  if (!s.reference.empty()) inputs.push_back(s.reference);
+  return finish_report(s.out, std::move(report), inputs);
 }
 
 }  // namespace
@@ -192,7 +206,7 @@ void add_monitor_command(CLI::App& app, Action& run) {
   cmd->add_option("--drive", s->drive,
                   "tcp://HOST:PORT or rtu:DEVICE: write the thresholds into this drive's collision monitor "
                   "(instead of --data)");
-  cmd->add_option("--report", s->report, "write thresholds and contacts as JSON");
+  add_report_options(cmd, s->out, "monitor", "write thresholds and contacts as JSON");
   cmd->add_option("--plots", s->plots,
                   "write SVG plots (gnuplot) of each joint's residual and threshold, contacts shaded, into this "
                   "directory");

@@ -13,6 +13,7 @@
 #include "dyncal_host/identification/payload/payload.hpp"
 #include "dyncal_host/identification/pipeline/compiled_robot.hpp"
 #include "dyncal_host/identification/reports/prediction.hpp"
+#include "report_outputs.hpp"
 
 namespace dyncal::app {
 namespace {
@@ -20,7 +21,8 @@ namespace {
 struct PayloadSettings {
   LogOption log;
   host::IdentifyOptions options;
-  std::string params, report, save_params, drive;
+  std::string params, save_params, drive;
+  ReportOutputs out;
   int periods = 2;
   double rate_hz = 500;
 };
@@ -66,20 +68,28 @@ int run_drive_payload(const PayloadSettings& s) {
       std::cout << " " << (std::isfinite(p.value[k]) ? std::to_string(p.value[k] / p.value[9]) : std::string("-"));
     std::cout << " m (last link's frame); written into the drive's active table\n";
   }
-  if (!s.report.empty())
-    write_json_file(s.report, {{"robot", robot.name},
-                               {"drive", s.drive},
-                               {"state", written ? "written" : "not written"},
-                               {"standard", params}});
+  nlohmann::json quantities = nlohmann::json::array();
+  if (written)
+    quantities.push_back({{"name", "mass"},
+                          {"unit", "kg"},
+                          {"value", p.value[9]},
+                          {"std", std::isfinite(p.std[9]) ? nlohmann::json(p.std[9]) : nlohmann::json(nullptr)}});
+  const int rc = s.out.wanted() ? finish_report(s.out, {{"robot", robot.name},
+                                                        {"drive", s.drive},
+                                                        {"state", written ? "written" : "not written"},
+                                                        {"standard", params},
+                                                        {"quantities", quantities}})
+                                : 0;
   if (!written)
     throw host::InputError(
         "the run did not determine the payload's mass (no load on the arm, or too little "
         "motion): the drive's table is unchanged");
-  return 0;
+  return rc;
 }
 
 int run_payload(PayloadSettings& s) {
-  check_outputs({{s.report, "report"}, {s.save_params, "parameters"}});
+  prepare_report_outputs(s.out);
+  check_outputs({{s.save_params, "parameters"}});
   if (!s.drive.empty()) {
     if (!s.log.data.empty() || !s.params.empty())
       throw host::InputError("--drive identifies on the drive with its own table: no --data or --params");
@@ -97,14 +107,16 @@ int run_payload(PayloadSettings& s) {
   host::PayloadResult r = host::identify_payload(robot, log, arm, s.options);
   r.notes.insert(r.notes.begin(), dropped.begin(), dropped.end());
   host::print_payload_report(std::cout, r);
-  if (!s.report.empty()) write_json_file(s.report, host::payload_report_json(r), "report");
   if (!s.save_params.empty()) {
     const host::ParameterSet loaded = host::with_payload(arm, robot, r.standard);
     write_json_file(s.save_params, host::loaded_parameter_file_json(loaded, r), "parameters");
     std::cout << "loaded model written to " << s.save_params << " (the arm's parameters with the payload on link "
               << r.link << ")\n";
   }
-  return 0;
+  if (!s.out.wanted()) return 0;
+  std::vector<std::string> inputs = s.log.data;
+  inputs.push_back(s.params);
+  return finish_report(s.out, host::payload_report_json(r), inputs);
 }
 
 }  // namespace
@@ -124,7 +136,7 @@ void add_payload_command(CLI::App& app, Action& run) {
   cmd->add_option("--cutoff", s->options.cutoff_hz, "zero-phase Butterworth cut-off [Hz] (as identify's)")
       ->capture_default_str();
   cmd->add_option("--filter-order", s->options.filter_order, "Butterworth order (even)")->capture_default_str();
-  cmd->add_option("--report", s->report, "write the payload and its verdicts as JSON");
+  add_report_options(cmd, s->out, "payload", "write the payload and its verdicts as JSON");
   cmd->add_option("--save-params", s->save_params,
                   "write the loaded arm's parameter file (predict, flash, table and diagnose take it)");
   cmd->callback([&run, s] { run = [s] { return run_payload(*s); }; });

@@ -6,6 +6,8 @@
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/identification/reports/identify_report.hpp"
 #include "dyncal_host/identification/reports/prediction.hpp"
+#include "dyncal_host/report/torque_series.hpp"
+#include "report_outputs.hpp"
 
 namespace dyncal::app {
 namespace {
@@ -13,11 +15,12 @@ namespace {
 struct PredictSettings {
   LogOption log;
   host::IdentifyOptions options;
-  std::string params, report;
+  std::string params;
+  ReportOutputs out;
 };
 
 int run_predict(PredictSettings& s) {
-  check_outputs({{s.report, "report"}});
+  prepare_report_outputs(s.out);
   const host::ParameterSet p = host::read_parameter_file(s.params);
   if (s.log.robot.name.empty()) s.log.robot.name = p.robot;  // the robot the parameters were identified for
   if (s.log.robot.name != p.robot)
@@ -29,14 +32,18 @@ int run_predict(PredictSettings& s) {
   result.notes.insert(result.notes.begin(), dropped.begin(), dropped.end());
   std::cout << "dyncal predict: robot " << robot.name << ", model " << p.model << ", parameters " << p.source << "\n";
   host::print_log_prediction(std::cout, result);
-  if (!s.report.empty()) {
-    nlohmann::json j = host::log_prediction_json(result);
-    j["robot"] = robot.name;
-    j["model"] = p.model;
-    j["params"] = p.source;
-    write_json_file(s.report, j, "report");
+  if (!s.out.wanted()) return 0;
+  nlohmann::json j = host::log_prediction_json(result);
+  j["robot"] = robot.name;
+  j["model"] = p.model;
+  j["params"] = p.source;
+  if (s.out.page()) {
+    const host::TorqueTrace trace = host::predicted_trace(robot, log, s.options, p);
+    j["series"] = host::torque_series_json(trace.t, trace.measured, trace.predicted);
   }
-  return 0;
+  std::vector<std::string> inputs = s.log.data;
+  inputs.push_back(s.params);
+  return finish_report(s.out, std::move(j), inputs);
 }
 
 }  // namespace
@@ -49,7 +56,7 @@ void add_predict_command(CLI::App& app, Action& run) {
   cmd->add_option("--cutoff", s->options.cutoff_hz, "zero-phase Butterworth cut-off [Hz] (as identify's)")
       ->capture_default_str();
   cmd->add_option("--filter-order", s->options.filter_order, "Butterworth order (even)")->capture_default_str();
-  cmd->add_option("--report", s->report, "write the prediction's metrics as JSON");
+  add_report_options(cmd, s->out, "predict", "write the prediction's metrics as JSON");
   cmd->callback([&run, s] { run = [s] { return run_predict(*s); }; });
 }
 

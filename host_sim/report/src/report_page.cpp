@@ -229,6 +229,36 @@ std::string diagnose_plot(const Json& joints, Plots& plots) {
       "y\nset style data lines");
 }
 
+/// Per joint: |r - mean| (its max per bucket) against the bound it is compared with, contacts shaded.
+std::string monitor_plots(const Json& series, const Json& contacts, Plots& plots) {
+  std::string out =
+      "<section id=\"residual\"><h2>The observer's residual over the log</h2><p>Per joint, the largest "
+      "|r - mean| of each of " +
+      std::to_string(series["t"].size()) +
+      " consecutive buckets against the largest threshold there (widened where the model cannot know "
+      "the friction); contacts shaded.</p>";
+  std::string shade;
+  int n = 1;
+  for (const auto& c : contacts)
+    shade += "set object " + std::to_string(n++) + " rect from " + g6(num(c, "start")) + ", graph 0 to " +
+             g6(num(c, "end")) + ", graph 1 fc rgb '#f4cccc' fs solid 0.6 behind\n";
+  for (const auto& joint : series["joints"]) {
+    const std::string J = std::to_string(joint.value("joint", 0));
+    std::ofstream d(plots.work() + "/monitor" + J + ".dat");
+    for (size_t i = 0; i < series["t"].size(); ++i) {
+      d << series["t"][i].get<double>();
+      write_column(d, joint["max"], i);
+      write_column(d, joint["threshold"], i);
+      d << "\n";
+    }
+    out += plots.add("monitor_joint" + J, "joint " + J + ": |r - mean| and its threshold [Nm]",
+                     shade + "set xlabel 't [s]'\nset ylabel '|r - mean| [Nm]'\nplot 'monitor" + J +
+                         ".dat' u 1:2 w l lc rgb '#1f77b4' t '|r - mean|', '' u 1:3 w l lc rgb '#d62728' t "
+                         "'threshold'\nunset object");
+  }
+  return out + "</section>";
+}
+
 std::string contact_plot(const Json& contacts, Plots& plots) {
   std::ofstream d(plots.work() + "/contacts.dat");
   for (const auto& c : contacts) {
@@ -388,6 +418,8 @@ std::string report_page(const std::string& command, const Json& report) {
                                                 contact_plot(report["contacts"], plots)) +
               "</section>";
     }
+    if (report.contains("residual_series"))
+      body += monitor_plots(report["residual_series"], report.value("contacts", Json::array()), plots);
     if (report.contains("thresholds"))
       body += "<section id=\"thresholds\"><h2>Thresholds</h2>" +
               table_html(report["thresholds"], "/thresholds", {"joint"}) + "</section>";

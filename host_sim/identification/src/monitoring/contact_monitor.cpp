@@ -284,14 +284,16 @@ std::vector<ContactThreshold> contact_thresholds(const ResidualStatistics& s, do
   return c;
 }
 
+double contact_limit(const ObserverRun& run, const std::vector<ContactThreshold>& thresholds, Eigen::Index k, int j) {
+  const size_t i = static_cast<size_t>(j);
+  return thresholds[i].value + run.friction_weight(k, j) * run.static_friction[i];
+}
+
 std::vector<Contact> detect_contacts(const ObserverRun& run, const ResidualStatistics& s,
                                      const std::vector<ContactThreshold>& thresholds) {
   const int N = static_cast<int>(run.r.cols());
   const double memory = 1.0 / run.gain;
-  const auto limit = [&](Eigen::Index k, int j) {
-    const size_t i = static_cast<size_t>(j);
-    return thresholds[i].value + run.friction_weight(k, j) * run.static_friction[i];
-  };
+  const auto limit = [&](Eigen::Index k, int j) { return contact_limit(run, thresholds, k, j); };
   std::vector<Contact> out;
   for (const auto& [a, b] : run.segments) {
     bool open = false;

@@ -15,8 +15,8 @@ namespace dyncal::host {
 /// the residual's envelope over time per joint ("series"), parameters with their 95 % interval,
 /// verdict and CAD value and a plot of their deviation from CAD, link inertials, effects found with
 /// before/after, the payload's quantities, contacts on the time axis, notes. Every number printed
-/// from the report carries data-path, the JSON pointer of the number it shows (%.6g, integers below 1e15 in full). Throws
-/// InputError: gnuplot failed (gnuplot.hpp).
+/// from the report carries data-path, the JSON pointer of the number it shows (%.6g, integers below 1e15 in full).
+/// Throws InputError: gnuplot failed (gnuplot.hpp).
 std::string report_page(const std::string& command, const nlohmann::json& report);
 
 }  // namespace dyncal::host

@@ -21,4 +21,11 @@ inline constexpr int kEnvelopeBuckets = 750;
 nlohmann::json torque_series_json(const Eigen::VectorXd& t, const Eigen::MatrixXd& measured,
                                   const Eigen::MatrixXd& predicted, const Eigen::MatrixXd* after = nullptr);
 
+/// The collision monitor's residual over time for a page: {samples, t[], joints[{joint, min[], max[],
+/// threshold[]}]}: the S samples in kEnvelopeBuckets consecutive buckets (fewer when S is smaller),
+/// each bucket's mid time, the min and max of `residual` (S x N) [Nm] and the max of `threshold`
+/// (S x N, the bound |residual| is compared with) [Nm] over its samples.
+nlohmann::json residual_envelope_json(const Eigen::VectorXd& t, const Eigen::MatrixXd& residual,
+                                      const Eigen::MatrixXd& threshold);
+
 }  // namespace dyncal::host

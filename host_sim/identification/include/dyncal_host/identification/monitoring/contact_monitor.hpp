@@ -118,6 +118,10 @@ struct Contact {
   int first_joint = 0;        ///< 1-based: the joint that crossed first
 };
 
+/// The bound |r - mean| of joint j (0-based) is compared with at row k [Nm]: the joint's threshold
+/// widened by the friction the model cannot know there (friction_weight * static_friction).
+double contact_limit(const ObserverRun& run, const std::vector<ContactThreshold>& thresholds, Eigen::Index k, int j);
+
 std::vector<Contact> detect_contacts(const ObserverRun& run, const ResidualStatistics& s,
                                      const std::vector<ContactThreshold>& thresholds);
 
