@@ -1,9 +1,10 @@
 #!/usr/bin/env python3
 """The HTML pages and gates in a real browser (issue 72, docs/report.md, docs/gates.md).
 
-Runs dyncal identify (the TX40 example), predict, monitor and diagnose (a hidden case of
-tests/hidden_cases/generate_logs.py) with --report, --html and gates, then loads each page in
-headless Chromium (Debian's chromium) and checks:
+Runs dyncal identify (the TX40 example), predict, monitor, diagnose (a hidden case of
+tests/hidden_cases/generate_logs.py), calibrate (the simulated er20 drive, lockstep) and payload (a
+2 kg load on a second simulated drive's arm, from its log) with --report, --html and gates, then
+loads each page in headless Chromium (Debian's chromium) and checks:
 - the DOM Chromium built has the expected plots (img.plot, data-plot names), each an embedded SVG
   (data:image/svg+xml) that decodes to an <svg>; no <script>, no http(s) address anywhere;
 - no request: Chromium's net log holds no URL but its own background services', and its console
@@ -12,7 +13,8 @@ headless Chromium (Debian's chromium) and checks:
   (%.6g, integers in full);
 - a screenshot of the page's top is kept in --out as the test's artefact;
 - the gates: the TX40 station gate file passes (exit 0), the strict one fails (exit 1) with the
-  failed items named on stdout and in the report's "gate".
+  failed items named on stdout and in the report's "gate"; a payload gate around the true mass
+  passes, one that excludes it fails.
 Exit 0 when every check holds; otherwise each failed check on one line, exit 1.
 """
 import argparse
@@ -26,6 +28,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import time
 
 # Hosts Chromium itself contacts in the background (updates, time, accounts, dictionaries): not
 # the page's requests.
@@ -201,6 +204,45 @@ def main():
          o("diagnose.html")], 0)
     check_page("diagnose", o("diagnose.html"), o("diagnose.json"),
                ["diagnose_before_after"] + [f"torque_joint{j}" for j in range(1, 7)], out)
+
+    # calibrate on the simulated er20 drive, and payload on a second drive whose arm carries 2 kg.
+    load = o("load_scenario.json")
+    with open(load, "w") as f:
+        json.dump({"payload": {"mass": 2.0, "com": [0.01, 0.0, 0.05],
+                               "inertia_about_com": [0.004, 0.0, 0.0, 0.004, 0.0, 0.003]}}, f)
+    drives = []
+    try:
+        uris = []
+        for name, extra in (("plain", []), ("loaded", ["--scenario", load])):
+            ready = o(f"drive_{name}.ready")
+            if os.path.exists(ready):
+                os.remove(ready)
+            drives.append(subprocess.Popen([dyncal, "drive", "--tcp", "127.0.0.1:0", "--lockstep", "--ready-file", ready,
+                                            "--table", o(f"drive_{name}.table"), *extra],
+                                           stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+            for _ in range(600):
+                if os.path.exists(ready) and os.path.getsize(ready) > 0:
+                    break
+                time.sleep(0.05)
+            with open(ready) as f:
+                uris.append(f.read().strip())
+        run([dyncal, "calibrate", "--drive", uris[0], "--quiet", "--save-log", o("unloaded.csv"), "--report",
+             o("calibrate.json"), "--html", o("calibrate.html")], 0)
+        check_page("calibrate", o("calibrate.html"), o("calibrate.json"), ["parameters_against_cad"], out)
+        run([dyncal, "calibrate", "--drive", uris[1], "--quiet", "--no-flash", "--save-log", o("loaded.csv")], 0)
+    finally:
+        for d in drives:
+            d.kill()
+            d.wait()
+    run([dyncal, "identify", "--robot", "er20", "--data", o("unloaded.csv"), "--params", o("arm.json")], 0)
+    p = run([dyncal, "payload", "--robot", "er20", "--data", o("loaded.csv"), "--params", o("arm.json"), "--report",
+             o("payload.json"), "--html", o("payload.html"), "--require", "payload_mass_min=1.9", "--require",
+             "payload_mass_max=2.1"], 0)
+    check("gate: passed" in p.stdout, "payload: a gate around the true mass did not pass")
+    check_page("payload", o("payload.html"), o("payload.json"), [], out)
+    p = run([dyncal, "payload", "--robot", "er20", "--data", o("loaded.csv"), "--params", o("arm.json"),
+             "--require", "payload_mass_min=2.5"], 1)
+    check("failed: payload_mass_min: payload mass" in p.stdout, "payload: a gate excluding the mass did not fail")
 
     for f in failures:
         print("FAILED: " + f)

@@ -55,8 +55,9 @@ std::string pointer_escape(const std::string& key) {
 
 /// A JSON value as HTML: numbers with their JSON pointer, arrays and objects inline.
 std::string value_html(const Json& v, const std::string& path) {
+  // A non-finite number is null in the JSON file (nlohmann-json writes NaN as null): a dash, as null.
+  if (v.is_null() || (v.is_number() && !std::isfinite(v.get<double>()))) return "<span class=\"none\">&ndash;</span>";
   if (v.is_number()) return "<span class=\"num\" data-path=\"" + escape(path) + "\">" + g6(v.get<double>()) + "</span>";
-  if (v.is_null()) return "<span class=\"none\">&ndash;</span>";
   if (v.is_boolean()) return v.get<bool>() ? "yes" : "no";
   if (v.is_string()) return escape(v.get<std::string>());
   std::string out;
