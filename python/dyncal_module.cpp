@@ -20,6 +20,7 @@
 #include "../host_sim/app/commands.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/interrupt.hpp"
+#include "dyncal_host/common/progress.hpp"
 #include "dyncal_host/common/robot_description.hpp"
 #include "dyncal_host/identification/pipeline/compiled_robot.hpp"
 
@@ -201,10 +202,14 @@ py::dict run_command(const std::string& command, const py::kwargs& kwargs) {
     throw;
   }
   std::cout.rdbuf(saved);
-  if (code != 0) throw InputError("dyncal " + command + " exited with " + std::to_string(code));
+  // Exit 1 with a report: a gate (gate=, require=) failed; the report says which items (docs/gates.md).
+  if (code != 0 && !(code == 1 && std::filesystem::exists(report)))
+    throw InputError("dyncal " + command + " exited with " + std::to_string(code));
   std::ifstream in(report);
   nlohmann::json doc = nlohmann::json::parse(in);
   std::filesystem::remove(report);
+  if (code != 0 && !(doc.contains("gate") && !doc["gate"].value("passed", true)))
+    throw InputError("dyncal " + command + " exited with " + std::to_string(code));
   py::dict out = to_python(doc).cast<py::dict>();
   out["report_text"] = text.str();
   return out;
@@ -273,6 +278,24 @@ PYBIND11_MODULE(dyncal, m) {
         return "<dyncal.Robot " + r.description.name + ", " + std::to_string(r.description.num_joints) + " joints>";
       });
 
+  m.def(
+      "set_progress",
+      [](py::object callback) {
+        if (callback.is_none()) {
+          dyncal::host::set_progress_sink({});
+          return;
+        }
+        dyncal::host::set_progress_sink([callback](const dyncal::host::ProgressUpdate& u) {
+          py::gil_scoped_acquire gil;
+          callback(u.task, u.done, u.total, u.finished);
+        });
+      },
+      py::arg("callback"),
+      "Progress of the long commands (diagnose, identify's folds): callback(task, done, total, finished) is "
+      "called as they go, at most once per 1 % of a task; None (the default) keeps them quiet.");
+  // The callback must not outlive the interpreter.
+  py::module_::import("atexit").attr("register")(py::cpp_function([] { dyncal::host::set_progress_sink({}); }));
+
   for (const char* command : {"identify", "predict", "diagnose", "payload"}) {
     const std::string name = command;
     m.def(
@@ -281,7 +304,9 @@ PYBIND11_MODULE(dyncal, m) {
          "` with its command-line options as keyword arguments (data='log.csv', model='eq7', validate_last=0.3, "
          "drop_outliers=True; a list repeats an option). Returns the document --report writes, as a dict, with "
          "every array of numbers as a numpy array, and 'report_text': what the command prints. Raises InputError "
-         "with the CLI's one-line message.")
+         "with the CLI's one-line message; a failed gate (gate='station.yaml', require=['key=value']) returns the "
+         "report, "
+         "its 'gate' saying which items failed.")
             .c_str());
   }
 }

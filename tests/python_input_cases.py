@@ -5,7 +5,9 @@
   main function");
 - dyncal.Robot runs the CLI's one description check: an MDH robot whose link was edited since the
   build is refused, naming the field (it was taken, with the compiled values);
-- an output that is not a regular file (a FIFO) is refused before any work, and stays a FIFO.
+- an output that is not a regular file (a FIFO) is refused before any work, and stays a FIFO;
+- issue 72: set_progress(callback) receives identify's progress, None keeps it quiet; a failed gate
+  returns the report with its failed items instead of raising.
 
 usage: python_input_cases.py SOURCE_DIR MODULE_DIR
 """
@@ -54,6 +56,20 @@ with tempfile.TemporaryDirectory() as tmp:
     except dyncal.InputError as e:
         check("a FIFO as params is refused", "not a regular file" in str(e), str(e))
     check("the FIFO stays a FIFO", os.path.exists(fifo) and not os.path.isfile(fifo))
+
+# Issue 72: progress through a callback (quiet without one), a failed gate as a report, not an error.
+updates = []
+dyncal.set_progress(lambda task, done, total, finished: updates.append((task, done, total, finished)))
+tx40 = os.path.join(SRC, "tests", "data", "staubli_tx40")
+doc = dyncal.identify(format="tx40", data=tx40, require=["r2_validation_min=0.999"])
+dyncal.set_progress(None)
+check("identify reports its folds to the progress callback",
+      any(t.startswith("identify:") and f for t, _, _, f in updates) and len(updates) >= 3, str(updates[:3]))
+check("a failed gate returns the report with its items",
+      doc.get("gate", {}).get("passed") is False and any(not i["passed"] for i in doc["gate"]["items"]),
+      str(doc.get("gate", {}))[:120])
+quiet = dyncal.identify(format="tx40", data=tx40)
+check("without a callback identify stays quiet", "\r" not in quiet["report_text"] and "gate" not in quiet)
 
 if failures:
     print(f"{len(failures)} failed: {failures}")

@@ -12,6 +12,7 @@ loads each page in headless Chromium (Debian's chromium) and checks:
 - every number on the page (data-path: its JSON pointer) is the JSON report's number, as printed
   (%.6g, integers in full);
 - a screenshot of the page's top is kept in --out as the test's artefact;
+- no command prints a progress line, its output not being a terminal;
 - the gates: the TX40 station gate file passes (exit 0), the strict one fails (exit 1) with the
   failed items named on stdout and in the report's "gate"; a payload gate around the true mass
   passes, one that excludes it fails.
@@ -47,9 +48,13 @@ def check(ok, message):
 
 
 def run(cmd, expect):
-    p = subprocess.run(cmd, capture_output=True, text=True)
-    check(p.returncode == expect, f"{' '.join(cmd)}: exit {p.returncode}, expected {expect}\n{p.stderr.strip()}")
-    return p
+    """Runs `cmd` with its output captured (not a terminal): it must exit `expect` and print no
+    progress line (host_sim/common/progress.hpp draws one on a terminal only)."""
+    p = subprocess.run(cmd, capture_output=True)
+    out, err = (x.decode("utf-8", "replace") for x in (p.stdout, p.stderr))  # bytes: a "\r" stays one
+    check(p.returncode == expect, f"{' '.join(cmd)}: exit {p.returncode}, expected {expect}\n{err.strip()}")
+    check("\r" not in out + err, f"{' '.join(cmd[:2])}: a progress line although its output is not a terminal")
+    return subprocess.CompletedProcess(cmd, p.returncode, out, err)
 
 
 class Dom(html.parser.HTMLParser):

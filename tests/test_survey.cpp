@@ -442,7 +442,7 @@ TEST(SurveyParallelRuns, ResultsDoNotDependOnTheThreadCountAndErrorsReachTheCall
     std::vector<dyncal::host::survey::Task> tasks;
     for (size_t i = 0; i < out.size(); ++i)
       tasks.push_back({static_cast<double>(i % 7), [&out, i] { out[i] = std::sqrt(static_cast<double>(i)) * 3.0; }});
-    dyncal::host::survey::run_parallel(std::move(tasks), jobs);
+    dyncal::host::survey::run_parallel(std::move(tasks), jobs, "test");
     return out;
   };
   const std::vector<double> one = squares(1);
@@ -450,7 +450,7 @@ TEST(SurveyParallelRuns, ResultsDoNotDependOnTheThreadCountAndErrorsReachTheCall
   EXPECT_DOUBLE_EQ(one[25], 15.0);
   std::vector<dyncal::host::survey::Task> failing{{1, [] {}},
                                                   {2, [] { throw dyncal::host::InputError("task 2 failed"); }}};
-  EXPECT_THROW(dyncal::host::survey::run_parallel(std::move(failing), 2), dyncal::host::InputError);
+  EXPECT_THROW(dyncal::host::survey::run_parallel(std::move(failing), 2, "test"), dyncal::host::InputError);
 }
 
 // --plots writes every figure from a result and its series (gnuplot from scripts/setup).

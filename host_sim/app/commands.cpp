@@ -1,9 +1,12 @@
 #include "commands.hpp"
 
+#include <unistd.h>
+
 #include <iostream>
 
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/interrupt.hpp"
+#include "dyncal_host/common/progress.hpp"
 #include "entry_points.hpp"
 #include "report_outputs.hpp"
 
@@ -24,6 +27,8 @@ int run_cli(void (*add)(CLI::App&, Action&), int argc, char** argv) {
   Action run;
   add(app, run);
   set_command_line(argc, argv);
+  // Progress of the long commands on one updating line, on a terminal only (progress.hpp).
+  if (isatty(STDERR_FILENO)) host::set_progress_sink(host::terminal_progress(std::cerr));
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

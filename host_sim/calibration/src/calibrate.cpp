@@ -19,6 +19,7 @@
 #include "dyncal_host/common/model_terms.hpp"
 #include "dyncal_host/common/number_text.hpp"
 #include "dyncal_host/common/output_file.hpp"
+#include "dyncal_host/common/progress.hpp"
 #include "dyncal_host/identification/excitation/excitation.hpp"
 #include "dyncal_host/identification/pipeline/compiled_robot.hpp"
 #include "dyncal_host/identification/reports/drive_table.hpp"
@@ -33,14 +34,6 @@ namespace mm = dyncal::modbus_map;
 
 double seconds_since(SteadyClock::time_point t0) {
   return std::chrono::duration<double>(SteadyClock::now() - t0).count();
-}
-
-void progress_bar(std::ostream& out, double fraction, long samples, const char* what) {
-  const int width = 30;
-  const int filled = static_cast<int>(std::lround(std::min(1.0, fraction) * width));
-  out << "\r" << what << " [" << std::string(static_cast<size_t>(filled), '#')
-      << std::string(static_cast<size_t>(width - filled), '.') << "] " << std::setw(3)
-      << static_cast<int>(std::lround(100 * std::min(1.0, fraction))) << "% " << samples << " samples" << std::flush;
 }
 
 /// Verification run: stream a fresh trajectory and read the drive's model error.
@@ -143,7 +136,11 @@ JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory
   std::vector<port::DriveSample> samples;
   samples.reserve(static_cast<size_t>(expected));
   port::DriveSample block[mm::kMaxSamplesPerBlock];
-  long last_shown = -1;
+  // The run's samples as progress (progress.hpp: a terminal line when the program set one).
+  std::unique_ptr<Progress> bar;
+  if (progress)
+    bar = std::make_unique<Progress>(run.name + (run.trace ? " run, uploading" : " run, streaming"),
+                                     static_cast<double>(expected), "samples");
   // Every wait has a deadline: a drive that delivers nothing new for kStallSeconds while it should
   // be playing has stalled (a healthy one delivers a sample every period, at least 100 Hz).
   constexpr double kStallSeconds = 10.0;
@@ -180,7 +177,7 @@ JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory
     if (st == port::PortStatus::transport_error) throw InputError("drive: " + drive.error());
     if (st == port::PortStatus::device_fault) {
       stop_on_exit.disarm();  // the drive stopped the run itself; its fault stands until a reset
-      if (progress) *progress << "\n";
+      bar.reset();            // the progress line erased before the fault is told
       if (samples.empty()) throw DriveFaultError(drive.error() + "; no sample was recorded before it");
       const std::string path = fault_log_path(run);
       const std::string count = std::to_string(samples.size()) + " samples recorded before it (" + run.name + " run)";
@@ -201,16 +198,9 @@ JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory
     if (on_sample) {
       for (int k = 0; k < n; ++k) on_sample(block[k]);
     }
-    if (progress && static_cast<long>(samples.size()) / 500 != last_shown) {
-      last_shown = static_cast<long>(samples.size()) / 500;
-      progress_bar(*progress, static_cast<double>(samples.size()) / static_cast<double>(expected),
-                   static_cast<long>(samples.size()), run.trace ? "uploading" : "streaming");
-    }
+    if (bar) bar->update(static_cast<double>(samples.size()));
   }
-  if (progress) {
-    progress_bar(*progress, 1.0, static_cast<long>(samples.size()), run.trace ? "uploading" : "streaming");
-    *progress << "\n";
-  }
+  bar.reset();
   if (seconds) *seconds = seconds_since(t0);
   if (lost) *lost += drive.lost();
   for (int j = 0; j < joints; ++j) {  // a saturated torque is a bound, not a measurement

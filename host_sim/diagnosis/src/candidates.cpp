@@ -8,6 +8,7 @@
 
 #include "dyncal/friction.hpp"
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/common/progress.hpp"
 #include "dyncal_host/identification/pipeline/signal.hpp"
 #include "harmonic_fit.hpp"
 #include "shape_search.hpp"
@@ -561,16 +562,21 @@ void filter_in_time(const CandidateContext& c, MatrixXd& series, EffectKind kind
   }
 }
 
-std::vector<Candidate> candidate_library(const CandidateContext& c) {
+std::vector<Candidate> candidate_library(const CandidateContext& c, const std::string& progress_task) {
   const int N = static_cast<int>(c.data.q.cols());
   std::vector<Candidate> out;
-  for (int i = 0; i < N; ++i)
+  Progress progress(progress_task, static_cast<double>(N + N * (N - 1) / 2), "joints and pairs");
+  for (int i = 0; i < N; ++i) {
     for (const EffectSpec& s : effect_specs())
       if (!s.per_pair) s.generate(c, i, i, out);
+    progress.advance();
+  }
   for (int i = 0; i < N; ++i)
-    for (int j = i + 1; j < N; ++j)
+    for (int j = i + 1; j < N; ++j) {
       for (const EffectSpec& s : effect_specs())
         if (s.per_pair) s.generate(c, i, j, out);
+      progress.advance();
+    }
   return out;
 }
 

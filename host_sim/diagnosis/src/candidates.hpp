@@ -100,7 +100,8 @@ const EffectSpec& effect_spec(Effect e);
 
 /// Every candidate of the current step: per joint the per-joint kinds in table order, then every
 /// joint pair's per-pair kinds.
-std::vector<Candidate> candidate_library(const CandidateContext& c);
+/// Reported as progress of `progress_task` (progress.hpp), per joint and joint pair.
+std::vector<Candidate> candidate_library(const CandidateContext& c, const std::string& progress_task);
 
 /// "joint 3: " or "joints 5 and 6: " followed by the kind's explanation.
 std::string explain(const Candidate& c, const std::vector<double>& params);

@@ -15,6 +15,7 @@
 #include "candidates.hpp"
 #include "cross_validator.hpp"
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/common/progress.hpp"
 #include "dyncal_host/identification/methods/effect_model.hpp"
 #include "dyncal_host/identification/pipeline/butterworth.hpp"
 #include "dyncal_host/identification/pipeline/signal.hpp"
@@ -406,7 +407,8 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
     library.model_X = &m.X;
     library.model_phi = &m.phi;
     library.column_joints = detail::column_joint_masks(m.X, N);
-    std::vector<Candidate> cands = detail::candidate_library(library);
+    std::vector<Candidate> cands =
+        detail::candidate_library(library, "diagnose: step " + std::to_string(step + 1) + ", building candidates");
     const VectorXd n_eff = effective_samples_per_joint(library.residual, N);
     if (step == 0) res.effective_samples_per_joint = n_eff.mean();
     // Selection on validation error only: the largest relative validation gain among candidates
@@ -414,8 +416,11 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
     int best = -1;
     double best_score = 0;
     std::vector<Evidence> ev(cands.size());
+    Progress progress("diagnose: step " + std::to_string(step + 1) + ", weighing", static_cast<double>(cands.size()),
+                      "candidates");
     for (size_t c = 0; c < cands.size(); ++c) {
       ev[c] = weigh(cv, cands[c], m, n_eff, declared.val);
+      progress.advance();
       const Evidence& e = ev[c];
       if (qualifies(e, o) && e.gain > best_score) {
         best_score = e.gain;

@@ -6,9 +6,12 @@
 #include <numeric>
 #include <thread>
 
+#include "dyncal_host/common/progress.hpp"
+
 namespace dyncal::host::survey {
 
-void run_parallel(std::vector<Task> tasks, int jobs) {
+void run_parallel(std::vector<Task> tasks, int jobs, const std::string& what) {
+  Progress progress(what, static_cast<double>(tasks.size()), "runs");
   std::vector<size_t> order(tasks.size());
   std::iota(order.begin(), order.end(), size_t{0});
   std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return tasks[a].cost > tasks[b].cost; });
@@ -21,6 +24,7 @@ void run_parallel(std::vector<Task> tasks, int jobs) {
       } catch (...) {
         errors[order[i]] = std::current_exception();
       }
+      progress.advance();
     }
   };
   const size_t threads = std::min(tasks.size(), static_cast<size_t>(std::max(jobs, 1)));

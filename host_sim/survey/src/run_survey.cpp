@@ -448,17 +448,17 @@ json run_survey(const RobotDescription& robot, const SurveyOptions& o, SurveySer
     designs.push_back(
         {1, [&st, k] { st.designs[k] = study_excitation(st.robot, k == 0 ? M::eq7 : M::eq4, st.options.seed); }});
   }
-  run_parallel(std::move(designs), jobs);
+  run_parallel(std::move(designs), jobs, "survey: excitation designs");
   for (ModelStudy& m : models) m.add_simulations(st, simulations);
   t10.add_simulations(st, simulations);
   t12.add_simulations(st, simulations);
   tracking.add_simulations(st, simulations);
-  run_parallel(std::move(simulations), jobs);
+  run_parallel(std::move(simulations), jobs, "survey: simulated drive runs");
   for (ModelStudy& m : models) m.add_methods(st, fits);
   t10.add_methods(st, fits);
   t12.add_methods(st, methods, fits);
   tracking.add_methods(st, fits);
-  run_parallel(std::move(fits), jobs);
+  run_parallel(std::move(fits), jobs, "survey: identification methods");
   json result;
   result["settings"] = settings_json(st);
   for (const ModelStudy& m : models) result["models"][model_key(m.model)] = m.assemble();

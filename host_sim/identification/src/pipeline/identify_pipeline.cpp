@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/common/progress.hpp"
 #include "dyncal_host/identification/methods/effect_model.hpp"
 #include "dyncal_host/identification/methods/instrumental_variables.hpp"
 #include "dyncal_host/identification/methods/sign_constrained.hpp"
@@ -644,7 +645,10 @@ IdentifyResult run_identify(const RobotDescription& robot, const TermSetModel& m
     std::vector<char> all(static_cast<size_t>(S), 1);
     const auto t0 = std::chrono::steady_clock::now();
     IdentifyPipeline::FitDetails final_fit;
+    Progress progress("identify: " + opt.method + " fit and " + std::to_string(folds) + " folds",
+                      static_cast<double>(folds + 1), "fits");
     pipe.fit(data, all, phi, stdev, &final_fit);
+    progress.advance();
     res.fit_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     res.condition_number = final_fit.cond;
     std::vector<Eigen::VectorXd> fold_phi(static_cast<size_t>(folds));
@@ -653,6 +657,7 @@ IdentifyResult run_identify(const RobotDescription& robot, const TermSetModel& m
       for (Eigen::Index s = 0; s < S; ++s) train[static_cast<size_t>(s)] = fold[static_cast<size_t>(s)] != f;
       Eigen::VectorXd fold_std;
       pipe.fit(data, train, fold_phi[static_cast<size_t>(f)], fold_std, nullptr, &final_fit);
+      progress.advance();
     }
     // Metrics from the pooled out-of-fold residuals, each sample predicted by the fit without its
     // fold (made sample by sample: no stored prediction).

@@ -37,7 +37,7 @@ struct CalibrateOptions {
   double rls_mu = 0.9999;
   bool flash = true;
   bool diagnose = false;  ///< run dyncal diagnose on the excitation and flash the effects found
-  bool progress = true;   ///< progress bar on the progress stream
+  bool progress = true;   ///< report the runs' samples as progress (progress.hpp; shown where the program set a sink)
   std::string save_log;   ///< if set, the excitation log is written here as CSV (dyncal identify --data)
   /// If set, the excitation run's control law is written here (docs/cli.md "Law file": trajectory,
   /// periods, rates, the drive's PD gains, the table active during the run beside it as NAME.table),

@@ -3,6 +3,7 @@
 // the results are those of a sequential run, bit for bit, whatever the thread count.
 
 #include <functional>
+#include <string>
 #include <vector>
 
 namespace dyncal::host::survey {
@@ -15,9 +16,9 @@ struct Task {
 };
 
 /// Runs every task on up to `jobs` threads (jobs <= 1: in the calling thread, in order), the costly
-/// ones first. Rethrows the first exception a task threw (by its position in `tasks`) after every
-/// task has finished.
-void run_parallel(std::vector<Task> tasks, int jobs);
+/// ones first, reporting each finished task as progress of `what` (progress.hpp). Rethrows the first
+/// exception a task threw (by its position in `tasks`) after every task has finished.
+void run_parallel(std::vector<Task> tasks, int jobs, const std::string& what);
 
 /// Threads to use by default: std::thread::hardware_concurrency(), at least 1.
 int default_jobs();
