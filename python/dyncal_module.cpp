@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "../host_sim/app/commands.hpp"
+#include "../host_sim/app/report_outputs.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/interrupt.hpp"
 #include "dyncal_host/common/progress.hpp"
@@ -174,6 +175,11 @@ py::dict run_command(const std::string& command, const py::kwargs& kwargs) {
                       ("dyncal_python_" + std::to_string(::getpid()) + "_" + command + ".json");
   std::vector<std::string> args{"dyncal", command};
   for (auto& a : options_of(kwargs)) args.push_back(std::move(a));
+  {  // the report's command_line: the equivalent dyncal command (without the module's own --report)
+    std::vector<char*> line;
+    for (auto& a : args) line.push_back(a.data());
+    dyncal::app::set_command_line(static_cast<int>(line.size()), line.data());
+  }
   args.push_back("--report");
   args.push_back(report.string());
   CLI::App app{"dyncal"};

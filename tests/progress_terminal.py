@@ -14,7 +14,9 @@ import os
 import shlex
 import subprocess
 import sys
-import time
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "support"))
+import lockstep_drive  # noqa: E402
 
 failures = []
 
@@ -46,24 +48,12 @@ def main():
     shown = on_terminal(diagnose)
     check("\rdiagnose: step 1, building candidates [" in shown, "diagnose on a terminal: no progress line")
 
-    ready = os.path.join(a.out, "drive.ready")
-    if os.path.exists(ready):
-        os.remove(ready)
-    drive = subprocess.Popen([a.dyncal, "drive", "--tcp", "127.0.0.1:0", "--lockstep", "--ready-file", ready,
-                              "--table", os.path.join(a.out, "drive.table")],
-                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    drive, uri = lockstep_drive.start(a.dyncal, a.out, "progress")
     try:
-        for _ in range(600):
-            if os.path.exists(ready) and os.path.getsize(ready) > 0:
-                break
-            time.sleep(0.05)
-        with open(ready) as f:
-            uri = f.read().strip()
         shown = on_terminal([a.dyncal, "calibrate", "--drive", uri, "--no-flash"])
         check("\rexcitation run, streaming [" in shown, "calibrate on a terminal: no progress line")
     finally:
-        drive.kill()
-        drive.wait()
+        lockstep_drive.stop(drive)
     for f in failures:
         print("FAILED: " + f)
     if not failures:

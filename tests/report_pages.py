@@ -22,14 +22,15 @@ import argparse
 import base64
 import html.parser
 import json
-import math
 import os
 import re
 import shutil
 import subprocess
 import sys
 import tempfile
-import time
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "support"))
+import lockstep_drive  # noqa: E402
 
 # Hosts Chromium itself contacts in the background (updates, time, accounts, dictionaries): not
 # the page's requests.
@@ -219,26 +220,16 @@ def main():
     try:
         uris = []
         for name, extra in (("plain", []), ("loaded", ["--scenario", load])):
-            ready = o(f"drive_{name}.ready")
-            if os.path.exists(ready):
-                os.remove(ready)
-            drives.append(subprocess.Popen([dyncal, "drive", "--tcp", "127.0.0.1:0", "--lockstep", "--ready-file", ready,
-                                            "--table", o(f"drive_{name}.table"), *extra],
-                                           stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
-            for _ in range(600):
-                if os.path.exists(ready) and os.path.getsize(ready) > 0:
-                    break
-                time.sleep(0.05)
-            with open(ready) as f:
-                uris.append(f.read().strip())
+            drive, uri = lockstep_drive.start(dyncal, out, name, extra)
+            drives.append(drive)
+            uris.append(uri)
         run([dyncal, "calibrate", "--drive", uris[0], "--quiet", "--save-log", o("unloaded.csv"), "--report",
              o("calibrate.json"), "--html", o("calibrate.html")], 0)
         check_page("calibrate", o("calibrate.html"), o("calibrate.json"), ["parameters_against_cad"], out)
         run([dyncal, "calibrate", "--drive", uris[1], "--quiet", "--no-flash", "--save-log", o("loaded.csv")], 0)
     finally:
         for d in drives:
-            d.kill()
-            d.wait()
+            lockstep_drive.stop(d)
     run([dyncal, "identify", "--robot", "er20", "--data", o("unloaded.csv"), "--params", o("arm.json")], 0)
     p = run([dyncal, "payload", "--robot", "er20", "--data", o("loaded.csv"), "--params", o("arm.json"), "--report",
              o("payload.json"), "--html", o("payload.html"), "--require", "payload_mass_min=1.9", "--require",
