@@ -133,6 +133,8 @@ def do_import(args):
     with open(os.path.join(robot_dir, "robot.json"), "w") as f:
         json.dump(desc, f, indent=2)
         f.write("\n")
+    for note in chain.notes:
+        print(f"{args.name}: note: {note}")
     ids = "not applicable (mass off the chain)" if torque_error is None else f"{torque_error:.1e}"
     print(f"{args.name}: {len(chain.joints)} joints from '{chain.base}' to '{chain.tip}'; KDL check: frames "
           f"{frame_error:.1e}, torques {ids}; wrote {robot_dir}/robot.json, {args.name}.urdf, source.urdf")

@@ -130,6 +130,23 @@ def main():
                                   'ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link></robot>')
         urdf_case(tmp, "nine_joints", eight, "1 to 7")
 
+        # A moving joint past the chosen tip (a gripper's finger, issue 68) is taken rigid at its zero
+        # position with a note, its link's mass in the last body; it was refused as "not on the chain".
+        finger = ARM3.replace("</robot>", '<joint name="finger" type="prismatic"><parent link="forearm"/>'
+                              '<child link="finger_link"/><origin xyz="0 0 0.3"/><axis xyz="1 0 0"/>'
+                              '<limit lower="0" upper="0.04" velocity="0.1" effort="10"/></joint>'
+                              '<link name="finger_link"><inertial><mass value="0.25"/><inertia ixx="1e-4" ixy="0" '
+                              'ixz="0" iyy="1e-4" iyz="0" izz="1e-4"/></inertial></link></robot>')
+        path = os.path.join(tmp, "finger.urdf")
+        with open(path, "w") as f:
+            f.write(finger)
+        rc, out, err = run(["robot", "import", path, "--name", "fingered", "--tip", "forearm", "--robots-dir",
+                            os.path.join(tmp, "robots_finger")])
+        noted = "1 joint past the tip 'forearm' (finger) taken rigid at zero position" in out
+        print(f"{'ok  ' if rc == 0 and noted else 'FAIL'} a finger past --tip: exit {rc}: {out.strip()} {err.strip()}")
+        if rc != 0 or not noted:
+            failures.append(f"a finger past --tip: exit {rc}, stdout {out!r}, stderr {err!r}")
+
         # An existing robot is not replaced without --force.
         robots = os.path.join(tmp, "robots")
         rc, _, err = run(["robot", "import", good, "--name", "arm3", "--robots-dir", robots])

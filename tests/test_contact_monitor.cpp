@@ -12,14 +12,18 @@
 //   its samples missing;
 // - the thresholds move with the calibration: the same model without its friction raises them.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
+#include <filesystem>
 #include <functional>
 #include <random>
 
 #include "dyncal_host/identification/monitoring/contact_monitor.hpp"
 #include "dyncal_host/identification/pipeline/identify.hpp"
 #include "dyncal_host/identification/reports/prediction.hpp"
+#include "support/dyncal_cli.hpp"
 #include "support/simulated_log.hpp"
+#include "support/test_paths.hpp"
 
 namespace {
 
@@ -201,6 +205,73 @@ TEST(ContactMonitor, DirectResidualForComparison) {
             << " alarms outside them\n";
   std::cout << "direct residual over " << seconds << " s of unseen motion: " << quiet << " alarms at 0.01 per hour, "
             << stated << " at a stated 100 (" << 100 * seconds / 3600 << " expected)\n";
+}
+
+// Issue 68: a 100 Hz arm monitored with the statistics identify --params saved. Their gain is the
+// default's ceiling, 1 / dt of the calibration log; a log sampled 0.5 % slower needed K dt > 1 and
+// was refused, as was any log more than 1 % off. Now the gain is lowered to the log's 1 / dt and the
+// rate accepted within the tolerance the false-alarm rate allows (statistics_rate_tolerance): no
+// contact on a contact-free log at the slower rate, and pushes of 10 % of tau_max found; a log 5 %
+// off is refused, naming the tolerance.
+TEST(ContactMonitorCli, SavedStatisticsServeALogAtASlightlyDifferentRate) {
+  const host::RobotDescription robot = test::test_robot("arm6");
+  const auto dir = std::filesystem::temp_directory_path() / ("dyncal_monitor_rate_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const std::string robots = " --robot arm6 --robots-dir " + std::string(test::source_dir()) + "/tests/robots";
+  auto path = [&](const char* name) { return (dir / name).string(); };
+  host::write_csv_log(path("cal.csv"), test::simulate(robot, test::uniform_times(100, 60), {}, 1, 3).log);
+  ASSERT_EQ(
+      test::run_dyncal("identify" + robots + " --model eq7 --data " + path("cal.csv") + " --params " + path("p.json")),
+      0);
+  ASSERT_TRUE(test::read_json(path("p.json")).contains("monitor"));
+  const double slower = 100 * 0.995;
+  host::write_csv_log(path("free.csv"), test::simulate(robot, test::uniform_times(slower, 120), {}, 21, 12).log);
+  ASSERT_EQ(test::run_dyncal("monitor" + robots + " --params " + path("p.json") + " --data " + path("free.csv") +
+                             " --report " + path("free.json")),
+            0);
+  const nlohmann::json free = test::read_json(path("free.json"));
+  EXPECT_TRUE(free["contacts"].empty()) << free["contacts"].dump();
+  bool noted = false;
+  for (const auto& n : free["notes"])
+    if (n.get<std::string>().rfind("rate: ", 0) == 0) {
+      noted = true;
+      std::cout << n.get<std::string>() << "\n";
+    }
+  EXPECT_TRUE(noted) << free["notes"].dump();
+  // Ten pushes of 10 % of tau_max for 0.3 s on joints 1..6 in turn, 2 s apart from 2 s on.
+  const std::vector<double> times = test::uniform_times(slower, 24);
+  long k = -1;
+  const test::ExtraTorque push = [&](const Eigen::VectorXd&, const Eigen::VectorXd&, const Eigen::VectorXd&,
+                                     Eigen::VectorXd& tau) {
+    const double t = times[static_cast<size_t>(++k)];
+    for (int i = 0; i < 10; ++i)
+      if (t >= 2.0 + 2.0 * i && t < 2.3 + 2.0 * i) tau[i % 6] -= 0.10 * robot.tau_max[i % 6];
+  };
+  host::write_csv_log(path("pushed.csv"), test::simulate(robot, times, {}, 22, 12, push).log);
+  ASSERT_EQ(test::run_dyncal("monitor" + robots + " --params " + path("p.json") + " --data " + path("pushed.csv") +
+                             " --report " + path("pushed.json")),
+            0);
+  int found = 0, other = 0;
+  const nlohmann::json pushed = test::read_json(path("pushed.json"));
+  for (const auto& c : pushed["contacts"]) {
+    const double start = c["start"].get<double>();
+    const int i = static_cast<int>(std::lround((start - 2.0) / 2.0));
+    const bool during = i >= 0 && i < 10 && start >= 2.0 + 2.0 * i - 0.05 && start <= 2.3 + 2.0 * i;
+    found += during ? 1 : 0;
+    other += during ? 0 : 1;
+  }
+  std::cout << "at " << slower << " Hz with the 100 Hz statistics: " << found << " of 10 pushes found, " << other
+            << " other alarms\n";
+  EXPECT_GE(found, 9) << pushed["contacts"].dump();
+  EXPECT_EQ(other, 0);
+  host::write_csv_log(path("far.csv"), test::simulate(robot, test::uniform_times(95, 20), {}, 23, 12).log);
+  const test::CliResult far =
+      test::run_dyncal_captured("monitor" + robots + " --params " + path("p.json") + " --data " + path("far.csv"));
+  EXPECT_EQ(far.exit_code, 2);
+  EXPECT_NE(far.output.find("within which their false-alarm rate at most doubles"), std::string::npos) << far.output;
+  std::cout << far.output;
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

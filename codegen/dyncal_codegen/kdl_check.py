@@ -26,18 +26,19 @@ def _inertia(body):
                                 kdl.RotationalInertia(I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2]))
 
 
-def urdf_chain(links, path_joints):
-    """KDL chain of the URDF path as written: each joint a segment, axis in the parent frame."""
+def urdf_chain(links, path_joints, rigid=frozenset()):
+    """KDL chain of the URDF path as written: each joint a segment, axis in the parent frame; the
+    joints named in `rigid` (moving joints past the tip, which import takes at zero position) fixed."""
     chain, moving_segments = kdl.Chain(), []
     for j in path_joints:
         f = _frame(j.origin)
-        if j.moves:
+        if j.moves and j.name not in rigid:
             axis = f.M * kdl.Vector(*[float(v) for v in j.axis])
             joint = kdl.Joint(j.name, f.p, axis, kdl.Joint.RotAxis)
         else:
             joint = kdl.Joint(j.name, kdl.Joint.Fixed)
         chain.addSegment(kdl.Segment(j.child, joint, f, _inertia(_link_inertial(links[j.child], j.child))))
-        if j.moves:
+        if j.moves and j.name not in rigid:
             moving_segments.append(chain.getNrOfSegments())
     return chain, moving_segments
 
@@ -77,12 +78,14 @@ def _urdf_path(links, joints, chain):
     """The URDF's joints from the chain's base to its tip, extended past the tip through the fixed
     links that carry mass while they form one chain (a flange, a tool); and whether any link off
     that path below the first moving joint carries mass (then the chain alone is not the URDF's
-    dynamics)."""
+    dynamics), and the moving joints past the tip on that extension (import takes them rigid at zero
+    position: so does the check)."""
     children, parent_joint = {}, {}
     for j in joints:
         children.setdefault(j.parent, []).append(j)
         parent_joint[j.child] = j
     path_joints = _path(chain.base, chain.tip, parent_joint, children)
+    past_tip = len(path_joints)
     link = chain.tip
     while True:
         massive = [j for j in children.get(link, []) if _subtree_mass(j.child, links, children) > 0]
@@ -93,13 +96,14 @@ def _urdf_path(links, joints, chain):
     moving_body = {j.child for j in path_joints[path_joints.index(_first(path_joints)):]}
     below = _subtree_links(_first(path_joints).child, children)
     off_path_mass = any(_link_inertial(links[name], name).mass > 0 for name in below if name not in moving_body)
-    return path_joints, off_path_mass
+    rigid = frozenset(j.name for j in path_joints[past_tip:] if j.moves)
+    return path_joints, off_path_mass, rigid
 
 
 def check(links, joints, chain, gravity, trials=20, seed=1):
     """Returns (max frame error, max torque error or None when the ID check does not apply)."""
-    path_joints, off_path_mass = _urdf_path(links, joints, chain)
-    original, moving_segments = urdf_chain(links, path_joints)
+    path_joints, off_path_mass, rigid = _urdf_path(links, joints, chain)
+    original, moving_segments = urdf_chain(links, path_joints, rigid)
     normalised = normalised_chain(chain)
     n = len(chain.joints)
     fk_o, fk_n = kdl.ChainFkSolverPos_recursive(original), kdl.ChainFkSolverPos_recursive(normalised)
@@ -136,10 +140,10 @@ def torques_at(links, joints, chain, gravity, states):
     """KDL's recursive Newton-Euler on the URDF's own chain (as check() builds it) at `states`
     ({"q", "qd", "qdd"}, joint order of `chain`): the torque lists, or None when mass hangs off the
     chain below the first joint (then the chain alone is not the URDF's dynamics)."""
-    path_joints, off_path_mass = _urdf_path(links, joints, chain)
+    path_joints, off_path_mass, rigid = _urdf_path(links, joints, chain)
     if off_path_mass:
         return None
-    original, _ = urdf_chain(links, path_joints)
+    original, _ = urdf_chain(links, path_joints, rigid)
     solver = kdl.ChainIdSolver_RNE(original, kdl.Vector(*gravity))
     n = len(chain.joints)
     out = []

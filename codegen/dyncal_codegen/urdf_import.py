@@ -179,6 +179,7 @@ class Chain:
         self.joints = []  # dicts: name, T_fixed, A, limit, body (Inertial), type
         self.base = None
         self.tip = None
+        self.notes = []  # what import decided that the user should know (joints past the tip)
 
 
 def parse(path):
@@ -212,17 +213,22 @@ def _descendant_moving(link, children):
     return out
 
 
-def _lump_subtree(link, T_body_link, children, links, skip):
-    """Inertial of `link` and its fixed-only subtree (except the child `skip`), in the body frame."""
+def _lump_subtree(link, T_body_link, children, links, skip, past_tip=None):
+    """Inertial of `link` and its fixed-only subtree (except the child `skip`), in the body frame.
+    past_tip: a list when `link` is the chain's tip: a moving joint below it (a gripper's fingers) is
+    then taken at its zero position, rigid, and named in the list; elsewhere a moving joint off the
+    chain is refused (a branch whose motion would move the chain's loads)."""
     total = _link_inertial(links[link], f"link '{link}'").moved(T_body_link)
     for j in children.get(link, []):
         if j.child == skip:
             continue
         moving = [j] if j.moves else []
         moving += _descendant_moving(j.child, children)
-        if moving:
+        if moving and past_tip is None:
             raise ImportError_(f"joint '{moving[0].name}' moves but is not on the chain; choose the chain with --tip")
-        total = total.plus(_lump_subtree(j.child, T_body_link @ j.origin, children, links, None))
+        if j.moves:
+            past_tip.append(j.name)
+        total = total.plus(_lump_subtree(j.child, T_body_link @ j.origin, children, links, None, past_tip))
     return total
 
 
@@ -303,5 +309,10 @@ def normalise(path, base=None, tip=None):
         elif body is not None:
             body["T_link"] = body["T_link"] @ j.origin
         link = nxt_on_path
-    body["body"] = body["body"].plus(_lump_subtree(link, body["T_link"], children, links, None))
+    past_tip = []
+    body["body"] = body["body"].plus(_lump_subtree(link, body["T_link"], children, links, None, past_tip))
+    if past_tip:
+        chain.notes.append(f"{len(past_tip)} joint{'s' if len(past_tip) > 1 else ''} past the tip '{chain.tip}' "
+                           f"({', '.join(past_tip)}) taken rigid at zero position: their links' mass is in the last "
+                           "body, their motion is not modelled")
     return robot_name, chain

@@ -109,6 +109,13 @@ double num(const Json& j, const char* key) {
   return j.is_object() && j.contains(key) && j[key].is_number() ? j[key].get<double>() : NAN;
 }
 
+/// Whether the array holds a finite number (gnuplot stops on a plot with none).
+bool any_number(const Json& a) {
+  for (const auto& v : a)
+    if (v.is_number() && std::isfinite(v.get<double>())) return true;
+  return false;
+}
+
 void write_column(std::ofstream& out, const Json& a, size_t i) {
   if (i < a.size() && a[i].is_number())
     out << " " << a[i].get<double>();
@@ -167,6 +174,10 @@ std::string series_plots(const Json& series, Plots& plots) {
   for (const auto& joint : series["joints"]) {
     const std::string J = std::to_string(joint.value("joint", 0));
     const bool after = joint.contains("predicted_after");
+    if (!any_number(joint["measured"]) || !any_number(joint["predicted"])) {  // gnuplot refuses an empty plot
+      out += "<p>Joint " + J + ": no predicted sample to draw.</p>";
+      continue;
+    }
     {
       std::ofstream d(plots.work() + "/torque" + J + ".dat");
       for (size_t i = 0; i < t.size(); ++i) {
@@ -326,7 +337,8 @@ std::string notes_html(const Json& r, const char* key, const char* title) {
 
 const char* kStyle =
     "body{font-family:sans-serif;margin:2em;max-width:1100px;color:#222}h1{font-size:1.5em}h2{font-size:1.2em;"
-    "border-bottom:1px solid #ccc;margin-top:1.6em}table{border-collapse:collapse;font-size:0.85em;margin:0.5em 0}"
+    "border-bottom:1px solid #ccc;margin-top:1.6em}table{border-collapse:collapse;font-size:0.85em;margin:0.5em "
+    "0;display:block;overflow-x:auto;max-width:100%}"
     "td,th{border:1px solid #ddd;padding:2px 6px;text-align:left;vertical-align:top}th{background:#f3f3f3}"
     ".num{font-family:monospace}figure{margin:0.5em 0}img.plot{max-width:100%}figcaption{font-size:0.85em;color:#555}"
     ".pass{background:#e6f4ea;border:1px solid #34a853;padding:0.6em}.fail{background:#fce8e6;border:1px solid "

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <utility>
 
 #include "dyncal_host/common/input_error.hpp"
@@ -142,6 +143,8 @@ JointLog to_uniform_grid(JointLog raw, double max_gap, SamplingReport& report) {
                        " (t = " + number_text(raw.t[i]) + " s after " + number_text(raw.t[i - 1]) + " s)");
     }
   }
+  report.repeated = drop_repeated_samples(raw);
+  if (raw.samples() < 3) throw InputError(raw.source + ": fewer than 3 samples after its repeated rows");
   const auto input_segments = raw.segments();
   // Input segments (several logs) must share one rate: interpolating one onto another's grid would
   // alias (no anti-alias filter on the way down) or invent samples (on the way up).
@@ -252,11 +255,21 @@ JointLog to_uniform_grid(JointLog raw, double max_gap, SamplingReport& report) {
 }
 
 std::string describe(const SamplingReport& r, double max_gap) {
+  char repeated[400] = "";
+  if (r.repeated.dropped > 0)
+    std::snprintf(repeated, sizeof repeated,
+                  "; %ld repeated rows dropped (%ld run%s identical to the row before while the arm moved, the longest "
+                  "%ld rows from t = %.6g s: a logger re-writing its last reading), treated as missing samples",
+                  r.repeated.dropped, r.repeated.runs, r.repeated.runs == 1 ? "" : "s", r.repeated.longest,
+                  r.repeated.longest_at);
+  if (r.repeated.kept_at_rest > 0)
+    std::snprintf(repeated + std::strlen(repeated), sizeof repeated - std::strlen(repeated),
+                  "; %ld repeated rows kept (the arm at rest across them)", r.repeated.kept_at_rest);
   char line[512];
   if (!r.resampled) {
     std::snprintf(line, sizeof line, "sampling: %.6g Hz, uniform, %ld samples in %d segment%s", r.raw_rate_hz,
                   r.grid_samples, r.segments, r.segments == 1 ? "" : "s");
-    return line;
+    return line + std::string(repeated);
   }
   std::snprintf(
       line, sizeof line,
@@ -273,7 +286,7 @@ std::string describe(const SamplingReport& r, double max_gap) {
                 "stamps)",
                 r.clock_used ? "the logger's regular clock estimated from the stamps" : "the time stamps",
                 100.0 * r.stamp_jitter, r.clock_missing, r.roughness_ratio);
-  return std::string(line) + clock;
+  return std::string(line) + clock + repeated;
 }
 
 JointLog stack_logs(std::vector<JointLog> logs) {

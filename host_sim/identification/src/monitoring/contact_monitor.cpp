@@ -38,7 +38,7 @@ double default_observer_gain(double period) {
 }
 
 ObserverRun run_observer(const RobotDescription& robot, JointLog log, const ParameterSet& params, double gain,
-                         const std::vector<double>& band, ResidualKind kind) {
+                         const std::vector<double>& band, ResidualKind kind, double lower_gain_within) {
   if (params.robot != robot.name)
     throw InputError("the parameters are for robot '" + params.robot + "', not '" + robot.name + "'");
   const CompiledRobot& compiled = compiled_robot_for(robot);
@@ -57,6 +57,7 @@ ObserverRun run_observer(const RobotDescription& robot, JointLog log, const Para
   log = to_uniform_grid(std::move(log), max_gap, sampling);
   run.period = log.sample_period();
   run.gain = gain > 0 ? gain : default_observer_gain(run.period);
+  if (run.gain * run.period > 1.0 && run.gain * run.period <= 1.0 + lower_gain_within) run.gain = 1.0 / run.period;
   if (run.gain * run.period > 1.0)
     throw InputError("observer gain " + std::to_string(run.gain) +
                      " 1/s: the discrete observer needs K dt <= 1, at most " + std::to_string(1.0 / run.period) +
@@ -282,6 +283,13 @@ std::vector<ContactThreshold> contact_thresholds(const ResidualStatistics& s, do
     c.push_back(t);
   }
   return c;
+}
+
+double statistics_rate_tolerance(const ResidualStatistics& s, const std::vector<ContactThreshold>& thresholds) {
+  double z = 0;
+  for (size_t j = 0; j < thresholds.size() && j < s.std.size(); ++j)
+    if (s.std[j] > 0) z = std::max(z, thresholds[j].gaussian / s.std[j]);
+  return z > 0 ? std::log(2.0) / (z * z) : 0.0;
 }
 
 double contact_limit(const ObserverRun& run, const std::vector<ContactThreshold>& thresholds, Eigen::Index k, int j) {

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "dyncal_host/identification/logs/joint_log.hpp"
+#include "dyncal_host/identification/logs/repeated_samples.hpp"
 
 namespace dyncal::host {
 
@@ -30,6 +31,7 @@ struct SamplingReport {
   /// stamps (geometric mean over the joints that move); < 1: the clock is used (clock_used).
   double roughness_ratio = 1;
   bool clock_used = false;
+  RepeatedSamples repeated;  ///< rows a logger re-wrote while the arm moved, dropped first (repeated_samples.hpp)
 };
 
 /// Relative deviation of every step from the median step under which a log counts as uniform and is
@@ -44,7 +46,8 @@ inline double bridgeable_gap(double cutoff_hz) {
   return 0.5 / cutoff_hz;
 }
 
-/// `raw` (time strictly increasing, finite values; any number of input segments) on a uniform grid
+/// `raw` (time strictly increasing, finite values; any number of input segments), its repeated rows
+/// dropped first (drop_repeated_samples: a logger that re-wrote its last reading), on a uniform grid
 /// of period T: the median step refined twice as the time spanned over the periods spanned (each
 /// step counting as its nearest multiple of T; missing samples bias the median up; exact while each
 /// step is within T/2 of a multiple, and a T off the logger's nominal period costs nothing but grid

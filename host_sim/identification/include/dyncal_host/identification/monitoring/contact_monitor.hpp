@@ -66,8 +66,12 @@ struct ObserverRun {
 /// kind direct: the direct residual instead, qdd twice the curvature of the least-squares parabola
 /// through the same window (lib/ centred_slope.hpp); also throws for a log with qd (its
 /// acceleration comes from q's window only).
+/// lower_gain_within: a gain with K dt > 1 by at most this much (relative) is lowered to 1 / dt, the
+/// log's grid period (a statistics' default gain, 1 / its own period, on a log a little slower);
+/// ObserverRun::gain is the gain used.
 ObserverRun run_observer(const RobotDescription& robot, JointLog log, const ParameterSet& params, double gain = 0,
-                         const std::vector<double>& band = {}, ResidualKind kind = ResidualKind::momentum_observer);
+                         const std::vector<double>& band = {}, ResidualKind kind = ResidualKind::momentum_observer,
+                         double lower_gain_within = 0);
 
 /// The residual's statistics on contact-free motion, per joint: mean, standard deviation and the
 /// standard deviation of its sample-to-sample difference [Nm] (differences within segments), from
@@ -106,6 +110,15 @@ struct ContactThreshold {
   bool peak_bound = false;
 };
 std::vector<ContactThreshold> contact_thresholds(const ResidualStatistics& s, double alarms_per_hour);
+
+/// How far a monitored log's rate may be from the statistics' (docs/monitor.md "Another rate"): the
+/// relative difference of sample period, and of the gain it forces, within which the statistics
+/// are used as taken. The observer's white-noise residual has variance ~ K dt / (2 - K dt) per unit
+/// noise, so a relative change e of dt or K moves its std by at most e (K dt <= 1); a threshold z
+/// stds out then passes Gaussian noise exp(z^2 e) times as often. The tolerance is the e at which
+/// the stated false-alarm rate at most doubles, ln 2 / z^2, z the largest gaussian threshold over
+/// its std among the joints.
+double statistics_rate_tolerance(const ResidualStatistics& s, const std::vector<ContactThreshold>& thresholds);
 
 /// One contact: from the first sample where a joint's |r - mean| exceeds its threshold to the first
 /// where every joint is back within it, alarms closer than the observer's time constant 1 / K
