@@ -7,6 +7,7 @@
 
 #include "dyncal/parameter_table.hpp"
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/common/normal_quantile.hpp"
 #include "dyncal_host/identification/pipeline/compiled_robot.hpp"
 
 namespace dyncal::host {
@@ -28,6 +29,14 @@ bool is_motor_term(const std::string& name) {
                      [&name](const char* prefix) { return name.rfind(prefix, 0) == 0; });
 }
 
+/// Whether compiled parameter i is a motor term (Fc, Fv, Ia) below 0 by less than its 95 % interval
+/// (kZ95 std, identify's std): the data do not tell it from 0.
+bool negative_within_noise(const ParameterSet& p, size_t i) {
+  const Eigen::Index k = static_cast<Eigen::Index>(i);
+  return is_motor_term(p.names[i]) && p.values[k] < 0.0 && k < p.stdev.size() && std::isfinite(p.stdev[k]) &&
+         -p.values[k] <= kZ95 * p.stdev[k];
+}
+
 /// Index of parameter `name` among the compiled ones (the first `count`), or -1.
 int index_of(const ParameterSet& p, const std::string& name, size_t count) {
   for (size_t i = 0; i < count; ++i)
@@ -43,6 +52,18 @@ DriveTableContent drive_table_content(const ParameterSet& p, const RobotDescript
   const size_t count = compiled_count(p);
   DriveTableContent out;
   out.values.assign(p.values.data(), p.values.data() + count);
+  // A negative Coulomb, viscous or rotor-inertia term that its own 95 % interval does not set apart
+  // from 0 is 0 as far as the data say, and a drive refuses a negative one: the table holds 0.
+  for (size_t i = 0; i < count; ++i)
+    if (negative_within_noise(p, i)) {
+      char line[200];
+      std::snprintf(line, sizeof line,
+                    "%s = %.3g +- %.2g (std): 0 within its 95 %% interval, held at 0 in the drive table (a drive "
+                    "takes no negative friction or rotor inertia)",
+                    p.names[i].c_str(), p.values[static_cast<Eigen::Index>(i)], p.stdev[static_cast<Eigen::Index>(i)]);
+      out.notes.push_back(line);
+      out.values[i] = 0.0;
+    }
   const int n = robot.num_joints;
   const Eigen::MatrixXd T = motor_velocity_map(robot, p.friction_per_motor, p.motors);
   for (int m = 0; m < n; ++m) {
@@ -98,12 +119,14 @@ ParameterTable parameter_table(const ParameterSet& p, const RobotDescription& ro
   // a coupling term's coefficients.
   for (size_t i = 0; i < count; ++i) {
     const std::string& name = p.names[i];
-    if (is_motor_term(name) && p.values[static_cast<Eigen::Index>(i)] < 0.0) {
+    if (is_motor_term(name) && p.values[static_cast<Eigen::Index>(i)] < 0.0 && !negative_within_noise(p, i)) {
       char value[32];
       std::snprintf(value, sizeof value, "%.6g", p.values[static_cast<Eigen::Index>(i)]);
-      throw InputError(p.source + ": params[" + std::to_string(i + 1) + "] '" + name + "' = " + value +
-                       ": Coulomb and viscous friction and rotor inertia must be >= 0 in a drive table (identify "
-                       "--sign-constraints holds them there)");
+      throw InputError(
+          p.source + ": params[" + std::to_string(i + 1) + "] '" + name + "' = " + value +
+          ": Coulomb and viscous friction and rotor inertia must be >= 0 in a drive table, and this one is "
+          "below 0 beyond its 95 % interval (or has no std): the data contradict physics there (identify "
+          "--sign-constraints holds them at 0)");
     }
   }
   ParameterTable t;

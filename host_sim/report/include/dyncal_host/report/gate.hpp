@@ -8,11 +8,9 @@
 #include <string>
 #include <vector>
 
-namespace dyncal::host {
+#include "dyncal_host/common/normal_quantile.hpp"  // kZ95: the pages' intervals, the physics gate's bound
 
-/// The two-sided 95 % normal quantile: the 95 % intervals the pages show (value +- kZ95 std) and the
-/// physics gate's bound (a term is contradicted by the data when value + kZ95 std < 0).
-inline constexpr double kZ95 = 1.959963984540054;
+namespace dyncal::host {
 
 /// One limit: a key the command knows (gate_keys) and one value, or one per joint.
 struct GateLimit {

@@ -11,10 +11,12 @@
 #include <string>
 #include <vector>
 
+#include "dyncal_host/common/normal_quantile.hpp"
+
 namespace dyncal::host {
 
-/// Two-sided 95 % normal quantile: a parameter's 95 % confidence interval is value +- kVerdictZ std.
-inline constexpr double kVerdictZ = 1.959963984540054;
+/// A parameter's 95 % confidence interval is value +- kVerdictZ std (normal_quantile.hpp).
+inline constexpr double kVerdictZ = kZ95;
 /// "determined" when the 95 % interval's half width is at most this fraction of the parameter's
 /// physical scale: the log fixes the parameter to a tenth of its plausible size.
 inline constexpr double kDeterminedFraction = 0.1;

@@ -29,14 +29,18 @@ struct DriveTableContent {
 /// identify fitted (T^T times the motor's torque). Throws InputError: params of another robot, a
 /// motor turning with more than one other joint (a table term couples two), Eq. 8's power friction
 /// of a coupled motor (no table term), more effect terms than kTableMaxEffects.
+/// A Coulomb, viscous or rotor-inertia value below 0 by no more than kZ95 times its std is set to 0
+/// with a note: the data do not tell it from 0, and a drive takes none below 0.
 DriveTableContent drive_table_content(const ParameterSet& params, const RobotDescription& robot);
 
 /// The parameter table of `params` for `robot` as a drive takes it (drive_table_content, float
 /// values, the id of the robot the parameters were identified for: a drive of another robot refuses
-/// it); the conversion's notes appended to *notes. Throws InputError as drive_table_content, for a
-/// Coulomb, viscous or rotor-inertia parameter below 0 (what a drive refuses, named here with its
-/// value; a coupled motor's too), and for more values than a table holds or a value or effect
-/// coefficient that is no finite float.
+/// it); the conversion's notes appended to *notes. A Coulomb, viscous or rotor-inertia parameter
+/// below 0 within its 95 % interval (kZ95 times its std; 0 as far as the data say) is held at 0 with
+/// a note (drive_table_content). Throws InputError as drive_table_content, for such a parameter
+/// below 0 beyond its interval or without a std (what a drive refuses, named here with its value; a
+/// coupled motor's too), and for more values than a table holds or a value or effect coefficient
+/// that is no finite float.
 ParameterTable parameter_table(const ParameterSet& params, const RobotDescription& robot,
                                std::vector<std::string>* notes);
 
