@@ -10,6 +10,7 @@
 #include "dyncal_host/identification/logs/uniform_grid.hpp"
 #include "dyncal_host/identification/pipeline/compiled_robot.hpp"
 #include "dyncal_host/identification/pipeline/identify_pipeline.hpp"
+#include "dyncal_host/identification/pipeline/poor_fit.hpp"
 #include "dyncal_host/identification/pipeline/signal.hpp"
 #include "dyncal_host/identification/pipeline/stacked_data.hpp"
 
@@ -104,9 +105,11 @@ const CompiledRobot& checked(const RobotDescription& robot, JointLog raw, const 
 IdentifyResult identify(const RobotDescription& robot, JointLog raw, const IdentifyOptions& options) {
   JointLog log;
   std::string note;
+  const JointLogFacts facts = joint_log_facts(raw);  // for the notes on joints that fit badly
   const CompiledRobot& c = checked(robot, std::move(raw), options, log, note);
   IdentifyResult r = run_identify(robot, term_set_model(c, options.terms), std::move(log), options);
   r.notes.insert(r.notes.begin(), note);
+  for (std::string& n : poor_fit_notes(facts, robot, r.joints)) r.notes.push_back(std::move(n));
   return r;
 }
 
