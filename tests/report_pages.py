@@ -225,7 +225,8 @@ def main():
             uris.append(uri)
         run([dyncal, "calibrate", "--drive", uris[0], "--quiet", "--save-log", o("unloaded.csv"), "--report",
              o("calibrate.json"), "--html", o("calibrate.html")], 0)
-        check_page("calibrate", o("calibrate.html"), o("calibrate.json"), ["parameters_against_cad"], out)
+        check_page("calibrate", o("calibrate.html"), o("calibrate.json"),
+                   ["parameters_against_cad", "torque_joint1", "residual_joint6"], out)
         run([dyncal, "calibrate", "--drive", uris[1], "--quiet", "--no-flash", "--save-log", o("loaded.csv")], 0)
     finally:
         for d in drives:

@@ -7,6 +7,7 @@
 #include "commands.hpp"
 #include "dyncal_host/calibration/calibrate.hpp"
 #include "dyncal_host/identification/reports/identify_report.hpp"
+#include "dyncal_host/report/torque_series.hpp"
 #include "report_outputs.hpp"
 
 namespace dyncal::app {
@@ -30,6 +31,7 @@ int run_calibrate(CalibrateSettings& s) {
   o.flash = !s.no_flash;
   o.stream = host::parse_stream_mode(s.stream);
   o.progress = !s.quiet && isatty(2);  // the bar redraws with \r: only on a terminal
+  o.keep_trace = s.out.page();         // the page draws the excitation's torque against the batch fit's
   if (!s.trajectory.empty()) o.excitation = host::trajectory_from_json(robot, read_json_file(s.trajectory));
   const auto r = host::calibrate(robot, o, std::cerr);
   host::print_calibrate_report(std::cout, r);
@@ -37,6 +39,8 @@ int run_calibrate(CalibrateSettings& s) {
   if (!s.out.wanted()) return rc;
   nlohmann::json report = host::calibrate_report_json(r);
   host::add_cad_values(report["batch"], robot.name);
+  if (s.out.page())
+    report["batch"]["series"] = host::torque_series_json(r.trace.t, r.trace.measured, r.trace.predicted);
   const int gate =
       finish_report(s.out, std::move(report),
                     s.trajectory.empty() ? std::vector<std::string>{} : std::vector<std::string>{s.trajectory});

@@ -417,6 +417,7 @@ CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions&
   }
   r.friction_per_motor = r.batch.friction_per_motor;
   ParameterSet batch_set = parameter_set(r.batch);
+  if (o.keep_trace) r.trace = predicted_trace(robot, log, io, batch_set);
   // 2. Fresh trajectory with the drive's current table, flash, same trajectory again.
   const auto fresh = default_excitation(robot, o.f_f, o.harmonics, 1, o.seed + 1000, nullptr);
   const bool trace_verification = plan("verification", fresh, o.verify_periods);

@@ -16,6 +16,7 @@
 #include "dyncal_host/diagnosis/diagnose.hpp"
 #include "dyncal_host/identification/excitation/excitation.hpp"
 #include "dyncal_host/identification/pipeline/identify.hpp"
+#include "dyncal_host/identification/reports/prediction.hpp"
 #include "dyncal_port/modbus_drive.hpp"
 
 namespace dyncal::host {
@@ -38,7 +39,9 @@ struct CalibrateOptions {
   bool flash = true;
   bool diagnose = false;  ///< run dyncal diagnose on the excitation and flash the effects found
   bool progress = true;   ///< report the runs' samples as progress (progress.hpp; shown where the program set a sink)
-  std::string save_log;   ///< if set, the excitation log is written here as CSV (dyncal identify --data)
+  bool keep_trace =
+      false;             ///< keep the excitation run's torque and the batch fit's prediction (CalibrateResult::trace)
+  std::string save_log;  ///< if set, the excitation log is written here as CSV (dyncal identify --data)
   /// If set, the excitation run's control law is written here (docs/cli.md "Law file": trajectory,
   /// periods, rates, the drive's PD gains, the table active during the run beside it as NAME.table),
   /// what `identify --method iv --law` needs for the saved log.
@@ -68,8 +71,9 @@ struct VerificationErrors {
 };
 
 struct CalibrateResult {
-  int num_joints = 0;                              ///< the robot's; per-joint arrays are filled to here
-  IdentifyResult batch;                            ///< OLS fit of the excitation run, with cross-validation
+  int num_joints = 0;    ///< the robot's; per-joint arrays are filled to here
+  IdentifyResult batch;  ///< OLS fit of the excitation run, with cross-validation
+  TorqueTrace trace;     ///< with CalibrateOptions::keep_trace: the excitation's torque and the batch fit's prediction
   std::vector<std::string> names;                  ///< parameter names, model order
   std::vector<double> phi_batch, phi_kf, phi_rls;  ///< batch: identify's model; KF, RLS: lib's (per joint)
   double trajectory_cond = 0;                      ///< cond(K) of the chosen excitation (Eq. 26, columns unit-scaled)
