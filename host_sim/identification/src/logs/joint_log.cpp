@@ -25,6 +25,20 @@ void check_log_time(const Eigen::VectorXd& t, const std::string& path) {
   }
 }
 
+JointLog sized_like(const JointLog& like, Eigen::Index rows) {
+  const int n = like.joints();
+  JointLog out;
+  out.has_qd = like.has_qd;
+  out.has_qdd = like.has_qdd;
+  out.source = like.source;
+  out.t.resize(rows);
+  out.q.resize(rows, n);
+  out.tau.resize(rows, n);
+  if (out.has_qd) out.qd.resize(rows, n);
+  if (out.has_qdd) out.qdd.resize(rows, n);
+  return out;
+}
+
 void write_csv_log(const std::string& path, const JointLog& log) {
   std::ostringstream out;
   const int n = log.joints();

@@ -65,17 +65,7 @@ RepeatedSamples drop_repeated_samples(JointLog& log) {
     }
   }
   if (r.dropped == 0) return r;
-  const Index kept = S - r.dropped;
-  JointLog out;
-  out.has_qd = log.has_qd;
-  out.has_qdd = log.has_qdd;
-  out.source = log.source;
-  out.period = 0;
-  out.t.resize(kept);
-  out.q.resize(kept, n);
-  out.tau.resize(kept, n);
-  if (log.has_qd) out.qd.resize(kept, n);
-  if (log.has_qdd) out.qdd.resize(kept, n);
+  JointLog out = sized_like(log, S - r.dropped);
   Index row = 0;
   for (const auto& [a, b] : log.segments()) {
     if (row > 0) out.segment_starts.push_back(row);

@@ -292,10 +292,7 @@ std::string describe(const SamplingReport& r, double max_gap) {
 JointLog stack_logs(std::vector<JointLog> logs) {
   if (logs.empty()) throw InputError("no log given");
   if (logs.size() == 1) return std::move(logs.front());
-  JointLog out;
   const JointLog& first = logs.front();
-  out.has_qd = first.has_qd;
-  out.has_qdd = first.has_qdd;
   Index total = 0;
   for (const JointLog& l : logs) {
     if (l.joints() != first.joints() || l.has_qd != first.has_qd || l.has_qdd != first.has_qdd)
@@ -304,12 +301,8 @@ JointLog stack_logs(std::vector<JointLog> logs) {
     if (l.samples() < 3) throw InputError(l.source + ": fewer than 3 samples");
     total += l.samples();
   }
-  const int n = first.joints();
-  out.t.resize(total);
-  out.q.resize(total, n);
-  out.tau.resize(total, n);
-  if (out.has_qd) out.qd.resize(total, n);
-  if (out.has_qdd) out.qdd.resize(total, n);
+  JointLog out = sized_like(first, total);
+  out.source.clear();
   Index row = 0;
   double shift_to = 0;
   for (const JointLog& l : logs) {

@@ -69,6 +69,10 @@ void current_to_joint_torque(JointLog& log, const Eigen::MatrixXd& transmission,
 /// Throws InputError naming `what` unless `t` has at least 3 samples and strictly increases.
 void check_log_time(const Eigen::VectorXd& t, const std::string& what);
 
+/// A log of `rows` samples (values unset) with the columns of `like`: its joints, measured qd and qdd,
+/// its source; one segment, no grid period.
+JointLog sized_like(const JointLog& like, Eigen::Index rows);
+
 /// Writes `log` as a CSV that read_csv_log reads back exactly: header `t, q1..qN, [qd1..qdN,]
 /// [qdd1..qddN,] tau1..tauN` (qd, qdd only when measured), 17 significant digits. Throws
 /// InputError when the file cannot be written.
