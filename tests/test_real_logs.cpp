@@ -271,12 +271,12 @@ TEST(RepeatedSamples, RowsRepeatedAtRestAreKept) {
 }
 
 // Why a joint fits badly is named (issue 68: a real arm's wrist fitted with R^2 .35, -.007, .12 and
-// no word on why). arm6, positions only: joint 4 held still (no motion), joint 5's torque buried in
-// noise three times its own variation, joint 6's effort rounded to steps three times its torque's std (a
-// current read in coarse counts). Each of those joints fits badly and its note names its
-// cause; joint 1 fits well and has none.
+// no word on why). cobot7 (a robot of the sanitize build too), positions only: joint 4 held still (no motion), joint
+// 5's torque buried in noise three times its own variation, joint 6's effort rounded to steps three times its torque's
+// std (a current read in coarse counts). Each of those joints fits badly and its note names its cause; joint 1 fits
+// well and has none.
 TEST(PoorFit, AJointThatFitsBadlyIsToldWhy) {
-  const RobotDescription robot = test_robot("arm6");
+  const RobotDescription robot = test_robot("cobot7");
   SimulatedLog s = simulate(robot, uniform_times(kRate, kSeconds), MotionClock{}, 5, 3, {}, kEncoderStep, {3});
   std::mt19937 rng(68);
   std::normal_distribution<double> noise(0.0, 1.0);
@@ -296,7 +296,7 @@ TEST(PoorFit, AJointThatFitsBadlyIsToldWhy) {
       if (n.rfind("joint " + std::to_string(joint) + " fits badly", 0) == 0) return n;
     return std::string();
   };
-  for (int j = 1; j <= 6; ++j)
+  for (int j = 1; j <= robot.num_joints; ++j)
     std::printf("joint %d: R^2 %.3g %s\n", j, r.joints[static_cast<size_t>(j - 1)].r2, note_of(j).c_str());
   EXPECT_TRUE(note_of(1).empty());
   EXPECT_NE(note_of(5).find("the torque is near the noise"), std::string::npos) << note_of(5);
