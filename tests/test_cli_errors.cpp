@@ -316,9 +316,9 @@ TEST(CliErrors, FlashChecksTheParameterFileAgainstItsModel) {
     const auto end = text.find_first_of(",}\n", value + 9);
     expect_error(variant("negative", text.substr(name, end - name), text.substr(name, value + 9 - name) + "-2.5"),
                  "'Fv1' = -2.5: Coulomb and viscous");
-    expect_error(variant("negative_in_noise", text.substr(name, end - name),
-                         text.substr(name, value + 9 - name) + "-0.25"),
-                 "cannot connect to the drive");
+    expect_error(
+        variant("negative_in_noise", text.substr(name, end - name), text.substr(name, value + 9 - name) + "-0.25"),
+        "cannot connect to the drive");
   }
   std::filesystem::remove_all(dir);
 }
