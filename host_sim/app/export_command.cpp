@@ -139,11 +139,10 @@ int run_export_urdf(const ExportSettings& s) {
   return 0;
 }
 
-/// Per joint what a MuJoCo joint holds (armature = Ia, damping = Fv, frictionloss = Fc), the
-/// columns of the set it holds, and the terms it cannot hold with the reason.
+/// Per joint what a MuJoCo joint holds (armature = Ia, damping = Fv, frictionloss = Fc), and the
+/// terms it cannot hold with the reason.
 struct MjcfTerms {
   Eigen::VectorXd armature, damping, frictionloss;
-  std::vector<std::pair<Eigen::Index, int>> held;  ///< the set's term columns the joints hold, with their kind
   nlohmann::json not_held = nlohmann::json::array();
 };
 
@@ -173,7 +172,7 @@ int joint_term_kind(const host::TermSetModel& model, Eigen::Index i, const std::
 
 MjcfTerms mjcf_terms(const host::ParameterSet& p, const host::CompiledRobot& c, const host::RobotDescription& robot) {
   const int n = c.num_joints;
-  MjcfTerms t{Eigen::VectorXd::Zero(n), Eigen::VectorXd::Zero(n), Eigen::VectorXd::Zero(n), {}};
+  MjcfTerms t{Eigen::VectorXd::Zero(n), Eigen::VectorXd::Zero(n), Eigen::VectorXd::Zero(n)};
   const host::TermSetModel& model = host::term_set_model(c, p.terms);
   // Three states and their mirror images (qd, qdd negated): an offset's column is then no sign(qd_j).
   std::vector<RandomState> states = random_states(robot, 3);
@@ -201,7 +200,6 @@ MjcfTerms mjcf_terms(const host::ParameterSet& p, const host::CompiledRobot& c, 
       continue;
     }
     (kind == 0 ? t.armature : kind == 1 ? t.damping : t.frictionloss)[j] = v;
-    t.held.emplace_back(i, kind);
   }
   return t;
 }
@@ -226,14 +224,13 @@ int run_export_mjcf(const ExportSettings& s) {
       {"mjcf", p.robot, "--robots-dir", s.robots_dir, "--input", input_file, "--out", folder.path() + "/" + mjcf_name});
   if (rc != 0) return rc;
   // MuJoCo's own inverse dynamics of the file must be dyncal's model: the rigid body with the
-  // identified inertials plus the terms the joints hold, from the model's own regressor (dry
-  // friction is a constraint in MuJoCo, off in the check: its value is written as identified).
+  // identified inertials plus the terms the joints hold, Ia qdd_j and Fv qd_j (mjcf_terms took only
+  // terms whose regressor column is exactly that; dry friction is a constraint in MuJoCo, off in the
+  // check: its value is written as identified).
   MujocoModel mujoco(folder.path() + "/" + mjcf_name);
   if (mujoco.dofs() != n)
     throw InputError("internal: MuJoCo reads " + std::to_string(mujoco.dofs()) +
                      " joints in the written MJCF, the robot has " + std::to_string(n) + "; nothing written");
-  const host::TermSetModel& model = host::term_set_model(c, p.terms);
-  Eigen::MatrixXd K(n, model.num_params);
   double worst = 0;
   for (const RandomState& x : random_states(m.robot, kCheckStates)) {
     const Eigen::VectorXd want = c.inverse_dynamics(x.q, x.qd, x.qdd, m.phi) + terms.armature.cwiseProduct(x.qdd) +
