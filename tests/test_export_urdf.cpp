@@ -58,7 +58,36 @@ TEST_P(ExportUrdf, RoundTripsThroughKdlAndRobotImport) {
   }
   EXPECT_NE(text.find("<dynamics damping="), std::string::npos);
   EXPECT_NE(text.find("<dyncal "), std::string::npos);
-  EXPECT_NE(text.find("offset=\""), std::string::npos);  // the default model's offsets, in <dyncal>
+  EXPECT_NE(text.find("offset=\""), std::string::npos);           // the default model's offsets, in <dyncal>
+  EXPECT_NE(text.find("<!-- dyncal: mass "), std::string::npos);  // each link's mass with its std
+
+  // Every link's mass carries its std (issue 68), and the simulated arm's mass (robot.json's) lies in
+  // its 99 % interval on all links but at most one.
+  const CompiledRobot& compiled = compiled_robot_for(robot);
+  nlohmann::json file = read_json(dir / "p.json");
+  int covered = 0;
+  for (size_t l = 0; l < file["links"].size(); ++l) {
+    const auto& link = file["links"][l];
+    ASSERT_TRUE(link.contains("mass_std")) << "link " << l + 1;
+    const double m = link["mass"].get<double>(), sd = link["mass_std"].get<double>(),
+                 truth = compiled.nominal_standard[10 * l + 9];
+    std::printf("link %zu: mass %.4g +- %.2g kg (true %.4g)\n", l + 1, m, sd, truth);
+    EXPECT_GT(sd, 0.0);
+    covered += std::abs(m - truth) <= 2.58 * sd;
+  }
+  EXPECT_GE(covered + 1, static_cast<int>(file["links"].size()));
+  // A link whose mass rests on neither the log nor a prior (its 95 % interval holds 0 and the fit had
+  // no prior; here the file is edited so) is refused, nothing written; --force writes it, marked.
+  file["links"][0]["mass_std"] = file["links"][0]["mass"].get<double>();
+  file["links"][0]["mass_basis"] = "neither";
+  std::ofstream(dir / "wide.json") << file.dump();
+  const std::filesystem::path wide = dir / "wide.urdf";
+  EXPECT_EQ(run_dyncal("export urdf --params " + (dir / "wide.json").string() + " --out " + wide.string() + robots), 2);
+  EXPECT_FALSE(std::filesystem::exists(wide));
+  const CliResult forced = run_dyncal_captured("export urdf --params " + (dir / "wide.json").string() + " --out " +
+                                               wide.string() + robots + " --force");
+  ASSERT_EQ(forced.exit_code, 0) << forced.output;
+  EXPECT_NE(read_text(wide).find("NOT DETERMINED"), std::string::npos);
 
   // Re-import the written file as a new robot: its merged chain must pass the importer's KDL check.
   ASSERT_EQ(run_dyncal("robot import " + out.string() + " --name roundtrip" + robots), 0);

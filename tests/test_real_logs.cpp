@@ -568,6 +568,80 @@ TEST(RealLogsCli, UrRtdeRecorderCsvIsReadWithoutAConverter) {
   std::filesystem::remove_all(dir);
 }
 
+/// Writes columns `names` (one per joint, after the time column `time`) of `m` at rows `rows`.
+void write_signal(const std::filesystem::path& path, const std::string& time, const std::string& prefix,
+                  const Eigen::VectorXd& t, const Eigen::MatrixXd& m, const std::vector<Eigen::Index>& rows) {
+  std::ofstream out(path);
+  out << time;
+  for (Eigen::Index j = 0; j < m.cols(); ++j) out << ',' << prefix << j + 1;
+  out << '\n';
+  char number[32];
+  for (const Eigen::Index k : rows) {
+    std::snprintf(number, sizeof number, "%.17g", t[k]);
+    out << number;
+    for (Eigen::Index j = 0; j < m.cols(); ++j) {
+      std::snprintf(number, sizeof number, ",%.17g", m(k, j));
+      out << number;
+    }
+    out << '\n';
+  }
+}
+
+// A logger that writes positions, velocities and efforts to three files, each with its own time
+// column (issue 68: a mobile arm's logs needed a converter): positions every other sample of a 1 kHz
+// run, velocities at the samples between (their own clock, 1 ms off), efforts at every sample with
+// a gap of 0.2 s. --merge-on-time gives the fit of the same run in one file (q, qd, tau at the
+// positions' stamps) within 2 % per joint of validation RMS; a signal in two files, or no effort, is
+// refused (exit 2).
+TEST(RealLogsCli, ALogSplitOverFilesIsMergedOnTime) {
+  const auto dir = std::filesystem::temp_directory_path() / ("dyncal_merge_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const RobotDescription robot = test_robot("arm3");
+  SimulatedLog a = simulate(robot, uniform_times(1000.0, 30.0), MotionClock{}, 41, 3);
+  std::vector<Eigen::Index> even, odd, all;
+  for (Eigen::Index k = 0; k < a.log.samples(); ++k) {
+    (k % 2 ? odd : even).push_back(k);
+    if (a.log.t[k] < 12.0 || a.log.t[k] > 12.2) all.push_back(k);
+  }
+  write_signal(dir / "pos.csv", "time", "q", a.log.t, a.log.q, even);
+  write_signal(dir / "vel.csv", "stamp", "qd", a.log.t, a.log.qd, odd);
+  write_signal(dir / "eff.csv", "t", "tau", a.log.t, a.log.tau, all);
+  JointLog one;
+  one.has_qd = true;
+  one.t = a.log.t(even);
+  one.q = a.log.q(even, Eigen::all);
+  one.qd = a.log.qd(even, Eigen::all);
+  one.tau = a.log.tau(even, Eigen::all);
+  write_csv_log((dir / "one.csv").string(), one);
+  const std::string robots =
+      " --robot arm3 --robots-dir " + std::string(dyncal::test::source_dir()) + "/tests/robots --model eq7";
+  ASSERT_EQ(run_dyncal("identify" + robots + " --data " + (dir / "one.csv").string() + " --report " +
+                       (dir / "one.json").string()),
+            0);
+  const std::string parts = " --data " + (dir / "pos.csv").string() + " --data " + (dir / "vel.csv").string() +
+                            " --data " + (dir / "eff.csv").string();
+  ASSERT_EQ(run_dyncal("identify" + robots + parts + " --merge-on-time --report " + (dir / "merged.json").string()), 0);
+  const nlohmann::json x = read_json(dir / "one.json"), y = read_json(dir / "merged.json");
+  for (size_t j = 0; j < 3; ++j) {
+    const double u = x["joints"][j]["rms_validation"].get<double>(), v = y["joints"][j]["rms_validation"].get<double>();
+    std::printf("joint %zu: validation RMS one file %.4g, merged %.4g Nm\n", j + 1, u, v);
+    EXPECT_LE(v, 1.02 * u);
+    EXPECT_GE(y["joints"][j]["r2_validation"].get<double>(), 0.98);
+  }
+  EXPECT_NE(y["notes"].dump().find("merged on time: q from"), std::string::npos) << y["notes"].dump();
+  EXPECT_NE(y["notes"].dump().find("inside a gap"), std::string::npos) << y["notes"].dump();
+  // The effort twice, or not at all: refused, nothing written.
+  EXPECT_EQ(run_dyncal("identify" + robots + parts + " --data " + (dir / "eff.csv").string() +
+                       " --merge-on-time --report " + (dir / "x.json").string()),
+            2);
+  EXPECT_EQ(run_dyncal("identify" + robots + " --data " + (dir / "pos.csv").string() + " --data " +
+                       (dir / "vel.csv").string() + " --merge-on-time --report " + (dir / "x.json").string()),
+            2);
+  EXPECT_FALSE(std::filesystem::exists(dir / "x.json"));
+  std::filesystem::remove_all(dir);
+}
+
 // The period, jitter and missing samples of a logger are read off its time stamps, and the spline
 // puts a smooth signal on the grid within the cubic spline's error bound, 5/384 h^4 max|f^(4)|
 // (h the longest step; Hall and Meyer 1976), away from the ends: a 2 Hz sine sampled at 200 Hz with

@@ -139,7 +139,7 @@ IdentifyOptions eq7_options() {
 
 // identify --method pcls on any robot, with robot.json's prior (--prior-std 0.5) and without one
 // (0: consistency alone, a note saying so): every link's pseudo-inertia positive definite, the
-// cross-validated RMS within 1 % of WLS on every joint, the base parameters recovered as WLS
+// cross-validated RMS within 1 % of WLS's with the same prior on every joint, the base parameters recovered as WLS
 // recovers them (1 % torque share). Individual masses are printed, not asserted: the log fixes only
 // the base parameters, and where their noise leaves a link at the edge of consistency (arm3's link 2,
 // smallest eigenvalue 1e-9 kg m^2) the constraint moves the unidentified directions, mass included.
@@ -147,23 +147,28 @@ TEST_P(RobotFolder, PhysicallyConsistentLeastSquares) {
   const RobotDescription robot = test_robot(GetParam());
   const SimulatedLog s = simulate(robot, 3);
   IdentifyOptions o = eq7_options();
-  const IdentifyResult w = identify(robot, s.log, o);
   const CompiledRobot& c = compiled_robot_for(robot);
   dyncal::test::Eq7TorqueShare shares(c, s.phi);
   for (Eigen::Index k = 0; k < s.log.samples(); ++k)
     shares.add(s.log.q.row(k).transpose(), s.log.qd.row(k).transpose(), s.log.qdd.row(k).transpose());
   for (const double prior : {0.5, 0.0}) {
     SCOPED_TRACE("--prior-std " + std::to_string(prior));
+    o.prior_std = prior;  // WLS with the same prior, or none (its MAP estimate, parameter_prior.hpp)
+    o.method = "wls";
+    const IdentifyResult w = identify(robot, s.log, o);
     o.method = "pcls";
-    o.prior_std = prior;
     const IdentifyResult r = identify(robot, s.log, o);
     ASSERT_EQ(static_cast<int>(r.links.size()), c.num_standard / 10);
     for (const LinkInertial& l : r.links) {
       SCOPED_TRACE("link " + std::to_string(l.link));
       EXPECT_GT(l.min_eigenvalue, 0.0);
       const double nominal_mass = c.nominal_standard[static_cast<size_t>(10 * (l.link - 1) + 9)];
-      std::printf("prior %g, link %d: mass %.4g kg (file %.4g), lambda_min %.3g\n", prior, l.link, l.mass, nominal_mass,
-                  l.min_eigenvalue);
+      std::printf("prior %g, link %d: mass %.4g +- %.2g kg (%s; file %.4g), lambda_min %.3g\n", prior, l.link, l.mass,
+                  l.mass_std, l.mass_basis.c_str(), nominal_mass, l.min_eigenvalue);
+      // Every mass says what it rests on (the prior only where there is one) and carries its std,
+      // unless nothing fixes it (no prior, a direction the log does not see: arm3's link 1).
+      EXPECT_TRUE(l.mass_basis == "data" || l.mass_basis == (prior > 0 ? "prior" : "neither")) << l.mass_basis;
+      if (l.mass_basis != "neither") EXPECT_TRUE(std::isfinite(l.mass_std) && l.mass_std > 0);
     }
     for (int j = 0; j < robot.num_joints; ++j) {
       SCOPED_TRACE("joint " + std::to_string(j + 1));

@@ -13,6 +13,7 @@
 #include <random>
 
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/common/normal_quantile.hpp"
 #include "dyncal_host/identification/logs/joint_log.hpp"
 #include "dyncal_host/identification/payload/torque_constants.hpp"
 #include "support/dyncal_cli.hpp"
@@ -233,6 +234,41 @@ TEST(TorqueConstantsCli, IdentifyWithALoadedRunReportsKt) {
   }
   EXPECT_EQ(run_dyncal(base + " --report " + (dir / "none.json").string()), 2);
   EXPECT_FALSE(std::filesystem::exists(dir / "none.json"));
+
+  // The payload of a third run (another load, another trajectory), logged as currents too, with the
+  // arm's parameter file: its torque constants (fitted, with std) convert the currents, and the mass
+  // lands within 3 % with the truth in its 95 % interval. With the file's constants replaced by
+  // robot.json's (20 % off, no std) the mass is off and the report says the constants' error is not
+  // in its interval.
+  ASSERT_EQ(run_dyncal(base + " --load-mass " + mass + " --params " + (dir / "arm.json").string()), 0);
+  const Body payload = random_load(rng, 0.08 * arm_mass(c));
+  write_current_csv(
+      dir / "p.csv", a,
+      simulate(a.robot, uniform_times(500.0, 40.0), MotionClock{}, 23, 7, load_torque(c, standard_parameters(payload)))
+          .log);
+  const std::string run_payload = "payload --robot arm6 --robots-dir " + (dir / "robots").string() +
+                                  " --torque-from current --data " + (dir / "p.csv").string();
+  ASSERT_EQ(
+      run_dyncal(run_payload + " --params " + (dir / "arm.json").string() + " --report " + (dir / "p.json").string()),
+      0);
+  const nlohmann::json fitted = read_json(dir / "p.json");
+  const double m = fitted["quantities"][0]["value"].get<double>(), sd = fitted["quantities"][0]["std"].get<double>();
+  std::printf("payload %.4g kg (true %.4g, %+.2f %%), std %.2g\n", m, payload.m, 100 * (m / payload.m - 1), sd);
+  EXPECT_LE(std::abs(m / payload.m - 1), 0.03);
+  EXPECT_LE(std::abs(m - payload.m), kZ95 * sd);
+  EXPECT_TRUE(fitted["torque_constant_error_included"].get<bool>());
+  nlohmann::json nominal = read_json(dir / "arm.json");
+  nominal.erase("torque_constants");
+  std::ofstream(dir / "nominal.json") << nominal.dump();
+  ASSERT_EQ(run_dyncal(run_payload + " --params " + (dir / "nominal.json").string() + " --report " +
+                       (dir / "n.json").string()),
+            0);
+  const nlohmann::json off = read_json(dir / "n.json");
+  const double m_off = off["quantities"][0]["value"].get<double>();
+  std::printf("with robot.json's Kt: %.4g kg (%+.1f %%)\n", m_off, 100 * (m_off / payload.m - 1));
+  EXPECT_GT(std::abs(m_off / payload.m - 1), 0.1);
+  EXPECT_FALSE(off["torque_constant_error_included"].get<bool>());
+  EXPECT_NE(off["notes"].dump().find("NOT in the interval"), std::string::npos);
   std::filesystem::remove_all(dir);
 }
 

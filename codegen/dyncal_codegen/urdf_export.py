@@ -120,7 +120,15 @@ def export(source, base, tip, chain_names, links, terms, provenance):
         body = Inertial(float(l["mass"]), np.array(l["com"], dtype=float), inertia)
         in_link = body.moved(transform(j["A"], np.zeros(3)))  # body frame -> the child link's URDF frame
         link_el = by_name[b["child"]]
-        _replace_child(link_el, "inertial", _inertial_element(in_link, "    "), "  ")
+        inertial = _inertial_element(in_link, "    ")
+        if l.get("mass_basis"):  # identify's interval, and a mark on what neither data nor prior fix
+            mark = "NOT DETERMINED, written as forced: " if l.get("not_determined") else ""
+            std = _fmt(float(l["mass_std"])) if l.get("mass_std") is not None else "(no interval)"
+            basis = f", from the {l['mass_basis']}" if l["mass_basis"] in ("data", "prior") else ""
+            note = ET.Comment(f" dyncal: {mark}mass {_fmt(float(l['mass']))} +- {std} kg (std){basis} ")
+            note.tail = "\n      "
+            inertial.insert(0, note)
+        _replace_child(link_el, "inertial", inertial, "  ")
         for name in b["merged"]:
             el = by_name[name]
             old = el.find("inertial")

@@ -93,6 +93,7 @@ struct LogOption {
   std::string columns;                 ///< csv logs: a logger's named columns (column_map.hpp), empty: dyncal's
   std::vector<std::string> data;       ///< one or more logs (--data A --data B): stacked as segments
   bool drop_outliers = false;
+  bool merge_on_time = false;    ///< csv: the --data files are one log split by signal (merged_files.hpp)
   std::string topic;             ///< ROS 2 bags: the JointState topic; empty: the bag's only one
   std::string effort;            ///< ROS 2 bags: what JointState.effort holds, "torque" or "current" (required)
   std::string clock = "header";  ///< ROS 2 bags: "header" (the message's stamp) or "log" (the recorder's time)
@@ -105,7 +106,8 @@ struct LogOption {
   host::RobotDescription load_robot() const;
   /// The log on the joint side (TX40 files through the robot's transmission), checked for physical
   /// plausibility against the robot's limits (log_plausibility.hpp); several --data logs stacked as
-  /// segments (uniform_grid.hpp: stack_logs). Throws InputError (unreadable, malformed, an
+  /// segments (uniform_grid.hpp: stack_logs), or with --merge-on-time merged into one log by signal
+  /// (merged_files.hpp, its note into *dropped). Throws InputError (unreadable, malformed, an
   /// implausible value without --drop-outliers). With --drop-outliers, *dropped (if given) receives
   /// one line per replaced value.
   host::JointLog load_log(const host::RobotDescription& robot, std::vector<std::string>* dropped = nullptr) const;

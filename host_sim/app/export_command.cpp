@@ -42,6 +42,7 @@ std::string number_text(double v) {
 
 struct ExportSettings {
   std::string params, out, robots_dir;
+  bool force = false;  ///< write links whose mass is not told from 0, marked in the file
 };
 
 /// A pcls parameter file's model: the set, its robot, the standard parameters its links give, and
@@ -67,12 +68,32 @@ IdentifiedModel identified_model(const ExportSettings& s, const char* format) {
   m.compiled = &host::compiled_robot(p.robot);
   const host::CompiledRobot& c = *m.compiled;
   m.phi = Eigen::VectorXd::Zero(c.num_standard);
+  std::string undetermined;
   for (const host::LinkInertial& l : p.links) {
     const std::array<double, 10> physical = {l.mass,       l.com[0],     l.com[1],     l.com[2],     l.inertia[0],
                                              l.inertia[1], l.inertia[2], l.inertia[3], l.inertia[4], l.inertia[5]};
     host::standard_from_physical(physical, m.phi.data() + 10 * (l.link - 1));
-    m.links.push_back({{"mass", l.mass}, {"com", l.com}, {"inertia_about_com", l.inertia}});
+    nlohmann::json link = {{"mass", l.mass}, {"com", l.com}, {"inertia_about_com", l.inertia}};
+    if (std::isfinite(l.mass_std)) link["mass_std"] = l.mass_std;  // none: neither data nor prior fix it
+    if (!l.mass_basis.empty()) link["mass_basis"] = l.mass_basis;
+    // A mass its own 95 % interval does not tell from 0, fitted without a prior, rests on nothing.
+    if (l.mass_basis == "neither") {
+      char v[200];
+      if (std::isfinite(l.mass_std))
+        std::snprintf(v, sizeof v, "link %d (mass %.4g +- %.2g kg std)", l.link, l.mass, l.mass_std);
+      else
+        std::snprintf(v, sizeof v, "link %d (mass %.4g kg, no interval)", l.link, l.mass);
+      undetermined += (undetermined.empty() ? "" : ", ") + std::string(v);
+      link["not_determined"] = true;
+    }
+    m.links.push_back(link);
   }
+  if (!undetermined.empty() && !s.force)
+    throw InputError(s.params + ": " + undetermined +
+                     ": its 95 % interval holds 0 and the fit had no prior: neither the log nor a prior fixes it "
+                     "(identify --method pcls with its prior, --prior-std > 0, or a log that moves it); nothing "
+                     "exported" +
+                     std::string(std::string(format) == "urdf" ? " (--force writes it, marked in the file)" : ""));
   // The links must be the file's rigid body: their base parameters are the file's (Gautier's map).
   const Eigen::VectorXd base = c.standard_to_base(m.phi);
   const Eigen::VectorXd file_base = p.values.head(c.num_base);
@@ -269,6 +290,9 @@ void add_export_command(CLI::App& app, Action& run) {
   urdf->add_option("--params", s->params, "parameter file of identify --method pcls --params")->required();
   urdf->add_option("--out", s->out, "the URDF to write")->required();
   urdf->add_option("--robots-dir", s->robots_dir, "directory holding the robot descriptions");
+  urdf->add_flag("--force", s->force,
+                 "write a link whose mass its 95 % interval does not tell from 0 (refused otherwise), marked in the "
+                 "file");
   urdf->callback([&run, s] { run = [s] { return run_export_urdf(*s); }; });
   auto* mjcf = cmd->add_subcommand(
       "mjcf",

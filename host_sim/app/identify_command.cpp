@@ -38,7 +38,7 @@ struct IdentifySettings {
 /// --loaded-data: each motor's Kt from the loaded and unloaded current logs (torque_constants.hpp),
 /// printed (and kept for the report); returns the robot with them in place of robot.json's.
 host::RobotDescription torque_constants_from_load(const IdentifySettings& s, const host::RobotDescription& robot,
-                                                  nlohmann::json* report) {
+                                                  nlohmann::json* report, Eigen::VectorXd* kt_std) {
   if (s.log.torque_from != "current")
     throw host::InputError("--loaded-data identifies the motors' torque constants: it needs --torque-from current");
   if (!(s.load_mass > 0)) throw host::InputError("--loaded-data needs --load-mass (the load's mass [kg], > 0)");
@@ -65,6 +65,7 @@ host::RobotDescription torque_constants_from_load(const IdentifySettings& s, con
   std::cout << "identify goes on with these Kt; put them into " << robot.directory
             << "/robot.json's transmission.torque_constants to keep them\n\n";
   *report = host::torque_constants_json(fit);
+  *kt_std = fit.stdev;
   host::RobotDescription out = robot;
   out.torque_constants = fit.kt;
   return out;
@@ -154,7 +155,8 @@ int run_identify(IdentifySettings& s) {
     };
   }
   nlohmann::json torque_constants;
-  if (!s.loaded.empty()) robot = torque_constants_from_load(s, robot, &torque_constants);
+  Eigen::VectorXd kt_std;
+  if (!s.loaded.empty()) robot = torque_constants_from_load(s, robot, &torque_constants, &kt_std);
   auto log = s.log.load_log(robot, &dropped);
   if (s.compare_friction) {
     if (!s.options.effects.empty())
@@ -171,7 +173,15 @@ int run_identify(IdentifySettings& s) {
   for (const auto& path : s.validate_on) others.push_back(s.log.load_logs(robot, {path}, &dropped));
   auto result = host::identify(robot, std::move(log), s.options);
   result.notes.insert(result.notes.begin(), dropped.begin(), dropped.end());
-  const host::ParameterSet fitted = host::parameter_set(result);
+  host::ParameterSet fitted = host::parameter_set(result);
+  if (s.log.torque_from == "current") {  // the constants the currents were converted with go with the set
+    fitted.torque_constants = robot.torque_constants;
+    fitted.torque_constants_std =
+        kt_std.size() > 0 ? kt_std
+                          : Eigen::VectorXd::Constant(robot.num_joints, std::numeric_limits<double>::quiet_NaN());
+    fitted.torque_constants_source =
+        kt_std.size() > 0 ? "fitted from a known load (--loaded-data, --load-mass)" : "robot.json (nominal, no std)";
+  }
   for (const auto& other : others) result.other_logs.push_back(host::predict(robot, other, s.options, fitted));
   host::print_identify_report(std::cout, result);
   nlohmann::json report;
@@ -186,6 +196,7 @@ int run_identify(IdentifySettings& s) {
   }
   if (!s.params.empty()) {
     nlohmann::json file = host::parameter_table_json(result);
+    if (fitted.torque_constants.size() > 0) file["torque_constants"] = host::torque_constants_json(fitted);
     // The observer's residual statistics on the fitted log (contact-free: a calibration run), for
     // dyncal monitor's thresholds (docs/monitor.md); the log is read again (identify consumed it).
     try {

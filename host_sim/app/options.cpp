@@ -9,6 +9,7 @@
 #include "dyncal_host/common/robot_description.hpp"
 #include "dyncal_host/identification/logs/column_map.hpp"
 #include "dyncal_host/identification/logs/log_plausibility.hpp"
+#include "dyncal_host/identification/logs/merged_files.hpp"
 #include "dyncal_host/identification/logs/ros2_bag.hpp"
 #include "dyncal_host/identification/logs/uniform_grid.hpp"
 #include "dyncal_host/identification/pipeline/compiled_robot.hpp"
@@ -76,6 +77,10 @@ CLI::Option* LogOption::add_to(CLI::App* cmd, bool data_required) {
                       "CSV log file (time-stamped; jitter and missing samples allowed), or the folder of the TX40 "
                       "files; repeat to stack several logs as segments");
   if (data_required) data_option->required();
+  cmd->add_flag("--merge-on-time", merge_on_time,
+                "csv: the --data files are one log split by signal (e.g. positions, velocities and efforts logged "
+                "apart, each file with its own time column: the map's t, else its first column), merged on the "
+                "positions' stamps by linear interpolation (docs/cli.md \"Logs\")");
   cmd->add_flag("--drop-outliers", drop_outliers,
                 "replace physically implausible values (beyond the robot's limits by a wide margin, docs/cli.md) by "
                 "interpolation and report each, instead of refusing the log");
@@ -134,6 +139,21 @@ host::JointLog LogOption::load_logs(const host::RobotDescription& r, const std::
     throw InputError(
         (torque_from == "current" ? std::string("--torque-from current") : map->origin + " reads motor currents") +
         ": " + r.directory + "/robot.json has no transmission.torque_constants (Nm/A per motor; docs/robots.md)");
+  if (merge_on_time) {
+    if (format != "csv") throw InputError("--merge-on-time merges CSV files; --format " + format + " is not csv");
+    for (const std::string& path : paths)
+      if (host::is_ros2_bag(path)) throw InputError("--merge-on-time merges CSV files; " + path + " is a ROS 2 bag");
+    const host::ColumnMap m = map ? *map : host::default_column_map(r.num_joints, torque_from == "current");
+    std::vector<std::string> notes;
+    host::JointLog log = host::read_merged_csv_logs(paths, m, r.num_joints, &notes);
+    if (m.effort_is_current) host::current_to_joint_torque(log, r.transmission, r.torque_constants, log.source);
+    const auto lines = host::check_plausibility(log, r, drop_outliers);
+    if (dropped) {
+      dropped->insert(dropped->end(), notes.begin(), notes.end());
+      dropped->insert(dropped->end(), lines.begin(), lines.end());
+    }
+    return log;
+  }
   std::vector<host::JointLog> logs;
   for (const std::string& path : paths) {
     host::JointLog log;

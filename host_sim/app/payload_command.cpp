@@ -101,10 +101,18 @@ int run_payload(PayloadSettings& s) {
   if (s.log.robot.name.empty()) s.log.robot.name = arm.robot;
   if (s.log.robot.name != arm.robot)
     throw host::InputError(s.params + ": parameters are for robot '" + arm.robot + "', not '" + s.log.robot.name + "'");
-  const auto robot = s.log.load_robot();
+  auto robot = s.log.load_robot();
   std::vector<std::string> dropped;
+  const bool currents = s.log.torque_from == "current";
+  // Currents are converted with the constants the arm's set was identified with (a Kt error then
+  // scales the load's torque only, and its std enters the payload's), robot.json's otherwise.
+  if (currents && arm.torque_constants.size() == robot.num_joints) {
+    robot.torque_constants = arm.torque_constants;
+    dropped.push_back("currents converted with " + s.params + "'s torque constants (" + arm.torque_constants_source +
+                      "), as the arm's parameters were");
+  }
   const auto log = s.log.load_log(robot, &dropped);
-  host::PayloadResult r = host::identify_payload(robot, log, arm, s.options);
+  host::PayloadResult r = host::identify_payload(robot, log, arm, s.options, currents);
   r.notes.insert(r.notes.begin(), dropped.begin(), dropped.end());
   host::print_payload_report(std::cout, r);
   if (!s.save_params.empty()) {

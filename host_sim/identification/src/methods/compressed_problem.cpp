@@ -8,6 +8,7 @@
 #include <string>
 
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/common/normal_quantile.hpp"
 #include "dyncal_host/identification/methods/inertial_parameters.hpp"
 #include "dyncal_host/identification/pipeline/identify.hpp"
 
@@ -161,6 +162,59 @@ bool is_consistent_method(const std::string& m) {
   return m == "pcls" || is_search_method(m);
 }
 
+namespace {
+
+/// Eigen-decomposition of a symmetric positive semi-definite matrix, with what it leaves unseen.
+struct Spectrum {
+  explicit Spectrum(const Eigen::MatrixXd& H) : es(H) {
+    // Numerical rank: a prior's information can be 1e-12 of the data's and is still information.
+    tolerance = 1e-14 * std::max(es.eigenvalues().cwiseAbs().maxCoeff(), 1e-300);
+  }
+  /// Whether g lies in the matrix's range (no component along an eigenvalue below the tolerance).
+  bool sees(const Eigen::VectorXd& g) const {
+    double unseen = 0;
+    for (Eigen::Index i = 0; i < g.size(); ++i)
+      if (es.eigenvalues()[i] < tolerance) unseen += std::pow(es.eigenvectors().col(i).dot(g), 2);
+    return unseen <= 1e-12 * g.squaredNorm();
+  }
+  /// g^T H^+ g.
+  double quadratic(const Eigen::VectorXd& g) const {
+    double q = 0;
+    for (Eigen::Index i = 0; i < g.size(); ++i)
+      if (es.eigenvalues()[i] >= tolerance) q += std::pow(es.eigenvectors().col(i).dot(g), 2) / es.eigenvalues()[i];
+    return q;
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es;
+  double tolerance = 0;
+};
+
+/// The std of link `link`'s physical quantities `v` (its standard parameters at s.standard[o10..])
+/// and what its mass rests on (report_consistent).
+void link_intervals(const ConsistentSolution& s, Eigen::Index o10, const std::array<double, 10>& v,
+                    LinkInertial& link) {
+  // The delta method: cov_physical = J^-1 cov_standard J^-T, J = d standard / d physical; each
+  // quantity's gradient in the fit's coordinates g = (J^-1 row k) d standard / d v.
+  Eigen::Matrix<double, 10, 10, Eigen::RowMajor> J;
+  double again[10];
+  standard_from_physical(v, again, J.data());
+  const Eigen::Matrix<double, 10, 10> Jinv = Eigen::Matrix<double, 10, 10>(J).inverse();
+  const Eigen::Matrix<double, 10, 10> cov = Jinv * s.standard_cov.block(o10, o10, 10, 10) * Jinv.transpose();
+  const Eigen::MatrixXd grad = Jinv * s.standard_jacobian.middleRows(o10, 10);  // 10 x inputs
+  const Spectrum fit(s.information_data + s.information_prior), data(s.information_data);
+  for (int k = 0; k < 10; ++k) {
+    const double sd = fit.sees(grad.row(k).transpose()) ? std::sqrt(std::max(0.0, cov(k, k))) : LinkInertial::kNoStd;
+    if (k == 0) link.mass_std = sd;
+    if (k >= 1 && k <= 3) link.com_std[static_cast<size_t>(k - 1)] = sd;
+    if (k >= 4) link.inertia_std[static_cast<size_t>(k - 4)] = sd;
+  }
+  const Eigen::VectorXd g = grad.row(0).transpose();
+  const bool by_data = data.sees(g) && kZ95 * std::sqrt(s.inflation * data.quadratic(g)) < link.mass;
+  const bool prior = s.information_prior.cwiseAbs().maxCoeff() > 0.0;
+  link.mass_basis = by_data ? "data" : prior ? "prior" : "neither";
+}
+
+}  // namespace
+
 void report_consistent(const ConsistentSolution& s, const IdentifyOptions& o, IdentifyResult& res) {
   if (is_search_method(o.method)) res.notes.push_back(search_note(s, o));
   if (o.method == "pcls" && o.prior_std == 0)
@@ -170,17 +224,25 @@ void report_consistent(const ConsistentSolution& s, const IdentifyOptions& o, Id
         "base combinations are identified)");
   for (size_t l = 0; l < s.min_eigenvalue.size(); ++l) {
     const std::array<double, 10> v = physical_parameters(s.standard.data() + 10 * l);
-    res.links.push_back(
-        {static_cast<int>(l) + 1, v[0], {v[1], v[2], v[3]}, {v[4], v[5], v[6], v[7], v[8], v[9]}, s.min_eigenvalue[l]});
+    LinkInertial link;
+    link.link = static_cast<int>(l) + 1;
+    link.mass = v[0];
+    link.com = {v[1], v[2], v[3]};
+    link.inertia = {v[4], v[5], v[6], v[7], v[8], v[9]};
+    link.min_eigenvalue = s.min_eigenvalue[l];
+    const auto o10 = static_cast<Eigen::Index>(10 * l);
+    if (s.standard_cov.rows() >= o10 + 10) link_intervals(s, o10, v, link);
+    res.links.push_back(link);
   }
   for (size_t l = 0; l < s.prior_mass.size() && l < res.links.size(); ++l) {
     const double prior = s.prior_mass[l], mass = res.links[l].mass;
     if (!(std::abs(mass - prior) > o.prior_std * prior)) continue;
-    char line[300];
+    char line[360], sd[40] = "";
+    if (std::isfinite(res.links[l].mass_std)) std::snprintf(sd, sizeof sd, " +- %.2g kg (std)", res.links[l].mass_std);
     std::snprintf(line, sizeof line,
-                  "warning: pcls moved link %zu's mass from robot.json's %.4g kg to %.4g kg, beyond the prior's "
+                  "warning: pcls moved link %zu's mass from robot.json's %.4g kg to %.4g kg%s, beyond the prior's "
                   "+-%.3g %%: the data, an effect the model lacks, a load or a wrong URDF put it there",
-                  l + 1, prior, mass, 100.0 * o.prior_std);
+                  l + 1, prior, mass, sd, 100.0 * o.prior_std);
     res.notes.push_back(line);
   }
 }

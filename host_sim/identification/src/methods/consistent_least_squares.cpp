@@ -130,6 +130,16 @@ std::vector<int> nonnegative_terms(const std::vector<std::string>& names, int nu
   return out;
 }
 
+void consistent_covariance(ConsistentSolution& s, double inflation) {
+  if (s.information_data.size() == 0) return;
+  const Eigen::MatrixXd Hinv =
+      (s.information_data + s.information_prior).completeOrthogonalDecomposition().pseudoInverse();
+  const Eigen::MatrixXd cov = Hinv * (inflation * s.information_data + s.information_prior) * Hinv;
+  s.params_std = (s.model_jacobian * cov * s.model_jacobian.transpose()).diagonal().cwiseMax(0.0).cwiseSqrt();
+  s.standard_cov = s.standard_jacobian * cov * s.standard_jacobian.transpose();
+  s.inflation = inflation;
+}
+
 ConsistentSolution consistent_least_squares(const ConsistentProblem& p) {
   const int L = static_cast<int>(p.K.cols() / 10);
   const Eigen::Index P = p.R.cols();
@@ -170,15 +180,17 @@ ConsistentSolution consistent_least_squares(const ConsistentProblem& p) {
   Eigen::MatrixXd J(f.values(), f.inputs());
   f.df(v, J);
   const Eigen::Index n = p.R.rows();
-  Eigen::MatrixXd H = J.topRows(n).transpose() * J.topRows(n);
-  if (f.with_prior) H += J.middleRows(n, 10 * L).transpose() * J.middleRows(n, 10 * L);
-  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(P, f.inputs());
+  s.information_data = J.topRows(n).transpose() * J.topRows(n);
+  s.information_prior = Eigen::MatrixXd::Zero(f.inputs(), f.inputs());
+  if (f.with_prior) s.information_prior = J.middleRows(n, 10 * L).transpose() * J.middleRows(n, 10 * L);
+  s.model_jacobian = Eigen::MatrixXd::Zero(P, f.inputs());
   for (int l = 0; l < L; ++l)
-    G.block(0, 10 * l, p.num_base, 10) = p.K.middleCols(10 * l, 10) * jac[static_cast<size_t>(l)];
+    s.model_jacobian.block(0, 10 * l, p.num_base, 10) = p.K.middleCols(10 * l, 10) * jac[static_cast<size_t>(l)];
   for (int i = 0; i < nx; ++i)
-    G(p.num_base + i, 10 * L + i) = f.squared[static_cast<size_t>(i)] ? 2.0 * v[10 * L + i] : 1.0;
-  const Eigen::MatrixXd cov = G * H.completeOrthogonalDecomposition().pseudoInverse() * G.transpose();
-  s.params_std = cov.diagonal().cwiseMax(0.0).cwiseSqrt();
+    s.model_jacobian(p.num_base + i, 10 * L + i) = f.squared[static_cast<size_t>(i)] ? 2.0 * v[10 * L + i] : 1.0;
+  s.standard_jacobian = Eigen::MatrixXd::Zero(10 * L, f.inputs());  // d standard / d v
+  for (int l = 0; l < L; ++l) s.standard_jacobian.block(10 * l, 10 * l, 10, 10) = jac[static_cast<size_t>(l)];
+  consistent_covariance(s, 1.0);
   return s;
 }
 

@@ -93,10 +93,54 @@ std::string fixed(double v, int precision) {
   return s.str();
 }
 
+/// identify_payload's from_current (payload.hpp): the torque constants' relative errors into `cov`
+/// (the kept parameters' entries), or a note that they are not in it.
+void add_torque_constant_error(const RobotDescription& robot, const ParameterSet& arm, const MatrixXd& C,
+                               const VectorXd& theta, const std::vector<char>& use, const VectorXd& w,
+                               const std::vector<Index>& kept, Mat10& cov, PayloadResult& res) {
+  const int N = robot.num_joints;
+  const bool with_std =
+      arm.torque_constants.size() == N && arm.torque_constants_std.size() == N && arm.torque_constants_std.allFinite();
+  if (!with_std) {
+    res.notes.push_back(
+        "torque constants: " +
+        (arm.torque_constants.size() == N ? arm.torque_constants_source : std::string("robot.json's")) +
+        " have no std: their error scales the load's torque and is NOT in the interval below (fit them "
+        "with a known load: identify --torque-from current --loaded-data L.csv --load-mass M --params, then "
+        "payload with that file)");
+    return;
+  }
+  const MatrixXd T = robot.transmission.size() > 0 ? robot.transmission : MatrixXd::Identity(N, N);
+  const MatrixXd to_motor = T.transpose().inverse();  // motor torques u = N^-T tau
+  const Index rows = C.rows(), K = static_cast<Index>(kept.size());
+  long n_use = 0;
+  for (char u : use) n_use += u;
+  MatrixXd Ak(n_use, K), G(n_use, N);  // G: per motor, its share of the load's torque (weighted)
+  const VectorXd tau_load = C * theta;
+  for (Index row = 0, k = 0; row < rows; row += N) {
+    const VectorXd u = to_motor * tau_load.segment(row, N);
+    for (int j = 0; j < N; ++j) {
+      if (!use[static_cast<size_t>(row + j)]) continue;
+      for (Index a = 0; a < K; ++a) Ak(k, a) = w[j] * C(row + j, kept[static_cast<size_t>(a)]);
+      for (int m = 0; m < N; ++m) G(k, m) = w[j] * T(m, j) * u[m];  // (N^T e_m u_m)_j
+      ++k;
+    }
+  }
+  const MatrixXd M = (Ak.transpose() * Ak).ldlt().solve(Ak.transpose() * G);  // K x N: dtheta / d(rel Kt_m)
+  VectorXd rel(N);
+  for (int m = 0; m < N; ++m) rel[m] = arm.torque_constants_std[m] / std::abs(arm.torque_constants[m]);
+  const MatrixXd add = M * rel.cwiseAbs2().asDiagonal() * M.transpose();
+  for (Index a = 0; a < K; ++a)
+    for (Index b = 0; b < K; ++b) cov(kept[static_cast<size_t>(a)], kept[static_cast<size_t>(b)]) += add(a, b);
+  res.torque_constant_error_included = true;
+  res.notes.push_back("torque constants: " + arm.torque_constants_source + ", their std (" +
+                      fixed(100.0 * rel.maxCoeff(), 2) + " % at most) included in the payload's");
+}
+
 }  // namespace
 
 PayloadResult identify_payload(const RobotDescription& robot, const JointLog& log, const ParameterSet& arm,
-                               const IdentifyOptions& options) {
+                               const IdentifyOptions& options, bool from_current) {
   const StackedData d = prepare_stacked(robot, log, prediction_options(robot, options, arm));
   const CompiledRobot& compiled = compiled_robot_for(robot);
   const int N = robot.num_joints;
@@ -193,6 +237,7 @@ PayloadResult identify_payload(const RobotDescription& robot, const JointLog& lo
                         " gives no standard deviations: the payload's std covers this log's noise only, not the "
                         "arm's calibration error");
   }
+  if (from_current) add_torque_constant_error(robot, arm, C, fit.phi, use, w, kept, cov, res);
   for (int i = 0; i < 10; ++i) {
     const bool dropped = std::find(fit.dropped.begin(), fit.dropped.end(), i) != fit.dropped.end();
     res.standard[i] = dropped ? 0.0 : fit.phi[i];
@@ -368,6 +413,7 @@ nlohmann::json payload_report_json(const PayloadResult& r) {
     standard.push_back({{"name", kStandardNames[i]}, {"value", r.standard[i]}, {"std", number(r.standard_std[i])}});
   j["standard_parameters"] = standard;
   j["not_determined"] = r.undetermined;
+  j["torque_constant_error_included"] = r.torque_constant_error_included;
   j["inertia_determined"] = r.inertia_determined;
   if (r.inertia_determined) j["pseudo_inertia_min_eigenvalue"] = r.min_eigenvalue;
   j["joints"] = nlohmann::json::array();

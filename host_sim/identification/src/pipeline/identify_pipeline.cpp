@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <memory>
 
 #include "dyncal_host/common/input_error.hpp"
@@ -13,6 +14,7 @@
 #include "dyncal_host/identification/methods/instrumental_variables.hpp"
 #include "dyncal_host/identification/methods/sign_constrained.hpp"
 #include "dyncal_host/identification/pipeline/compiled_robot.hpp"
+#include "dyncal_host/identification/pipeline/parameter_prior.hpp"
 #include "dyncal_host/identification/pipeline/parameter_scales.hpp"
 #include "dyncal_host/identification/pipeline/recursive_fit.hpp"
 #include "dyncal_host/identification/pipeline/signal.hpp"
@@ -101,16 +103,42 @@ void recursive_result(const RecursiveFit& f, const LeastSquaresFit& ls, Eigen::V
   if (cond) *cond = condition_number(ls);
 }
 
+/// Flags each Coulomb, viscous and rotor-inertia term of res.params below 0 beyond its 95 %
+/// interval (ParamEstimate::contradicts_physics) and names them in a note.
+void physics_check(const std::vector<std::string>& names, IdentifyResult& res) {
+  std::string named;
+  for (const int i : nonnegative_terms(names, 0)) {
+    if (static_cast<size_t>(i) >= res.params.size()) break;
+    ParamEstimate& p = res.params[static_cast<size_t>(i)];
+    if (!(p.value < 0.0) || !std::isfinite(p.std) || -p.value <= kVerdictZ * p.std) continue;
+    p.contradicts_physics = true;
+    char v[120];
+    std::snprintf(v, sizeof v, "%s = %.3g +- %.2g", p.name.c_str(), p.value, p.std);
+    named += (named.empty() ? "" : ", ") + std::string(v);
+  }
+  if (named.empty()) return;
+  res.notes.push_back("physics: " + named +
+                      " (std): below 0 beyond the 95 % interval, which friction and rotor inertia cannot be: the "
+                      "model lacks an effect the log holds (dyncal diagnose finds it), or the torque's sign or "
+                      "transmission is wrong; a drive table refuses it (docs/accuracy.md \"Real arms\")");
+}
+
 /// Each parameter's physical scale and verdict (identifiability.hpp) into res.params, and a note
 /// naming the parameters the log does not determine and what their values rest on; with --strict,
 /// InputError naming them instead.
 void judge_parameters(const Eigen::VectorXd& scale, const IdentifyPipeline::FitDetails& fit, const IdentifyOptions& opt,
-                      const std::vector<std::string>& names, IdentifyResult& res) {
+                      const ParameterPrior& prior, const std::vector<std::string>& names, IdentifyResult& res) {
   // What a not-determined parameter's value rests on, per method, and the note's words for it.
   const std::string& m = opt.method;
   const char* basis = "held at 0";
   std::string rests = "held at 0, the fit keeps the combination the log determines";
-  if (m == "pcls") {
+  const bool map = prior.usable() && fit.data_share.size() > 0;
+  if (map) {
+    basis = "prior";
+    rests = "their values are the MAP estimate with robot.json's inertials as prior (+-" +
+            std::to_string(static_cast<int>(std::lround(100 * opt.prior_std))) +
+            " %, --prior-std; each parameter's data share says how much the log adds)";
+  } else if (m == "pcls") {
     basis = "prior";
     rests = opt.prior_std > 0 ? "their values rest on the prior (robot.json's inertials, --prior-std)"
                               : "their values rest on the consistency constraints alone (no prior)";
@@ -120,30 +148,63 @@ void judge_parameters(const Eigen::VectorXd& scale, const IdentifyPipeline::FitD
   } else if (m == "kf" || m == "rls") {
     basis = "start";
     rests = "their values are the filter's start, not estimates";
+  } else if (m == "wls" || m == "ols") {
+    if (!prior.missing.empty()) rests += " (no prior: " + prior.missing + ")";
   }
-  std::string undetermined;
+  std::string undetermined, unsupported;
   for (size_t i = 0; i < res.params.size() && i < static_cast<size_t>(scale.size()); ++i) {
     ParamEstimate& p = res.params[i];
     const auto ii = static_cast<Eigen::Index>(i);
     p.scale = scale[ii];
+    if (map) p.data_share = fit.data_share[ii];
     const bool dropped = std::find(fit.decision.dropped.begin(), fit.decision.dropped.end(), static_cast<int>(i)) !=
                          fit.decision.dropped.end();
-    const double data_std = fit.data_stdev.size() > ii ? fit.data_stdev[ii] : p.std;
+    // The data's own std, or the reported one where it is wider (the MAP estimate's spread): a
+    // verdict never claims more than the interval printed beside it.
+    double data_std = fit.data_stdev.size() > ii ? fit.data_stdev[ii] : p.std;
+    if (map && std::isfinite(data_std)) data_std = std::max(data_std, p.std);
     p.verdict = dropped ? Verdict::not_determined : verdict_of(data_std, p.scale);
+    if (std::find(fit.held.begin(), fit.held.end(), static_cast<int>(i)) != fit.held.end()) {
+      p.basis = "sign constraint";  // at its bound: the free fit has it below 0
+      p.value = 0.0;
+      continue;
+    }
     if (p.verdict != Verdict::not_determined) continue;
     p.basis = basis;
-    if (!dropped) undetermined += (undetermined.empty() ? "" : ", ") + p.name;
+    if (map && !prior.has[i]) {  // no prior: held at 0 when dropped, else the data's wide estimate
+      p.basis = dropped ? "held at 0" : "least squares";
+      if (!dropped) undetermined += (undetermined.empty() ? "" : ", ") + p.name;
+    } else if (!dropped || map) {
+      undetermined += (undetermined.empty() ? "" : ", ") + p.name;
+    }
   }
-  std::string named = dropped_parameters_text(fit.decision, names);
-  if (!undetermined.empty()) named += (named.empty() ? "" : ", ") + undetermined;
-  if (named.empty()) return;
+  if (map) {  // the dropped parameters no prior covers: held at 0 as without a prior
+    DeterminedFit held;
+    for (size_t k = 0; k < fit.decision.dropped.size(); ++k) {
+      if (prior.has[static_cast<size_t>(fit.decision.dropped[k])]) continue;
+      held.dropped.push_back(fit.decision.dropped[k]);
+      held.absorbed_into.push_back(fit.decision.absorbed_into[k]);
+    }
+    unsupported = dropped_parameters_text(held, names);
+  }
+  physics_check(names, res);
+  std::string named = map ? undetermined : dropped_parameters_text(fit.decision, names);
+  if (!map && !undetermined.empty()) named += (named.empty() ? "" : ", ") + undetermined;
+  if (named.empty() && unsupported.empty()) return;
   if (opt.strict)
     throw InputError("--strict: the log does not determine " + named +
+                     (named.empty() || unsupported.empty() ? "" : ", ") + unsupported +
                      " (95 % interval wider than the parameter's physical scale; docs/accuracy.md \"Real arms\")");
-  res.notes.push_back(
-      "not determined by this log (95 % interval wider than the parameter's physical scale, "
-      "docs/accuracy.md \"Real arms\"): " +
-      named + "; " + rests + " (--strict: refuse instead)");
+  if (!named.empty())
+    res.notes.push_back(
+        "not determined by this log (95 % interval wider than the parameter's physical scale, "
+        "docs/accuracy.md \"Real arms\"): " +
+        named + "; " + rests + " (--strict: refuse instead)");
+  if (!unsupported.empty())
+    res.notes.push_back(
+        "not determined by this log (95 % interval wider than the parameter's physical scale, docs/accuracy.md "
+        "\"Real arms\") and without a prior (robot.json holds none for friction, rotor inertia or offsets): " +
+        unsupported + "; held at 0, the fit keeps the combination the log determines (--strict: refuse instead)");
 }
 
 }  // namespace
@@ -157,7 +218,9 @@ IdentifyPipeline::IdentifyPipeline(const RobotDescription& robot, const Identify
       P(model.num_params),
       motor_(motor_velocity_map(robot, !options.friction_per_joint, options.motors)),
       robot_coupled_(!motor_velocity_map(robot, !options.friction_per_joint, {}).isDiagonal(0.0)),
-      scale_(parameter_scales(robot, model)) {
+      scale_(parameter_scales(robot, model)),
+      prior_(options.method == "wls" || options.method == "ols" ? parameter_prior(robot, model, options.prior_std)
+                                                                : ParameterPrior{}) {
   for (int m = 0; m < N; ++m) {
     for (int j = 0; j < N; ++j) {
       if (j != m && motor_(m, j) != 0.0) {
@@ -338,13 +401,48 @@ void IdentifyPipeline::fit(const StackedData& data, const std::vector<char>& tra
   std::vector<int>* held = details ? &details->held : nullptr;
   DeterminedFit* decision = details ? &details->decision : nullptr;
   const std::string& m = opt_.method;
+  // ols, wls: the MAP estimate with the robot's prior where it has one (parameter_prior.hpp). The
+  // data alone decide first which parameters they determine (the verdict; their std is the data's);
+  // the prior then enters as pseudo-rows weighed against the data rows' residual variance, and only
+  // a parameter the data do not determine and the prior does not cover is held at 0.
+  struct {
+    Eigen::MatrixXd R;             // the data's triangular factor (without the prior's rows); empty: no MAP fit
+    double sigma2 = 1;             // the data rows' residual variance
+    std::vector<int> held;         // parameters held at 0 (no prior and undetermined, or sign constraints)
+    std::vector<int> unsupported;  // of them, those without a prior the data do not determine (std NaN)
+  } map_data;
+  const double data_weight = details ? details->data_weight : decided ? decided->data_weight : 1.0;
+  auto fit_least_squares = [&]() {
+    if (!prior_.usable() || m == "iv") {  // iv: its start (fit_instrumental) decides on the data alone
+      least_squares(*ls, dropped, decision_inflation, opt_.sign_constraints, phi, stdev, cond, held, decision);
+      return;
+    }
+    DeterminedFit d;
+    Eigen::VectorXd data_std;
+    least_squares(*ls, dropped, decision_inflation, false, phi, data_std, cond, nullptr, &d);
+    const std::vector<int>& undetermined = dropped ? *dropped : d.dropped;
+    std::vector<int> unsupported;
+    for (const int i : undetermined)
+      if (!prior_.has[static_cast<size_t>(i)]) unsupported.push_back(i);
+    const double kept = static_cast<double>(P) - static_cast<double>(undetermined.size());
+    const Eigen::MatrixXd R = ls->r_factor().triangularView<Eigen::Upper>();
+    const double sigma2 = (ls->residual_sum_of_squares() + (R * phi - ls->rotated_rhs()).squaredNorm()) /
+                          std::max(1.0, static_cast<double>(ls->rows()) - kept);
+    check(add_prior_rows(*ls, prior_, std::sqrt(sigma2 / data_weight)));
+    least_squares(*ls, &unsupported, 1.0, opt_.sign_constraints, phi, stdev, nullptr, held, nullptr);
+    if (!details) return;
+    details->data_stdev = data_std;
+    details->decision = std::move(d);
+    map_data = {R, sigma2, unsupported, unsupported};
+    if (held) map_data.held.insert(map_data.held.end(), held->begin(), held->end());
+  };
   if (m == "ols") {
-    least_squares(*ls, dropped, decision_inflation, opt_.sign_constraints, phi, stdev, cond, held, decision);
+    fit_least_squares();
   } else if (m == "wls" || m == "iv" || m == "pcls" || is_search_method(m)) {
     ls->reset();
     add_rows([&](int j) { return 1.0 / sigma[j]; });
-    if (m == "wls" || m == "iv") {  // iv: its start (fit_instrumental)
-      least_squares(*ls, dropped, decision_inflation, opt_.sign_constraints, phi, stdev, cond, held, decision);
+    if (m == "wls" || m == "iv") {
+      fit_least_squares();
     } else {  // the WLS solution starts the consistent fit of the same weighted data
       DeterminedFit d;
       Eigen::VectorXd data_std;
@@ -399,7 +497,25 @@ void IdentifyPipeline::fit(const StackedData& data, const std::vector<char>& tra
   }
   if (!details) return;
   details->inflation = streamed_autocorrelation_inflation(data, train, phi);
-  stdev *= std::sqrt(details->inflation);
+  if (map_data.R.size() > 0) {
+    // The MAP estimate weighs the data as white noise (as pcls: the autocorrelation of a real log is
+    // mostly model error; weighed by their effective information, TX40's joint 1 validated 2.63 Nm
+    // instead of 1.73); its std are that estimate's spread with the data's noise S / n_eff times
+    // the white variance (parameter_prior.hpp).
+    const PriorFitStatistics st =
+        prior_fit_statistics(prior_, map_data.R, map_data.sigma2, details->inflation, data_weight, map_data.held);
+    stdev = st.stdev;
+    for (const int i : map_data.unsupported) stdev[i] = std::numeric_limits<double>::quiet_NaN();
+    details->data_share = st.data_share;
+    details->data_stdev *= std::sqrt(details->inflation);
+    return;
+  }
+  if (details->consistent.information_data.size() > 0) {  // pcls: the prior's part is not inflated
+    consistent_covariance(details->consistent, details->inflation);
+    stdev = details->consistent.params_std;
+  } else {
+    stdev *= std::sqrt(details->inflation);
+  }
   if (details->data_stdev.size() > 0) details->data_stdev *= std::sqrt(details->inflation);
 }
 
@@ -632,55 +748,98 @@ IdentifyResult run_identify(const RobotDescription& robot, const TermSetModel& m
     Eigen::VectorXd wls_phi, wls_std;
     pipe.fit(data, std::vector<char>(static_cast<size_t>(data.t.size()), 1), wls_phi, wls_std, &details);
     fit_instrumental(data, grid, fold, folds, robot, opt, prepare, details.decision.dropped, res);
-    judge_parameters(pipe.scales(), details, opt, model.names, res);
+    judge_parameters(pipe.scales(), details, opt, pipe.prior(), model.names, res);
   } else if (!opt.effects.empty()) {
     // Effect terms (model_effects.hpp): [W E] fitted at run time, validated the same way.
     fit_effect_model(data, opt.effects, fold, folds, robot, opt, res);
-    judge_parameters(pipe.scales(), IdentifyPipeline::FitDetails{}, opt, model.names, res);
+    judge_parameters(pipe.scales(), IdentifyPipeline::FitDetails{}, opt, pipe.prior(), model.names, res);
     res.model = model_spec_name({model.terms, opt.effects, opt.motors});
   } else {
     // Final fit on all data first: the reported parameters, and the decision of which parameters the
     // log determines, which the folds' fits then share (the validated model is the reported one).
-    Eigen::VectorXd phi, stdev;
     std::vector<char> all(static_cast<size_t>(S), 1);
-    const auto t0 = std::chrono::steady_clock::now();
-    IdentifyPipeline::FitDetails final_fit;
+    const bool map = pipe.prior().usable();
     Progress progress("identify: " + opt.method + " fit and " + std::to_string(folds) + " folds",
-                      static_cast<double>(folds + 1), "fits");
-    pipe.fit(data, all, phi, stdev, &final_fit);
-    progress.advance();
-    res.fit_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    res.condition_number = final_fit.cond;
-    std::vector<Eigen::VectorXd> fold_phi(static_cast<size_t>(folds));
-    for (int f = 0; f < folds; ++f) {
-      std::vector<char> train(static_cast<size_t>(S));
-      for (Eigen::Index s = 0; s < S; ++s) train[static_cast<size_t>(s)] = fold[static_cast<size_t>(s)] != f;
-      Eigen::VectorXd fold_std;
-      pipe.fit(data, train, fold_phi[static_cast<size_t>(f)], fold_std, nullptr, &final_fit);
+                      static_cast<double>((map ? 2 : 1) * (folds + 1)), "fits");
+    // The final fit with the data's rows weighed `data_weight` times against the prior, its folds'
+    // fits and their pooled out-of-fold metrics (each sample predicted by the fit without its fold,
+    // made sample by sample: no stored prediction).
+    struct Validated {
+      Eigen::VectorXd phi, stdev;
+      IdentifyPipeline::FitDetails details;
+      std::vector<JointMetrics> joints;
+      double seconds = 0;
+    };
+    const auto fit_and_validate = [&](double data_weight) {
+      Validated v;
+      const auto t0 = std::chrono::steady_clock::now();
+      v.details.data_weight = data_weight;
+      pipe.fit(data, all, v.phi, v.stdev, &v.details);
       progress.advance();
-    }
-    // Metrics from the pooled out-of-fold residuals, each sample predicted by the fit without its
-    // fold (made sample by sample: no stored prediction).
-    Eigen::MatrixXd K;
-    Eigen::VectorXd tau_hat(N);
-    res.joints = torque_metrics(
-        data.y, N, robot.tau_max,
-        // Rows --min-speed leaves out of the fit are left out of the scores too.
-        [&](Eigen::Index s, int j) {
-          return fold[static_cast<size_t>(s)] >= 0 && data.fit_row[static_cast<size_t>(s * N + j)];
-        },
-        [&](Eigen::Index s) {
-          data.regressor(s, K);
-          tau_hat = K * fold_phi[static_cast<size_t>(fold[static_cast<size_t>(s)])];
-          return tau_hat.data();
-        });
-    for (int i = 0; i < P; ++i) res.params.push_back({model.names[static_cast<size_t>(i)], phi[i], stdev[i]});
-    judge_parameters(pipe.scales(), final_fit, opt, model.names, res);
-    {
-      char line[200];
+      v.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      std::vector<Eigen::VectorXd> fold_phi(static_cast<size_t>(folds));
+      for (int f = 0; f < folds; ++f) {
+        std::vector<char> train(static_cast<size_t>(S));
+        for (Eigen::Index s = 0; s < S; ++s) train[static_cast<size_t>(s)] = fold[static_cast<size_t>(s)] != f;
+        Eigen::VectorXd fold_std;
+        pipe.fit(data, train, fold_phi[static_cast<size_t>(f)], fold_std, nullptr, &v.details);
+        progress.advance();
+      }
+      Eigen::MatrixXd K;
+      Eigen::VectorXd tau_hat(N);
+      v.joints = torque_metrics(
+          data.y, N, robot.tau_max,
+          // Rows --min-speed leaves out of the fit are left out of the scores too.
+          [&](Eigen::Index s, int j) {
+            return fold[static_cast<size_t>(s)] >= 0 && data.fit_row[static_cast<size_t>(s * N + j)];
+          },
+          [&](Eigen::Index s) {
+            data.regressor(s, K);
+            tau_hat = K * fold_phi[static_cast<size_t>(fold[static_cast<size_t>(s)])];
+            return tau_hat.data();
+          });
+      return v;
+    };
+    Validated chosen = fit_and_validate(1.0);
+    if (map) {
+      // How much the data weigh against the prior: as white noise (their rows' count), or as their
+      // effective information (S / n_eff times less: the residual's autocorrelation). Which is right
+      // depends on whether that autocorrelation is noise or model error, so the blocked
+      // cross-validation decides: the effective weighting is kept when its out-of-fold mean squared
+      // error, relative to the white one's, is lower averaged over the joints.
+      Validated effective = fit_and_validate(1.0 / chosen.details.inflation);
+      double ratio = 0;
+      for (size_t j = 0; j < chosen.joints.size(); ++j)
+        ratio += std::pow(effective.joints[j].rms / chosen.joints[j].rms, 2) / static_cast<double>(N);
+      char line[300];
       std::snprintf(line, sizeof line,
-                    "parameter std: the white-noise figures times %.3g for the residual's autocorrelation (S / n_eff)",
-                    std::sqrt(final_fit.inflation));
+                    "prior weight: the data weigh against the prior as %s (cross-validated mean squared error "
+                    "%.4g times the other's; S / n_eff = %.3g)",
+                    ratio < 1.0 ? "their effective information" : "white noise", ratio < 1.0 ? ratio : 1.0 / ratio,
+                    chosen.details.inflation);
+      if (ratio < 1.0) chosen = std::move(effective);
+      res.notes.push_back(line);
+    }
+    const Eigen::VectorXd& phi = chosen.phi;
+    const Eigen::VectorXd& stdev = chosen.stdev;
+    const IdentifyPipeline::FitDetails& final_fit = chosen.details;
+    res.fit_seconds = chosen.seconds;
+    res.condition_number = final_fit.cond;
+    res.joints = chosen.joints;
+    for (int i = 0; i < P; ++i) res.params.push_back({model.names[static_cast<size_t>(i)], phi[i], stdev[i]});
+    judge_parameters(pipe.scales(), final_fit, opt, pipe.prior(), model.names, res);
+    {
+      char line[240];
+      if (final_fit.data_share.size() > 0 || final_fit.consistent.information_data.size() > 0)
+        std::snprintf(line, sizeof line,
+                      "parameter std: the MAP estimate's spread with the data's noise %.3g times its white "
+                      "variance (the residual's autocorrelation, S / n_eff) and the prior's own",
+                      final_fit.inflation);
+      else
+        std::snprintf(
+            line, sizeof line,
+            "parameter std: the white-noise figures times %.3g for the residual's autocorrelation (S / n_eff)",
+            std::sqrt(final_fit.inflation));
       res.notes.push_back(line);
     }
     report_consistent(final_fit.consistent, opt, res);

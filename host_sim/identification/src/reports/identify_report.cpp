@@ -43,7 +43,18 @@ void print_identify_report(std::ostream& out, const IdentifyResult& r) {
          "scale: docs/accuracy.md \"Real arms\")\n";
   for (const auto& p : r.params) {
     char line[240];
-    if (p.verdict == Verdict::not_determined) {
+    if (p.verdict == Verdict::not_determined && std::isfinite(p.data_share)) {
+      // The MAP value with its posterior std, and how much of it the log contributed.
+      std::snprintf(line, sizeof line,
+                    "%-20s %12.5g %10.3g %8s %10.3g  not determined by the log: MAP with the prior "
+                    "(data share %.0f %%)\n",
+                    p.name.c_str(), p.value, p.std, "-", p.scale, 100.0 * p.data_share);
+    } else if (p.basis == "sign constraint") {
+      std::snprintf(line, sizeof line,
+                    "%-20s %12s %10s %8s %10.3g  held at 0 by the sign constraint (the free fit "
+                    "gives < 0)\n",
+                    p.name.c_str(), "0", "-", "-", p.scale);
+    } else if (p.verdict == Verdict::not_determined) {
       // Never a free number: what the value rests on instead.
       std::snprintf(line, sizeof line, "%-20s %12s %10.3g %8s %10.3g  not determined (%s)\n", p.name.c_str(),
                     p.basis == "held at 0" ? "0" : "-", p.std, "-", p.scale, p.basis.c_str());
@@ -52,7 +63,10 @@ void print_identify_report(std::ostream& out, const IdentifyResult& r) {
       // A value its own 95 % interval does not tell from 0 says so.
       const bool zero_within = std::abs(p.value) <= kVerdictZ * p.std;
       std::snprintf(line, sizeof line, "%-20s %12.5g %10.3g %8.1f %10.3g  %s%s\n", p.name.c_str(), p.value, p.std, rel,
-                    p.scale, p.scale > 0.0 ? to_string(p.verdict) : "not judged",
+                    p.scale,
+                    p.contradicts_physics ? "contradicts physics: below 0 beyond its 95 % interval"
+                    : p.scale > 0.0       ? to_string(p.verdict)
+                                          : "not judged",
                     zero_within ? ", 0 within its 95 % interval" : "");
     }
     out << line;
@@ -69,6 +83,21 @@ void print_identify_report(std::ostream& out, const IdentifyResult& r) {
                     l.mass, l.com[0], l.com[1], l.com[2], l.inertia[0], l.inertia[1], l.inertia[2], l.inertia[3],
                     l.inertia[4], l.inertia[5], l.min_eigenvalue);
       out << line;
+      if (l.mass_basis.empty()) continue;
+      // Their std ("-": neither the data nor a prior fix it) and what the mass rests on.
+      const auto sd = [](double v, int width) {
+        char b[32];
+        if (std::isfinite(v))
+          std::snprintf(b, sizeof b, "%*.2g", width, v);
+        else
+          std::snprintf(b, sizeof b, "%*s", width, "-");
+        return std::string(b);
+      };
+      out << "     +- " << sd(l.mass_std, 8) << "   " << sd(l.com_std[0], 9) << " " << sd(l.com_std[1], 9) << " "
+          << sd(l.com_std[2], 9) << "  ";
+      for (double v : l.inertia_std) out << " " << sd(v, 10);
+      out << (l.mass_basis == "neither" ? "   (std; mass fixed by neither the data nor a prior)\n"
+                                        : "   (std; mass from the " + l.mass_basis + ")\n");
     }
   }
   for (const auto& o : r.other_logs) print_log_prediction(out, o);
@@ -123,6 +152,8 @@ nlohmann::json identify_report_json(const IdentifyResult& r) {
       e["verdict"] = to_string(p.verdict);
     }
     if (!p.basis.empty()) e["basis"] = p.basis;
+    if (std::isfinite(p.data_share)) e["data_share"] = p.data_share;
+    if (p.contradicts_physics) e["physics"] = "contradicted: below 0 beyond its 95 % interval";
     j["params"].push_back(e);
   }
   j["notes"] = r.notes;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <nlohmann/json.hpp>
 
 #include "dyncal_host/common/input_error.hpp"
@@ -13,7 +14,31 @@
 namespace dyncal::host {
 namespace {
 
-/// The file's "links" (one per joint, in order): finite numbers, mass > 0. Throws InputError.
+/// The file's "torque_constants": {source, values [N] finite and nonzero, std [N] null or >= 0}.
+void read_torque_constants(const nlohmann::json& t, const std::string& path, int joints, ParameterSet& p) {
+  const std::string what = path + ": 'torque_constants' ";
+  if (!t.is_object() || !t.contains("values") || !t["values"].is_array() ||
+      t["values"].size() != static_cast<size_t>(joints))
+    throw InputError(what + "must hold 'values', one per motor (" + std::to_string(joints) + ")");
+  p.torque_constants.resize(joints);
+  p.torque_constants_std = Eigen::VectorXd::Constant(joints, std::numeric_limits<double>::quiet_NaN());
+  const nlohmann::json none = nlohmann::json::array();
+  const nlohmann::json& sd = t.contains("std") && t["std"].is_array() ? t["std"] : none;
+  if (!sd.empty() && sd.size() != static_cast<size_t>(joints)) throw InputError(what + "'std' must have one per motor");
+  for (int k = 0; k < joints; ++k) {
+    const nlohmann::json& v = t["values"][static_cast<size_t>(k)];
+    if (!v.is_number() || !std::isfinite(v.get<double>()) || v.get<double>() == 0.0)
+      throw InputError(what + "value " + std::to_string(k + 1) + " is not a finite nonzero number");
+    p.torque_constants[k] = v.get<double>();
+    if (sd.empty() || sd[static_cast<size_t>(k)].is_null()) continue;
+    if (!sd[static_cast<size_t>(k)].is_number() || !(sd[static_cast<size_t>(k)].get<double>() >= 0.0))
+      throw InputError(what + "std " + std::to_string(k + 1) + " is not a number >= 0");
+    p.torque_constants_std[k] = sd[static_cast<size_t>(k)].get<double>();
+  }
+  p.torque_constants_source = t.value("source", std::string("the parameter file"));
+}
+
+/// The "links" (one per joint, in order): finite numbers, mass > 0. Throws InputError.
 std::vector<LinkInertial> read_links(const nlohmann::json& list, const std::string& path, int joints) {
   if (!list.is_array() || static_cast<int>(list.size()) != joints)
     throw InputError(path + ": 'links' must list the " + std::to_string(joints) + " links");
@@ -39,6 +64,19 @@ std::vector<LinkInertial> read_links(const nlohmann::json& list, const std::stri
       l.inertia[static_cast<size_t>(i)] = number(e["inertia_about_com"][static_cast<size_t>(i)], "inertia_about_com");
     if (e.contains("pseudo_inertia_min_eigenvalue") && e["pseudo_inertia_min_eigenvalue"].is_number())
       l.min_eigenvalue = e["pseudo_inertia_min_eigenvalue"].get<double>();
+    // Their std (optional; null or absent: none).
+    const auto sd = [&](const char* key, size_t i, size_t n) {
+      if (!e.contains(key)) return LinkInertial::kNoStd;
+      const nlohmann::json& v = n == 1 ? e[key] : (e[key].is_array() && e[key].size() == n ? e[key][i] : e[key]);
+      if (v.is_null()) return LinkInertial::kNoStd;
+      if (!v.is_number() || !(v.get<double>() >= 0.0))
+        throw InputError(where + ": '" + key + "' must be numbers >= 0 (or null)");
+      return v.get<double>();
+    };
+    l.mass_std = sd("mass_std", 0, 1);
+    if (e.contains("mass_basis") && e["mass_basis"].is_string()) l.mass_basis = e["mass_basis"].get<std::string>();
+    for (size_t i = 0; i < 3; ++i) l.com_std[i] = sd("com_std", i, 3);
+    for (size_t i = 0; i < 6; ++i) l.inertia_std[i] = sd("inertia_std", i, 6);
     out.push_back(l);
   }
   return out;
@@ -99,6 +137,7 @@ ParameterSet read_parameter_file(const std::string& path) {
       p.stdev[static_cast<Eigen::Index>(i)] = v["std"].get<double>();
   }
   if (j.contains("links")) p.links = read_links(j["links"], path, compiled.num_joints);
+  if (j.contains("torque_constants")) read_torque_constants(j["torque_constants"], path, compiled.num_joints, p);
   return p;
 }
 
@@ -121,17 +160,40 @@ nlohmann::json parameter_file_json(const ParameterSet& p, const std::string& met
     j["params"].push_back(e);
   }
   if (!p.links.empty()) j["links"] = link_inertials_json(p.links);
+  if (p.torque_constants.size() > 0) j["torque_constants"] = torque_constants_json(p);
   return j;
+}
+
+nlohmann::json torque_constants_json(const ParameterSet& p) {
+  nlohmann::json sd = nlohmann::json::array();
+  for (Eigen::Index k = 0; k < p.torque_constants_std.size(); ++k)
+    sd.push_back(std::isfinite(p.torque_constants_std[k]) ? nlohmann::json(p.torque_constants_std[k])
+                                                          : nlohmann::json(nullptr));
+  return {
+      {"source", p.torque_constants_source},
+      {"values", std::vector<double>(p.torque_constants.data(), p.torque_constants.data() + p.torque_constants.size())},
+      {"std", sd}};
 }
 
 nlohmann::json link_inertials_json(const std::vector<LinkInertial>& links) {
   nlohmann::json out = nlohmann::json::array();
-  for (const auto& l : links)
-    out.push_back({{"link", l.link},
-                   {"mass", l.mass},
-                   {"com", l.com},
-                   {"inertia_about_com", l.inertia},
-                   {"pseudo_inertia_min_eigenvalue", l.min_eigenvalue}});
+  const auto number = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
+  for (const auto& l : links) {
+    nlohmann::json e = {{"link", l.link},
+                        {"mass", l.mass},
+                        {"com", l.com},
+                        {"inertia_about_com", l.inertia},
+                        {"pseudo_inertia_min_eigenvalue", l.min_eigenvalue}};
+    if (!l.mass_basis.empty()) {
+      e["mass_std"] = number(l.mass_std);
+      e["mass_basis"] = l.mass_basis;
+      e["com_std"] = nlohmann::json::array();
+      for (double v : l.com_std) e["com_std"].push_back(number(v));
+      e["inertia_std"] = nlohmann::json::array();
+      for (double v : l.inertia_std) e["inertia_std"].push_back(number(v));
+    }
+    out.push_back(e);
+  }
   return out;
 }
 

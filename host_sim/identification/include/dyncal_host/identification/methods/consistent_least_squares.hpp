@@ -51,6 +51,14 @@ struct ConsistentSolution {
   /// consistent_least_squares with a prior: per link, the prior's mass [kg] (robot.json's), which
   /// report_consistent compares the fitted mass with.
   std::vector<double> prior_mass;
+  /// consistent_least_squares: the 10 L x 10 L covariance of `standard` (consistent_covariance);
+  /// empty for the searches.
+  Eigen::MatrixXd standard_cov;
+  /// consistent_least_squares: at the solution, in its coordinates v (log-Cholesky, then the other
+  /// parameters), the Gauss-Newton matrices of the data's rows (in units of sigma2) and of the
+  /// prior's, and the Jacobians of the model parameters and of the standard ones in v.
+  Eigen::MatrixXd information_data, information_prior, model_jacobian, standard_jacobian;
+  double inflation = 1;  ///< the data's noise factor consistent_covariance last used
   int iterations = 0;
   /// search_consistent: standard parameters that end at an end of their range (within 1e-6 of its
   /// width) that binds: moving that parameter alone outwards to where the cost is least along it
@@ -66,8 +74,16 @@ struct ConsistentSolution {
 /// them); not effect terms (an asymmetric difference Fc+<j> has either sign).
 std::vector<int> nonnegative_terms(const std::vector<std::string>& names, int num_base);
 
-/// Solves `p`. Throws InputError when Levenberg-Marquardt fails or ends non-finite.
+/// Solves `p`. Throws InputError when Levenberg-Marquardt fails or ends non-finite. params_std and
+/// standard_cov are consistent_covariance(s, 1).
 ConsistentSolution consistent_least_squares(const ConsistentProblem& p);
+
+/// Sets s.params_std and s.standard_cov of a consistent_least_squares solution from the sandwich
+/// covariance of v, H^+ (inflation D + Q) H^+ with D, Q its information_data and information_prior
+/// and H = D + Q: the data's noise `inflation` times their white variance (the residual's
+/// autocorrelation, S / n_eff), the prior's as it is; propagated through model_jacobian and
+/// standard_jacobian.
+void consistent_covariance(ConsistentSolution& s, double inflation);
 
 /// The survey's optimisers (Sec. 3.4; optimisers.hpp) on the same weighted problem as
 /// consistent_least_squares, for any robot (identify --method gd|ga|pf). They search the 10 L
@@ -101,7 +117,11 @@ struct IdentifyResult;
 /// identify's settings of search_consistent: --range-width, --seed, --evaluations (IdentifyOptions).
 OptimiserSettings search_settings(const IdentifyOptions& options);
 /// identify's report of a consistent fit (pcls, gd, ga, pf) into res: each link's inertials
-/// (res.links: mass, centre of mass, inertia about it, smallest pseudo-inertia eigenvalue); for pcls
+/// (res.links: mass, centre of mass, inertia about it, smallest pseudo-inertia eigenvalue; for pcls
+/// their std from standard_cov by the delta method through d standard / d physical, NaN for a
+/// quantity neither the data nor the prior fix (its gradient outside the range of the fit's
+/// Gauss-Newton matrix), and what the mass rests on: "data" when the data alone put 0 outside its 95 %
+/// interval, else "prior" with a prior, else "neither"); for pcls
 /// a warning per link whose mass the fit moved beyond the prior's standard deviation (--prior-std
 /// of robot.json's mass: the data, an effect the model lacks, a load or a wrong URDF put it there); for a
 /// search, a note with the cost above least squares' minimum and the parameters the search range

@@ -47,6 +47,8 @@ struct PayloadResult {
   /// The std includes the arm's calibration error (the parameter file's std propagated), not only
   /// this log's noise.
   bool arm_error_included = false;
+  /// The std includes the torque constants' error (a log of currents, the arm set's Kt with std).
+  bool torque_constant_error_included = false;
   std::vector<JointMetrics> unloaded;  ///< this log predicted by the arm's model alone
   std::vector<JointMetrics> loaded;    ///< out-of-fold (blocked folds): arm model plus the payload
   std::vector<std::string> notes;
@@ -58,8 +60,15 @@ struct PayloadResult {
 /// are the parameter set's). Throws InputError: parameters for another robot, a log the preparation
 /// refuses, a log that determines no payload parameter, or a payload mass the log does not
 /// determine (its 95 % interval holds 0: no load to speak of, or too little motion).
+/// from_current: the log's torque is motor currents times torque constants (tau = N^T diag(Kt) i,
+/// robot.transmission N): a relative error e_k of Kt_k scales motor k's share of the load's torque
+/// (the arm's model, identified with the same Kt, scales with its data), moving the payload by
+/// G_k e_k, G_k the weighted least-squares solution for the load torque's motor-k share N^T e_k
+/// (N^-T C theta)_k; with the arm set's Kt std (ParameterSet::torque_constants_std, a fit from a
+/// known load) sum_k (std_k / Kt_k)^2 G_k G_k^T is added to the covariance, without them a note says
+/// the constants' error is not in the interval.
 PayloadResult identify_payload(const RobotDescription& robot, const JointLog& log, const ParameterSet& arm,
-                               const IdentifyOptions& options);
+                               const IdentifyOptions& options, bool from_current = false);
 
 /// The arm's parameters with the payload's standard parameters (10, link N frame) added to link N:
 /// the base parameters move by K_N dphi; terms, effects and friction are the arm's. Its source says

@@ -13,6 +13,7 @@
 #include "dyncal_host/identification/pipeline/butterworth.hpp"
 #include "dyncal_host/identification/pipeline/identify.hpp"
 #include "dyncal_host/identification/pipeline/kept_samples.hpp"
+#include "dyncal_host/identification/pipeline/parameter_prior.hpp"
 #include "dyncal_host/identification/pipeline/stacked_data.hpp"
 #include "dyncal_host/identification/pipeline/term_set_model.hpp"
 
@@ -55,23 +56,37 @@ class IdentifyPipeline {
     std::vector<int> held;          ///< sign constraints: indices held at 0
     double inflation = 1;           ///< the residual's autocorrelation factor S / n_eff
     DeterminedFit decision;         ///< the parameters the log does not determine (identifiability.hpp)
-    Eigen::VectorXd data_stdev;     ///< pcls, gd, ga, pf: the weighted least-squares std (the data alone)
+    Eigen::VectorXd data_stdev;     ///< pcls, gd, ga, pf, and ols/wls with a prior: the std of the data alone
+    /// ols/wls with a prior: per parameter, the share of its information from the data (data_share
+    /// of parameter_prior.hpp; NaN without a prior); empty otherwise.
+    Eigen::VectorXd data_share;
+    /// Input of the final fit (its folds take it from `decided`): ols/wls with a prior weigh the data
+    /// rows this many times their white-noise weight against the prior (1; 1 / S / n_eff: their
+    /// effective information; run_identify chooses by cross-validation).
+    double data_weight = 1;
     double decision_inflation = 1;  ///< the OLS residual's autocorrelation factor the decision and pcls use
   };
 
   /// Fits on the samples with train[s] true. Writes phi and parameter standard deviations (P).
-  /// Final fit (`details` given): decides which parameters the data determine
-  /// (determined_least_squares, with the residual's autocorrelation factor of the OLS fit) and drops
-  /// the others from the least-squares fits (held at 0, std NaN); the std are the white-noise figures
-  /// times the square root of the autocorrelation factor S / n_eff of the final residual
+  /// Final fit (`details` given): decides which parameters the data alone determine
+  /// (determined_least_squares, with the residual's autocorrelation factor of the OLS fit). ols and
+  /// wls with a usable prior() then fit every parameter as the MAP estimate (data rows and the
+  /// prior's pseudo-rows, parameter_prior.hpp; the std posterior ones, details->data_share per
+  /// parameter), holding at 0 only an undetermined parameter without a prior; without a prior (and
+  /// for iv's start) the undetermined ones are held at 0 (std NaN). The std are the white-noise
+  /// figures times the square root of the autocorrelation factor S / n_eff of the final residual
   /// (streamed_autocorrelation_inflation, N passes over the data), written into details->inflation.
-  /// A fold's fit (`decided` given: the final fit's details) drops the same parameters, weighs pcls's
-  /// data by the same autocorrelation factor and writes the white-noise figures. pcls, gd, ga, pf start from the
-  /// weighted least-squares fit with the dropped parameters at 0 and fit every parameter (the prior or the search range
-  /// holds those). Throws InputError.
+  /// A fold's fit (`decided` given: the final fit's details) treats the same parameters as
+  /// undetermined, weighs pcls's data by the same autocorrelation factor and writes the white-noise
+  /// figures. pcls, gd, ga, pf start from the weighted least-squares fit with the undetermined
+  /// parameters at 0 and fit every parameter (the prior or the search range holds those). Throws
+  /// InputError.
   void fit(const StackedData& data, const std::vector<char>& train, Eigen::VectorXd& phi, Eigen::VectorXd& stdev,
            FitDetails* details, const FitDetails* decided = nullptr) const;
 
+  /// The prior the ols and wls fits are the MAP estimate with (parameter_prior.hpp); not usable for
+  /// another method, with --prior-std 0, or for a robot without inertials.
+  const ParameterPrior& prior() const { return prior_; }
   /// Physical scale of each parameter (parameter_scales.hpp).
   const Eigen::VectorXd& scales() const { return scale_; }
 
@@ -108,6 +123,7 @@ class IdentifyPipeline {
   std::vector<int> coupled_;            ///< motors turning with more than their own joint (0-based)
   std::vector<FilteredTerm> filtered_;  ///< StackedData::filtered_terms' columns
   Eigen::VectorXd scale_;               ///< parameter_scales(robot_, model_)
+  ParameterPrior prior_;                ///< ols, wls: parameter_prior(robot_, model_, --prior-std)
 };
 
 /// Runs the whole `identify` job for one robot and term set; preparing the data consumes the log.

@@ -29,6 +29,12 @@ struct ParameterSet {
   /// Each link's consistent inertials (identify --method pcls; file key "links"), empty when the set
   /// has none (other methods: the base parameters do not determine them).
   std::vector<LinkInertial> links;
+  /// A set identified from motor currents (file key "torque_constants"): each motor's torque
+  /// constant [Nm/A] the logs were converted with, its std [Nm/A] (NaN: a nominal value without
+  /// one, robot.json's) and where they come from; empty for a set identified from joint torques.
+  /// Logs of currents the set is applied to are converted with the same constants (payload).
+  Eigen::VectorXd torque_constants, torque_constants_std;
+  std::string torque_constants_source;
 };
 
 /// Reads a `dyncal identify --params` file (docs/cli.md). Throws InputError with the file and what
@@ -39,8 +45,13 @@ ParameterSet read_parameter_file(const std::string& path);
 
 /// The parameter file of `p` (docs/cli.md "--params schema"; read_parameter_file reads it): format,
 /// version, robot, model, `method`, friction_per, params [{name, value, std}] (std only when the set
-/// has them; null where not determined), links [{link, mass, com, inertia_about_com}] when it has them.
+/// has them; null where not determined), links [{link, mass, com, inertia_about_com}] when it has them,
+/// torque_constants {source, values, std} when the set has them.
 nlohmann::json parameter_file_json(const ParameterSet& p, const std::string& method);
+
+/// A parameter file's "torque_constants" of `p` (it has them): {source, values [Nm/A], std (null where
+/// none)}.
+nlohmann::json torque_constants_json(const ParameterSet& p);
 
 /// [{link, mass, com, inertia_about_com, pseudo_inertia_min_eigenvalue}]: the "links" of a report
 /// and of a parameter file (read_parameter_file reads the latter back).
