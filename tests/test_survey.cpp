@@ -10,6 +10,7 @@
 
 #include "dyncal/generated/er20/robot.hpp"
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/common/parallel_tasks.hpp"
 #include "dyncal_host/common/robot_description.hpp"
 #include "dyncal_host/survey/indices.hpp"
 #include "dyncal_host/survey/methods/idim_iv.hpp"
@@ -17,7 +18,6 @@
 #include "dyncal_host/survey/methods/objective.hpp"
 #include "dyncal_host/survey/methods/physically_consistent.hpp"
 #include "dyncal_host/survey/methods/standard_parameters.hpp"
-#include "dyncal_host/survey/parallel_runs.hpp"
 #include "dyncal_host/survey/survey_data.hpp"
 #include "dyncal_host/survey/survey_plots.hpp"
 #include "dyncal_host/survey/tracking.hpp"
@@ -439,18 +439,18 @@ TEST(SurveyClosedLoop, SimulationWithTheSetParametersRetracesTheRecordedStates) 
 TEST(SurveyParallelRuns, ResultsDoNotDependOnTheThreadCountAndErrorsReachTheCaller) {
   auto squares = [](int jobs) {
     std::vector<double> out(40);
-    std::vector<dyncal::host::survey::Task> tasks;
+    std::vector<dyncal::host::ParallelTask> tasks;
     for (size_t i = 0; i < out.size(); ++i)
       tasks.push_back({static_cast<double>(i % 7), [&out, i] { out[i] = std::sqrt(static_cast<double>(i)) * 3.0; }});
-    dyncal::host::survey::run_parallel(std::move(tasks), jobs, "test");
+    dyncal::host::run_parallel(std::move(tasks), jobs, "test");
     return out;
   };
   const std::vector<double> one = squares(1);
   EXPECT_EQ(one, squares(3));
   EXPECT_DOUBLE_EQ(one[25], 15.0);
-  std::vector<dyncal::host::survey::Task> failing{{1, [] {}},
+  std::vector<dyncal::host::ParallelTask> failing{{1, [] {}},
                                                   {2, [] { throw dyncal::host::InputError("task 2 failed"); }}};
-  EXPECT_THROW(dyncal::host::survey::run_parallel(std::move(failing), 2, "test"), dyncal::host::InputError);
+  EXPECT_THROW(dyncal::host::run_parallel(std::move(failing), 2, "test"), dyncal::host::InputError);
 }
 
 // --plots writes every figure from a result and its series (gnuplot from scripts/setup).

@@ -8,7 +8,7 @@
 
 #include "dyncal/friction.hpp"
 #include "dyncal_host/common/input_error.hpp"
-#include "dyncal_host/common/progress.hpp"
+#include "dyncal_host/common/parallel_tasks.hpp"
 #include "dyncal_host/identification/pipeline/signal.hpp"
 #include "harmonic_fit.hpp"
 #include "shape_search.hpp"
@@ -258,12 +258,18 @@ void coupling(const CandidateContext& c, int i, int j, std::vector<Candidate>& o
   for (double sign : {1.0, -1.0}) {
     auto gain = [&](double lr) {
       const double r = sign * std::exp(lr);
+      const double band = std::hypot(d.standstill_band[i], r * d.standstill_band[j]);  // motor_velocity's
+      Eigen::Vector3d row;  // joint i's row at the sample; joint j's (p = 1, asked next) is r times it
       return local_gain<3>(
           c, EffectKind::coupling, pair, local,
           [&](Index s, size_t p, Eigen::Vector3d& x) {
-            const double v = motor_velocity(d, s, i, j, r), a = d.qdd(s, i) + r * d.qdd(s, j);
-            x << (v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0)), v, a;
-            if (p == 1) x *= r;
+            if (p == 0) {
+              const double v = signed_velocity(d.qd(s, i) + r * d.qd(s, j), d.qd_raw(s, i) + r * d.qd_raw(s, j), band);
+              row << (v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0)), v, d.qdd(s, i) + r * d.qdd(s, j);
+              x = row;
+            } else {
+              x = r * row;
+            }
           },
           [](const Eigen::Vector3d& beta) { return beta[0] >= 0 && beta[1] >= 0; });  // friction opposes motion
     };
@@ -564,19 +570,24 @@ void filter_in_time(const CandidateContext& c, MatrixXd& series, EffectKind kind
 
 std::vector<Candidate> candidate_library(const CandidateContext& c, const std::string& progress_task) {
   const int N = static_cast<int>(c.data.q.cols());
-  std::vector<Candidate> out;
-  Progress progress(progress_task, static_cast<double>(N + N * (N - 1) / 2), "joints and pairs");
-  for (int i = 0; i < N; ++i) {
-    for (const EffectSpec& s : effect_specs())
-      if (!s.per_pair) s.generate(c, i, i, out);
-    progress.advance();
-  }
+  // One task per joint and per pair, each writing its own slot: the library is the sequential
+  // one, in the same order, on any number of threads (parallel_tasks.hpp).
+  std::vector<std::pair<int, int>> units;
+  for (int i = 0; i < N; ++i) units.emplace_back(i, i);
   for (int i = 0; i < N; ++i)
-    for (int j = i + 1; j < N; ++j) {
-      for (const EffectSpec& s : effect_specs())
-        if (s.per_pair) s.generate(c, i, j, out);
-      progress.advance();
-    }
+    for (int j = i + 1; j < N; ++j) units.emplace_back(i, j);
+  std::vector<std::vector<Candidate>> found(units.size());
+  std::vector<ParallelTask> tasks;
+  for (size_t u = 0; u < units.size(); ++u)
+    tasks.push_back({units[u].first == units[u].second ? 1.0 : 2.0, [&c, &units, &found, u] {
+                       const auto [i, j] = units[u];
+                       for (const EffectSpec& s : effect_specs())
+                         if (s.per_pair == (i != j)) s.generate(c, i, j, found[u]);
+                     }});
+  run_parallel(std::move(tasks), default_jobs(), progress_task, "joints and pairs");
+  std::vector<Candidate> out;
+  for (std::vector<Candidate>& f : found)
+    for (Candidate& cand : f) out.push_back(std::move(cand));
   return out;
 }
 

@@ -15,7 +15,7 @@
 #include "candidates.hpp"
 #include "cross_validator.hpp"
 #include "dyncal_host/common/input_error.hpp"
-#include "dyncal_host/common/progress.hpp"
+#include "dyncal_host/common/parallel_tasks.hpp"
 #include "dyncal_host/identification/methods/effect_model.hpp"
 #include "dyncal_host/identification/pipeline/butterworth.hpp"
 #include "dyncal_host/identification/pipeline/signal.hpp"
@@ -416,11 +416,14 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
     int best = -1;
     double best_score = 0;
     std::vector<Evidence> ev(cands.size());
-    Progress progress("diagnose: step " + std::to_string(step + 1) + ", weighing", static_cast<double>(cands.size()),
-                      "candidates");
+    // Each candidate weighed on its own (each task writes its own slots: parallel_tasks.hpp), then
+    // chosen in the library's order, as one thread would.
+    std::vector<ParallelTask> weighing;
+    for (size_t c = 0; c < cands.size(); ++c)
+      weighing.push_back({1.0, [&, c] { ev[c] = weigh(cv, cands[c], m, n_eff, declared.val); }});
+    run_parallel(std::move(weighing), default_jobs(), "diagnose: step " + std::to_string(step + 1) + ", weighing",
+                 "candidates");
     for (size_t c = 0; c < cands.size(); ++c) {
-      ev[c] = weigh(cv, cands[c], m, n_eff, declared.val);
-      progress.advance();
       const Evidence& e = ev[c];
       if (qualifies(e, o) && e.gain > best_score) {
         best_score = e.gain;

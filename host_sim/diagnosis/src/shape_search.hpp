@@ -39,8 +39,8 @@ inline std::vector<Eigen::Index> local_columns(const CandidateContext& c, const 
 /// The weighted RSS that M columns remove from the residual of `joints` when fitted with the local
 /// columns `local` (the residual is already orthogonal to those, so the gain is g^T S^-1 g, S the
 /// Schur complement of their Gram). columns(s, p, x) writes joint joints[p]'s row of the M columns
-/// at sample s into x. A fit whose coefficients (S^-1 g, those of the joint fit) are not
-/// physical(coefficients) removes nothing: the search looks only among physical shapes.
+/// at sample s into x; it is called sample by sample, p = 0, 1, ... at each. A fit whose coefficients (S^-1 g, those of
+/// the joint fit) are not physical(coefficients) removes nothing: the search looks only among physical shapes.
 template <int M, class Columns, class Physical>
 double local_gain(const CandidateContext& c, EffectKind kind, const std::vector<int>& joints,
                   const std::vector<Eigen::Index>& local, Columns columns, Physical physical) {

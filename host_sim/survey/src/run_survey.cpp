@@ -6,13 +6,13 @@
 #include <sstream>
 
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/common/parallel_tasks.hpp"
 #include "dyncal_host/survey/indices.hpp"
 #include "dyncal_host/survey/methods/idim_iv.hpp"
 #include "dyncal_host/survey/methods/methods.hpp"
 #include "dyncal_host/survey/methods/optimisers.hpp"
 #include "dyncal_host/survey/methods/physically_consistent.hpp"
 #include "dyncal_host/survey/methods/standard_parameters.hpp"
-#include "dyncal_host/survey/parallel_runs.hpp"
 #include "dyncal_host/survey/survey.hpp"
 #include "dyncal_host/survey/survey_data.hpp"
 #include "dyncal_host/survey/survey_plots.hpp"
@@ -212,7 +212,7 @@ struct ModelStudy {
     for (auto& r : results) r.resize(methods.size());
   }
 
-  void add_simulations(const Study& st, std::vector<Task>& tasks) {
+  void add_simulations(const Study& st, std::vector<ParallelTask>& tasks) {
     for (int noisy = 0; noisy < 2; ++noisy) {
       tasks.push_back({1, [this, &st, noisy] {
                          data[static_cast<size_t>(noisy)] = simulate_survey_data(
@@ -221,7 +221,7 @@ struct ModelStudy {
     }
   }
 
-  void add_methods(const Study& st, std::vector<Task>& tasks) {
+  void add_methods(const Study& st, std::vector<ParallelTask>& tasks) {
     for (size_t noisy = 0; noisy < 2; ++noisy) {
       for (size_t i = 0; i < methods.size(); ++i) {
         tasks.push_back({method_cost(*methods[i], model), [this, &st, noisy, i] {
@@ -274,7 +274,7 @@ struct Table10Study {
   static constexpr std::array<const char*, 3> kVariants{"with_filter", "without_filter",
                                                         "without_filter_parallel_decimation"};
 
-  void add_simulations(const Study& st, std::vector<Task>& tasks) {
+  void add_simulations(const Study& st, std::vector<ParallelTask>& tasks) {
     tasks.push_back({1, [this, &st] {
                        SurveyDataOptions qopt = run_options(st, FrictionModel::eq7, true, st.options.quick ? 1 : 2);
                        qopt.position_noise_std = kPositionNoise;
@@ -282,7 +282,7 @@ struct Table10Study {
                      }});
   }
 
-  void add_methods(const Study& st, std::vector<Task>& tasks) {
+  void add_methods(const Study& st, std::vector<ParallelTask>& tasks) {
     for (size_t k = 0; k < results.size(); ++k) {
       const bool iv = k / 3 == 1;
       const size_t variant = k % 3;
@@ -336,7 +336,7 @@ struct Table12Study {
   SurveyData fit, validation;
   std::array<std::array<json, 2>, 6> results;  // per model: particle filter, consistent LS
 
-  void add_simulations(const Study& st, std::vector<Task>& tasks) {
+  void add_simulations(const Study& st, std::vector<ParallelTask>& tasks) {
     tasks.push_back({1, [this, &st] {
                        SurveyDataOptions eopt = run_options(st, FrictionModel::eq4, true, 2);
                        eopt.position_noise_std = kPositionNoise;
@@ -347,7 +347,7 @@ struct Table12Study {
                      }});
   }
 
-  void add_methods(const Study& st, const Methods& all, std::vector<Task>& tasks) {
+  void add_methods(const Study& st, const Methods& all, std::vector<ParallelTask>& tasks) {
     for (size_t mi = 0; mi < kModels.size(); ++mi) {
       for (size_t k = 0; k < 2; ++k) {
         const Method* m = k == 0 ? &all.optimisers[3] : &all.optimisers[0];  // particle filter, consistent LS
@@ -384,7 +384,7 @@ struct TrackingStudy {
   std::array<SurveyData, 2> data;
   std::array<std::vector<TrackingResult>, 2> runs;  // per model: every profile's results in order
 
-  void add_simulations(const Study& st, std::vector<Task>& tasks) {
+  void add_simulations(const Study& st, std::vector<ParallelTask>& tasks) {
     for (size_t mi = 0; mi < 2; ++mi) {
       tasks.push_back({1, [this, &st, mi] {
                          data[mi] =
@@ -393,7 +393,7 @@ struct TrackingStudy {
     }
   }
 
-  void add_methods(const Study& st, std::vector<Task>& tasks) {
+  void add_methods(const Study& st, std::vector<ParallelTask>& tasks) {
     for (size_t mi = 0; mi < 2; ++mi) {
       tasks.push_back(
           {5, [this, &st, mi] {
@@ -443,7 +443,7 @@ json run_survey(const RobotDescription& robot, const SurveyOptions& o, SurveySer
   TrackingStudy tracking;
   // Three rounds: the two excitation designs (every run plays one of them), every run's data, then
   // every method on them.
-  std::vector<Task> designs, simulations, fits;
+  std::vector<ParallelTask> designs, simulations, fits;
   for (size_t k = 0; k < st.designs.size(); ++k) {
     designs.push_back(
         {1, [&st, k] { st.designs[k] = study_excitation(st.robot, k == 0 ? M::eq7 : M::eq4, st.options.seed); }});

@@ -1,4 +1,4 @@
-#include "dyncal_host/survey/parallel_runs.hpp"
+#include "dyncal_host/common/parallel_tasks.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -8,10 +8,10 @@
 
 #include "dyncal_host/common/progress.hpp"
 
-namespace dyncal::host::survey {
+namespace dyncal::host {
 
-void run_parallel(std::vector<Task> tasks, int jobs, const std::string& what) {
-  Progress progress(what, static_cast<double>(tasks.size()), "runs");
+void run_parallel(std::vector<ParallelTask> tasks, int jobs, const std::string& what, const std::string& unit) {
+  Progress progress(what, static_cast<double>(tasks.size()), unit);
   std::vector<size_t> order(tasks.size());
   std::iota(order.begin(), order.end(), size_t{0});
   std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) { return tasks[a].cost > tasks[b].cost; });
@@ -44,4 +44,4 @@ int default_jobs() {
   return std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
 }
 
-}  // namespace dyncal::host::survey
+}  // namespace dyncal::host
