@@ -244,8 +244,10 @@ void add_identify_command(CLI::App& app, Action& run) {
                   "iv: the drive's control law the log was recorded under (JSON: trajectory, periods, sample_rate_hz, "
                   "kp, kd, optional control_rate_hz and feed_forward; docs/cli.md)");
   cmd->add_option("--prior-std", opt.prior_std,
-                  "pcls: the prior's standard deviation relative to max(|value|, 5 % of the largest of its kind in "
-                  "the link) of robot.json's inertials; 0: no prior, consistency alone")
+                  "the prior on robot.json's inertials: each standard parameter's standard deviation relative to "
+                  "max(|value|, 5 % of the largest of its kind in the link). wls, ols: their MAP estimate (what the "
+                  "log does not determine comes from the prior, with its data share); pcls: its prior. 0: no prior "
+                  "(wls, ols: undetermined parameters held at 0; pcls: consistency alone)")
       ->capture_default_str();
   cmd->add_option("--range-width", opt.range_width,
                   "gd, ga, pf: each standard parameter searched within robot.json's value +- this x max(|value|, 5 % "
