@@ -2,7 +2,8 @@
 """Writes the URDF of a robot described in modified DH (robots/<name>/robot.json).
 
 Usage: export_urdf.py ROBOT_DIR > ROBOT_DIR/<name>.urdf
-Each joint becomes an origin (xyz, rpy) followed by a revolute joint about z; each link carries its
+Each joint becomes an origin (xyz, rpy) followed by a revolute joint about z (a prismatic joint along
+z where the row's sigma is 1); each link carries its
 mass, centre of mass and inertia about it (link axes), as in the description.
 """
 import math
@@ -42,7 +43,7 @@ def main():
         parent = "base_link" if i == 0 else f"link_{i}"
         ixx, ixy, ixz, iyy, iyz, izz = link["inertia"]
         out += [
-            f'  <joint name="joint_{i + 1}" type="revolute">',
+            f'  <joint name="joint_{i + 1}" type="{j.kind}">',
             f'    <origin xyz="{xyz}" rpy="{rpy}"/>',
             f'    <parent link="{parent}"/>', f'    <child link="link_{i + 1}"/>', '    <axis xyz="0 0 1"/>',
             f'    <limit lower="{limits["q_min"][i]}" upper="{limits["q_max"][i]}" effort="{limits["tau_max"][i]}" velocity="{limits["qd_max"][i]}"/>',

@@ -20,7 +20,7 @@ from dyncal_codegen.description import STANDARD_NAMES  # noqa: E402
 from dyncal_codegen.emit_cpp import CppPrinter  # noqa: E402
 from dyncal_codegen.tracer import live_program  # noqa: E402
 
-GENERATOR_VERSION = "4"
+GENERATOR_VERSION = "5"
 
 
 def input_digest(robot_dir, desc):
@@ -53,6 +53,8 @@ def banner(name, inputs, what, counts):
 def preamble(used, n, with_q=True, with_qd=True, with_qdd=True, indent="  "):
     out = []
     for i in range(n):
+        if sp.Symbol(f"q{i + 1}") in used:
+            out.append(f"{indent}const Scalar q{i + 1} = q[{i}];")
         has_c, has_s = sp.Symbol(f"c{i + 1}") in used, sp.Symbol(f"s{i + 1}") in used
         if has_c or has_s:
             out.append(f"{indent}const SinCos<Scalar> sc{i + 1} = sin_cos(q[{i}]);")
@@ -167,7 +169,8 @@ namespace {ns} {{
 
 /// Standard regressor Y ({n} x {n_std}): tau = Y(q, qd, qdd) * phi, phi the standard parameters
 /// (StandardParam order; 10 per link about the link frame origin, link axes, Khalil-Kleinfinger).
-/// q [rad], qd [rad/s], qdd [rad/s^2]; Y row i gives joint i+1's torque [Nm]. Gravity included.
+/// q [rad], qd [rad/s], qdd [rad/s^2] ([m], [m/s], [m/s^2] for a prismatic joint, kJointPrismatic);
+/// Y row i gives joint i+1's torque [Nm] (force [N] when prismatic). Gravity included.
 /// Allocation-free; every entry of Y is written.
 template <typename Scalar>
 inline void standard_regressor({args}, Eigen::Matrix<Scalar, {n}, {n_std}>& Y) noexcept {{
@@ -213,14 +216,14 @@ inline void base_regressor({args}, Eigen::Matrix<Scalar, {n}, Cols>& Yb) noexcep
 namespace {ns} {{
 
 /// Inverse dynamics by recursive Newton-Euler: tau [Nm] ({n}) from q [rad], qd [rad/s],
-/// qdd [rad/s^2] and the standard parameters phi ({n_std}, StandardParam order). Gravity included.
+/// qdd [rad/s^2] ([N], [m], [m/s], [m/s^2] for a prismatic joint) and the standard parameters phi ({n_std}, StandardParam order). Gravity included.
 template <typename Scalar>
 inline void inverse_dynamics({args}, const {pvec}& phi, {vec}& tau) noexcept {{
 {preamble(used_symbols(id_defs, tau), n)}
 {id_text}
 }}
 
-/// Joint-space mass matrix M(q) [kg m^2] ({n} x {n}, symmetric) for standard parameters phi:
+/// Joint-space mass matrix M(q) [kg m^2; kg m and kg on prismatic rows and columns] ({n} x {n}, symmetric) for standard parameters phi:
 /// tau = M(q) qdd + c(q, qd) + g(q). Only the lower triangle is derived; the upper one is mirrored.
 template <typename Scalar>
 inline void mass_matrix(const {vec}& q, const {pvec}& phi, Eigen::Matrix<Scalar, {n}, {n}>& M) noexcept {{
@@ -268,7 +271,10 @@ inline void mass_matrix(const {vec}& q, const {pvec}& phi, Eigen::Matrix<Scalar,
         Rn = [[float(j.R[r, c].evalf()) for c in range(3)] for r in range(3)]
         pn = [float(x) for x in j.p.evalf()]
         origins.append("    {{" + ", ".join(fmt(x) for row in Rn for x in row) + "}, {" + ", ".join(fmt(x) for x in pn) + "}}")
-    robot_id = fnv1a32("\n".join([name] + groupings + origins))
+    # A prismatic joint changes what the values mean: it enters the id (a revolute-only arm's id is as before).
+    kinds = [f"joint {i + 1} prismatic" for i, j in enumerate(joints) if j.kind == "prismatic"]
+    robot_id = fnv1a32("\n".join([name] + groupings + origins + kinds))
+    prismatic_list = ", ".join("true" if j.kind == "prismatic" else "false" for j in joints)
     nominal = ", ".join(fmt(x) for j in joints for x in j.standard)
     std_enum = ",\n".join(f"  {std_name(k)} = {k}" for k in range(n_std))
     base_enum = ",\n".join(f"  {nm} = {b}" for b, nm in enumerate(base_names))
@@ -327,11 +333,15 @@ inline constexpr bool kRotorInertiaSeparate[kNumJoints] = {{{rotor_sep}}};
 inline constexpr int kRotorInertiaAbsorbedInto[kNumJoints] = {{{", ".join(absorbed)}}};
 inline constexpr double kRotorInertiaAbsorbedCoefficient[kNumJoints] = {{{", ".join(absorbed_coeff)}}};
 
+/// Joint kinds: true where joint i is prismatic (q [m] along its z axis, tau a force [N]), false
+/// where it is revolute (q [rad] about z, tau [Nm]).
+inline constexpr bool kJointPrismatic[kNumJoints] = {{{prismatic_list}}};
+
 /// Gravity [m/s^2] in the base frame.
 inline constexpr double kGravity[3] = {{{", ".join(fmt(g) for g in desc["gravity"])}}};
 
-/// Joint i's fixed transform before its rotation about z: rotation (row-major) and offset [m]
-/// in the parent frame, T(i-1, i) = [R p] * Rz(q_i).
+/// Joint i's fixed transform before its motion along z: rotation (row-major) and offset [m]
+/// in the parent frame, T(i-1, i) = [R p] * Rz(q_i), or [R p] * Tz(q_i) where kJointPrismatic[i].
 struct JointOrigin {{
   double R[9];
   double p[3];
@@ -380,6 +390,8 @@ struct Robot {{
   /// First and last row (0-based joint) where base column b can be nonzero (kBaseColumnRows).
   static constexpr int base_column_first_row(int b) {{ return kBaseColumnRows[b][0]; }}
   static constexpr int base_column_last_row(int b) {{ return kBaseColumnRows[b][1]; }}
+  /// Whether joint j (0-based) is prismatic (q [m], tau [N]) rather than revolute (q [rad], tau [Nm]).
+  static constexpr bool joint_prismatic(int j) {{ return kJointPrismatic[j]; }}
   /// Gravity [m/s^2] along base axis i.
   static constexpr double gravity(int i) {{ return kGravity[i]; }}
   static constexpr const char* standard_param_name(int i) {{ return kStandardParamNames[i]; }}

@@ -51,7 +51,7 @@ ELBOW_LIMIT = '<limit lower="-2.5" upper="2.5" velocity="2.5" effort="60"/>'
 URDF_CASES = [
     ("not_xml", "this is not a URDF <robot", "not a readable URDF"),
     ("not_robot", '<?xml version="1.0"?><model name="x"/>', "not <robot>"),
-    ("prismatic", replace('name="elbow" type="revolute"', 'name="elbow" type="prismatic"'), "joint 'elbow' is prismatic"),
+    ("planar", replace('name="elbow" type="revolute"', 'name="elbow" type="planar"'), "joint 'elbow' is planar"),
     ("mimic", replace(ELBOW_LIMIT, ELBOW_LIMIT + '<mimic joint="pitch"/>'), "joint 'elbow' is a mimic joint"),
     ("branching", replace("</robot>", '<joint name="wrist2" type="revolute"><parent link="upper_arm"/>'
                           '<child link="side"/><axis xyz="0 0 1"/>'
@@ -157,9 +157,10 @@ def main():
         # Re-importing reproduces the committed test robots.
         for name in sorted(os.listdir(os.path.join(SRC, "tests/robots"))):
             out = os.path.join(tmp, "reimport")
-            rc, _, err = run(["robot", "import", os.path.join(SRC, f"tests/urdf/{name}.urdf"), "--name", name,
-                              "--robots-dir", out])
             committed = os.path.join(SRC, "tests/robots", name)
+            source = json.load(open(os.path.join(committed, "robot.json")))["source"]
+            rc, _, err = run(["robot", "import", os.path.join(SRC, f"tests/urdf/{name}.urdf"), "--name", name,
+                              "--base", source["base"], "--tip", source["tip"], "--robots-dir", out])
             for f in sorted(os.listdir(committed)):
                 a, b = open(os.path.join(committed, f), "rb").read(), open(os.path.join(out, name, f), "rb").read()
                 if a != b:

@@ -101,7 +101,7 @@ TEST_P(ExportMjcf, MujocoInverseDynamicsIsTheCompiledModel) {
   std::filesystem::remove_all(dir);
 }
 
-INSTANTIATE_TEST_SUITE_P(TestRobots, ExportMjcf, ::testing::Values("arm6", "cobot7"));
+INSTANTIATE_TEST_SUITE_P(TestRobots, ExportMjcf, ::testing::Values("arm6", "cobot7", "scara4", "torso7"));
 
 // A base-parameter file (wls) has no link inertials: one line, exit 2, no file.
 TEST(ExportMjcfErrors, BaseParametersAloneAreRefused) {

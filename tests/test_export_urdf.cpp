@@ -89,8 +89,12 @@ TEST_P(ExportUrdf, RoundTripsThroughKdlAndRobotImport) {
   ASSERT_EQ(forced.exit_code, 0) << forced.output;
   EXPECT_NE(read_text(wide).find("NOT DETERMINED"), std::string::npos);
 
-  // Re-import the written file as a new robot: its merged chain must pass the importer's KDL check.
-  ASSERT_EQ(run_dyncal("robot import " + out.string() + " --name roundtrip" + robots), 0);
+  // Re-import the written file as a new robot, on the chain the robot was imported with (its base and
+  // tip: torso7's URDF branches to wheels and fingers): its merged chain must pass the importer's KDL check.
+  const nlohmann::json source = read_json(std::filesystem::path(robot.directory) / "robot.json")["source"];
+  ASSERT_EQ(run_dyncal("robot import " + out.string() + " --name roundtrip --base " +
+                       source["base"].get<std::string>() + " --tip " + source["tip"].get<std::string>() + robots),
+            0);
   const std::string samples = (dir / "samples.json").string();
   ASSERT_EQ(std::system(("/usr/bin/python3 " + std::string(dyncal::test::source_dir()) +
                          "/codegen/import_urdf.py samples roundtrip" + robots + " --out " + samples)
@@ -126,7 +130,7 @@ TEST_P(ExportUrdf, RoundTripsThroughKdlAndRobotImport) {
   std::filesystem::remove_all(dir);
 }
 
-INSTANTIATE_TEST_SUITE_P(TestRobots, ExportUrdf, ::testing::Values("arm3", "arm6", "cobot7"));
+INSTANTIATE_TEST_SUITE_P(TestRobots, ExportUrdf, ::testing::Values("arm3", "arm6", "cobot7", "scara4", "torso7"));
 
 // A parameter file without link inertials (wls) cannot be exported: one line, exit 2, no file.
 TEST(ExportUrdfErrors, BaseParametersAloneAreRefused) {

@@ -25,7 +25,7 @@ def compile_program(defs, outputs, sym):
     n = sym.n
     lines = ["def f(q, qd, qdd):"]
     for i in range(n):
-        lines.append(f"    c{i + 1} = math.cos(q[{i}]); s{i + 1} = math.sin(q[{i}])")
+        lines.append(f"    q{i + 1} = q[{i}]; c{i + 1} = math.cos(q[{i}]); s{i + 1} = math.sin(q[{i}])")
         lines.append(f"    qd{i + 1} = qd[{i}]; qdd{i + 1} = qdd[{i}]")
     for s, e in defs:
         lines.append(f"    {s} = {e}")

@@ -1,8 +1,11 @@
-"""Robot descriptions: URDF or modified DH (Khalil-Kleinfinger) -> a chain of revolute joints.
+"""Robot descriptions: URDF or modified DH (Khalil-Kleinfinger) -> a chain of revolute and
+prismatic joints.
 
-Every joint i is reduced to a fixed transform followed by a rotation q_i about its own z axis:
-    T(i-1, i) = [R_fixed  p] * Rz(q_i)
-Link i's frame is the frame after that rotation. Angles within 1e-9 rad of a multiple of pi/2 are
+Every joint i is reduced to a fixed transform followed by its motion q_i along its own z axis: a
+rotation [rad] for a revolute joint, a translation [m] for a prismatic one (Khalil-Kleinfinger's
+sigma_i = 0 or 1):
+    T(i-1, i) = [R_fixed  p] * Rz(q_i)   or   [R_fixed  p] * Tz(q_i)
+Link i's frame is the frame after that motion. Angles within 1e-9 rad of a multiple of pi/2 are
 snapped to the exact value so that the generator folds the resulting zeros and ones.
 """
 import json
@@ -54,12 +57,17 @@ def rpy_matrix(rpy):
     return rot_z(exact_angle(rpy[2])) * rot_y(exact_angle(rpy[1])) * rot_x(exact_angle(rpy[0]))
 
 
-class Joint:
-    """One revolute joint: fixed rotation R (3x3 SymPy), fixed offset p (3x1, in the parent frame),
-    and the link it carries, as 10 standard parameters about the link frame origin."""
+REVOLUTE, PRISMATIC = "revolute", "prismatic"
 
-    def __init__(self, name, R, p, origin_xyz, origin_rpy, standard):
+
+class Joint:
+    """One joint: its kind (REVOLUTE: q turns about z; PRISMATIC: q slides along z), fixed rotation
+    R (3x3 SymPy), fixed offset p (3x1, in the parent frame), and the link it carries, as 10 standard
+    parameters about the link frame origin."""
+
+    def __init__(self, name, R, p, origin_xyz, origin_rpy, standard, kind=REVOLUTE):
         self.name = name
+        self.kind = kind
         self.R = R
         self.p = p
         self.origin_xyz = origin_xyz
@@ -106,12 +114,13 @@ def _mdh_joints(rows, links):
         theta = exact_angle(float(row["theta"]))
         a = exact_length(float(row["a"]))
         d = exact_length(float(row["d"]))
-        # Rx(alpha) Tx(a) Rz(theta) Tz(d) Rz(q)
+        # Rx(alpha) Tx(a) Rz(theta) Tz(d), then Rz(q) (sigma 0) or Tz(q) (sigma 1)
         R = rot_x(alpha) * rot_z(theta)
         p = sp.Matrix([a, 0, 0]) + rot_x(alpha) * sp.Matrix([0, 0, d])
         standard = None if link is None else standard_from_com(float(link["mass"]), link["com"], link["inertia"])
         xyz = [float(v) for v in p.evalf()]
-        joints.append(Joint(f"joint_{i + 1}", sp.simplify(R), p, xyz, None, standard))
+        kind = PRISMATIC if int(row.get("sigma", 0)) == 1 else REVOLUTE
+        joints.append(Joint(f"joint_{i + 1}", sp.simplify(R), p, xyz, None, standard, kind))
     return joints
 
 
@@ -151,8 +160,8 @@ def load_urdf(path):
                 raise DescriptionError(f"fixed joint '{j.get('name')}' carries mass; merge it first")
             current = child
             continue
-        if jtype not in ("revolute", "continuous"):
-            raise DescriptionError(f"joint '{j.get('name')}': only revolute joints are supported")
+        if jtype not in ("revolute", "continuous", "prismatic"):
+            raise DescriptionError(f"joint '{j.get('name')}': only revolute and prismatic joints are supported")
         axis = _floats(j.find("axis").get("xyz") if j.find("axis") is not None else "1 0 0", 3)
         if axis != [0.0, 0.0, 1.0]:
             raise DescriptionError(f"joint '{j.get('name')}': axis must be 0 0 1 (got {axis})")
@@ -167,7 +176,8 @@ def load_urdf(path):
             t = inertial.find("inertia")
             inertia = [float(t.get(k)) for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")]
             standard = standard_from_com(mass, cxyz, inertia, rpy_matrix(crpy))
-        joints.append(Joint(j.get("name"), sp.simplify(R), p, xyz, rpy, standard))
+        kind = PRISMATIC if jtype == "prismatic" else REVOLUTE
+        joints.append(Joint(j.get("name"), sp.simplify(R), p, xyz, rpy, standard, kind))
         current = child
     return joints
 
@@ -203,6 +213,11 @@ def load(robot_dir):
         raise DescriptionError(f"{path}: {e}") from None
     if len(joints) != n:
         raise DescriptionError(f"{path}: limits list {n} joints, the kinematics {len(joints)}")
+    kinds = desc.get("joint_types", [REVOLUTE] * n if desc["kinematics"]["format"] == "urdf" else None)
+    for i, j in enumerate(joints):
+        if kinds is not None and kinds[i] != j.kind:
+            raise DescriptionError(f"{path}: joint_types[{i + 1}] is {kinds[i]}, the kinematics' joint {i + 1} "
+                                   f"is {j.kind}")
     desc.setdefault("gravity", [0.0, 0.0, -9.81])
     return desc, joints
 

@@ -4,6 +4,7 @@ kinematics) and, when no link off that chain below the first joint carries mass,
 Newton-Euler on the URDF's own chain (fixed joints as KDL fixed segments, axes as given, massive
 fixed links past the tip included) against the normalised chain; the fixed base's mass does not
 enter joint torques. Tolerance: 1e-9, relative to max(1, |value|)."""
+import copy
 import math
 import random
 
@@ -34,7 +35,8 @@ def urdf_chain(links, path_joints, rigid=frozenset()):
         f = _frame(j.origin)
         if j.moves and j.name not in rigid:
             axis = f.M * kdl.Vector(*[float(v) for v in j.axis])
-            joint = kdl.Joint(j.name, f.p, axis, kdl.Joint.RotAxis)
+            kind = kdl.Joint.TransAxis if j.type == "prismatic" else kdl.Joint.RotAxis
+            joint = kdl.Joint(j.name, f.p, axis, kind)
         else:
             joint = kdl.Joint(j.name, kdl.Joint.Fixed)
         chain.addSegment(kdl.Segment(j.child, joint, f, _inertia(_link_inertial(links[j.child], j.child))))
@@ -47,7 +49,8 @@ def normalised_chain(chain):
     out = kdl.Chain()
     for j in chain.joints:
         f = _frame(j["T_fixed"])
-        joint = kdl.Joint(j["name"], f.p, f.M * kdl.Vector(0, 0, 1), kdl.Joint.RotAxis)
+        kind = kdl.Joint.TransAxis if j["type"] == "prismatic" else kdl.Joint.RotAxis
+        joint = kdl.Joint(j["name"], f.p, f.M * kdl.Vector(0, 0, 1), kind)
         out.addSegment(kdl.Segment(j["name"], joint, f, _inertia(j["body"])))
     return out
 
@@ -70,29 +73,40 @@ def _subtree_links(link, children):
     return out
 
 
-def _subtree_mass(link, links, children):
-    return sum(_link_inertial(links[name], name).mass for name in _subtree_links(link, children))
+def _rigid_subtree(tip, children):
+    """The joints below `tip` in depth-first order, each re-expressed as a segment after the previous
+    one: a rigid subtree (fixed joints, and moving joints past the tip taken at zero position) is a
+    chain of fixed segments whose frames are each relative to the previous segment's, which KDL's
+    chain solvers take exactly (a gripper's two fingers are siblings in the URDF)."""
+    out = []
+    T_prev = np.eye(4)
+
+    def visit(link, T_link):
+        nonlocal T_prev
+        for j in children.get(link, []):
+            T_child = T_link @ j.origin
+            segment = copy.copy(j)
+            segment.origin = np.linalg.solve(T_prev, T_child)
+            out.append(segment)
+            T_prev = T_child
+            visit(j.child, T_child)
+
+    visit(tip, np.eye(4))
+    return out
 
 
 def _urdf_path(links, joints, chain):
-    """The URDF's joints from the chain's base to its tip, extended past the tip through the fixed
-    links that carry mass while they form one chain (a flange, a tool); and whether any link off
-    that path below the first moving joint carries mass (then the chain alone is not the URDF's
-    dynamics), and the moving joints past the tip on that extension (import takes them rigid at zero
-    position: so does the check)."""
+    """The URDF's joints from the chain's base to its tip, extended past the tip through every link
+    below it (_rigid_subtree: a flange, a tool, a gripper's fingers); whether any link off that path
+    below the first moving joint carries mass (then the chain alone is not the URDF's dynamics), and
+    the moving joints past the tip (import takes them rigid at zero position: so does the check)."""
     children, parent_joint = {}, {}
     for j in joints:
         children.setdefault(j.parent, []).append(j)
         parent_joint[j.child] = j
     path_joints = _path(chain.base, chain.tip, parent_joint, children)
     past_tip = len(path_joints)
-    link = chain.tip
-    while True:
-        massive = [j for j in children.get(link, []) if _subtree_mass(j.child, links, children) > 0]
-        if len(massive) != 1:
-            break
-        path_joints.append(massive[0])
-        link = massive[0].child
+    path_joints += _rigid_subtree(chain.tip, children)
     moving_body = {j.child for j in path_joints[path_joints.index(_first(path_joints)):]}
     below = _subtree_links(_first(path_joints).child, children)
     off_path_mass = any(_link_inertial(links[name], name).mass > 0 for name in below if name not in moving_body)
@@ -157,7 +171,7 @@ def torques_at(links, joints, chain, gravity, states):
 
 def torque_samples(links, joints, chain, gravity, count=200, seed=7):
     """torques_at `count` seeded random states: a list of {"q", "qd", "qdd", "tau"} (rad, rad/s,
-    rad/s^2, Nm), or None (torques_at). The oracle `dyncal robot check` runs the compiled model
+    rad/s^2, Nm; m, m/s, m/s^2, N for a prismatic joint), or None (torques_at). The oracle `dyncal robot check` runs the compiled model
     against."""
     n = len(chain.joints)
     rng = random.Random(seed)

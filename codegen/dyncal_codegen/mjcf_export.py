@@ -1,11 +1,12 @@
 """The identified model as an MJCF file for MuJoCo (dyncal export mjcf, docs/export.md).
 
 The arm is the robot's chain as dyncal compiles it (description.py: joint i is a fixed transform
-[R p] followed by a rotation about its own z): one MJCF <body> per joint at pos = p, quat = R in its
-parent body, a hinge joint about z at the body's origin, and the identified body as an <inertial>
+[R p] followed by a rotation about or a translation along its own z): one MJCF <body> per joint at
+pos = p, quat = R in its parent body, a hinge (revolute) or slide (prismatic) joint about or along z
+at the body's origin, and the identified body as an <inertial>
 (mass, centre of mass, principal moments and axes of the inertia about it; body frame). Per joint, what MuJoCo's joint holds:
-armature = rotor inertia reflected to the joint (Ia, kg m^2), damping = viscous friction (Fv,
-N m s/rad), frictionloss = Coulomb friction (Fc, Nm) (MuJoCo XML reference, <joint>). Every other
+armature = rotor inertia reflected to the joint (Ia, kg m^2; kg for a slide), damping = viscous
+friction (Fv, N m s/rad; N s/m), frictionloss = Coulomb friction (Fc, Nm; N) (MuJoCo XML reference, <joint>). Every other
 identified term (offsets, Stribeck, couplings, effects, terms acting through a coupled
 transmission) has no place in a MuJoCo joint: it is kept as <custom><numeric name="dyncal_NAME">
 and named in a comment. The file carries dynamics only: no geometry (no <geom>), so no contacts.
@@ -96,7 +97,8 @@ def export(robot_dir, model):
                              {"name": names[i], "pos": " ".join(_fmt(v) for v in p),
                               "quat": " ".join(_fmt(v) for v in quaternion(R))})
         ET.SubElement(body, "joint",
-                      {"name": j.name, "type": "hinge", "axis": "0 0 1", "limited": "true",
+                      {"name": j.name, "type": "slide" if j.kind == "prismatic" else "hinge", "axis": "0 0 1",
+                       "limited": "true",
                        "range": f"{_fmt(limits['q_min'][i])} {_fmt(limits['q_max'][i])}",
                        "armature": _fmt(terms["armature"]), "damping": _fmt(terms["damping"]),
                        "frictionloss": _fmt(terms["frictionloss"])})

@@ -60,6 +60,9 @@ def validate(desc, robot_dir):
                 if not isinstance(row, dict) or k not in row:
                     raise SchemaError(f"kinematics.joints[{i + 1}].{k}: missing")
                 _number(row[k], f"kinematics.joints[{i + 1}].{k}")
+            if "sigma" in row and (isinstance(row["sigma"], bool) or row["sigma"] not in (0, 1)):
+                raise SchemaError(f"kinematics.joints[{i + 1}].sigma: expected 0 (revolute) or 1 (prismatic), "
+                                  f"got {row['sigma']!r}")
         links = desc.get("links")
         if not isinstance(links, list) or len(links) != len(rows):
             raise SchemaError(f"links: expected one entry per joint ({len(rows)}) for an mdh description")
@@ -80,6 +83,13 @@ def validate(desc, robot_dir):
         raise SchemaError(f"kinematics.format: expected 'mdh' or 'urdf', got {fmt!r}")
     if "gravity" in desc:
         _vector(desc, "gravity", 3, "")
+    types = desc.get("joint_types")
+    if types is not None:
+        if not isinstance(types, list) or (n is not None and len(types) != n):
+            raise SchemaError("joint_types: expected a list of \"revolute\" or \"prismatic\", one per joint")
+        for i, t in enumerate(types):
+            if t not in ("revolute", "prismatic"):
+                raise SchemaError(f"joint_types[{i + 1}]: expected \"revolute\" or \"prismatic\", got {t!r}")
     if "rotor_inertia" in desc and not isinstance(desc["rotor_inertia"], bool):
         raise SchemaError("rotor_inertia: expected true or false")
     lim = _object(desc, "limits", "")
@@ -87,6 +97,8 @@ def validate(desc, robot_dir):
     n = len(q_min)
     if not 1 <= n <= 7:
         raise SchemaError(f"limits.q_min: {n} joints; dyncal takes 1 to 7")
+    if types is not None and len(types) != n:
+        raise SchemaError(f"joint_types: {len(types)} entries, expected {n} (one per joint)")
     q_max = _vector(lim, "q_max", n, "limits")
     for i in range(n):
         if q_max[i] <= q_min[i]:

@@ -1,16 +1,16 @@
 """A stock URDF -> dyncal's normalised serial chain (docs/robots.md, "Importing a URDF").
 
-The normalised chain is what the code generator reads: one revolute joint per moving URDF joint,
-each a fixed transform [R p] followed by a rotation q about its own +z axis, and one rigid body per
-joint (the URDF links it carries, lumped). From a stock URDF:
+The normalised chain is what the code generator reads: one joint per moving URDF joint, each a
+fixed transform [R p] followed by a rotation q about (revolute, continuous) or a translation q along
+(prismatic) its own +z axis, and one rigid body per joint (the URDF links it carries, lumped). From a stock URDF:
 - fixed joints are merged: a link attached by fixed joints (a flange, a tool0 frame, a sensor) is
   lumped into the body of the moving joint before it, its inertial included; the links before the
   first moving joint form the fixed base, whose mass does not enter the dynamics;
 - any joint axis is handled by re-expressing the joint's child frame: with A a rotation taking +z to
   the axis, Rot(axis, q) = A Rz(q) A^T, so the new frame F' = F A turns about its own +z (A is an
-  exact quarter or half turn for +-x, +-y, -z);
-- revolute and continuous joints are accepted; prismatic, planar, floating joints, mimic joints and
-  a tree whose moving joints branch are refused with one line naming the joint or link.
+  exact quarter or half turn for +-x, +-y, -z); likewise Trans(axis, q) = A Tz(q) A^T;
+- revolute, continuous and prismatic joints are accepted; planar and floating joints, mimic joints
+  and a tree whose moving joints branch are refused with one line naming the joint or link.
 Errors are ImportError_ with a one-line message.
 """
 import math
@@ -156,7 +156,7 @@ class UrdfJoint:
         self.mimic = el.find("mimic") is not None
         axis = np.array(_floats(el.find("axis"), "xyz", 3, where + " <axis>", [1, 0, 0]))
         norm = np.linalg.norm(axis)
-        if self.type in ("revolute", "continuous") and norm < 1e-9:
+        if self.type in ("revolute", "continuous", "prismatic") and norm < 1e-9:
             raise ImportError_(f"{where}: zero axis")
         self.axis = axis / norm if norm > 0 else axis
         lim = el.find("limit")
@@ -278,8 +278,9 @@ def normalise(path, base=None, tip=None):
             raise ImportError_(f"{what} link '{name}' is not in the URDF")
     path_joints = _path(base, tip, parent_joint, children)
     for j in path_joints:
-        if j.type not in ("revolute", "continuous", "fixed"):
-            raise ImportError_(f"joint '{j.name}' is {j.type}: dyncal models revolute and continuous joints only")
+        if j.type not in ("revolute", "continuous", "prismatic", "fixed"):
+            raise ImportError_(f"joint '{j.name}' is {j.type}: dyncal models revolute, continuous and prismatic "
+                               "joints only")
         if j.mimic:
             raise ImportError_(f"joint '{j.name}' is a mimic joint: dyncal models independent joints only")
     moving = [j for j in path_joints if j.moves]

@@ -112,6 +112,19 @@ void read_kinematics(const Reader& rd, const json& j, RobotDescription& r) {
             "expected \"mdh\" or \"urdf\", got " + (kin.contains("format") ? kin["format"].dump() : "nothing"));
   r.kinematics_format = kin["format"].get<std::string>();
   const int n = r.num_joints;
+  r.prismatic.assign(static_cast<size_t>(n), false);
+  if (j.contains("joint_types")) {
+    const json& types = j["joint_types"];
+    if (!types.is_array() || static_cast<int>(types.size()) != n)
+      rd.fail("joint_types", "expected a list of " + std::to_string(n) + " joint types (one per joint)");
+    for (int k = 0; k < n; ++k) {
+      const json& t = types[static_cast<size_t>(k)];
+      if (!t.is_string() || (t != "revolute" && t != "prismatic"))
+        rd.fail("joint_types[" + std::to_string(k + 1) + "]",
+                "expected \"revolute\" or \"prismatic\", got " + t.dump());
+      r.prismatic[static_cast<size_t>(k)] = t == "prismatic";
+    }
+  }
   if (r.kinematics_format == "urdf") {
     std::error_code ec;
     if (!kin.contains("file") || !kin["file"].is_string() ||
@@ -130,6 +143,16 @@ void read_kinematics(const Reader& rd, const json& j, RobotDescription& r) {
       if (!row.contains(key)) rd.fail(field + "." + key, "missing");
       rd.number(row[key], field + "." + key);
     }
+    bool sigma = false;
+    if (row.contains("sigma")) {
+      const json& s = row["sigma"];
+      if (!s.is_number_integer() || (s != 0 && s != 1))
+        rd.fail(field + ".sigma", "expected 0 (revolute) or 1 (prismatic), got " + s.dump());
+      sigma = s == 1;
+    }
+    if (j.contains("joint_types") && sigma != r.prismatic[static_cast<size_t>(k)])
+      rd.fail("joint_types[" + std::to_string(k + 1) + "]", "differs from " + field + ".sigma");
+    r.prismatic[static_cast<size_t>(k)] = sigma;
   }
   if (!j.contains("links") || !j["links"].is_array() || static_cast<int>(j["links"].size()) != n)
     rd.fail("links",
@@ -236,6 +259,19 @@ void read_log_formats(const Reader& rd, const json& j, RobotDescription& r) {
 }
 
 }  // namespace
+
+bool is_prismatic(const RobotDescription& robot, int j) {
+  return j >= 0 && static_cast<size_t>(j) < robot.prismatic.size() && robot.prismatic[static_cast<size_t>(j)];
+}
+const char* position_unit(const RobotDescription& robot, int j) {
+  return is_prismatic(robot, j) ? "m" : "rad";
+}
+const char* velocity_unit(const RobotDescription& robot, int j) {
+  return is_prismatic(robot, j) ? "m/s" : "rad/s";
+}
+const char* effort_unit(const RobotDescription& robot, int j) {
+  return is_prismatic(robot, j) ? "N" : "Nm";
+}
 
 std::string default_robots_dir() {
   if (const char* env = std::getenv("DYNCAL_ROBOTS")) return env;

@@ -6,7 +6,7 @@
 namespace dyncal::host {
 namespace {
 
-/// Frames of joints 1..link in the base frame: rotation and origin of each (after its Rz(q_i)).
+/// Frames of joints 1..link in the base frame: rotation and origin of each (after its Rz(q_i) or Tz(q_i)).
 void chain(const JointOrigins& origins, const double* q, int link, Eigen::Matrix3d* R, Eigen::Vector3d* o) {
   Eigen::Matrix3d Rc = Eigen::Matrix3d::Identity();
   Eigen::Vector3d pc = Eigen::Vector3d::Zero();
@@ -15,7 +15,12 @@ void chain(const JointOrigins& origins, const double* q, int link, Eigen::Matrix
     const Eigen::Matrix3d Ri = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(f.R.data());
     const Eigen::Vector3d pi(f.p[0], f.p[1], f.p[2]);
     pc = pc + Rc * pi;
-    Rc = Rc * Ri * Eigen::AngleAxisd(q[i], Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    if (f.prismatic) {
+      Rc = Rc * Ri;
+      pc = pc + Rc.col(2) * q[i];
+    } else {
+      Rc = Rc * Ri * Eigen::AngleAxisd(q[i], Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    }
     R[i] = Rc;
     o[i] = pc;
   }
@@ -42,8 +47,9 @@ std::array<double, kMaxDriveJoints> contact_joint_torque(const JointOrigins& ori
   const Eigen::Vector3d p = o[n - 1] + R[n - 1] * Eigen::Vector3d(point[0], point[1], point[2]);
   std::array<double, kMaxDriveJoints> tau{};
   for (int j = 0; j < n; ++j) {
-    // Joint j turns about its frame's z (the rotation Rz(q_j) leaves z where the origin put it).
-    tau[static_cast<size_t>(j)] = R[j].col(2).dot((p - o[j]).cross(force));
+    // Joint j turns about (slides along) its frame's z: Rz(q_j) and Tz(q_j) leave z where the origin put it.
+    const JointOrigin& f = origins[static_cast<size_t>(j)];
+    tau[static_cast<size_t>(j)] = f.prismatic ? R[j].col(2).dot(force) : R[j].col(2).dot((p - o[j]).cross(force));
   }
   return tau;
 }

@@ -1,5 +1,5 @@
 // GENERATED FILE - DO NOT EDIT.
-// Generator: codegen/generate.py (dyncal codegen 4, SymPy 1.11.1)
+// Generator: codegen/generate.py (dyncal codegen 5, SymPy 1.11.1)
 // Robot: er20; inputs: robots/er20/robot.json (sha256 4a57ae3dca2a7e3c)
 // Contents: parameter index names, standard->base map, kinematic data
 // Include as "dyncal/generated/er20/<file>.hpp". Regenerate: cmake --build <build> --target regenerate (or scripts/codegen).
@@ -185,11 +185,15 @@ inline constexpr bool kRotorInertiaSeparate[kNumJoints] = {false, false, true, t
 inline constexpr int kRotorInertiaAbsorbedInto[kNumJoints] = {0, 5, -1, -1, -1, -1};
 inline constexpr double kRotorInertiaAbsorbedCoefficient[kNumJoints] = {1.0, 1.0, 0.0, 0.0, 0.0, 0.0};
 
+/// Joint kinds: true where joint i is prismatic (q [m] along its z axis, tau a force [N]), false
+/// where it is revolute (q [rad] about z, tau [Nm]).
+inline constexpr bool kJointPrismatic[kNumJoints] = {false, false, false, false, false, false};
+
 /// Gravity [m/s^2] in the base frame.
 inline constexpr double kGravity[3] = {0.0, 0.0, -9.81};
 
-/// Joint i's fixed transform before its rotation about z: rotation (row-major) and offset [m]
-/// in the parent frame, T(i-1, i) = [R p] * Rz(q_i).
+/// Joint i's fixed transform before its motion along z: rotation (row-major) and offset [m]
+/// in the parent frame, T(i-1, i) = [R p] * Rz(q_i), or [R p] * Tz(q_i) where kJointPrismatic[i].
 struct JointOrigin {
   double R[9];
   double p[3];

@@ -1,5 +1,5 @@
 // GENERATED FILE - DO NOT EDIT.
-// Generator: codegen/generate.py (dyncal codegen 4, SymPy 1.11.1)
+// Generator: codegen/generate.py (dyncal codegen 5, SymPy 1.11.1)
 // Robot: er20; inputs: robots/er20/robot.json (sha256 4a57ae3dca2a7e3c)
 // Contents: the Robot traits type gathering the generated model
 // Include as "dyncal/generated/er20/<file>.hpp". Regenerate: cmake --build <build> --target regenerate (or scripts/codegen).
@@ -31,6 +31,8 @@ struct Robot {
   /// First and last row (0-based joint) where base column b can be nonzero (kBaseColumnRows).
   static constexpr int base_column_first_row(int b) { return kBaseColumnRows[b][0]; }
   static constexpr int base_column_last_row(int b) { return kBaseColumnRows[b][1]; }
+  /// Whether joint j (0-based) is prismatic (q [m], tau [N]) rather than revolute (q [rad], tau [Nm]).
+  static constexpr bool joint_prismatic(int j) { return kJointPrismatic[j]; }
   /// Gravity [m/s^2] along base axis i.
   static constexpr double gravity(int i) { return kGravity[i]; }
   static constexpr const char* standard_param_name(int i) { return kStandardParamNames[i]; }

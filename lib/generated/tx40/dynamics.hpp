@@ -1,5 +1,5 @@
 // GENERATED FILE - DO NOT EDIT.
-// Generator: codegen/generate.py (dyncal codegen 4, SymPy 1.11.1)
+// Generator: codegen/generate.py (dyncal codegen 5, SymPy 1.11.1)
 // Robot: tx40; inputs: robots/tx40/robot.json (sha256 fdac684fe7e00f95), robots/tx40/tx40.urdf (sha256 3d00cbd46279c915)
 // Contents: inverse dynamics tau(q, qd, qdd, phi) and mass matrix M(q, phi)
 // Operation count inverse_dynamics: 360 multiplications, 299 additions (plus dyncal::sin_cos of q)
@@ -15,7 +15,7 @@
 namespace dyncal::generated::tx40 {
 
 /// Inverse dynamics by recursive Newton-Euler: tau [Nm] (6) from q [rad], qd [rad/s],
-/// qdd [rad/s^2] and the standard parameters phi (60, StandardParam order). Gravity included.
+/// qdd [rad/s^2] ([N], [m], [m/s], [m/s^2] for a prismatic joint) and the standard parameters phi (60, StandardParam order). Gravity included.
 template <typename Scalar>
 inline void inverse_dynamics(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matrix<Scalar, 6, 1>& qd, const Eigen::Matrix<Scalar, 6, 1>& qdd, const Eigen::Matrix<Scalar, 60, 1>& phi, Eigen::Matrix<Scalar, 6, 1>& tau) noexcept {
   const SinCos<Scalar> sc2 = sin_cos(q[1]);
@@ -334,7 +334,7 @@ inline void inverse_dynamics(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::
   tau[0] = x250;
 }
 
-/// Joint-space mass matrix M(q) [kg m^2] (6 x 6, symmetric) for standard parameters phi:
+/// Joint-space mass matrix M(q) [kg m^2; kg m and kg on prismatic rows and columns] (6 x 6, symmetric) for standard parameters phi:
 /// tau = M(q) qdd + c(q, qd) + g(q). Only the lower triangle is derived; the upper one is mirrored.
 template <typename Scalar>
 inline void mass_matrix(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matrix<Scalar, 60, 1>& phi, Eigen::Matrix<Scalar, 6, 6>& M) noexcept {

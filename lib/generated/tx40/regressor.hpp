@@ -1,5 +1,5 @@
 // GENERATED FILE - DO NOT EDIT.
-// Generator: codegen/generate.py (dyncal codegen 4, SymPy 1.11.1)
+// Generator: codegen/generate.py (dyncal codegen 5, SymPy 1.11.1)
 // Robot: tx40; inputs: robots/tx40/robot.json (sha256 fdac684fe7e00f95), robots/tx40/tx40.urdf (sha256 3d00cbd46279c915)
 // Contents: standard regressor Y and base regressor Y_b
 // Operation count standard_regressor: 561 multiplications, 376 additions (plus dyncal::sin_cos of q)
@@ -16,7 +16,8 @@ namespace dyncal::generated::tx40 {
 
 /// Standard regressor Y (6 x 60): tau = Y(q, qd, qdd) * phi, phi the standard parameters
 /// (StandardParam order; 10 per link about the link frame origin, link axes, Khalil-Kleinfinger).
-/// q [rad], qd [rad/s], qdd [rad/s^2]; Y row i gives joint i+1's torque [Nm]. Gravity included.
+/// q [rad], qd [rad/s], qdd [rad/s^2] ([m], [m/s], [m/s^2] for a prismatic joint, kJointPrismatic);
+/// Y row i gives joint i+1's torque [Nm] (force [N] when prismatic). Gravity included.
 /// Allocation-free; every entry of Y is written.
 template <typename Scalar>
 inline void standard_regressor(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matrix<Scalar, 6, 1>& qd, const Eigen::Matrix<Scalar, 6, 1>& qdd, Eigen::Matrix<Scalar, 6, 60>& Y) noexcept {

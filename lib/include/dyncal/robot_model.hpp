@@ -34,7 +34,8 @@ inline constexpr int kMaxRobotJoints = 7;
 ///   `base_column_first_row(b)` / `base_column_last_row(b)` (rows where base column b can be
 ///   nonzero), `rotor_inertia_separate(j)` / `rotor_inertia_absorbed_into(j)` (0-based joint;
 ///   the base parameter Ia_j is grouped into, -1 when the description declares no rotor inertia),
-///   `gravity(i)` [m/s^2] along base axis i.
+///   `gravity(i)` [m/s^2] along base axis i, `joint_prismatic(j)` (q [m] and tau [N] where true,
+///   q [rad] and tau [Nm] where false).
 template <class R, class = void>
 struct is_robot_model : std::false_type {};
 
@@ -62,7 +63,8 @@ using RobotModelMembers = std::void_t<
     decltype(static_cast<const char*>(R::standard_param_name(0))),
     decltype(static_cast<int>(R::base_column_first_row(0))), decltype(static_cast<int>(R::base_column_last_row(0))),
     decltype(static_cast<bool>(R::rotor_inertia_separate(0))),
-    decltype(static_cast<int>(R::rotor_inertia_absorbed_into(0))), decltype(static_cast<double>(R::gravity(0)))>;
+    decltype(static_cast<int>(R::rotor_inertia_absorbed_into(0))), decltype(static_cast<double>(R::gravity(0))),
+    decltype(static_cast<bool>(R::joint_prismatic(0)))>;
 }  // namespace detail
 
 template <class R>

@@ -70,24 +70,33 @@ std::vector<std::string> column_names(const std::string& names, bool expand, int
   return out;
 }
 
-/// The factor from `unit` to the signal's SI unit, or InputError listing the signal's units.
-double unit_scale(const std::string& signal, const std::string& unit, bool& current, const std::string& where) {
+/// The factor from `unit` to the signal's SI unit, and whether the unit is linear (m, N: a prismatic
+/// joint's) rather than angular (rad, Nm: a revolute joint's; time and current are both); or
+/// InputError listing the signal's units.
+double unit_scale(const std::string& signal, const std::string& unit, bool& current, bool& linear,
+                  const std::string& where) {
   const double deg = M_PI / 180.0;
-  static const std::map<std::string, std::vector<std::pair<std::string, double>>> units{
-      {"t", {{"s", 1.0}, {"ms", 1e-3}, {"us", 1e-6}, {"ns", 1e-9}}},
-      {"q", {{"rad", 1.0}, {"deg", deg}}},
-      {"qd", {{"rad/s", 1.0}, {"deg/s", deg}}},
-      {"qdd", {{"rad/s^2", 1.0}, {"deg/s^2", deg}}},
-      {"tau", {{"Nm", 1.0}, {"mNm", 1e-3}, {"current", 1.0}}},
+  struct Unit {
+    const char* name;
+    double factor;
+    bool linear;
+  };
+  static const std::map<std::string, std::vector<Unit>> units{
+      {"t", {{"s", 1.0, false}, {"ms", 1e-3, false}, {"us", 1e-6, false}, {"ns", 1e-9, false}}},
+      {"q", {{"rad", 1.0, false}, {"deg", deg, false}, {"m", 1.0, true}, {"mm", 1e-3, true}}},
+      {"qd", {{"rad/s", 1.0, false}, {"deg/s", deg, false}, {"m/s", 1.0, true}, {"mm/s", 1e-3, true}}},
+      {"qdd", {{"rad/s^2", 1.0, false}, {"deg/s^2", deg, false}, {"m/s^2", 1.0, true}, {"mm/s^2", 1e-3, true}}},
+      {"tau", {{"Nm", 1.0, false}, {"mNm", 1e-3, false}, {"N", 1.0, true}, {"current", 1.0, false}}},
   };
   const auto& list = units.at(signal);
   std::string known;
-  for (const auto& [name, factor] : list) {
-    if (name == unit) {
+  for (const Unit& u : list) {
+    if (u.name == unit) {
       current = unit == "current";
-      return factor;
+      linear = u.linear;
+      return u.factor;
     }
-    known += (known.empty() ? "" : ", ") + name;
+    known += (known.empty() ? "" : ", ") + std::string(u.name);
   }
   throw InputError(where + ": unit '" + unit + "' is not one of " + known);
 }
@@ -114,17 +123,35 @@ ColumnMap parse_column_map(const std::string& spec, int joints) {
       throw InputError(where + ": signal '" + signal + "' is not one of t, q, qd, qdd, tau");
     if (seen[signal]) throw InputError(where + ": " + signal + " is mapped twice");
     seen[signal] = true;
-    bool current = false;
-    const double scale = unit.empty() ? 1.0 : unit_scale(signal, unit, current, where);
+    // Up to two units, "angular|linear" (deg|mm): the revolute joints' and the prismatic joints'.
+    double scale = 1.0, linear_scale = 1.0;
+    bool current = false, have_angular = false, have_linear = false;
+    for (std::string rest = unit; !rest.empty();) {
+      const auto bar = rest.find('|');
+      const std::string u = trim_field(rest.substr(0, bar));
+      rest = bar == std::string::npos ? "" : rest.substr(bar + 1);
+      bool is_current = false, linear = false;
+      const double f = unit_scale(signal, u, is_current, linear, where);
+      bool& have = linear ? have_linear : have_angular;
+      if (have)
+        throw InputError(where + ": two " + (linear ? "linear" : "angular") + " units; give one of each: deg|mm");
+      have = true;
+      (linear ? linear_scale : scale) = f;
+      current = current || is_current;
+    }
     if (signal == "t") {
+      if (have_linear) throw InputError(where + ": a time unit is one of s, ms, us, ns");
       map.t = column_names(names, false, joints, where).front();
       map.t_scale = scale;
     } else {
       std::vector<std::string> cols = column_names(names, true, joints, where);
-      if (signal == "q") map.q = std::move(cols), map.q_scale = scale;
-      if (signal == "qd") map.qd = std::move(cols), map.qd_scale = scale;
-      if (signal == "qdd") map.qdd = std::move(cols), map.qdd_scale = scale;
-      if (signal == "tau") map.effort = std::move(cols), map.effort_scale = scale, map.effort_is_current = current;
+      if (current) linear_scale = scale;  // a current is a current on any joint
+      if (signal == "q") map.q = std::move(cols), map.q_scale = scale, map.q_linear_scale = linear_scale;
+      if (signal == "qd") map.qd = std::move(cols), map.qd_scale = scale, map.qd_linear_scale = linear_scale;
+      if (signal == "qdd") map.qdd = std::move(cols), map.qdd_scale = scale, map.qdd_linear_scale = linear_scale;
+      if (signal == "tau")
+        map.effort = std::move(cols), map.effort_scale = scale, map.force_scale = linear_scale,
+        map.effort_is_current = current;
     }
   }
   for (const char* required : {"t", "q", "tau"}) {
@@ -150,20 +177,21 @@ JointLog read_mapped_csv_log(const std::string& path, const ColumnMap& map, int 
     if (it == col.end()) throw InputError(path + ": no column '" + name + "' (" + map.origin + ")");
     return it->second;
   };
-  auto block = [&](const std::vector<std::string>& names, double scale) {
+  auto block = [&](const std::vector<std::string>& names, double scale, double linear_scale) {
     Eigen::MatrixXd m(csv.values.rows(), joints);
-    for (int j = 0; j < joints; ++j) m.col(j) = scale * csv.values.col(find(names[static_cast<size_t>(j)]));
+    for (int j = 0; j < joints; ++j)
+      m.col(j) = map.joint_scale(j, scale, linear_scale) * csv.values.col(find(names[static_cast<size_t>(j)]));
     return m;
   };
   JointLog log;
   log.source = path + " (" + map.origin + ")";
   log.t = map.t_scale * csv.values.col(find(map.t));
-  log.q = block(map.q, map.q_scale);
-  log.tau = block(map.effort, map.effort_scale);
+  log.q = block(map.q, map.q_scale, map.q_linear_scale);
+  log.tau = block(map.effort, map.effort_scale, map.force_scale);
   log.has_qd = !map.qd.empty();
   log.has_qdd = !map.qdd.empty();
-  if (log.has_qd) log.qd = block(map.qd, map.qd_scale);
-  if (log.has_qdd) log.qdd = block(map.qdd, map.qdd_scale);
+  if (log.has_qd) log.qd = block(map.qd, map.qd_scale, map.qd_linear_scale);
+  if (log.has_qdd) log.qdd = block(map.qdd, map.qdd_scale, map.qdd_linear_scale);
   check_log_time(log.t, path);
   return log;
 }

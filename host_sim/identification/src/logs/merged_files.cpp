@@ -118,7 +118,7 @@ JointLog read_merged_csv_logs(const std::vector<std::string>& paths, const Colum
     throw InputError("the files of --data share fewer than 3 samples in time (" + q.file->path +
                      "'s stamps within the others' spans)");
   // A signal at the kept stamps: its own rows, or interpolated linearly in its file.
-  const auto at_stamps = [&](const Source& s, double scale) {
+  const auto at_stamps = [&](const Source& s, double angular_scale, double linear_scale) {
     Eigen::MatrixXd m(S, joints);
     const Eigen::VectorXd& t = s.file->t;
     for (Eigen::Index r = 0; r < S; ++r) {
@@ -129,7 +129,8 @@ JointLog read_merged_csv_logs(const std::vector<std::string>& paths, const Colum
       const double w = hi == lo ? 0.0 : (x - t[lo]) / (t[hi] - t[lo]);
       for (int j = 0; j < joints; ++j) {
         const Eigen::Index c = s.columns[static_cast<size_t>(j)];
-        m(r, j) = scale * ((1.0 - w) * s.file->csv.values(lo, c) + w * s.file->csv.values(hi, c));
+        m(r, j) = map.joint_scale(j, angular_scale, linear_scale) *
+                  ((1.0 - w) * s.file->csv.values(lo, c) + w * s.file->csv.values(hi, c));
       }
     }
     return m;
@@ -137,12 +138,12 @@ JointLog read_merged_csv_logs(const std::vector<std::string>& paths, const Colum
   JointLog log;
   log.t.resize(S);
   for (Eigen::Index r = 0; r < S; ++r) log.t[r] = grid[kept[static_cast<size_t>(r)]];
-  log.q = at_stamps(q, map.q_scale);
-  log.tau = at_stamps(effort, map.effort_scale);
+  log.q = at_stamps(q, map.q_scale, map.q_linear_scale);
+  log.tau = at_stamps(effort, map.effort_scale, map.force_scale);
   log.has_qd = qd.file != nullptr;
   log.has_qdd = qdd.file != nullptr;
-  if (log.has_qd) log.qd = at_stamps(qd, map.qd_scale);
-  if (log.has_qdd) log.qdd = at_stamps(qdd, map.qdd_scale);
+  if (log.has_qd) log.qd = at_stamps(qd, map.qd_scale, map.qd_linear_scale);
+  if (log.has_qdd) log.qdd = at_stamps(qdd, map.qdd_scale, map.qdd_linear_scale);
   std::string source;
   for (const std::string& p : paths) source += (source.empty() ? "" : " + ") + p;
   log.source = source + " (merged on time)";

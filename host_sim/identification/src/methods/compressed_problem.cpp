@@ -200,7 +200,13 @@ void link_intervals(const ConsistentSolution& s, Eigen::Index o10, const std::ar
   const Eigen::Matrix<double, 10, 10> Jinv = Eigen::Matrix<double, 10, 10>(J).inverse();
   const Eigen::Matrix<double, 10, 10> cov = Jinv * s.standard_cov.block(o10, o10, 10, 10) * Jinv.transpose();
   const Eigen::MatrixXd grad = Jinv * s.standard_jacobian.middleRows(o10, 10);  // 10 x inputs
-  const Spectrum fit(s.information_data + s.information_prior), data(s.information_data);
+  // range(D + P) = range(D / |D| + P / |P|): each source at its own scale, so that a prior's information
+  // is not lost below the rank tolerance of a data block 1e14 times stronger (a prismatic joint's force).
+  const auto unit = [](const Eigen::MatrixXd& H) -> Eigen::MatrixXd {
+    const double top = H.cwiseAbs().maxCoeff();
+    return top > 0 ? Eigen::MatrixXd(H / top) : H;
+  };
+  const Spectrum fit(unit(s.information_data) + unit(s.information_prior)), data(s.information_data);
   for (int k = 0; k < 10; ++k) {
     const double sd = fit.sees(grad.row(k).transpose()) ? std::sqrt(std::max(0.0, cov(k, k))) : LinkInertial::kNoStd;
     if (k == 0) link.mass_std = sd;

@@ -30,6 +30,7 @@ bool register_robot(const CompiledRobot& robot) {
     entry.num_standard = robot.num_standard;
     entry.num_base = robot.num_base;
     entry.nominal_standard = robot.nominal_standard;
+    entry.prismatic = robot.prismatic;
   }
   for (int i = 0; i < kBuiltTermSets; ++i) {
     const auto k = static_cast<size_t>(i);
@@ -66,6 +67,13 @@ const CompiledRobot& compiled_robot_for(const RobotDescription& robot) {
   if (robot.num_joints != c.num_joints) {
     throw InputError(robot.directory + "/robot.json lists " + std::to_string(robot.num_joints) +
                      " joints, its compiled model has " + std::to_string(c.num_joints) + ": build again");
+  }
+  for (int j = 0; j < c.num_joints && static_cast<size_t>(j) < robot.prismatic.size(); ++j) {
+    if (robot.prismatic[static_cast<size_t>(j)] != static_cast<bool>(c.prismatic[static_cast<size_t>(j)]))
+      throw InputError(robot.directory + "/robot.json: joint " + std::to_string(j + 1) + " is " +
+                       (robot.prismatic[static_cast<size_t>(j)] ? "prismatic" : "revolute") +
+                       ", in its compiled model " + (c.prismatic[static_cast<size_t>(j)] ? "prismatic" : "revolute") +
+                       ": build again (scripts/build) after robot check, or undo the edit");
   }
   // An MDH robot's inertials are compiled from robot.json: an edit since the build is named, not
   // silently replaced by the compiled values (a URDF robot's are checked against KDL by robot check).

@@ -711,6 +711,8 @@ IdentifyResult run_identify(const RobotDescription& robot, const TermSetModel& m
   res.notes = data.notes;
   const Eigen::Index S = data.t.size();
   res.robot = robot.name;
+  for (int j = 0; j < robot.num_joints; ++j)
+    if (is_prismatic(robot, j)) res.prismatic_joints.push_back(j + 1);
   res.method = opt.method;
   res.model = model_spec_name({model.terms, opt.effects, opt.motors});
   res.friction_per_motor = pipe.models_coupled_motors();

@@ -37,6 +37,11 @@ void print_identify_report(std::ostream& out, const IdentifyResult& r) {
       << " Hz; zero-phase Butterworth " << format("%g", r.cutoff_hz) << " Hz, parallel decimation)\n";
   out << "validation: " << r.validation << " (every sample predicted by a fit that did not see it)\n\n";
   print_joint_table(out, r.joints);
+  if (!r.prismatic_joints.empty()) {
+    out << "prismatic joint" << (r.prismatic_joints.size() > 1 ? "s" : "");
+    for (const int j : r.prismatic_joints) out << " " << j;
+    out << ": torques are forces [N] (RMS, Fc), Fv [N s/m], Ia [kg], q [m]\n";
+  }
   out << "\nregressor condition number cond(W): " << format("%.4g", r.condition_number) << "; full-data fit in "
       << format("%.3f", r.fit_seconds) << " s\n";
   out << "\nparameter                   value        std    std %      scale  verdict (95 % interval against the "
@@ -140,6 +145,7 @@ nlohmann::json identify_report_json(const IdentifyResult& r) {
   j["cutoff_hz"] = r.cutoff_hz;
   j["samples"] = r.samples_used;
   j["condition_number"] = r.condition_number;
+  if (!r.prismatic_joints.empty()) j["prismatic_joints"] = r.prismatic_joints;  // forces [N], not torques
   j["fit_seconds"] = r.fit_seconds;
   j["joints"] = joint_metrics_json(r.joints);
   j["params"] = nlohmann::json::array();

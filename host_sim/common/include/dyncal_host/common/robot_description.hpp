@@ -41,6 +41,10 @@ struct RobotDescription {
   /// takes the robot listing F (robot_for_log_format). Empty when the file lists none.
   std::vector<std::string> log_formats;
   int num_joints = 0;             ///< the length of limits.q_min, 1..kMaxRobotDescriptionJoints
+  /// Per joint: true where it is prismatic (q [m], qd [m/s], tau a force [N]), false where it is
+  /// revolute (q [rad], tau [Nm]): robot.json's "joint_types" (a URDF robot; all revolute when
+  /// absent) or the MDH rows' "sigma" (1: prismatic; Khalil-Kleinfinger).
+  std::vector<bool> prismatic;
   Eigen::VectorXd gear_ratios;    ///< motor turns per joint turn (signed); 1 without "transmission"
   Eigen::MatrixXd transmission;   ///< N: q_motor = N q_joint, tau_joint = N^T tau_motor
   Eigen::VectorXd joint_offsets;  ///< added to N^-1 q_motor to give the model's q [rad]; default 0
@@ -60,6 +64,14 @@ struct RobotDescription {
   /// import` kept); empty when the file gives neither.
   std::vector<std::string> joint_names;
 };
+
+/// Whether joint j (0-based) is prismatic (false for a joint the description does not list).
+bool is_prismatic(const RobotDescription& robot, int j);
+/// Unit of joint j's (0-based) position, velocity and effort: "m", "m/s", "N" where it is
+/// prismatic, else "rad", "rad/s", "Nm".
+const char* position_unit(const RobotDescription& robot, int j);
+const char* velocity_unit(const RobotDescription& robot, int j);
+const char* effort_unit(const RobotDescription& robot, int j);
 
 /// Loads robots/<name>/robot.json below `robots_dir`. Throws InputError on one line naming the file
 /// and the field as docs/robots.md does (unknown robot, not a file, invalid JSON, a field missing,

@@ -9,11 +9,13 @@
 
 namespace dyncal::host {
 
-/// Joint i's fixed transform before its rotation about z, as the generated kJointOrigins give it:
-/// rotation R (row-major) and offset p [m] in the parent frame, T(i-1, i) = [R p] Rz(q_i).
+/// Joint i's fixed transform before its motion along z, as the generated kJointOrigins give it:
+/// rotation R (row-major) and offset p [m] in the parent frame, T(i-1, i) = [R p] Rz(q_i), or
+/// [R p] Tz(q_i) for a prismatic joint (kJointPrismatic).
 struct JointOrigin {
   std::array<double, 9> R{1, 0, 0, 0, 1, 0, 0, 0, 1};
   std::array<double, 3> p{};
+  bool prismatic = false;
 };
 using JointOrigins = std::array<JointOrigin, kMaxDriveJoints>;
 
@@ -22,9 +24,10 @@ using JointOrigins = std::array<JointOrigin, kMaxDriveJoints>;
 Eigen::Vector3d link_point_position(const JointOrigins& origins, int joints, const double* q, int link,
                                     const std::array<double, 3>& point);
 
-/// tau = J_p(q)^T F [Nm] per joint (entries past `joints` 0): the torques a force F [N, base
-/// frame] on that point exerts on the joints, tau_j = z_j . ((p - o_j) x F) for the joints that
-/// move the point (z_j, o_j joint j's axis and origin in the base frame), 0 for the others.
+/// tau = J_p(q)^T F [Nm; N for a prismatic joint] per joint (entries past `joints` 0): the torques
+/// a force F [N, base frame] on that point exerts on the joints, tau_j = z_j . ((p - o_j) x F) for
+/// the revolute joints that move the point and z_j . F for the prismatic ones (z_j, o_j joint j's
+/// axis and origin in the base frame), 0 for the others.
 std::array<double, kMaxDriveJoints> contact_joint_torque(const JointOrigins& origins, int joints, const double* q,
                                                          int link, const std::array<double, 3>& point,
                                                          const Eigen::Vector3d& force);

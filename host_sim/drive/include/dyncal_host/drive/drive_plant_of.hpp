@@ -730,6 +730,7 @@ bool register_drive_plant_of(const double (&nominal_standard)[Robot::kNumStandar
     for (int i = 0; i < Robot::kNumJoints; ++i) {
       for (int k = 0; k < 9; ++k) d.origins[static_cast<size_t>(i)].R[static_cast<size_t>(k)] = joint_origins[i].R[k];
       for (int k = 0; k < 3; ++k) d.origins[static_cast<size_t>(i)].p[static_cast<size_t>(k)] = joint_origins[i].p[k];
+      d.origins[static_cast<size_t>(i)].prismatic = Robot::joint_prismatic(i);
     }
     return d;
   }();

@@ -9,23 +9,34 @@
 
 namespace dyncal::host {
 
-/// Per signal, the logger's column names (joint 1 first) and the factor that takes its values to
-/// dyncal's units: t [s], q [rad], qd [rad/s], qdd [rad/s^2], effort [Nm] or, with
-/// effort_is_current, motor current [A] (converted by the robot's torque constants afterwards:
-/// current_to_joint_torque). qd and qdd empty: not in the log (computed).
+/// Per signal, the logger's column names (joint 1 first) and the factors that take its values to
+/// dyncal's units: t [s]; on a revolute joint q [rad], qd [rad/s], qdd [rad/s^2], effort [Nm]
+/// (*_scale), on a prismatic one q [m], qd [m/s], qdd [m/s^2], effort [N] (*_linear_scale,
+/// force_scale); or, with effort_is_current, motor current [A] (converted by the robot's torque
+/// constants afterwards: current_to_joint_torque). qd and qdd empty: not in the log (computed).
 struct ColumnMap {
   std::string t;
   std::vector<std::string> q, qd, qdd, effort;
   double t_scale = 1, q_scale = 1, qd_scale = 1, qdd_scale = 1, effort_scale = 1;
+  double q_linear_scale = 1, qd_linear_scale = 1, qdd_linear_scale = 1, force_scale = 1;
   bool effort_is_current = false;
-  std::string origin;  ///< what the map came from, for messages ("--columns", "--format ur-rtde")
+  std::vector<bool> prismatic;  ///< per joint (RobotDescription::prismatic); empty: all revolute
+  std::string origin;           ///< what the map came from, for messages ("--columns", "--format ur-rtde")
+  /// The factor of joint j (0-based): `scale` on a revolute joint, `linear_scale` on a prismatic one.
+  double joint_scale(int j, double scale, double linear_scale) const {
+    const bool linear = static_cast<size_t>(j) < prismatic.size() && prismatic[static_cast<size_t>(j)];
+    return linear ? linear_scale : scale;
+  }
 };
 
 /// Parses `--columns`: entries `signal=names[:unit]` separated by commas, signal one of t, q, qd,
 /// qdd, tau. names is one column name, or a pattern with one range {a..b} (a <= b, integers) that
 /// expands to one name per joint: `q=actual_q_{0..5}` is actual_q_0 .. actual_q_5. Units: t s (the
-/// default), ms, us, ns; q rad, deg; qd rad/s, deg/s; qdd rad/s^2, deg/s^2; tau Nm, mNm, or current
-/// (motor current [A]). t, q and tau are required. Throws InputError naming the entry: an unknown
+/// default), ms, us, ns; q rad, deg | m, mm; qd rad/s, deg/s | m/s, mm/s; qdd rad/s^2, deg/s^2 |
+/// m/s^2, mm/s^2; tau Nm, mNm | N, or current (motor current [A]). An angular unit applies to the
+/// revolute joints, a linear one to the prismatic joints (ColumnMap::prismatic, set by the caller);
+/// give both as `deg|mm`; a joint whose kind has no unit given is read in SI. t, q and tau are
+/// required. Throws InputError naming the entry: an unknown
 /// signal or unit, a repeated signal, a range that does not give `joints` names, a malformed range.
 ColumnMap parse_column_map(const std::string& spec, int joints);
 

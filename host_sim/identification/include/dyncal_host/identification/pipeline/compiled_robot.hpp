@@ -28,6 +28,7 @@ struct CompiledRobot {
   std::uint32_t robot_id = 0;  ///< the generated kRobotId
   int num_joints = 0, num_standard = 0, num_base = 0;
   std::vector<double> nominal_standard;  ///< kNominalStandard: the description's inertials
+  std::vector<bool> prismatic;           ///< kJointPrismatic: per joint, prismatic (else revolute)
 
   /// Stacked, column-normalised regressor of one period of `t` on `grid` points (rows N x grid):
   /// Eq. 7 (base parameters, Fc and beta per joint), or Eq. 4 (base parameters and d tau_f /

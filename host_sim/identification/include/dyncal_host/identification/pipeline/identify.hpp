@@ -142,6 +142,8 @@ struct IdentifyResult {
   std::vector<LogPrediction> other_logs;  ///< --validate-on: the final fit's prediction of each other log
   std::vector<LinkInertial> links;        ///< pcls: the final fit's consistent inertials per link
   bool friction_per_motor = false;        ///< a coupled motor's terms act on several joints (robot.json's coupling)
+  /// 1-based joints that are prismatic: their torques are forces [N], their Fc [N], Fv [N s/m], Ia [kg].
+  std::vector<int> prismatic_joints;
 };
 
 /// Identifies the model from `log` and validates it on data each fit never saw.

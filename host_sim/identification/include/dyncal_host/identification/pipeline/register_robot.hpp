@@ -134,6 +134,7 @@ bool register_robot_model(const double (&nominal_standard)[Robot::kNumStandard])
   c.num_standard = Robot::kNumStandard;
   c.num_base = Robot::kNumBase;
   c.nominal_standard.assign(nominal_standard, nominal_standard + Robot::kNumStandard);
+  for (int j = 0; j < Robot::kNumJoints; ++j) c.prismatic.push_back(Robot::joint_prismatic(j));
   c.excitation_regressor = &excitation_regressor<Robot>;
   c.inverse_dynamics = &inverse_dynamics<Robot>;
   c.standard_to_base = &standard_to_base<Robot>;
