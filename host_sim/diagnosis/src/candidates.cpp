@@ -151,18 +151,20 @@ void stribeck(const CandidateContext& c, int i, int, std::vector<Candidate>& out
   const std::vector<Index> none;
   double rss = 0, n_eff = 0;
   residual_scale(c, joint, rss, n_eff);
-  auto gain_with = [&](const std::vector<Index>& with, double lq) {
+  auto gain_with = [&](const LocalSystem& with, double lq) {
     const double qds = std::exp(lq);
     return local_gain<1>(
-        c, EffectKind::stribeck, joint, with,
-        [&](Index s, size_t, Eigen::Matrix<double, 1, 1>& x) {
+        c, with, EffectKind::stribeck, {1.0},
+        [&](Index s, Eigen::Matrix<double, 1, 1>& x) {
           const double v = signed_velocity(d.qd(s, i), d.qd_raw(s, i), d.standstill_band[i]), z = v / qds;
           x[0] = (v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0)) * std::exp(-z * z);
         },
         [](const Eigen::Matrix<double, 1, 1>& beta) { return beta[0] > 0; });  // Fs > Fc
   };
   const double lo = std::log(0.01 * vmax), hi = std::log(0.2 * vmax);
-  const ShapeFit first = profile_search([&](double lq) { return gain_with(none, lq); }, lo, hi, kScaleGrid, rss, n_eff);
+  const LocalSystem alone = local_system(c, joint, none);
+  const ShapeFit first =
+      profile_search([&](double lq) { return gain_with(alone, lq); }, lo, hi, kScaleGrid, rss, n_eff);
   // A scale the data cannot tell from the narrowest searched is no Stribeck curve: what it fits
   // lives at a few samples around the stops and reversals (a transient, a timing error of the
   // log), not on a friction curve over the speed.
@@ -172,7 +174,7 @@ void stribeck(const CandidateContext& c, int i, int, std::vector<Candidate>& out
   // part, which biased the first scale low; the bracket keeps the curve from turning into the
   // polynomial in the speed it becomes at broad scales.
   const double a = std::max(lo, first.log_value - std::log(2.0)), b = std::min(hi, first.log_value + std::log(2.0));
-  const std::vector<Index> local = local_columns(c, joint);
+  const LocalSystem local = local_system(c, joint, local_columns(c, joint));
   ShapeFit f = profile_search([&](double lq) { return gain_with(local, lq); }, a, b, 9, rss, n_eff);
   // A refined scale whose interval reaches the bracket has no maximum of its own there: the gain
   // still grows towards the broad curve's polynomial in the speed (seen on a simulated six-joint drive's log:
@@ -250,7 +252,7 @@ void coupling(const CandidateContext& c, int i, int j, std::vector<Candidate>& o
   const double span = std::log(5.0);
   const StackedData& d = c.data;
   const std::vector<int> pair{i, j};
-  const std::vector<Index> local = local_columns(c, pair);
+  const LocalSystem local = local_system(c, pair, local_columns(c, pair));
   double rss = 0, n_eff = 0;
   residual_scale(c, pair, rss, n_eff);
   ShapeFit best;
@@ -259,17 +261,11 @@ void coupling(const CandidateContext& c, int i, int j, std::vector<Candidate>& o
     auto gain = [&](double lr) {
       const double r = sign * std::exp(lr);
       const double band = std::hypot(d.standstill_band[i], r * d.standstill_band[j]);  // motor_velocity's
-      Eigen::Vector3d row;  // joint i's row at the sample; joint j's (p = 1, asked next) is r times it
       return local_gain<3>(
-          c, EffectKind::coupling, pair, local,
-          [&](Index s, size_t p, Eigen::Vector3d& x) {
-            if (p == 0) {
-              const double v = signed_velocity(d.qd(s, i) + r * d.qd(s, j), d.qd_raw(s, i) + r * d.qd_raw(s, j), band);
-              row << (v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0)), v, d.qdd(s, i) + r * d.qdd(s, j);
-              x = row;
-            } else {
-              x = r * row;
-            }
+          c, local, EffectKind::coupling, {1.0, r},
+          [&](Index s, Eigen::Vector3d& x) {
+            const double v = signed_velocity(d.qd(s, i) + r * d.qd(s, j), d.qd_raw(s, i) + r * d.qd_raw(s, j), band);
+            x << (v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0)), v, d.qdd(s, i) + r * d.qdd(s, j);
           },
           [](const Eigen::Vector3d& beta) { return beta[0] >= 0 && beta[1] >= 0; });  // friction opposes motion
     };

@@ -36,55 +36,78 @@ inline std::vector<Eigen::Index> local_columns(const CandidateContext& c, const 
   return out;
 }
 
-/// The weighted RSS that M columns remove from the residual of `joints` when fitted with the local
-/// columns `local` (the residual is already orthogonal to those, so the gain is g^T S^-1 g, S the
-/// Schur complement of their Gram). columns(s, p, x) writes joint joints[p]'s row of the M columns
-/// at sample s into x; it is called sample by sample, p = 0, 1, ... at each. A fit whose coefficients (S^-1 g, those of
-/// the joint fit) are not physical(coefficients) removes nothing: the search looks only among physical shapes.
-template <int M, class Columns, class Physical>
-double local_gain(const CandidateContext& c, EffectKind kind, const std::vector<int>& joints,
-                  const std::vector<Eigen::Index>& local, Columns columns, Physical physical) {
-  using Vec = Eigen::Matrix<double, M, 1>;
+/// The part of local_gain that does not depend on the candidate's shape, built once per search: the
+/// weighted rows of `joints` with the model's local columns L and the residual r, and the
+/// factorised Gram of L (regularised by 1e-12 of its largest diagonal entry).
+struct LocalSystem {
+  std::vector<int> joints;
+  Eigen::MatrixXd L;
+  Eigen::VectorXd r;
+  Eigen::LDLT<Eigen::MatrixXd> LL;
+};
+
+inline LocalSystem local_system(const CandidateContext& c, const std::vector<int>& joints,
+                                const std::vector<Eigen::Index>& local) {
   const StackedData& d = c.data;
   const Eigen::MatrixXd& X = *c.model_X;
   const int N = static_cast<int>(d.q.cols());
-  const Eigen::Index k = static_cast<Eigen::Index>(local.size());
-  // The columns over time, filtered as the regressor was (filter_in_time: kind's columns).
   const Eigen::Index S = d.t.size(), P = static_cast<Eigen::Index>(joints.size());
-  Eigen::MatrixXd series(S, M * P);
-  Vec x;
+  const Eigen::Index k = static_cast<Eigen::Index>(local.size()), R = S * P;
+  LocalSystem sys;
+  sys.joints = joints;
+  sys.L.resize(R, k);
+  sys.r.resize(R);
   for (Eigen::Index s = 0; s < S; ++s)
-    for (Eigen::Index p = 0; p < P; ++p) {
-      columns(s, static_cast<size_t>(p), x);
-      series.row(s).segment(p * M, M) = x.transpose();
-    }
-  filter_in_time(c, series, kind, M);
-  // Weighted rows of the pair: local columns L, candidate columns C, residual r; the Grams by
-  // matrix products.
-  const Eigen::Index R = S * P;
-  Eigen::MatrixXd L(R, k), C(R, M);
-  Eigen::VectorXd r(R);
-  for (Eigen::Index s = 0; s < S; ++s) {
     for (Eigen::Index p = 0; p < P; ++p) {
       const int j = joints[static_cast<size_t>(p)];
       const Eigen::Index row = s * N + j, out = s * P + p;
       const double w = c.joint_weights[j];
-      for (Eigen::Index q = 0; q < k; ++q) L(out, q) = w * X(row, local[static_cast<size_t>(q)]);
-      C.row(out) = w * series.row(s).segment(p * M, M);
-      r[out] = w * c.residual[row];
+      for (Eigen::Index q = 0; q < k; ++q) sys.L(out, q) = w * X(row, local[static_cast<size_t>(q)]);
+      sys.r[out] = w * c.residual[row];
     }
-  }
-  Eigen::MatrixXd LL(k, k), LC(k, M);
   if (k > 0) {
-    LL.noalias() = L.transpose() * L;
-    LC.noalias() = L.transpose() * C;
+    Eigen::MatrixXd LL(k, k);
+    LL.noalias() = sys.L.transpose() * sys.L;
+    LL.diagonal().array() += 1e-12 * std::max(1.0, LL.diagonal().maxCoeff());
+    sys.LL.compute(LL);
   }
-  const Eigen::Matrix<double, M, M> CC = C.transpose() * C;
-  const Vec g = C.transpose() * r;
+  return sys;
+}
+
+/// The weighted RSS that M columns remove from the residual of the system's joints when fitted
+/// with its local columns (the residual is already orthogonal to those, so the gain is
+/// g^T S^-1 g, S the Schur complement of their Gram). columns(s, x) writes the M columns at sample
+/// s into x, called sample by sample; they act on the system's joint p times factor[p] (a
+/// coupling's motor: 1 on joint i, r on joint j), filtered in time as `kind`'s (linear: once for
+/// every joint). A fit whose coefficients (S^-1 g, those of the joint fit) are not
+/// physical(coefficients) removes nothing: the search looks only among physical shapes.
+template <int M, class Columns, class Physical>
+double local_gain(const CandidateContext& c, const LocalSystem& sys, EffectKind kind, const std::vector<double>& factor,
+                  Columns columns, Physical physical) {
+  using Vec = Eigen::Matrix<double, M, 1>;
+  const Eigen::Index k = sys.L.cols();
+  const Eigen::Index S = c.data.t.size(), P = static_cast<Eigen::Index>(sys.joints.size());
+  Eigen::MatrixXd series(S, M);
+  Vec x;
+  for (Eigen::Index s = 0; s < S; ++s) {
+    columns(s, x);
+    series.row(s) = x.transpose();
+  }
+  filter_in_time(c, series, kind, M);
+  Eigen::MatrixXd C(S * P, M);
+  for (Eigen::Index s = 0; s < S; ++s)
+    for (Eigen::Index p = 0; p < P; ++p)
+      C.row(s * P + p) =
+          (c.joint_weights[sys.joints[static_cast<size_t>(p)]] * factor[static_cast<size_t>(p)]) * series.row(s);
+  // Coefficient-wise products (lazyProduct): a few columns against long ones, where the blocked
+  // product's packing of the long operand costs as much as the product.
+  const Eigen::Matrix<double, M, M> CC = C.transpose().lazyProduct(C);
+  const Vec g = C.transpose().lazyProduct(sys.r);
   Eigen::Matrix<double, M, M> schur = CC;
   if (k > 0) {
-    LL.diagonal().array() += 1e-12 * std::max(1.0, LL.diagonal().maxCoeff());
-    schur -= LC.transpose() * LL.ldlt().solve(LC);
+    Eigen::MatrixXd LC(k, M);
+    LC.noalias() = sys.L.transpose().lazyProduct(C);
+    schur -= LC.transpose() * sys.LL.solve(LC);
   }
   schur.diagonal().array() += 1e-12 * std::max(1.0, CC.diagonal().maxCoeff());
   const Vec beta = schur.ldlt().solve(g);
@@ -162,12 +185,12 @@ double replacement_gain(const CandidateContext& c, const ReplacementSystem& sys,
     }
   Eigen::MatrixXd G(k + u, k + u);
   G.topLeftCorner(k, k) = sys.LL;
-  G.topRightCorner(k, u).noalias() = sys.L.transpose() * C;
+  G.topRightCorner(k, u).noalias() = sys.L.transpose().lazyProduct(C);
   G.bottomLeftCorner(u, k) = G.topRightCorner(k, u).transpose();
-  G.bottomRightCorner(u, u).noalias() = C.transpose() * C;
+  G.bottomRightCorner(u, u).noalias() = C.transpose().lazyProduct(C);
   G.diagonal().array() += 1e-12 * std::max(1.0, G.diagonal().maxCoeff());
   Eigen::VectorXd b(k + u);
-  b << sys.Lr1, C.transpose() * sys.r1;
+  b << sys.Lr1, C.transpose().lazyProduct(sys.r1);
   const Eigen::VectorXd beta = G.ldlt().solve(b);
   if (!physical(Eigen::VectorXd(beta.tail(u)))) return 0.0;
   return sys.r0_sq - (sys.r1_sq - b.dot(beta));

@@ -33,19 +33,42 @@ ButterworthLowPass::ButterworthLowPass(int order, double cutoff_hz, double sampl
   pad_ = static_cast<int>(std::ceil(3.0 * sample_rate_hz / (2.0 * M_PI * cutoff_hz))) * order;
 }
 
-void ButterworthLowPass::pass(Eigen::VectorXd& y) const {
-  for (int k = 0; k < sections_.rows(); ++k) {
-    const double b0 = sections_(k, 0), b1 = sections_(k, 1), b2 = sections_(k, 2);
-    const double a1 = sections_(k, 3), a2 = sections_(k, 4);
-    // Direct form II transposed, state at the steady state of the first sample (unit DC gain).
-    double z2 = (b2 - a2) * y[0];
-    double z1 = (b1 - a1) * y[0] + z2;
-    for (Eigen::Index i = 0; i < y.size(); ++i) {
-      const double x = y[i];
-      const double out = b0 * x + z1;
-      z1 = b1 * x - a1 * out + z2;
-      z2 = b2 * x - a2 * out;
-      y[i] = out;
+void ButterworthLowPass::pass(Eigen::VectorXd& y, bool forward) const {
+  constexpr int kMaxSections = 16;
+  const int K = static_cast<int>(sections_.rows());
+  const Eigen::Index n = y.size();
+  if (n == 0 || K == 0) return;
+  double b0[kMaxSections], b1[kMaxSections], b2[kMaxSections], a1[kMaxSections], a2[kMaxSections];
+  double z1[kMaxSections], z2[kMaxSections];
+  double* const first = forward ? y.data() : y.data() + (n - 1);
+  const Eigen::Index step = forward ? 1 : -1;
+  for (int from = 0; from < K; from += kMaxSections) {  // more than 16 sections: in groups
+    const int m = std::min(K - from, kMaxSections);
+    for (int k = 0; k < m; ++k) {
+      b0[k] = sections_(from + k, 0), b1[k] = sections_(from + k, 1), b2[k] = sections_(from + k, 2);
+      a1[k] = sections_(from + k, 3), a2[k] = sections_(from + k, 4);
+    }
+    // Direct form II transposed, each section's state at the steady state of its first input
+    // (unit DC gain): the first sample through the sections one after another.
+    double x = first[0];
+    for (int k = 0; k < m; ++k) {
+      z2[k] = (b2[k] - a2[k]) * x;
+      z1[k] = (b1[k] - a1[k]) * x + z2[k];
+      const double out = b0[k] * x + z1[k];
+      z1[k] = b1[k] * x - a1[k] * out + z2[k];
+      z2[k] = b2[k] * x - a2[k] * out;
+      x = out;
+    }
+    first[0] = x;
+    for (Eigen::Index i = 1; i < n; ++i) {
+      x = first[i * step];
+      for (int k = 0; k < m; ++k) {
+        const double out = b0[k] * x + z1[k];
+        z1[k] = b1[k] * x - a1[k] * out + z2[k];
+        z2[k] = b2[k] * x - a2[k] * out;
+        x = out;
+      }
+      first[i * step] = x;
     }
   }
 }
@@ -60,10 +83,8 @@ void ButterworthLowPass::filtfilt(Eigen::Ref<Eigen::MatrixXd> x) const {
     for (Eigen::Index i = 0; i < pad; ++i) ext[i] = 2.0 * col[0] - col[pad - i];
     ext.segment(pad, n) = col;
     for (Eigen::Index i = 0; i < pad; ++i) ext[pad + n + i] = 2.0 * col[n - 1] - col[n - 2 - i];
-    pass(ext);
-    ext.reverseInPlace();
-    pass(ext);
-    ext.reverseInPlace();
+    pass(ext, true);
+    pass(ext, false);
     x.col(c) = ext.segment(pad, n);
   }
 }

@@ -23,7 +23,10 @@ class ButterworthLowPass {
   struct Section {
     double b0, b1, b2, a1, a2;
   };
-  void pass(Eigen::VectorXd& y) const;
+  /// One causal pass over y in place, forward (step +1 from the first sample) or backward (step -1
+  /// from the last): the sections run fused in one loop over the samples, each from the steady
+  /// state of its own first input, so their recurrences overlap in the processor.
+  void pass(Eigen::VectorXd& y, bool forward) const;
 
   Eigen::Matrix<double, Eigen::Dynamic, 5> sections_;
   double cutoff_hz_;
