@@ -36,6 +36,40 @@ inline std::vector<Eigen::Index> local_columns(const CandidateContext& c, const 
   return out;
 }
 
+/// A motor's M columns over time (S x M), columns(s, x) sample by sample, filtered in time as
+/// `kind`'s (filter_in_time).
+template <int M, class Columns>
+Eigen::MatrixXd filtered_series(const CandidateContext& c, EffectKind kind, Columns columns) {
+  const Eigen::Index S = c.data.t.size();
+  Eigen::MatrixXd series(S, M);
+  Eigen::Matrix<double, M, 1> x;
+  for (Eigen::Index s = 0; s < S; ++s) {
+    columns(s, x);
+    series.row(s) = x.transpose();
+  }
+  filter_in_time(c, series, kind, M);
+  return series;
+}
+
+/// A motor's filtered columns (filtered_series: filtering is linear, once for every joint it acts
+/// on) as rows of `joints`: on joint p the columns `use`
+/// times its weight and factor[p] (1 on a motor's own joint, r on the other it turns with). Rows
+/// s P + p (P joints).
+template <int M, class Columns>
+Eigen::MatrixXd motor_rows(const CandidateContext& c, const std::vector<int>& joints, EffectKind kind,
+                           const std::vector<int>& use, const std::vector<double>& factor, Columns columns) {
+  const Eigen::Index S = c.data.t.size(), P = static_cast<Eigen::Index>(joints.size());
+  const Eigen::Index u = static_cast<Eigen::Index>(use.size());
+  const Eigen::MatrixXd series = filtered_series<M>(c, kind, columns);
+  Eigen::MatrixXd C(S * P, u);
+  for (Eigen::Index s = 0; s < S; ++s)
+    for (Eigen::Index p = 0; p < P; ++p) {
+      const double w = c.joint_weights[joints[static_cast<size_t>(p)]] * factor[static_cast<size_t>(p)];
+      for (Eigen::Index q = 0; q < u; ++q) C(s * P + p, q) = w * series(s, use[static_cast<size_t>(q)]);
+    }
+  return C;
+}
+
 /// The part of local_gain that does not depend on the candidate's shape, built once per search: the
 /// weighted rows of `joints` with the model's local columns L and the residual r, and the
 /// factorised Gram of L (regularised by 1e-12 of its largest diagonal entry).
@@ -86,19 +120,9 @@ double local_gain(const CandidateContext& c, const LocalSystem& sys, EffectKind 
                   Columns columns, Physical physical) {
   using Vec = Eigen::Matrix<double, M, 1>;
   const Eigen::Index k = sys.L.cols();
-  const Eigen::Index S = c.data.t.size(), P = static_cast<Eigen::Index>(sys.joints.size());
-  Eigen::MatrixXd series(S, M);
-  Vec x;
-  for (Eigen::Index s = 0; s < S; ++s) {
-    columns(s, x);
-    series.row(s) = x.transpose();
-  }
-  filter_in_time(c, series, kind, M);
-  Eigen::MatrixXd C(S * P, M);
-  for (Eigen::Index s = 0; s < S; ++s)
-    for (Eigen::Index p = 0; p < P; ++p)
-      C.row(s * P + p) =
-          (c.joint_weights[sys.joints[static_cast<size_t>(p)]] * factor[static_cast<size_t>(p)]) * series.row(s);
+  std::vector<int> all(M);
+  for (int q = 0; q < M; ++q) all[static_cast<size_t>(q)] = q;
+  const Eigen::MatrixXd C = motor_rows<M>(c, sys.joints, kind, all, factor, columns);
   // Coefficient-wise products (lazyProduct): a few columns against long ones, where the blocked
   // product's packing of the long operand costs as much as the product.
   const Eigen::Matrix<double, M, M> CC = C.transpose().lazyProduct(C);
@@ -168,21 +192,8 @@ template <int M, class Columns, class Physical>
 double replacement_gain(const CandidateContext& c, const ReplacementSystem& sys, EffectKind kind,
                         const std::vector<int>& use, const std::vector<double>& factor, Columns columns,
                         Physical physical) {
-  const Eigen::Index S = c.data.t.size(), P = static_cast<Eigen::Index>(sys.joints.size());
   const Eigen::Index k = sys.L.cols(), u = static_cast<Eigen::Index>(use.size());
-  Eigen::MatrixXd series(S, M);  // filtering is linear: once for every joint the motor acts on
-  Eigen::Matrix<double, M, 1> x;
-  for (Eigen::Index s = 0; s < S; ++s) {
-    columns(s, x);
-    series.row(s) = x.transpose();
-  }
-  filter_in_time(c, series, kind, M);
-  Eigen::MatrixXd C(S * P, u);
-  for (Eigen::Index s = 0; s < S; ++s)
-    for (Eigen::Index p = 0; p < P; ++p) {
-      const double w = c.joint_weights[sys.joints[static_cast<size_t>(p)]] * factor[static_cast<size_t>(p)];
-      for (Eigen::Index q = 0; q < u; ++q) C(s * P + p, q) = w * series(s, use[static_cast<size_t>(q)]);
-    }
+  const Eigen::MatrixXd C = motor_rows<M>(c, sys.joints, kind, use, factor, columns);
   Eigen::MatrixXd G(k + u, k + u);
   G.topLeftCorner(k, k) = sys.LL;
   G.topRightCorner(k, u).noalias() = sys.L.transpose().lazyProduct(C);
@@ -238,13 +249,7 @@ double full_replacement_gain(const CandidateContext& c, const FullReplacement& f
   const int N = static_cast<int>(d.q.cols());
   const Eigen::Index S = d.t.size(), P = static_cast<Eigen::Index>(joints.size());
   const Eigen::Index k = static_cast<Eigen::Index>(f.kept.size()), u = static_cast<Eigen::Index>(use.size());
-  Eigen::MatrixXd series(S, M);
-  Eigen::Matrix<double, M, 1> x;
-  for (Eigen::Index s = 0; s < S; ++s) {
-    columns(s, x);
-    series.row(s) = x.transpose();
-  }
-  filter_in_time(c, series, kind, M);
+  const Eigen::MatrixXd series = filtered_series<M>(c, kind, columns);
   Eigen::MatrixXd Gxc = Eigen::MatrixXd::Zero(k, u), Gcc = Eigen::MatrixXd::Zero(u, u);
   Eigen::VectorXd gc = Eigen::VectorXd::Zero(u), cr(u);
   for (Eigen::Index s = 0; s < S; ++s)
