@@ -263,12 +263,6 @@ void read_log_formats(const Reader& rd, const json& j, RobotDescription& r) {
 bool is_prismatic(const RobotDescription& robot, int j) {
   return j >= 0 && static_cast<size_t>(j) < robot.prismatic.size() && robot.prismatic[static_cast<size_t>(j)];
 }
-const char* position_unit(const RobotDescription& robot, int j) {
-  return is_prismatic(robot, j) ? "m" : "rad";
-}
-const char* velocity_unit(const RobotDescription& robot, int j) {
-  return is_prismatic(robot, j) ? "m/s" : "rad/s";
-}
 const char* effort_unit(const RobotDescription& robot, int j) {
   return is_prismatic(robot, j) ? "N" : "Nm";
 }

@@ -40,7 +40,7 @@ struct RobotDescription {
   /// Vendor log formats (`--format`) this arm's controller writes: "--format F" without --robot
   /// takes the robot listing F (robot_for_log_format). Empty when the file lists none.
   std::vector<std::string> log_formats;
-  int num_joints = 0;             ///< the length of limits.q_min, 1..kMaxRobotDescriptionJoints
+  int num_joints = 0;  ///< the length of limits.q_min, 1..kMaxRobotDescriptionJoints
   /// Per joint: true where it is prismatic (q [m], qd [m/s], tau a force [N]), false where it is
   /// revolute (q [rad], tau [Nm]): robot.json's "joint_types" (a URDF robot; all revolute when
   /// absent) or the MDH rows' "sigma" (1: prismatic; Khalil-Kleinfinger).
@@ -67,10 +67,7 @@ struct RobotDescription {
 
 /// Whether joint j (0-based) is prismatic (false for a joint the description does not list).
 bool is_prismatic(const RobotDescription& robot, int j);
-/// Unit of joint j's (0-based) position, velocity and effort: "m", "m/s", "N" where it is
-/// prismatic, else "rad", "rad/s", "Nm".
-const char* position_unit(const RobotDescription& robot, int j);
-const char* velocity_unit(const RobotDescription& robot, int j);
+/// Unit of joint j's (0-based) effort: "N" where it is prismatic, else "Nm".
 const char* effort_unit(const RobotDescription& robot, int j);
 
 /// Loads robots/<name>/robot.json below `robots_dir`. Throws InputError on one line naming the file
