@@ -462,7 +462,8 @@ TEST(LogFormats, NamedColumnsWithUnitsAndSeparators) {
   write("tab.tsv", "\t");
   write("semicolon.csv", ";");
   write("spaces.txt", "   ");
-  const ColumnMap map = parse_column_map("t=time_ms:ms, q=pos{1..3}:deg, qd=vel{1..3}:deg/s, tau=torque{1..3}:mNm", 3);
+  const ColumnMap map =
+      parse_column_map("t=time_ms:ms, q=pos{1..3}:deg, qd=vel{1..3}:deg/s, tau=torque{1..3}:mNm", robot.prismatic);
   for (const char* name : {"tab.tsv", "semicolon.csv", "spaces.txt"}) {
     SCOPED_TRACE(name);
     const JointLog b = read_mapped_csv_log((dir / name).string(), map, 3);
@@ -484,16 +485,24 @@ TEST(LogFormats, NamedColumnsWithUnitsAndSeparators) {
       EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << e.what();
     }
   };
-  refused([] { parse_column_map("t=time, q=pos{1..4}, tau=torque{1..3}", 3); }, "names 4 columns, the robot has 3");
-  refused([] { parse_column_map("t=time:min, q=pos{1..3}, tau=torque{1..3}", 3); }, "unit 'min' is not one of s, ms");
-  refused([] { parse_column_map("t=time, q=pos{1..3}", 3); }, "no tau=... entry");
-  refused([] { parse_column_map("t=time, q=pos{1..3}, q=p{1..3}, tau=torque{1..3}", 3); }, "q is mapped twice");
-  refused([] { parse_column_map("t=time, q=pos{3..1}, tau=torque{1..3}", 3); }, "integers a <= b");
-  refused([] { parse_column_map("t=time, x=pos{1..3}, tau=torque{1..3}", 3); }, "signal 'x'");
+  refused([&] { parse_column_map("t=time, q=pos{1..4}, tau=torque{1..3}", robot.prismatic); },
+          "names 4 columns, the robot has 3");
+  refused([&] { parse_column_map("t=time:min, q=pos{1..3}, tau=torque{1..3}", robot.prismatic); },
+          "unit 'min' is not one of s, ms");
+  refused([&] { parse_column_map("t=time, q=pos{1..3}", robot.prismatic); }, "no tau=... entry");
+  refused([&] { parse_column_map("t=time, q=pos{1..3}, q=p{1..3}, tau=torque{1..3}", robot.prismatic); },
+          "q is mapped twice");
+  refused([&] { parse_column_map("t=time, q=pos{3..1}, tau=torque{1..3}", robot.prismatic); }, "integers a <= b");
+  refused([&] { parse_column_map("t=time, x=pos{1..3}, tau=torque{1..3}", robot.prismatic); }, "signal 'x'");
+  // A unit must read some joint: a linear unit on this all-revolute arm is refused, not ignored.
+  refused([&] { parse_column_map("t=time, q=pos{1..3}:mm, tau=torque{1..3}", robot.prismatic); },
+          "a linear unit, but the robot has no prismatic joint");
+  refused([&] { parse_column_map("t=time, q=pos{1..3}, tau=torque{1..3}:N", robot.prismatic); },
+          "a linear unit, but the robot has no prismatic joint");
   refused(
       [&] {
-        read_mapped_csv_log((dir / "tab.tsv").string(), parse_column_map("t=time_ms, q=pos{1..3}, tau=effort{1..3}", 3),
-                            3);
+        read_mapped_csv_log((dir / "tab.tsv").string(),
+                            parse_column_map("t=time_ms, q=pos{1..3}, tau=effort{1..3}", robot.prismatic), 3);
       },
       "tab.tsv: no column 'effort1' (--columns)");
   std::filesystem::remove_all(dir);

@@ -260,7 +260,8 @@ INSTANTIATE_TEST_SUITE_P(TestRobots, RobotFolderFits, ::testing::Values("arm3", 
 
 // A SCARA's log (issue 68): revolute joints in degrees and mNm, its prismatic quill (joint 3) in mm
 // and N, mapped by `deg|mm` and `mNm|N`: each joint takes its kind's unit, and the simulated log's
-// values come back in SI (rad, m; Nm, N). A unit of neither kind, or two of one kind, is refused.
+// values come back in SI (rad, m; Nm, N). A unit of neither kind, two of one kind, or one kind's
+// unit alone (which would read the other kind's joints in SI unasked) is refused.
 TEST(PrismaticLogs, JointsTakeTheirKindsUnit) {
   const RobotDescription robot = test_robot("scara4");
   ASSERT_TRUE(is_prismatic(robot, 2));
@@ -281,17 +282,20 @@ TEST(PrismaticLogs, JointsTakeTheirKindsUnit) {
       out << "\n";
     }
   }
-  ColumnMap map = parse_column_map("t=t, q=p{1..4}:deg|mm, tau=f{1..4}:mNm|N", 4);
-  map.prismatic = robot.prismatic;
+  ColumnMap map = parse_column_map("t=t, q=p{1..4}:deg|mm, tau=f{1..4}:mNm|N", robot.prismatic);
   const JointLog b = read_mapped_csv_log((dir / "scara.csv").string(), map, 4);
   EXPECT_NEAR((b.q - a.log.q).cwiseAbs().maxCoeff(), 0.0, 1e-12 * (1 + a.log.q.cwiseAbs().maxCoeff()));
   EXPECT_NEAR((b.tau - a.log.tau).cwiseAbs().maxCoeff(), 0.0, 1e-12 * (1 + a.log.tau.cwiseAbs().maxCoeff()));
   for (const auto& [spec, expected] : std::vector<std::pair<std::string, std::string>>{
            {"t=t, q=p{1..4}:deg|rad, tau=f{1..4}", "two angular units"},
            {"t=t, q=p{1..4}:deg|N, tau=f{1..4}", "unit 'N' is not one of rad, deg, m, mm"},
-           {"t=t:s|m, q=p{1..4}, tau=f{1..4}", "unit 'm' is not one of s, ms"}}) {
+           {"t=t:s|m, q=p{1..4}, tau=f{1..4}", "unit 'm' is not one of s, ms"},
+           // A mixed arm given one kind's unit would read the other kind's joints in SI unasked.
+           {"t=t, q=p{1..4}:deg, tau=f{1..4}", "give one unit of each kind, angular|linear (deg|mm)"},
+           {"t=t, q=p{1..4}:deg|mm, qd=v{1..4}:mm/s, tau=f{1..4}", "(deg/s|mm/s)"},
+           {"t=t, q=p{1..4}:deg|mm, tau=f{1..4}:mNm", "(mNm|N)"}}) {
     try {
-      parse_column_map(spec, 4);
+      parse_column_map(spec, robot.prismatic);
       ADD_FAILURE() << spec << ": accepted";
     } catch (const InputError& e) {
       EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();

@@ -74,7 +74,7 @@ CLI::Option* LogOption::add_to(CLI::App* cmd, bool data_required) {
       "range per joint, e.g. 't=time:ms,q=pos_{1..6}:deg,qd=vel_{1..6}:deg/s,tau=cur_{1..6}:current' "
       "(units: t s, ms, us, ns; q rad, deg, m, mm; qd rad/s, deg/s, m/s, mm/s; qdd rad/s^2, deg/s^2, m/s^2, "
       "mm/s^2; tau Nm, mNm, N, current; an angular unit is the revolute joints', a linear one the "
-      "prismatic joints', both as q=pos{1..4}:deg|mm; SI where none is given)");
+      "prismatic joints', one of each on an arm with both: q=pos{1..4}:deg|mm; SI where none is given)");
   CLI::Option* data_option =
       cmd->add_option("--data", data,
                       "CSV log file (time-stamped; jitter and missing samples allowed), or the folder of the TX40 "
@@ -134,10 +134,9 @@ host::JointLog LogOption::load_logs(const host::RobotDescription& r, const std::
   std::optional<host::ColumnMap> map;
   if (!columns.empty() && format != "csv")
     throw InputError("--columns maps a CSV's columns; --format " + format + " has its own");
-  if (!columns.empty()) map = host::parse_column_map(columns, r.num_joints);
-  if (format == "ur-rtde") map = host::ur_rtde_column_map(r.num_joints);
+  if (!columns.empty()) map = host::parse_column_map(columns, r.prismatic);
+  if (format == "ur-rtde") map = host::ur_rtde_column_map(r.prismatic);
   if (map && torque_from == "current") map->effort_is_current = true;
-  if (map) map->prismatic = r.prismatic;
   // Motor currents need the torque constants: refused before any file is read.
   if ((torque_from == "current" || (map && map->effort_is_current)) && r.torque_constants.size() == 0)
     throw InputError(
@@ -147,8 +146,7 @@ host::JointLog LogOption::load_logs(const host::RobotDescription& r, const std::
     if (format != "csv") throw InputError("--merge-on-time merges CSV files; --format " + format + " is not csv");
     for (const std::string& path : paths)
       if (host::is_ros2_bag(path)) throw InputError("--merge-on-time merges CSV files; " + path + " is a ROS 2 bag");
-    host::ColumnMap m = map ? *map : host::default_column_map(r.num_joints, torque_from == "current");
-    m.prismatic = r.prismatic;
+    host::ColumnMap m = map ? *map : host::default_column_map(r.prismatic, torque_from == "current");
     std::vector<std::string> notes;
     host::JointLog log = host::read_merged_csv_logs(paths, m, r.num_joints, &notes);
     if (m.effort_is_current) host::current_to_joint_torque(log, r.transmission, r.torque_constants, log.source);

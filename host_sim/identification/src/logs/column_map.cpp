@@ -1,5 +1,6 @@
 #include "dyncal_host/identification/logs/column_map.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
@@ -101,11 +102,22 @@ double unit_scale(const std::string& signal, const std::string& unit, bool& curr
   throw InputError(where + ": unit '" + unit + "' is not one of " + known);
 }
 
+/// An example of both kinds' units for `signal` (q, qd, qdd or tau).
+std::string mixed_unit_example(const std::string& signal) {
+  if (signal == "tau") return "mNm|N";
+  const std::string per = signal == "qd" ? "/s" : signal == "qdd" ? "/s^2" : "";
+  return "deg" + per + "|mm" + per;
+}
+
 }  // namespace
 
-ColumnMap parse_column_map(const std::string& spec, int joints) {
+ColumnMap parse_column_map(const std::string& spec, const std::vector<bool>& prismatic) {
+  const int joints = static_cast<int>(prismatic.size());
+  const bool any_prismatic = std::find(prismatic.begin(), prismatic.end(), true) != prismatic.end();
+  const bool any_revolute = std::find(prismatic.begin(), prismatic.end(), false) != prismatic.end();
   ColumnMap map;
   map.origin = "--columns";
+  map.prismatic = prismatic;
   std::map<std::string, bool> seen;
   for (const std::string& entry : entries(spec)) {
     const std::string where = "--columns '" + entry + "'";
@@ -139,6 +151,17 @@ ColumnMap parse_column_map(const std::string& spec, int joints) {
       (linear ? linear_scale : scale) = f;
       current = current || is_current;
     }
+    if (signal != "t" && !current && (have_angular || have_linear)) {
+      // Every unit given applies to some joint, and every joint gets a unit once one is given: a
+      // unit that reads no joint, or a joint silently read in SI beside one that is not, is refused.
+      if (have_linear && !any_prismatic)
+        throw InputError(where + ": a linear unit, but the robot has no prismatic joint");
+      if (have_angular && !any_revolute)
+        throw InputError(where + ": an angular unit, but every joint of the robot is prismatic");
+      if (any_prismatic && any_revolute && !(have_angular && have_linear))
+        throw InputError(where + ": the robot has revolute and prismatic joints; give one unit of each kind, " +
+                         "angular|linear (" + mixed_unit_example(signal) + ")");
+    }
     if (signal == "t") {
       if (have_linear) throw InputError(where + ": a time unit is one of s, ms, us, ns");
       map.t = column_names(names, false, joints, where).front();
@@ -160,11 +183,12 @@ ColumnMap parse_column_map(const std::string& spec, int joints) {
   return map;
 }
 
-ColumnMap ur_rtde_column_map(int joints) {
+ColumnMap ur_rtde_column_map(const std::vector<bool>& prismatic) {
+  const int joints = static_cast<int>(prismatic.size());
   ColumnMap map = parse_column_map("t=timestamp, q=actual_q_{0.." + std::to_string(joints - 1) +
                                        "}, qd=actual_qd_{0.." + std::to_string(joints - 1) +
                                        "}, tau=actual_current_{0.." + std::to_string(joints - 1) + "}:current",
-                                   joints);
+                                   prismatic);
   map.origin = "--format ur-rtde";
   return map;
 }

@@ -38,8 +38,10 @@ struct Source {
 
 }  // namespace
 
-ColumnMap default_column_map(int joints, bool current) {
+ColumnMap default_column_map(const std::vector<bool>& prismatic, bool current) {
+  const int joints = static_cast<int>(prismatic.size());
   ColumnMap m;
+  m.prismatic = prismatic;
   m.t = "t";
   for (int j = 1; j <= joints; ++j) {
     const std::string k = std::to_string(j);

@@ -34,17 +34,19 @@ struct ColumnMap {
 /// expands to one name per joint: `q=actual_q_{0..5}` is actual_q_0 .. actual_q_5. Units: t s (the
 /// default), ms, us, ns; q rad, deg | m, mm; qd rad/s, deg/s | m/s, mm/s; qdd rad/s^2, deg/s^2 |
 /// m/s^2, mm/s^2; tau Nm, mNm | N, or current (motor current [A]). An angular unit applies to the
-/// revolute joints, a linear one to the prismatic joints (ColumnMap::prismatic, set by the caller);
-/// give both as `deg|mm`; a joint whose kind has no unit given is read in SI. t, q and tau are
-/// required. Throws InputError naming the entry: an unknown
-/// signal or unit, a repeated signal, a range that does not give `joints` names, a malformed range.
-ColumnMap parse_column_map(const std::string& spec, int joints);
+/// revolute joints, a linear one to the prismatic joints (`prismatic`: per joint, the robot's
+/// RobotDescription::prismatic; its length is the number of joints). A signal without a unit is read
+/// in SI on every joint; one with units needs a unit for each joint kind the robot has, as
+/// `deg|mm` on a mixed arm. t, q and tau are required. Throws InputError naming the entry: an
+/// unknown signal or unit, a repeated signal, a range that does not give one name per joint, a
+/// malformed range, a unit of a kind the robot has no joint of, a mixed arm given one kind's unit.
+ColumnMap parse_column_map(const std::string& spec, const std::vector<bool>& prismatic);
 
 /// The built-in map of Universal Robots' RTDE recorder (its CSV: `timestamp`, `actual_q_0..`,
 /// `actual_qd_0..`, `actual_current_0..`; space-separated by default): time [s], measured joint
 /// positions [rad] and velocities [rad/s], and the motors' measured currents [A] as the effort (the
 /// recorder's `target_moment_*` is a command, not a measurement).
-ColumnMap ur_rtde_column_map(int joints);
+ColumnMap ur_rtde_column_map(const std::vector<bool>& prismatic);
 
 /// Reads a delimited log (read_numeric_csv: comma, semicolon, tab or space separated) with the
 /// columns `map` names; other columns are ignored. The effort lands in `tau` as it is (currents

@@ -11,8 +11,9 @@
 namespace dyncal::host {
 
 /// The default map of merged files: t, q1..qN, qd1..qN, qdd1..qN and tau1..tauN (or i1..iN with
-/// `current`: motor currents, converted afterwards with current_to_joint_torque).
-ColumnMap default_column_map(int joints, bool current);
+/// `current`: motor currents, converted afterwards with current_to_joint_torque), in SI units; N =
+/// prismatic.size() (per joint: whether it is prismatic, RobotDescription::prismatic).
+ColumnMap default_column_map(const std::vector<bool>& prismatic, bool current);
 
 /// Reads `paths` (read_numeric_csv) and merges them on time. Each file's time is its column
 /// map.t, else its first column (scaled by map.t_scale); each signal of `map` (q, qd, qdd, effort;
