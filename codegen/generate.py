@@ -45,8 +45,8 @@ def banner(name, inputs, what, counts):
     ]
     for fn, (m, a) in counts.items():
         lines.append(f"// Operation count {fn}: {m} multiplications, {a} additions (plus dyncal::sin_cos of q)")
-    lines.append(f"// Include as \"dyncal/generated/{name}/<file>.hpp\". "
-                 "Regenerate: cmake --build <build> --target regenerate (or scripts/codegen).")
+    lines.append(f"// Include as \"dyncal/generated/{name}/<file>.hpp\".")
+    lines.append("// Regenerate: cmake --build <build> --target regenerate (or scripts/codegen).")
     return "\n".join(lines) + "\n"
 
 
@@ -215,16 +215,18 @@ inline void base_regressor({args}, Eigen::Matrix<Scalar, {n}, Cols>& Yb) noexcep
 
 namespace {ns} {{
 
-/// Inverse dynamics by recursive Newton-Euler: tau [Nm] ({n}) from q [rad], qd [rad/s],
-/// qdd [rad/s^2] ([N], [m], [m/s], [m/s^2] for a prismatic joint) and the standard parameters phi ({n_std}, StandardParam order). Gravity included.
+/// Inverse dynamics by recursive Newton-Euler: tau [Nm] ({n}) from q [rad], qd [rad/s], qdd [rad/s^2]
+/// ([N], [m], [m/s], [m/s^2] for a prismatic joint) and the standard parameters phi ({n_std},
+/// StandardParam order). Gravity included.
 template <typename Scalar>
 inline void inverse_dynamics({args}, const {pvec}& phi, {vec}& tau) noexcept {{
 {preamble(used_symbols(id_defs, tau), n)}
 {id_text}
 }}
 
-/// Joint-space mass matrix M(q) [kg m^2; kg m and kg on prismatic rows and columns] ({n} x {n}, symmetric) for standard parameters phi:
-/// tau = M(q) qdd + c(q, qd) + g(q). Only the lower triangle is derived; the upper one is mirrored.
+/// Joint-space mass matrix M(q) [kg m^2; kg m and kg on prismatic rows and columns] ({n} x {n},
+/// symmetric) for standard parameters phi: tau = M(q) qdd + c(q, qd) + g(q). Only the lower triangle
+/// is derived; the upper one is mirrored.
 template <typename Scalar>
 inline void mass_matrix(const {vec}& q, const {pvec}& phi, Eigen::Matrix<Scalar, {n}, {n}>& M) noexcept {{
 {preamble(used_symbols(mm_defs, [e for _, e in mm_assign]), n)}
@@ -272,9 +274,9 @@ inline void mass_matrix(const {vec}& q, const {pvec}& phi, Eigen::Matrix<Scalar,
         pn = [float(x) for x in j.p.evalf()]
         origins.append("    {{" + ", ".join(fmt(x) for row in Rn for x in row) + "}, {" + ", ".join(fmt(x) for x in pn) + "}}")
     # A prismatic joint changes what the values mean: it enters the id (a revolute-only arm's id is as before).
-    kinds = [f"joint {i + 1} prismatic" for i, j in enumerate(joints) if j.kind == "prismatic"]
+    kinds = [f"joint {i + 1} prismatic" for i, j in enumerate(joints) if j.kind == description.PRISMATIC]
     robot_id = fnv1a32("\n".join([name] + groupings + origins + kinds))
-    prismatic_list = ", ".join("true" if j.kind == "prismatic" else "false" for j in joints)
+    prismatic_list = ", ".join("true" if j.kind == description.PRISMATIC else "false" for j in joints)
     nominal = ", ".join(fmt(x) for j in joints for x in j.standard)
     std_enum = ",\n".join(f"  {std_name(k)} = {k}" for k in range(n_std))
     base_enum = ",\n".join(f"  {nm} = {b}" for b, nm in enumerate(base_names))

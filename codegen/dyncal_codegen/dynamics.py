@@ -2,8 +2,8 @@
 programs.
 
 Conventions (Khalil-Kleinfinger, modified DH frames): link i's frame rotates with a revolute joint i
-about its z axis, or slides with a prismatic one along it; standard parameters of link i, about the frame origin and in link axes, are
-[XX XY XZ YY YZ ZZ MX MY MZ M] (Khalil & Kleinfinger 1986; Gautier & Khalil 1990).
+about its z axis, or slides with a prismatic one along it; standard parameters of link i, about the
+frame origin and in link axes, are [XX XY XZ YY YZ ZZ MX MY MZ M] (Khalil & Kleinfinger 1986; Gautier & Khalil 1990).
 
 Newton-Euler about the link origin makes the link wrench linear in the standard parameters:
     f = M a + w_dot x MS + w x (w x MS),   n = I w_dot + w x (I w) + MS x a,
@@ -16,6 +16,7 @@ relative terms 2 w x (qd z) + qdd z, its angular velocity none.
 """
 import sympy as sp
 
+from .description import PRISMATIC
 from .tracer import Tracer
 
 PARAMS_PER_LINK = 10
@@ -39,7 +40,7 @@ def _rotations(tr, joints, sym):
     for i, j in enumerate(joints):
         Rf = j.R
         p = [sp.nsimplify(x) if x == 0 else x for x in j.p]
-        if j.kind == "prismatic":
+        if j.kind == PRISMATIC:
             R = [[Rf[r, col] for col in range(3)] for r in range(3)]
             p = tr.vec([p[r] + sym.q[i] * Rf[r, 2] for r in range(3)])
         else:
@@ -48,7 +49,7 @@ def _rotations(tr, joints, sym):
             R = [[tr.let(sum(Rf[r, k] * Rz[k][col] for k in range(3))) for col in range(3)] for r in range(3)]
         Rs.append(R)
         ps.append(p)
-        prismatic.append(j.kind == "prismatic")
+        prismatic.append(j.kind == PRISMATIC)
     return Rs, ps, prismatic
 
 

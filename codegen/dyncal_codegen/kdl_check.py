@@ -171,8 +171,8 @@ def torques_at(links, joints, chain, gravity, states):
 
 def torque_samples(links, joints, chain, gravity, count=200, seed=7):
     """torques_at `count` seeded random states: a list of {"q", "qd", "qdd", "tau"} (rad, rad/s,
-    rad/s^2, Nm; m, m/s, m/s^2, N for a prismatic joint), or None (torques_at). The oracle `dyncal robot check` runs the compiled model
-    against."""
+    rad/s^2, Nm; m, m/s, m/s^2, N for a prismatic joint), or None (torques_at). The oracle `dyncal
+    robot check` runs the compiled model against."""
     n = len(chain.joints)
     rng = random.Random(seed)
     states = []

@@ -3,11 +3,11 @@
 The arm is the robot's chain as dyncal compiles it (description.py: joint i is a fixed transform
 [R p] followed by a rotation about or a translation along its own z): one MJCF <body> per joint at
 pos = p, quat = R in its parent body, a hinge (revolute) or slide (prismatic) joint about or along z
-at the body's origin, and the identified body as an <inertial>
-(mass, centre of mass, principal moments and axes of the inertia about it; body frame). Per joint, what MuJoCo's joint holds:
+at the body's origin, and the identified body as an <inertial> (mass, centre of mass, principal
+moments and axes of the inertia about it; body frame). Per joint, what MuJoCo's joint holds:
 armature = rotor inertia reflected to the joint (Ia, kg m^2; kg for a slide), damping = viscous
-friction (Fv, N m s/rad; N s/m), frictionloss = Coulomb friction (Fc, Nm; N) (MuJoCo XML reference, <joint>). Every other
-identified term (offsets, Stribeck, couplings, effects, terms acting through a coupled
+friction (Fv, N m s/rad; N s/m), frictionloss = Coulomb friction (Fc, Nm; N) (MuJoCo XML reference,
+<joint>). Every other identified term (offsets, Stribeck, couplings, effects, terms acting through a coupled
 transmission) has no place in a MuJoCo joint: it is kept as <custom><numeric name="dyncal_NAME">
 and named in a comment. The file carries dynamics only: no geometry (no <geom>), so no contacts.
 """
@@ -84,7 +84,8 @@ def export(robot_dir, model):
     prov = model["provenance"]
     root = ET.Element("mujoco", {"model": desc["name"]})
     root.append(ET.Comment(
-        f" dyncal export mjcf (format {FORMAT_VERSION}) from {prov.get('params', '?')} (robot {prov.get('robot', '?')}, "
+        f" dyncal export mjcf (format {FORMAT_VERSION}) from {prov.get('params', '?')} "
+        f"(robot {prov.get('robot', '?')}, "
         f"model {prov.get('model', '?')}): identified inertials; joint armature = rotor inertia Ia, damping = Fv, "
         "frictionloss = Fc; dynamics only, no geometry (docs/export.md) "))
     ET.SubElement(root, "compiler", {"angle": "radian", "inertiafromgeom": "false"})
@@ -97,7 +98,7 @@ def export(robot_dir, model):
                              {"name": names[i], "pos": " ".join(_fmt(v) for v in p),
                               "quat": " ".join(_fmt(v) for v in quaternion(R))})
         ET.SubElement(body, "joint",
-                      {"name": j.name, "type": "slide" if j.kind == "prismatic" else "hinge", "axis": "0 0 1",
+                      {"name": j.name, "type": "slide" if j.kind == description.PRISMATIC else "hinge", "axis": "0 0 1",
                        "limited": "true",
                        "range": f"{_fmt(limits['q_min'][i])} {_fmt(limits['q_max'][i])}",
                        "armature": _fmt(terms["armature"]), "damping": _fmt(terms["damping"]),

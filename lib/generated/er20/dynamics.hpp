@@ -4,7 +4,8 @@
 // Contents: inverse dynamics tau(q, qd, qdd, phi) and mass matrix M(q, phi)
 // Operation count inverse_dynamics: 372 multiplications, 309 additions (plus dyncal::sin_cos of q)
 // Operation count mass_matrix: 401 multiplications, 312 additions (plus dyncal::sin_cos of q)
-// Include as "dyncal/generated/er20/<file>.hpp". Regenerate: cmake --build <build> --target regenerate (or scripts/codegen).
+// Include as "dyncal/generated/er20/<file>.hpp".
+// Regenerate: cmake --build <build> --target regenerate (or scripts/codegen).
 #pragma once
 
 #include <Eigen/Core>
@@ -14,8 +15,9 @@
 
 namespace dyncal::generated::er20 {
 
-/// Inverse dynamics by recursive Newton-Euler: tau [Nm] (6) from q [rad], qd [rad/s],
-/// qdd [rad/s^2] ([N], [m], [m/s], [m/s^2] for a prismatic joint) and the standard parameters phi (60, StandardParam order). Gravity included.
+/// Inverse dynamics by recursive Newton-Euler: tau [Nm] (6) from q [rad], qd [rad/s], qdd [rad/s^2]
+/// ([N], [m], [m/s], [m/s^2] for a prismatic joint) and the standard parameters phi (60,
+/// StandardParam order). Gravity included.
 template <typename Scalar>
 inline void inverse_dynamics(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matrix<Scalar, 6, 1>& qd, const Eigen::Matrix<Scalar, 6, 1>& qdd, const Eigen::Matrix<Scalar, 60, 1>& phi, Eigen::Matrix<Scalar, 6, 1>& tau) noexcept {
   const SinCos<Scalar> sc2 = sin_cos(q[1]);
@@ -343,8 +345,9 @@ inline void inverse_dynamics(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::
   tau[0] = x258;
 }
 
-/// Joint-space mass matrix M(q) [kg m^2; kg m and kg on prismatic rows and columns] (6 x 6, symmetric) for standard parameters phi:
-/// tau = M(q) qdd + c(q, qd) + g(q). Only the lower triangle is derived; the upper one is mirrored.
+/// Joint-space mass matrix M(q) [kg m^2; kg m and kg on prismatic rows and columns] (6 x 6,
+/// symmetric) for standard parameters phi: tau = M(q) qdd + c(q, qd) + g(q). Only the lower triangle
+/// is derived; the upper one is mirrored.
 template <typename Scalar>
 inline void mass_matrix(const Eigen::Matrix<Scalar, 6, 1>& q, const Eigen::Matrix<Scalar, 60, 1>& phi, Eigen::Matrix<Scalar, 6, 6>& M) noexcept {
   const SinCos<Scalar> sc2 = sin_cos(q[1]);

@@ -2,7 +2,8 @@
 // Generator: codegen/generate.py (dyncal codegen 5, SymPy 1.11.1)
 // Robot: er20; inputs: robots/er20/robot.json (sha256 4a57ae3dca2a7e3c)
 // Contents: parameter index names, standard->base map, kinematic data
-// Include as "dyncal/generated/er20/<file>.hpp". Regenerate: cmake --build <build> --target regenerate (or scripts/codegen).
+// Include as "dyncal/generated/er20/<file>.hpp".
+// Regenerate: cmake --build <build> --target regenerate (or scripts/codegen).
 #pragma once
 
 #include <Eigen/Core>

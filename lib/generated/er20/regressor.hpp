@@ -4,7 +4,8 @@
 // Contents: standard regressor Y and base regressor Y_b
 // Operation count standard_regressor: 559 multiplications, 374 additions (plus dyncal::sin_cos of q)
 // Operation count base_regressor: 439 multiplications, 294 additions (plus dyncal::sin_cos of q)
-// Include as "dyncal/generated/er20/<file>.hpp". Regenerate: cmake --build <build> --target regenerate (or scripts/codegen).
+// Include as "dyncal/generated/er20/<file>.hpp".
+// Regenerate: cmake --build <build> --target regenerate (or scripts/codegen).
 #pragma once
 
 #include <Eigen/Core>

@@ -2,7 +2,8 @@
 // Generator: codegen/generate.py (dyncal codegen 5, SymPy 1.11.1)
 // Robot: tx40; inputs: robots/tx40/robot.json (sha256 fdac684fe7e00f95), robots/tx40/tx40.urdf (sha256 3d00cbd46279c915)
 // Contents: parameter index names, standard->base map, kinematic data
-// Include as "dyncal/generated/tx40/<file>.hpp". Regenerate: cmake --build <build> --target regenerate (or scripts/codegen).
+// Include as "dyncal/generated/tx40/<file>.hpp".
+// Regenerate: cmake --build <build> --target regenerate (or scripts/codegen).
 #pragma once
 
 #include <Eigen/Core>

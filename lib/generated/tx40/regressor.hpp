@@ -4,7 +4,8 @@
 // Contents: standard regressor Y and base regressor Y_b
 // Operation count standard_regressor: 561 multiplications, 376 additions (plus dyncal::sin_cos of q)
 // Operation count base_regressor: 441 multiplications, 294 additions (plus dyncal::sin_cos of q)
-// Include as "dyncal/generated/tx40/<file>.hpp". Regenerate: cmake --build <build> --target regenerate (or scripts/codegen).
+// Include as "dyncal/generated/tx40/<file>.hpp".
+// Regenerate: cmake --build <build> --target regenerate (or scripts/codegen).
 #pragma once
 
 #include <Eigen/Core>
