@@ -154,7 +154,9 @@ def main():
             failures.append(f"importing arm3 failed: {err}")
         expect_one_line("existing robot", ["robot", "import", good, "--name", "arm3", "--robots-dir", robots], "--force")
 
-        # Re-importing reproduces the committed test robots.
+        # Re-importing reproduces the committed test robots; of robot.json, what the import writes (the
+        # fields a URDF holds nothing for, added by hand after it, docs/robots.md, are left out).
+        hand_added = {"transmission", "friction", "joint_names", "log_formats"}
         for name in sorted(os.listdir(os.path.join(SRC, "tests/robots"))):
             out = os.path.join(tmp, "reimport")
             committed = os.path.join(SRC, "tests/robots", name)
@@ -163,6 +165,14 @@ def main():
                               "--base", source["base"], "--tip", source["tip"], "--robots-dir", out])
             for f in sorted(os.listdir(committed)):
                 a, b = open(os.path.join(committed, f), "rb").read(), open(os.path.join(out, name, f), "rb").read()
+                if f == "robot.json":
+                    a_json, b_json = json.loads(a), json.loads(b)
+                    extra = set(a_json) - set(b_json)
+                    if not extra <= hand_added:
+                        failures.append(f"re-import of {name}: robot.json has {sorted(extra - hand_added)} the import "
+                                        "does not write")
+                    a = json.dumps({k: v for k, v in a_json.items() if k not in hand_added}, indent=2).encode()
+                    b = json.dumps(b_json, indent=2).encode()
                 if a != b:
                     failures.append(f"re-import of {name}: {f} differs from tests/robots/{name}/{f}")
             print(f"ok   re-import of {name} equals tests/robots/{name}" if rc == 0 else f"FAIL {err}")

@@ -111,8 +111,9 @@ TEST_P(IdimIv, RecoversTheSimulatedParametersFromALogUnderAKnownLaw) {
   int dropped = 0, dropped_differently = 0, compared = 0;
   for (Eigen::Index i = 0; i < truth.size(); ++i) {
     const auto& p = iv["params"][static_cast<size_t>(i)];
-    // Both methods drop (std null, value 0) what the log does not determine (identifiability.hpp),
-    // decided on the same weighted data; a dropped parameter's effect is in the kept ones.
+    // Both methods drop (std null; wls with --prior-std 0 holds at 0, iv at the prior's mean) what the log does not
+    // determine (identifiability.hpp), decided on the same weighted data; a dropped parameter's effect is in the kept
+    // ones.
     const bool iv_dropped = p["std"].is_null(), wls_dropped = wls["params"][static_cast<size_t>(i)]["std"].is_null();
     dropped += iv_dropped;
     dropped_differently += iv_dropped != wls_dropped;
@@ -137,6 +138,14 @@ TEST_P(IdimIv, RecoversTheSimulatedParametersFromALogUnderAKnownLaw) {
   std::printf("dropped: %d of %d, %d by one method only\n", dropped, static_cast<int>(truth.size()),
               dropped_differently);
   EXPECT_EQ(dropped_differently, 0);
+  // What the log does not determine IV holds at the prior's mean (robot.json's inertials, here the
+  // simulated truth), named "prior", never at an arbitrary 0.
+  for (int i = 0; i < c.num_base; ++i) {
+    const auto& p = iv["params"][static_cast<size_t>(i)];
+    if (!p["std"].is_null()) continue;
+    EXPECT_EQ(p["basis"], "prior") << p["name"];
+    EXPECT_NEAR(p["value"].get<double>(), truth[i], 1e-9 * (1 + std::abs(truth[i]))) << p["name"];
+  }
   int converged = 0, tripped = 0;
   for (const auto& n : iv["notes"]) {
     const std::string note = n.get<std::string>();

@@ -481,6 +481,11 @@ void print_calibrate_report(std::ostream& out, const CalibrateResult& r) {
         << " samples\n";
     for (const auto& p : l.plans) out << "  " << p << "\n";
   }
+  if (!r.batch.prismatic_joints.empty()) {
+    out << "prismatic joint" << (r.batch.prismatic_joints.size() > 1 ? "s" : "");
+    for (const int j : r.batch.prismatic_joints) out << " " << j;
+    out << ": the torques below [Nm] are forces [N] there\n";
+  }
   out << "batch fit (" << r.batch.method << ", " << r.batch.model
       << (r.friction_per_motor ? ", friction and rotor inertia per motor" : "")
       << "), cross-validated on the excitation run:\n";

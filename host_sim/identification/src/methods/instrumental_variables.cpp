@@ -39,7 +39,7 @@ int param_index(const StackedData& d, const std::string& name) {
 
 void fit_instrumental(const StackedData& d, const JointLog& grid, const std::vector<int>& fold, int folds,
                       const RobotDescription& robot, const IdentifyOptions& o, const PrepareLog& prepare,
-                      const std::vector<int>& dropped, IdentifyResult& res) {
+                      const std::vector<int>& dropped, const VectorXd& held_at, IdentifyResult& res) {
   if (!o.closed_loop)
     throw InputError("--method iv needs --law FILE: the drive's control law the run was recorded under");
   const auto t0 = std::chrono::steady_clock::now();
@@ -74,7 +74,8 @@ void fit_instrumental(const StackedData& d, const JointLog& grid, const std::vec
   }();
   // The iteration runs on the whole model (its plants need every parameter: one held at 0 would
   // pull the plant away from what the data say at the white-noise level); the reported IV estimate
-  // drops the parameters the log does not determine (held at 0), with the final instruments.
+  // holds the parameters the log does not determine at held_at (the prior's mean), with the final
+  // instruments.
   std::vector<Index> kept;
   for (Index i = 0; i < P; ++i)
     if (std::find(dropped.begin(), dropped.end(), static_cast<int>(i)) == dropped.end()) kept.push_back(i);
@@ -84,8 +85,10 @@ void fit_instrumental(const StackedData& d, const JointLog& grid, const std::vec
     for (Index k = 0; k < Pk; ++k) B.col(k) = A.col(kept[static_cast<size_t>(k)]);
     return B;
   };
+  VectorXd held = VectorXd::Zero(P);  // the undetermined parameters' values, 0 elsewhere
+  for (const int i : dropped) held[i] = held_at[i];
   auto full = [&](const VectorXd& x) {
-    VectorXd v = VectorXd::Zero(P);
+    VectorXd v = held;
     for (Index k = 0; k < Pk; ++k) v[kept[static_cast<size_t>(k)]] = x[k];
     return v;
   };
@@ -135,7 +138,8 @@ void fit_instrumental(const StackedData& d, const JointLog& grid, const std::vec
   // The IV estimate of the last instruments (the iterate may be a half step), of the parameters the
   // log determines.
   const MatrixXd Z = kept_columns(it.Z);
-  const VectorXd phi = full(iv_solve(Kk, Z, y, VectorXd::Ones(rows)));
+  const VectorXd y_held = y - K * held;  // the held parameters' torque moved to the left-hand side
+  const VectorXd phi = full(iv_solve(Kk, Z, y_held, VectorXd::Ones(rows)));
   if (!phi.allFinite()) throw InputError("--method iv: the instrumental estimate is not finite");
   res.fit_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
@@ -144,7 +148,7 @@ void fit_instrumental(const StackedData& d, const JointLog& grid, const std::vec
   for (int f = 0; f < folds; ++f) {
     VectorXd train(rows);
     for (Index r = 0; r < rows; ++r) train[r] = fold[static_cast<size_t>(r / N)] != f ? 1.0 : 0.0;
-    const VectorXd phi_f = full(iv_solve(Kk, Z, y, train));
+    const VectorXd phi_f = full(iv_solve(Kk, Z, y_held, train));
     for (Index s = 0; s < S; ++s)
       if (fold[static_cast<size_t>(s)] == f) pred.segment(s * N, N) = d.W.middleRows(s * N, N) * phi_f;
   }

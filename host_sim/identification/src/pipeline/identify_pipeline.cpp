@@ -133,11 +133,18 @@ void judge_parameters(const Eigen::VectorXd& scale, const IdentifyPipeline::FitD
   const char* basis = "held at 0";
   std::string rests = "held at 0, the fit keeps the combination the log determines";
   const bool map = prior.usable() && fit.data_share.size() > 0;
+  // iv: the undetermined parameters held at the prior's mean where it has one (fit_instrumental).
+  const bool held_at_prior = m == "iv" && prior.usable();
   if (map) {
     basis = "prior";
-    rests = "their values are the MAP estimate with robot.json's inertials as prior (+-" +
+    rests = "their values are the MAP estimate with robot.json's inertials and friction as prior (+-" +
             std::to_string(static_cast<int>(std::lround(100 * opt.prior_std))) +
             " %, --prior-std; each parameter's data share says how much the log adds)";
+  } else if (held_at_prior) {
+    basis = "prior";
+    rests =
+        "those the log does not determine at all are held at robot.json's values (the prior's mean), the fit "
+        "keeps the combination the log determines; the others are the data's wide estimates";
   } else if (m == "pcls") {
     basis = "prior";
     rests = opt.prior_std > 0 ? "their values rest on the prior (robot.json's inertials, --prior-std)"
@@ -170,15 +177,17 @@ void judge_parameters(const Eigen::VectorXd& scale, const IdentifyPipeline::FitD
       continue;
     }
     if (p.verdict != Verdict::not_determined) continue;
-    p.basis = basis;
-    if (map && !prior.has[i]) {  // no prior: held at 0 when dropped, else the data's wide estimate
-      p.basis = dropped ? "held at 0" : "least squares";
-      if (!dropped) undetermined += (undetermined.empty() ? "" : ", ") + p.name;
-    } else if (!dropped || map) {
-      undetermined += (undetermined.empty() ? "" : ", ") + p.name;
+    const bool has_prior = prior.usable() && prior.has[i];
+    if (map) {  // the MAP estimate, or without a prior: held at 0 when dropped, else the data's wide estimate
+      p.basis = has_prior ? "prior" : dropped ? "held at 0" : "least squares";
+    } else if (m == "wls" || m == "ols" || m == "iv") {  // the data alone; a dropped one held
+      p.basis = !dropped ? "least squares" : held_at_prior && has_prior ? "prior" : "held at 0";
+    } else {
+      p.basis = basis;
     }
+    if (!dropped || ((map || held_at_prior) && has_prior)) undetermined += (undetermined.empty() ? "" : ", ") + p.name;
   }
-  if (map) {  // the dropped parameters no prior covers: held at 0 as without a prior
+  if (map || held_at_prior) {  // the dropped parameters no prior covers: held at 0 as without a prior
     DeterminedFit held;
     for (size_t k = 0; k < fit.decision.dropped.size(); ++k) {
       if (prior.has[static_cast<size_t>(fit.decision.dropped[k])]) continue;
@@ -188,8 +197,9 @@ void judge_parameters(const Eigen::VectorXd& scale, const IdentifyPipeline::FitD
     unsupported = dropped_parameters_text(held, names);
   }
   physics_check(names, res);
-  std::string named = map ? undetermined : dropped_parameters_text(fit.decision, names);
-  if (!map && !undetermined.empty()) named += (named.empty() ? "" : ", ") + undetermined;
+  const bool by_prior = map || held_at_prior;
+  std::string named = by_prior ? undetermined : dropped_parameters_text(fit.decision, names);
+  if (!by_prior && !undetermined.empty()) named += (named.empty() ? "" : ", ") + undetermined;
   if (named.empty() && unsupported.empty()) return;
   if (opt.strict)
     throw InputError("--strict: the log does not determine " + named +
@@ -203,14 +213,15 @@ void judge_parameters(const Eigen::VectorXd& scale, const IdentifyPipeline::FitD
   if (!unsupported.empty())
     res.notes.push_back(
         "not determined by this log (95 % interval wider than the parameter's physical scale, docs/accuracy.md "
-        "\"Real arms\") and without a prior (robot.json holds none for friction, rotor inertia or offsets): " +
+        "\"Real arms\") and without a prior (robot.json holds none for rotor inertia or offsets, and its friction "
+        "list none for these): " +
         unsupported + "; held at 0, the fit keeps the combination the log determines (--strict: refuse instead)");
 }
 
 }  // namespace
 
 IdentifyPipeline::IdentifyPipeline(const RobotDescription& robot, const IdentifyOptions& options,
-                                   const TermSetModel& model)
+                                   const TermSetModel& model, const Eigen::VectorXd& effect_scales)
     : robot_(robot),
       opt_(options),
       model_(model),
@@ -219,8 +230,10 @@ IdentifyPipeline::IdentifyPipeline(const RobotDescription& robot, const Identify
       motor_(motor_velocity_map(robot, !options.friction_per_joint, options.motors)),
       robot_coupled_(!motor_velocity_map(robot, !options.friction_per_joint, {}).isDiagonal(0.0)),
       scale_(parameter_scales(robot, model)),
-      prior_(options.method == "wls" || options.method == "ols" ? parameter_prior(robot, model, options.prior_std)
-                                                                : ParameterPrior{}) {
+      prior_(options.method == "wls" || options.method == "ols" || options.method == "iv"
+                 ? parameter_prior(robot, model, options.prior_std)
+                 : ParameterPrior{}) {
+  scale_.tail(effect_scales.size()) = effect_scales;
   for (int m = 0; m < N; ++m) {
     for (int j = 0; j < N; ++j) {
       if (j != m && motor_(m, j) != 0.0) {
@@ -412,6 +425,7 @@ void IdentifyPipeline::fit(const StackedData& data, const std::vector<char>& tra
     std::vector<int> unsupported;  // of them, those without a prior the data do not determine (std NaN)
   } map_data;
   const double data_weight = details ? details->data_weight : decided ? decided->data_weight : 1.0;
+  ParameterPrior search_prior;  // gd, ga, pf: the spread of what the log determines only with the prior
   auto fit_least_squares = [&]() {
     if (!prior_.usable() || m == "iv") {  // iv: its start (fit_instrumental) decides on the data alone
       least_squares(*ls, dropped, decision_inflation, opt_.sign_constraints, phi, stdev, cond, held, decision);
@@ -474,6 +488,19 @@ void IdentifyPipeline::fit(const StackedData& data, const std::vector<char>& tra
         p.sigma2 *= streamed_autocorrelation_inflation(data, train, phi);
         sol = search_consistent(p, search_method(m), search_settings(opt_));
         stdev = data_std;
+        if (details && !d.dropped.empty()) {
+          // The search moves the parameters the log does not determine within its range, and those
+          // the log determines only together with them move along: their spread is the posterior's
+          // with robot.json's inertials as prior (the search's centre), not the data's with the
+          // undetermined ones held at 0 (which understated it 4-fold on a coupled motor's Ia).
+          search_prior = parameter_prior(robot_, model_, opt_.prior_std > 0 ? opt_.prior_std : kPriorRelativeStd);
+          if (search_prior.usable()) {
+            std::vector<int> unsupported;
+            for (const int i : d.dropped)
+              if (!search_prior.has[static_cast<size_t>(i)]) unsupported.push_back(i);
+            map_data = {p.R, d.sigma2, unsupported, d.dropped};
+          }
+        }
       }
       phi = sol.params;
       if (details) {
@@ -502,10 +529,15 @@ void IdentifyPipeline::fit(const StackedData& data, const std::vector<char>& tra
     // mostly model error; weighed by their effective information, TX40's joint 1 validated 2.63 Nm
     // instead of 1.73); its std are that estimate's spread with the data's noise S / n_eff times
     // the white variance (parameter_prior.hpp).
-    const PriorFitStatistics st =
-        prior_fit_statistics(prior_, map_data.R, map_data.sigma2, details->inflation, data_weight, map_data.held);
+    const bool search = search_prior.usable();
+    const PriorFitStatistics st = prior_fit_statistics(search ? search_prior : prior_, map_data.R, map_data.sigma2,
+                                                       details->inflation, data_weight, map_data.held);
     stdev = st.stdev;
     for (const int i : map_data.unsupported) stdev[i] = std::numeric_limits<double>::quiet_NaN();
+    if (search) {
+      details->data_stdev *= std::sqrt(details->inflation);
+      return;
+    }
     details->data_share = st.data_share;
     details->data_stdev *= std::sqrt(details->inflation);
     return;
@@ -692,9 +724,117 @@ void IdentifyPipeline::constrain_signs(const LeastSquaresFit& ls, const std::vec
     stdev[kept[static_cast<size_t>(k)]] = std::sqrt(sol.inverse_gram_diag[k] * sigma2);
 }
 
+namespace {
+
+/// The declared model's fit, or [W E] with effect columns appended (set_effect_columns): the final
+/// fit on all samples, then its blocked cross-validation (`fold`, `folds`), the prior's weight chosen
+/// by it (ols/wls with a prior), and the parameters, their verdicts and notes, into res.
+void fit_validated(const IdentifyPipeline& pipe, const StackedData& data, const TermSetModel& model,
+                   const std::vector<int>& fold, int folds, const RobotDescription& robot, const IdentifyOptions& opt,
+                   IdentifyResult& res) {
+  const int N = model.num_joints, P = model.num_params;
+  const Eigen::Index S = data.t.size();
+
+  // Final fit on all data first: the reported parameters, and the decision of which parameters the
+  // log determines, which the folds' fits then share (the validated model is the reported one).
+  std::vector<char> all(static_cast<size_t>(S), 1);
+  const bool map = pipe.prior().usable();
+  Progress progress("identify: " + opt.method + " fit and " + std::to_string(folds) + " folds",
+                    static_cast<double>((map ? 2 : 1) * (folds + 1)), "fits");
+  // The final fit with the data's rows weighed `data_weight` times against the prior, its folds'
+  // fits and their pooled out-of-fold metrics (each sample predicted by the fit without its fold,
+  // made sample by sample: no stored prediction).
+  struct Validated {
+    Eigen::VectorXd phi, stdev;
+    IdentifyPipeline::FitDetails details;
+    std::vector<JointMetrics> joints;
+    double seconds = 0;
+  };
+  const auto fit_and_validate = [&](double data_weight) {
+    Validated v;
+    const auto t0 = std::chrono::steady_clock::now();
+    v.details.data_weight = data_weight;
+    pipe.fit(data, all, v.phi, v.stdev, &v.details);
+    progress.advance();
+    v.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    std::vector<Eigen::VectorXd> fold_phi(static_cast<size_t>(folds));
+    for (int f = 0; f < folds; ++f) {
+      std::vector<char> train(static_cast<size_t>(S));
+      for (Eigen::Index s = 0; s < S; ++s) train[static_cast<size_t>(s)] = fold[static_cast<size_t>(s)] != f;
+      Eigen::VectorXd fold_std;
+      pipe.fit(data, train, fold_phi[static_cast<size_t>(f)], fold_std, nullptr, &v.details);
+      progress.advance();
+    }
+    Eigen::MatrixXd K;
+    Eigen::VectorXd tau_hat(N);
+    v.joints = torque_metrics(
+        data.y, N, robot.tau_max,
+        // Rows --min-speed leaves out of the fit are left out of the scores too.
+        [&](Eigen::Index s, int j) {
+          return fold[static_cast<size_t>(s)] >= 0 && data.fit_row[static_cast<size_t>(s * N + j)];
+        },
+        [&](Eigen::Index s) {
+          data.regressor(s, K);
+          tau_hat = K * fold_phi[static_cast<size_t>(fold[static_cast<size_t>(s)])];
+          return tau_hat.data();
+        });
+    return v;
+  };
+  Validated chosen = fit_and_validate(1.0);
+  if (map) {
+    // How much the data weigh against the prior: as white noise (their rows' count), or as their
+    // effective information (S / n_eff times less: the residual's autocorrelation). Which is right
+    // depends on whether that autocorrelation is noise or model error, so the blocked
+    // cross-validation decides: the effective weighting is kept when its out-of-fold mean squared
+    // error, relative to the white one's, is lower averaged over the joints.
+    Validated effective = fit_and_validate(1.0 / chosen.details.inflation);
+    double ratio = 0;
+    for (size_t j = 0; j < chosen.joints.size(); ++j)
+      ratio += std::pow(effective.joints[j].rms / chosen.joints[j].rms, 2) / static_cast<double>(N);
+    char line[300];
+    std::snprintf(line, sizeof line,
+                  "prior weight: the data weigh against the prior as %s (cross-validated mean squared error "
+                  "%.4g times the other's; S / n_eff = %.3g)",
+                  ratio < 1.0 ? "their effective information" : "white noise", ratio < 1.0 ? ratio : 1.0 / ratio,
+                  chosen.details.inflation);
+    if (ratio < 1.0) chosen = std::move(effective);
+    res.notes.push_back(line);
+  }
+  const Eigen::VectorXd& phi = chosen.phi;
+  const Eigen::VectorXd& stdev = chosen.stdev;
+  const IdentifyPipeline::FitDetails& final_fit = chosen.details;
+  res.fit_seconds = chosen.seconds;
+  res.condition_number = final_fit.cond;
+  res.joints = chosen.joints;
+  for (int i = 0; i < P; ++i) res.params.push_back({model.names[static_cast<size_t>(i)], phi[i], stdev[i]});
+  judge_parameters(pipe.scales(), final_fit, opt, pipe.prior(), model.names, res);
+  {
+    char line[240];
+    if (final_fit.data_share.size() > 0 || final_fit.consistent.information_data.size() > 0)
+      std::snprintf(line, sizeof line,
+                    "parameter std: the MAP estimate's spread with the data's noise %.3g times its white "
+                    "variance (the residual's autocorrelation, S / n_eff) and the prior's own",
+                    final_fit.inflation);
+    else
+      std::snprintf(line, sizeof line,
+                    "parameter std: the white-noise figures times %.3g for the residual's autocorrelation (S / n_eff)",
+                    std::sqrt(final_fit.inflation));
+    res.notes.push_back(line);
+  }
+  report_consistent(final_fit.consistent, opt, res);
+  if (!final_fit.held.empty()) {
+    std::string names;
+    for (int i : final_fit.held) names += (names.empty() ? "" : ", ") + model.names[static_cast<size_t>(i)];
+    res.notes.push_back("sign constraints: " + names +
+                        " held at 0 (negative without the constraint: friction and rotor inertia cannot be)");
+  }
+}
+
+}  // namespace
+
 IdentifyResult run_identify(const RobotDescription& robot, const TermSetModel& model, JointLog&& log,
                             const IdentifyOptions& opt) {
-  const int N = model.num_joints, P = model.num_params;
+  const int N = model.num_joints;
   if (log.joints() != N)
     throw InputError("log has " + std::to_string(log.joints()) + " joints, robot " + robot.name + " has " +
                      std::to_string(N));
@@ -707,7 +847,7 @@ IdentifyResult run_identify(const RobotDescription& robot, const TermSetModel& m
   IdentifyResult res;
   res.data_source = log.source;
   res.sample_rate_hz = 1.0 / log.sample_period();
-  const StackedData data = pipe.prepare(std::move(log), !opt.effects.empty() || iv);  // consumes the log
+  StackedData data = pipe.prepare(std::move(log), !opt.effects.empty() || iv);  // consumes the log
   res.notes = data.notes;
   const Eigen::Index S = data.t.size();
   res.robot = robot.name;
@@ -749,108 +889,38 @@ IdentifyResult run_identify(const RobotDescription& robot, const TermSetModel& m
     IdentifyPipeline::FitDetails details;
     Eigen::VectorXd wls_phi, wls_std;
     pipe.fit(data, std::vector<char>(static_cast<size_t>(data.t.size()), 1), wls_phi, wls_std, &details);
-    fit_instrumental(data, grid, fold, folds, robot, opt, prepare, details.decision.dropped, res);
+    // What the log does not determine is held at the robot's prior mean (0 where it has none).
+    const Eigen::VectorXd held_at =
+        pipe.prior().usable() ? pipe.prior().mean : Eigen::VectorXd(Eigen::VectorXd::Zero(model.num_params));
+    fit_instrumental(data, grid, fold, folds, robot, opt, prepare, details.decision.dropped, held_at, res);
     judge_parameters(pipe.scales(), details, opt, pipe.prior(), model.names, res);
   } else if (!opt.effects.empty()) {
-    // Effect terms (model_effects.hpp): [W E] fitted at run time, validated the same way.
-    fit_effect_model(data, opt.effects, fold, folds, robot, opt, res);
-    judge_parameters(pipe.scales(), IdentifyPipeline::FitDetails{}, opt, pipe.prior(), model.names, res);
-    res.model = model_spec_name({model.terms, opt.effects, opt.motors});
-  } else {
-    // Final fit on all data first: the reported parameters, and the decision of which parameters the
-    // log determines, which the folds' fits then share (the validated model is the reported one).
-    std::vector<char> all(static_cast<size_t>(S), 1);
-    const bool map = pipe.prior().usable();
-    Progress progress("identify: " + opt.method + " fit and " + std::to_string(folds) + " folds",
-                      static_cast<double>((map ? 2 : 1) * (folds + 1)), "fits");
-    // The final fit with the data's rows weighed `data_weight` times against the prior, its folds'
-    // fits and their pooled out-of-fold metrics (each sample predicted by the fit without its fold,
-    // made sample by sample: no stored prediction).
-    struct Validated {
-      Eigen::VectorXd phi, stdev;
+    // Effect terms (model_effects.hpp): their columns appended to the regressor and fitted by this
+    // same pipeline (the prior, the decision of what the log determines, the validation). Load
+    // friction's columns need the rigid-body torque: from a first fit without them on all samples.
+    const Eigen::Index declared = data.W.cols();
+    std::vector<bool> use = effect_columns_without_load_friction(opt.effects);
+    Eigen::VectorXd tau_rb = Eigen::VectorXd::Zero(data.y.size());
+    if (std::find(use.begin(), use.end(), false) != use.end()) {
+      set_effect_columns(data, declared, opt.effects, use, tau_rb);
+      const TermSetModel first_model = with_effect_parameters(model, opt.effects, use);
+      const IdentifyPipeline first(robot, opt, first_model);
       IdentifyPipeline::FitDetails details;
-      std::vector<JointMetrics> joints;
-      double seconds = 0;
-    };
-    const auto fit_and_validate = [&](double data_weight) {
-      Validated v;
-      const auto t0 = std::chrono::steady_clock::now();
-      v.details.data_weight = data_weight;
-      pipe.fit(data, all, v.phi, v.stdev, &v.details);
-      progress.advance();
-      v.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      std::vector<Eigen::VectorXd> fold_phi(static_cast<size_t>(folds));
-      for (int f = 0; f < folds; ++f) {
-        std::vector<char> train(static_cast<size_t>(S));
-        for (Eigen::Index s = 0; s < S; ++s) train[static_cast<size_t>(s)] = fold[static_cast<size_t>(s)] != f;
-        Eigen::VectorXd fold_std;
-        pipe.fit(data, train, fold_phi[static_cast<size_t>(f)], fold_std, nullptr, &v.details);
-        progress.advance();
-      }
-      Eigen::MatrixXd K;
-      Eigen::VectorXd tau_hat(N);
-      v.joints = torque_metrics(
-          data.y, N, robot.tau_max,
-          // Rows --min-speed leaves out of the fit are left out of the scores too.
-          [&](Eigen::Index s, int j) {
-            return fold[static_cast<size_t>(s)] >= 0 && data.fit_row[static_cast<size_t>(s * N + j)];
-          },
-          [&](Eigen::Index s) {
-            data.regressor(s, K);
-            tau_hat = K * fold_phi[static_cast<size_t>(fold[static_cast<size_t>(s)])];
-            return tau_hat.data();
-          });
-      return v;
-    };
-    Validated chosen = fit_and_validate(1.0);
-    if (map) {
-      // How much the data weigh against the prior: as white noise (their rows' count), or as their
-      // effective information (S / n_eff times less: the residual's autocorrelation). Which is right
-      // depends on whether that autocorrelation is noise or model error, so the blocked
-      // cross-validation decides: the effective weighting is kept when its out-of-fold mean squared
-      // error, relative to the white one's, is lower averaged over the joints.
-      Validated effective = fit_and_validate(1.0 / chosen.details.inflation);
-      double ratio = 0;
-      for (size_t j = 0; j < chosen.joints.size(); ++j)
-        ratio += std::pow(effective.joints[j].rms / chosen.joints[j].rms, 2) / static_cast<double>(N);
-      char line[300];
-      std::snprintf(line, sizeof line,
-                    "prior weight: the data weigh against the prior as %s (cross-validated mean squared error "
-                    "%.4g times the other's; S / n_eff = %.3g)",
-                    ratio < 1.0 ? "their effective information" : "white noise", ratio < 1.0 ? ratio : 1.0 / ratio,
-                    chosen.details.inflation);
-      if (ratio < 1.0) chosen = std::move(effective);
-      res.notes.push_back(line);
+      Eigen::VectorXd phi, stdev;
+      first.fit(data, std::vector<char>(static_cast<size_t>(S), 1), phi, stdev, &details);
+      tau_rb = rigid_body_torque(data, phi);
+      res.notes.push_back(
+          "load friction: its rigid-body torque from a first fit without the load terms (the transmitted torque, as "
+          "a drive's feed-forward computes it)");
     }
-    const Eigen::VectorXd& phi = chosen.phi;
-    const Eigen::VectorXd& stdev = chosen.stdev;
-    const IdentifyPipeline::FitDetails& final_fit = chosen.details;
-    res.fit_seconds = chosen.seconds;
-    res.condition_number = final_fit.cond;
-    res.joints = chosen.joints;
-    for (int i = 0; i < P; ++i) res.params.push_back({model.names[static_cast<size_t>(i)], phi[i], stdev[i]});
-    judge_parameters(pipe.scales(), final_fit, opt, pipe.prior(), model.names, res);
-    {
-      char line[240];
-      if (final_fit.data_share.size() > 0 || final_fit.consistent.information_data.size() > 0)
-        std::snprintf(line, sizeof line,
-                      "parameter std: the MAP estimate's spread with the data's noise %.3g times its white "
-                      "variance (the residual's autocorrelation, S / n_eff) and the prior's own",
-                      final_fit.inflation);
-      else
-        std::snprintf(
-            line, sizeof line,
-            "parameter std: the white-noise figures times %.3g for the residual's autocorrelation (S / n_eff)",
-            std::sqrt(final_fit.inflation));
-      res.notes.push_back(line);
-    }
-    report_consistent(final_fit.consistent, opt, res);
-    if (!final_fit.held.empty()) {
-      std::string names;
-      for (int i : final_fit.held) names += (names.empty() ? "" : ", ") + model.names[static_cast<size_t>(i)];
-      res.notes.push_back("sign constraints: " + names +
-                          " held at 0 (negative without the constraint: friction and rotor inertia cannot be)");
-    }
+    use.assign(use.size(), true);
+    set_effect_columns(data, declared, opt.effects, use, tau_rb);
+    const TermSetModel with_effects = with_effect_parameters(model, opt.effects, use);
+    const IdentifyPipeline effects_pipe(robot, opt, with_effects,
+                                        effect_parameter_scales(data, declared, with_effects, robot));
+    fit_validated(effects_pipe, data, with_effects, fold, folds, robot, opt, res);
+  } else {
+    fit_validated(pipe, data, model, fold, folds, robot, opt, res);
   }
   for (int j = 0; j < N; ++j) {
     if (!(model.terms & term::rotor_inertia) || model.rotor_inertia_separate[static_cast<size_t>(j)]) continue;

@@ -11,6 +11,27 @@
 
 namespace dyncal::host {
 
+namespace {
+
+/// robot.json's nominal friction as the prior of model column i (a Coulomb or viscous term), or 0
+/// when it gives none: no value > 0, or a motor that turns with other joints too (its friction is
+/// the motor's, robot.json's is per joint).
+double nominal_friction(const RobotDescription& robot, const TermSetModel& model, int i) {
+  const dyncal::ParamInfo& p = model.info[static_cast<size_t>(i)];
+  const int j = p.joint - 1;
+  if (p.kind != dyncal::ParamKind::term || j < 0 || static_cast<size_t>(j) >= robot.friction.size()) return 0.0;
+  if (robot.transmission.rows() > j) {
+    for (Eigen::Index k = 0; k < robot.transmission.cols(); ++k)
+      if (k != j && robot.transmission(j, k) != 0.0) return 0.0;
+  }
+  const NominalFriction& f = robot.friction[static_cast<size_t>(j)];
+  if (p.term == term::coulomb) return f.Fc > 0.0 ? f.Fc : 0.0;
+  if (p.term == term::viscous) return f.beta > 0.0 ? f.beta : 0.0;
+  return 0.0;
+}
+
+}  // namespace
+
 ParameterPrior parameter_prior(const RobotDescription& robot, const TermSetModel& model, double relative_std) {
   const int P = model.num_params, B = model.num_base;
   ParameterPrior out;
@@ -21,25 +42,43 @@ ParameterPrior parameter_prior(const RobotDescription& robot, const TermSetModel
     out.missing = "--prior-std 0";
     return out;
   }
+  // The base parameters' block, from the inertials.
+  Eigen::MatrixXd base_rows;
   const CompiledRobot& c = compiled_robot_for(robot);
   const Eigen::VectorXd nominal = Eigen::Map<const Eigen::VectorXd>(c.nominal_standard.data(), c.num_standard);
   if (nominal.cwiseAbs().maxCoeff() == 0.0) {
     out.missing = "robot " + robot.name + "'s files give no inertials";
-    return out;
+  } else {
+    const Eigen::MatrixXd K = base_map(c);
+    const Eigen::VectorXd s = prior_std(nominal, relative_std);
+    const Eigen::MatrixXd sigma = K * s.cwiseAbs2().asDiagonal() * K.transpose();
+    const Eigen::LLT<Eigen::MatrixXd> llt(sigma);
+    if (llt.info() != Eigen::Success) {
+      out.missing = "the base parameters' prior covariance is singular";
+    } else {
+      out.mean.head(B) = K * nominal;
+      out.variance.head(B) = sigma.diagonal();
+      base_rows = Eigen::MatrixXd::Zero(B, P);
+      base_rows.leftCols(B) = llt.matrixL().solve(Eigen::MatrixXd::Identity(B, B));
+      std::fill(out.has.begin(), out.has.begin() + B, 1);
+    }
   }
-  const Eigen::MatrixXd K = base_map(c);
-  const Eigen::VectorXd s = prior_std(nominal, relative_std);
-  const Eigen::MatrixXd sigma = K * s.cwiseAbs2().asDiagonal() * K.transpose();
-  const Eigen::LLT<Eigen::MatrixXd> llt(sigma);
-  if (llt.info() != Eigen::Success) {
-    out.missing = "the base parameters' prior covariance is singular";
-    return out;
+  // Coulomb and viscous friction from robot.json's "friction" list, independent of the rest.
+  std::vector<int> friction;
+  for (int i = B; i < P; ++i) {
+    const double value = nominal_friction(robot, model, i);
+    if (!(value > 0.0)) continue;
+    const double sd = relative_std * value;
+    out.mean[i] = value;
+    out.variance[i] = sd * sd;
+    out.has[static_cast<size_t>(i)] = 1;
+    friction.push_back(i);
   }
-  out.mean.head(B) = K * nominal;
-  out.variance.head(B) = sigma.diagonal();
-  out.whitening = Eigen::MatrixXd::Zero(B, P);
-  out.whitening.leftCols(B) = llt.matrixL().solve(Eigen::MatrixXd::Identity(B, B));
-  std::fill(out.has.begin(), out.has.begin() + B, 1);
+  out.whitening = Eigen::MatrixXd::Zero(base_rows.rows() + static_cast<Eigen::Index>(friction.size()), P);
+  out.whitening.topRows(base_rows.rows()) = base_rows;
+  for (size_t k = 0; k < friction.size(); ++k)
+    out.whitening(base_rows.rows() + static_cast<Eigen::Index>(k), friction[k]) =
+        1.0 / std::sqrt(out.variance[friction[k]]);
   return out;
 }
 

@@ -59,6 +59,10 @@ void print_identify_report(std::ostream& out, const IdentifyResult& r) {
                     "%-20s %12s %10s %8s %10.3g  held at 0 by the sign constraint (the free fit "
                     "gives < 0)\n",
                     p.name.c_str(), "0", "-", "-", p.scale);
+    } else if (p.verdict == Verdict::not_determined && p.basis == "prior" && !std::isfinite(p.std)) {
+      // iv: held at robot.json's value, which the fit kept the determined combination around.
+      std::snprintf(line, sizeof line, "%-20s %12.5g %10s %8s %10.3g  not determined: held at robot.json's value\n",
+                    p.name.c_str(), p.value, "-", "-", p.scale);
     } else if (p.verdict == Verdict::not_determined) {
       // Never a free number: what the value rests on instead.
       std::snprintf(line, sizeof line, "%-20s %12s %10.3g %8s %10.3g  not determined (%s)\n", p.name.c_str(),

@@ -1,16 +1,18 @@
 #pragma once
-// A model with effect terms (model_effects.hpp) fitted and predicted at run time: the compiled
-// regressor W of the declared terms, then the effects' columns E, and a least-squares fit of [W E]
-// (OLS, IDIM-OLS, or WLS with Gautier's per-joint weights) with blocked cross-validation, as the
-// compiled pipeline fits W alone.
+// A model with effect terms (model_effects.hpp) at run time: the compiled regressor W of the declared
+// terms, then the effects' columns E, appended so that identification fits [W E] by the same
+// pipeline, prior and validation as W alone (identify_pipeline.hpp).
 
 #include <Eigen/Core>
 #include <vector>
 
 #include "dyncal_host/common/model_effects.hpp"
 #include "dyncal_host/identification/pipeline/stacked_data.hpp"
+#include "dyncal_host/identification/pipeline/term_set_model.hpp"
 
 namespace dyncal::host {
+
+struct RobotDescription;
 
 /// Number of columns of the effects (effect_param_names' counts summed).
 Eigen::Index effect_column_count(const std::vector<ModelEffect>& effects);
@@ -50,15 +52,29 @@ Eigen::VectorXd rigid_body_torque(const StackedData& d, const Eigen::VectorXd& p
 /// torque taken from phi.
 Eigen::MatrixXd model_design(const StackedData& d, const std::vector<ModelEffect>& effects, const Eigen::VectorXd& phi);
 
-/// Fits [W E] to d by options.method (ols, wls, or pcls, gd, ga, pf: WLS made physically consistent,
-/// consistent_least_squares.hpp, each link's inertials into res.links; InputError otherwise) with the validation of
-/// `fold` (per sample: the fold it validates, -1 training only; `folds` folds): the out-of-fold
-/// metrics into res.joints, the final fit's parameters (names: d.names then effect_param_names) with
-/// standard deviations (white-noise figures times the residual's autocorrelation factor, as the
-/// compiled pipeline) into res.params, cond into res.condition_number. Load friction's rigid-body
-/// torque comes from a first fit of the same training rows without the load terms. Throws
-/// InputError when [W E] is rank deficient on a training set.
-void fit_effect_model(const StackedData& d, const std::vector<ModelEffect>& effects, const std::vector<int>& fold,
-                      int folds, const RobotDescription& robot, const IdentifyOptions& options, IdentifyResult& res);
+/// Appends the effects' columns to d's regressor, for the identification pipeline to fit them as it
+/// fits the declared terms (one least-squares implementation: identify_pipeline.hpp): W becomes
+/// [W(:, 0..declared) E(:, use)] and names gains effect_param_names of the used columns; the
+/// regressor's rows are then read from the dense W (W_load is cleared: none with effects). E is
+/// effect_design(d, effects, tau_rb); use: per effect column (effect_column_count entries), whether
+/// it is appended. Throws InputError as effect_design.
+void set_effect_columns(StackedData& d, Eigen::Index declared, const std::vector<ModelEffect>& effects,
+                        const std::vector<bool>& use, const Eigen::VectorXd& tau_rb);
+
+/// `model` with the used effect columns' parameters appended (set_effect_columns' order): names,
+/// and ParamInfo of a term of the effect's first joint (parameter_scales judges it on that joint's
+/// tau_max); no compiled regressor (its rows come from StackedData::W).
+TermSetModel with_effect_parameters(const TermSetModel& model, const std::vector<ModelEffect>& effects,
+                                    const std::vector<bool>& use);
+
+/// The physical scale of each appended effect parameter (identifiability.hpp's verdicts), entries
+/// declared .. P-1 of `model` (with_effect_parameters) over d (set_effect_columns): the value at which
+/// its column, at its largest on the effect's joint in this log, gives that joint's tau_max [Nm; N].
+Eigen::VectorXd effect_parameter_scales(const StackedData& d, Eigen::Index declared, const TermSetModel& model,
+                                        const RobotDescription& robot);
+
+/// Per effect column: false for load friction's (it needs a first fit's rigid-body torque), true
+/// for every other.
+std::vector<bool> effect_columns_without_load_friction(const std::vector<ModelEffect>& effects);
 
 }  // namespace dyncal::host

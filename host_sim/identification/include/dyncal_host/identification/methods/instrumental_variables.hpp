@@ -36,11 +36,12 @@ inline constexpr double kIvTolerance = 0.1;
 /// autocorrelation. Fills res (joints, params, condition number, notes: simulations run, converged
 /// or not, last step in standard errors). `dropped`: the parameters the log does not determine (the
 /// WLS fit's decision, identifiability.hpp): the iteration's plants come from the whole model, the
-/// reported estimate and its cross-validation hold these at 0 (std NaN). Throws InputError: no
+/// reported estimate and its cross-validation hold each at held_at[i] (P: the robot's prior mean
+/// where it has one, else 0; ParameterPrior) with std NaN. Throws InputError: no
 /// closed loop, a term set other than Eq. 7, a coupled motor's friction (use --friction-per-joint),
 /// a simulation that trips the drive.
 void fit_instrumental(const StackedData& d, const JointLog& grid, const std::vector<int>& fold, int folds,
                       const RobotDescription& robot, const IdentifyOptions& options, const PrepareLog& prepare,
-                      const std::vector<int>& dropped, IdentifyResult& res);
+                      const std::vector<int>& dropped, const Eigen::VectorXd& held_at, IdentifyResult& res);
 
 }  // namespace dyncal::host

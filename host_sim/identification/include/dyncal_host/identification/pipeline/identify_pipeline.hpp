@@ -22,8 +22,10 @@ namespace dyncal::host {
 class IdentifyPipeline {
  public:
   /// `robot` and `options` are referenced, not copied: they must outlive the pipeline; `model` is
-  /// the compiled robot's TermSetModel of options.terms.
-  IdentifyPipeline(const RobotDescription& robot, const IdentifyOptions& options, const TermSetModel& model);
+  /// the compiled robot's TermSetModel of options.terms (or it with effect parameters appended,
+  /// with_effect_parameters: effect_scales then gives their scales(), the last entries).
+  IdentifyPipeline(const RobotDescription& robot, const IdentifyOptions& options, const TermSetModel& model,
+                   const Eigen::VectorXd& effect_scales = Eigen::VectorXd());
 
   /// As below on a copy of `log`, which the caller keeps.
   StackedData prepare(const JointLog& log, bool dense, const Eigen::VectorXd* band_override = nullptr) const {

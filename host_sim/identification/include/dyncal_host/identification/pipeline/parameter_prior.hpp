@@ -17,14 +17,19 @@ struct RobotDescription;
 /// N(mean, Sigma) on the parameters that have a prior. The base parameters' prior is that of
 /// robot.json's inertials (the standard parameters phi0, each with std prior_std(phi0,
 /// relative_std), consistent_least_squares.hpp) carried through Gautier's base map K:
-/// mean K phi0, Sigma = K diag(s^2) K^T (full: base parameters share standard ones). Friction,
-/// rotor inertia, offsets and effect terms have none (a robot folder holds no friction data).
+/// mean K phi0, Sigma = K diag(s^2) K^T (full: base parameters share standard ones). A joint's
+/// Coulomb Fc [Nm; N] and viscous Fv [Nm s/rad; N s/m] columns have robot.json's "friction" values
+/// (Fc, beta) where they are > 0, each with std relative_std times the value, independent of the
+/// rest; not for a motor that turns with other joints (robot.json's friction is per joint). Rotor
+/// inertia, offsets, the power term and effect terms have none (a robot folder holds no value).
 struct ParameterPrior {
-  Eigen::VectorXd mean;       ///< P; 0 where a parameter has no prior (has[i] false)
-  Eigen::VectorXd variance;   ///< P: diag(Sigma); NaN where no prior
-  Eigen::MatrixXd whitening;  ///< B x P (B base parameters): whitening (phi - mean) ~ N(0, I)
-  std::vector<char> has;      ///< P: parameter i has a prior
-  /// Why there is none, when whitening is empty (a robot file without inertials, --prior-std 0).
+  Eigen::VectorXd mean;      ///< P; 0 where a parameter has no prior (has[i] false)
+  Eigen::VectorXd variance;  ///< P: diag(Sigma); NaN where no prior
+  /// R x P: whitening (phi - mean) ~ N(0, I); rows: the B base parameters' block (when the robot has
+  /// inertials), then one row per friction prior.
+  Eigen::MatrixXd whitening;
+  std::vector<char> has;  ///< P: parameter i has a prior
+  /// Why the inertials give none (a robot file without inertials, --prior-std 0); empty when they do.
   std::string missing;
   bool usable() const { return whitening.rows() > 0; }
 };
@@ -33,7 +38,7 @@ struct ParameterPrior {
 /// (<= 0: none). A robot whose inertials are all 0 has none (missing says so).
 ParameterPrior parameter_prior(const RobotDescription& robot, const TermSetModel& model, double relative_std);
 
-/// Adds the prior to `ls` as B pseudo-rows whitening.row(b) phi = whitening.row(b) mean, each with
+/// Adds the prior to `ls` as pseudo-rows whitening.row(b) phi = whitening.row(b) mean, each with
 /// weight sigma (the data rows' residual std in their weighted units): ls then solves
 /// min ||W phi - y||^2 / sigma^2 + ||whitening (phi - mean)||^2, the MAP estimate, whose inverse
 /// Gram matrix times sigma^2 is the posterior covariance (Gaussian noise of variance sigma^2).
