@@ -1,5 +1,5 @@
 // libFuzzer target: the drive's whole Modbus request handler (host_sim/drive/src/modbus_request_handler.cpp)
-// on any byte stream from one TCP client, on a simulated er20 drive: framing, libmodbus's parsing and
+// on any byte stream from one TCP client, on a simulated er20 drive: framing, lib/'s PDU server and its
 // replies, the register map, the access and state rules, staging, commits to a real table file and
 // the trajectory playing between requests. Each input starts from a fresh drive with no table file,
 // so a finding replays. Checks, after every frame, what the drive promises (docs/reliability.md):
@@ -7,7 +7,7 @@
 //     protocol 0, the function code or its exception), and a request gets at most one;
 //   - the active table always decodes (format, CRC) and belongs to this robot;
 //   - a table is committed only after the unlock key was written;
-//   - no request makes libmodbus sleep (a stalled drive): see Fixture.
+//   - no request stalls the drive (libmodbus's reply paths could sleep; none is left: see Fixture).
 // Crashes, leaks, ASan and UBSan findings abort as well. Corpus: tests/fuzz/corpus/modbus_request,
 // request streams recorded from a drive (unlock, stage and commit its own table; start, read the ring,
 // acknowledge, stop; refused and ignored requests).
@@ -20,19 +20,19 @@
 #include <cstdlib>
 #include <string>
 
+#include "dyncal/drive/modbus_frames.hpp"
 #include "dyncal/modbus_map.hpp"
 #include "dyncal/parameter_table.hpp"
 #include "dyncal_host/common/robot_description.hpp"
 #include "dyncal_host/drive/scenario.hpp"
 #include "dyncal_host/drive/simulated_drive.hpp"
-#include "mbap_frame.hpp"
 #include "modbus_request_handler.hpp"
 
 namespace {
 
 namespace mm = dyncal::modbus_map;
-using dyncal::host::be16;
-using dyncal::host::MbapFrame;
+using dyncal::drive::be16;
+using dyncal::drive::MbapFrame;
 
 void fail(const char* what) {
   std::fprintf(stderr, "fuzz_modbus_request: %s\n", what);
@@ -52,7 +52,7 @@ struct Fixture {
     if (!::mkdtemp(dir)) fail("mkdtemp");
     table_path = std::string(dir) + "/drive.table";
     if (!ctx || ::socketpair(AF_UNIX, SOCK_STREAM | SOCK_NONBLOCK, 0, fds) != 0) fail("socket pair");
-    // libmodbus sleeps its response time-out before some exception replies (and flushes the
+    // libmodbus slept its response time-out before some exception replies (and flushed the
     // socket): the drive must never take those paths. A long time-out turns one into a libFuzzer
     // time-out (scripts/fuzz: -timeout=10), a finding.
     modbus_set_response_timeout(ctx, 30, 0);
@@ -69,13 +69,13 @@ void check_replies(const std::uint8_t* request, const MbapFrame& f) {
   std::uint8_t reply[4096];
   const ssize_t n = ::recv(fixture().fds[1], reply, sizeof reply, 0);
   if (n <= 0) return;  // ignored (another protocol or unit), or a request libmodbus does not answer
-  const MbapFrame r = dyncal::host::next_mbap_frame(reply, static_cast<std::size_t>(n));
+  const MbapFrame r = dyncal::drive::next_mbap_frame(reply, static_cast<std::size_t>(n));
   if (r.status != MbapFrame::Status::complete || r.bytes != static_cast<std::size_t>(n))
     fail("a reply is not exactly one Modbus TCP frame");
   if (f.protocol != 0 || (f.unit != 0xFF && f.unit != 1)) fail("a frame for another protocol or unit was answered");
   if (be16(reply) != be16(request) || r.protocol != 0) fail("a reply does not answer its request's transaction");
-  const std::uint8_t function = request[dyncal::host::kMbapHeaderBytes];
-  const std::uint8_t answered = reply[dyncal::host::kMbapHeaderBytes];
+  const std::uint8_t function = request[dyncal::drive::kMbapHeaderBytes];
+  const std::uint8_t answered = reply[dyncal::drive::kMbapHeaderBytes];
   if (answered != function && answered != (function | 0x80)) {
     std::fprintf(stderr, "request function %d, reply function %d\n", function, answered);
     fail("a reply names another function");
@@ -93,7 +93,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   bool unlocked = false;
   std::size_t used = 0;
   while (used < size) {
-    const MbapFrame f = dyncal::host::next_mbap_frame(data + used, size - used);
+    const MbapFrame f = dyncal::drive::next_mbap_frame(data + used, size - used);
     if (f.status != MbapFrame::Status::complete) {
       // A partial or invalid frame: the handler consumes nothing of it (and drops the client when invalid).
       const auto r = handler.serve_tcp(data + used, size - used, client);
@@ -109,8 +109,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (!r.keep) break;  // the reply could not be sent: the server would close the connection
     check_replies(frame, f);
     // Did this frame write the unlock key? (function 6 or 16 covering kUnlockReg with the key)
-    const std::uint8_t* pdu = frame + dyncal::host::kMbapHeaderBytes;
-    const std::size_t pdu_bytes = f.bytes - dyncal::host::kMbapHeaderBytes;
+    const std::uint8_t* pdu = frame + dyncal::drive::kMbapHeaderBytes;
+    const std::size_t pdu_bytes = f.bytes - dyncal::drive::kMbapHeaderBytes;
     if (pdu_bytes >= 5 && pdu[0] == 6 && be16(pdu + 1) == mm::kUnlockReg && be16(pdu + 3) == mm::kUnlockKey)
       unlocked = true;
     if (pdu_bytes >= 6 && pdu[0] == 16) {

@@ -1,6 +1,7 @@
 #include "modbus_request_handler.hpp"
 
 #include <sys/socket.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -10,13 +11,19 @@
 #include <vector>
 
 #include "dyncal/centred_slope.hpp"
-#include "mbap_frame.hpp"
+#include "dyncal/drive/modbus_frames.hpp"
+#include "dyncal/drive/modbus_pdu_server.hpp"
 
 namespace dyncal::host {
 namespace {
 
 namespace mm = dyncal::modbus_map;
 using Clock = ModbusRequestHandler::Clock;
+using drive::be16;
+using drive::kMaxTcpAduBytes;
+using drive::kMbapHeaderBytes;
+using drive::MbapFrame;
+using drive::next_mbap_frame;
 
 /// Copies the drive's state into the input registers (the ring window starts at the ack).
 /// `table_generation`: the drive's table generation last copied into the registers (-1: none yet).
@@ -264,17 +271,11 @@ void load_trajectory(SimulatedDrive& d, const std::uint16_t* h) {
 
 ModbusRequestHandler::ModbusRequestHandler(SimulatedDrive& drive, modbus_t* ctx, int unit_id, std::FILE* log)
     : drive_(drive), ctx_(ctx), unit_id_(unit_id), log_(log) {
-  map_ = modbus_mapping_new_start_address(0, 0, 0, 0, 0, mm::kHoldingWords, 0, mm::kInputWords);
-  if (!map_) throw std::runtime_error("cannot allocate the Modbus register map");
   // Defaults: the survey's excitation settings (Eq. 27: L = 5, f_f = 0.1 Hz), 2 periods.
-  mm::set_f32(map_->tab_registers + mm::kSampleRateReg, static_cast<float>(drive.sample_rate_hz));
-  mm::set_f32(map_->tab_registers + mm::kOmegaFReg, 0.1f);
-  map_->tab_registers[mm::kHarmonicsReg] = 5;
-  map_->tab_registers[mm::kPeriodsReg] = 2;
-}
-
-ModbusRequestHandler::~ModbusRequestHandler() {
-  modbus_mapping_free(map_);
+  mm::set_f32(holding_.data() + mm::kSampleRateReg, static_cast<float>(drive.sample_rate_hz));
+  mm::set_f32(holding_.data() + mm::kOmegaFReg, 0.1f);
+  holding_.data()[mm::kHarmonicsReg] = 5;
+  holding_.data()[mm::kPeriodsReg] = 2;
 }
 
 ModbusRequestHandler::TcpResult ModbusRequestHandler::serve_tcp(const std::uint8_t* bytes, std::size_t size,
@@ -294,41 +295,11 @@ ModbusRequestHandler::TcpResult ModbusRequestHandler::serve_tcp(const std::uint8
     // Protocol id 0 is Modbus; the unit id is 0xFF (the spec's value for a server addressed by its
     // IP address) or the drive's unit id. Other frames are not for this drive: ignored.
     if (f.protocol != 0 || (f.unit != 0xFF && f.unit != unit_id_)) continue;
-    modbus_set_socket(ctx_, client);
-    if (!request_pdu_consistent(frame + kMbapHeaderBytes, f.bytes - kMbapHeaderBytes)) {
-      if (client == owner_client_) owner_last_request_ = Clock::now();
-      if (modbus_reply_exception(ctx_, frame, MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE) < 0) {
-        r.keep = false;
-        return r;
-      }
-      continue;
-    }
     if (!answer(frame, static_cast<int>(f.bytes), client)) {
       r.keep = false;
       return r;
     }
   }
-}
-
-// Function codes 0x80-0xFF are reserved for exception responses (Modbus Application Protocol
-// v1.1b3, sec. 5 and 7): libmodbus would answer function + 0x80 truncated to a byte, another
-// function's exception. The drive answers exception 1 (illegal function) under the request's code.
-bool ModbusRequestHandler::reply_reserved_function(const std::uint8_t* query, int header_length, int client) {
-  if (client == kRtuClient) {  // slave id, function, exception code; libmodbus adds the CRC
-    const std::uint8_t raw[3] = {query[0], query[1], MODBUS_EXCEPTION_ILLEGAL_FUNCTION};
-    return modbus_send_raw_request(ctx_, raw, 3) >= 0;
-  }
-  // MBAP: the request's transaction id, protocol 0, length 3 (unit, function, code), its unit id.
-  const std::uint8_t reply[9] = {query[0],
-                                 query[1],
-                                 0,
-                                 0,
-                                 0,
-                                 3,
-                                 query[header_length - 1],
-                                 query[header_length],
-                                 MODBUS_EXCEPTION_ILLEGAL_FUNCTION};
-  return ::send(client, reply, sizeof reply, MSG_NOSIGNAL) == static_cast<ssize_t>(sizeof reply);
 }
 
 void ModbusRequestHandler::client_closed(int client) {
@@ -349,121 +320,79 @@ bool ModbusRequestHandler::holds_a_role(int client) const {
   return client == session_client_ && Clock::now() < session_until_;
 }
 
-bool ModbusRequestHandler::answer(const std::uint8_t* query, int rc, int client) {
+/// The drive's registers as lib/'s PDU server sees them (dyncal/drive/modbus_pdu_server.hpp): reads
+/// of the map, writes checked against the register map and the access and state rules
+/// (check_holding) on a copy of the holding registers with the write in it, then applied.
+struct ModbusRequestHandler::Bank {
+  ModbusRequestHandler& h;
+
+  drive::ModbusException read(bool input, std::uint16_t address, std::uint16_t count, std::uint16_t* out) const {
+    if (!addresses_defined(input ? mm::Bank::input : mm::Bank::holding, address, count))
+      return drive::ModbusException::illegal_data_address;
+    const std::uint16_t* regs = input ? h.input_.data() : h.holding_.data();
+    std::copy(regs + address, regs + address + count, out);
+    return drive::ModbusException::none;
+  }
+
+  drive::ModbusException check_write(std::uint16_t address, std::uint16_t count, const std::uint8_t* values) const {
+    if (!addresses_defined(mm::Bank::holding, address, count) || splits_element(address, count) ||
+        overlaps(address, count, mm::kRingReg, mm::kRingWords))
+      return drive::ModbusException::illegal_data_address;
+    std::vector<std::uint16_t> scratch(h.holding_.data(), h.holding_.data() + mm::kHoldingWords);
+    for (int k = 0; k < count; ++k) scratch[static_cast<size_t>(address + k)] = be16(values + 2 * k);
+    return static_cast<drive::ModbusException>(check_holding(
+        h.drive_, scratch.data(), address, count, 1.0 / h.drive_.control_period(), h.session_open(),
+        h.session_held_by_another(), h.owner_client_ != kNoClient && h.owner_client_ != h.current_client_));
+  }
+
+  /// The write, its effect on the drive, and the ring window after it (function 23 reads it next:
+  /// an acknowledgement frees its samples before the next are shown). The command and unlock
+  /// registers read 0 again at once.
+  void write(std::uint16_t address, std::uint16_t count, const std::uint8_t* values) const {
+    for (int k = 0; k < count; ++k) h.holding_.data()[address + k] = be16(values + 2 * k);
+    h.apply_write(address, count);
+    refresh_window(h.drive_, h.holding_.data());
+    h.holding_.data()[mm::kCommandReg] = 0;
+    h.holding_.data()[mm::kUnlockReg] = 0;
+  }
+};
+
+bool ModbusRequestHandler::answer(const std::uint8_t* adu, int length, int client) {
   current_client_ = client;
   if (client == owner_client_) owner_last_request_ = Clock::now();
-  const int off = modbus_get_header_length(ctx_);
-  const int function = query[off];
-  if (function >= 0x80) return reply_reserved_function(query, off, client);
-  const int address = be16(query + off + 1);
-  refresh_inputs(drive_, map_->tab_input_registers, table_generation_);
-  refresh_window(drive_, map_->tab_registers);
-  map_->tab_registers[mm::kCommandReg] = 0;
-  int exception = 0;
-  int write_address = -1, write_count = 0;
-  std::vector<std::uint16_t> scratch(map_->tab_registers, map_->tab_registers + mm::kHoldingWords);
-  // A quantity outside what its function allows is exception 3 (illegal data value), answered here:
-  // libmodbus 3.1 would answer it only after sleeping its response time-out and flushing the
-  // client's socket, which would stall the drive.
-  const int count = be16(query + off + 3);
-  auto quantity_outside = [&](int max) { return count < 1 || count > max; };
-  switch (function) {
-    case MODBUS_FC_READ_INPUT_REGISTERS:
-    case MODBUS_FC_READ_HOLDING_REGISTERS: {
-      const auto bank = function == MODBUS_FC_READ_INPUT_REGISTERS ? mm::Bank::input : mm::Bank::holding;
-      if (quantity_outside(MODBUS_MAX_READ_REGISTERS)) {
-        exception = MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
-      } else if (!addresses_defined(bank, address, count)) {
-        exception = MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS;
-      }
-      break;
-    }
-    case MODBUS_FC_WRITE_SINGLE_REGISTER:
-      write_address = address;
-      write_count = 1;
-      if (!addresses_defined(mm::Bank::holding, address, 1)) {
-        exception = MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS;
-      } else {
-        scratch[static_cast<size_t>(address)] = be16(query + off + 3);
-      }
-      break;
-    case MODBUS_FC_WRITE_MULTIPLE_REGISTERS: {
-      if (quantity_outside(MODBUS_MAX_WRITE_REGISTERS)) {
-        exception = MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
-        break;
-      }
-      write_address = address;
-      write_count = count;
-      if (!addresses_defined(mm::Bank::holding, address, write_count)) {
-        exception = MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS;
-      } else {
-        for (int k = 0; k < write_count; ++k) scratch[static_cast<size_t>(address + k)] = be16(query + off + 6 + 2 * k);
-      }
-      break;
-    }
-    case MODBUS_FC_WRITE_AND_READ_REGISTERS: {  // the write first, then the read (of the state after it)
-      const int write_quantity = be16(query + off + 7);
-      if (quantity_outside(MODBUS_MAX_WR_READ_REGISTERS) || write_quantity < 1 ||
-          write_quantity > MODBUS_MAX_WR_WRITE_REGISTERS) {
-        exception = MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
-        break;
-      }
-      write_address = be16(query + off + 5);
-      write_count = write_quantity;
-      if (!addresses_defined(mm::Bank::holding, address, count) ||
-          !addresses_defined(mm::Bank::holding, write_address, write_count)) {
-        exception = MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS;
-      } else {
-        for (int k = 0; k < write_count; ++k)
-          scratch[static_cast<size_t>(write_address + k)] = be16(query + off + 10 + 2 * k);
-      }
-      break;
-    }
-    case MODBUS_FC_READ_COILS:
-    case MODBUS_FC_READ_DISCRETE_INPUTS:
-      if (quantity_outside(MODBUS_MAX_READ_BITS)) exception = MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
-      break;  // else libmodbus answers (no coils: illegal data address)
-    case MODBUS_FC_WRITE_MULTIPLE_COILS:
-      if (quantity_outside(MODBUS_MAX_WRITE_BITS)) exception = MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
-      break;
-    case MODBUS_FC_WRITE_SINGLE_COIL:
-    case MODBUS_FC_REPORT_SLAVE_ID:
-      break;  // libmodbus answers (no coils: illegal data address)
-    default:
-      exception = MODBUS_EXCEPTION_ILLEGAL_FUNCTION;
+  // The PDU: after the MBAP header on TCP; after the address and before the CRC on RTU.
+  const bool rtu = client == kRtuClient;
+  const std::size_t header = rtu ? 1 : kMbapHeaderBytes, trailer = rtu ? 2 : 0;
+  if (length < 0 || static_cast<std::size_t>(length) < header + trailer + 1) return true;  // nothing to answer
+  refresh_inputs(drive_, input_.data(), table_generation_);
+  refresh_window(drive_, holding_.data());
+  holding_.data()[mm::kCommandReg] = 0;
+  Bank bank{*this};
+  std::uint8_t reply[kMbapHeaderBytes + drive::kMaxPduBytes + 2];
+  const std::size_t pdu =
+      drive::serve_pdu(bank, adu + header, static_cast<std::size_t>(length) - header - trailer, reply + header);
+  if (rtu) {  // the address, the PDU, the CRC low byte first (MODBUS over Serial Line v1.02, sec. 2.5.1)
+    reply[0] = adu[0];
+    const std::uint16_t crc = drive::crc16(reply, 1 + pdu);
+    reply[1 + pdu] = static_cast<std::uint8_t>(crc & 0xFF);
+    reply[2 + pdu] = static_cast<std::uint8_t>(crc >> 8);
+    const std::size_t n = 3 + pdu;
+    return ::write(modbus_get_socket(ctx_), reply, n) == static_cast<ssize_t>(n);
   }
-  if (!exception && write_count > 0 && write_address >= 0) {
-    if (splits_element(write_address, write_count) ||
-        overlaps(write_address, write_count, mm::kRingReg, mm::kRingWords)) {
-      exception = MODBUS_EXCEPTION_ILLEGAL_DATA_ADDRESS;
-    } else {
-      exception = check_holding(drive_, scratch.data(), write_address, write_count, 1.0 / drive_.control_period(),
-                                session_open(), session_held_by_another(),
-                                owner_client_ != kNoClient && owner_client_ != current_client_);
-    }
-  }
-  if (exception) {
-    return modbus_reply_exception(ctx_, query, static_cast<unsigned>(exception)) >= 0;
-  }
-  if (function == MODBUS_FC_WRITE_AND_READ_REGISTERS) {
-    // libmodbus writes, then reads the mapping: the write takes effect first, and the window read
-    // shows the drive after it (an acknowledgement frees its samples before the next are shown).
-    std::copy(scratch.begin() + write_address, scratch.begin() + write_address + write_count,
-              map_->tab_registers + write_address);
-    apply_write(write_address, write_count);
-    refresh_window(drive_, map_->tab_registers);
-    const bool sent = modbus_reply(ctx_, query, rc, map_) >= 0;
-    map_->tab_registers[mm::kCommandReg] = 0;  // both read 0 (libmodbus wrote the request's values again)
-    map_->tab_registers[mm::kUnlockReg] = 0;
-    return sent;
-  }
-  if (modbus_reply(ctx_, query, rc, map_) < 0) return false;
-  if (write_count > 0) apply_write(write_address, write_count);
-  return true;
+  // MBAP: the request's transaction id, protocol 0, the length of unit id + PDU, its unit id.
+  reply[0] = adu[0];
+  reply[1] = adu[1];
+  reply[2] = 0;
+  reply[3] = 0;
+  reply[4] = static_cast<std::uint8_t>((pdu + 1) >> 8);
+  reply[5] = static_cast<std::uint8_t>((pdu + 1) & 0xFF);
+  reply[6] = adu[6];
+  const std::size_t n = kMbapHeaderBytes + pdu;
+  return ::send(client, reply, n, MSG_NOSIGNAL) == static_cast<ssize_t>(n);
 }
 
 void ModbusRequestHandler::apply_write(int address, int count) {
-  std::uint16_t* h = map_->tab_registers;
+  std::uint16_t* h = holding_.data();
   if (overlaps(address, count, mm::kAckReg, 2)) drive_.ack(mm::get_u32(h + mm::kAckReg));
   if (overlaps(address, count, mm::kUnlockReg, 1)) {
     // A new session starts empty: a commit writes only what its own connection staged.
@@ -512,8 +441,8 @@ void ModbusRequestHandler::apply_write(int address, int count) {
         if (log_) std::fprintf(log_, "dyncal drive: flash write failed: %s\n", e.what());
         st = TableStatus::store_failed;  // the store's own failure, not the table's (the active one stays)
       }
-      map_->tab_input_registers[mm::kCommitResultReg] = static_cast<std::uint16_t>(st);
-      ++map_->tab_input_registers[mm::kCommitCounterReg];
+      input_.data()[mm::kCommitResultReg] = static_cast<std::uint16_t>(st);
+      ++input_.data()[mm::kCommitCounterReg];
       if (log_) {
         std::fprintf(log_, "dyncal drive: commit %s\n", to_string(st));
         std::fflush(log_);

@@ -1,11 +1,14 @@
 #pragma once
 // The simulated drive's Modbus request handler without its transport: the register map
 // (dyncal/modbus_map.hpp), the access and state rules and the staging session (docs/modbus.md
-// "Access and states"). The server (drive_server.cpp) receives the bytes and hands over what a
-// client sent; the fuzz target tests/fuzz/fuzz_modbus_request.cpp hands over any bytes at all.
+// "Access and states"), served by lib/'s PDU server and framing (dyncal/drive/modbus_pdu_server.hpp,
+// modbus_frames.hpp: the drive application's, no libmodbus in the replies). The server
+// (drive_server.cpp) receives the bytes and hands over what a client sent; the fuzz target
+// tests/fuzz/fuzz_modbus_request.cpp hands over any bytes at all.
 
 #include <modbus/modbus.h>
 
+#include <array>
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
@@ -26,12 +29,11 @@ class ModbusRequestHandler {
   /// The client id of the RTU line (one point-to-point client); TCP clients are their sockets.
   static constexpr int kRtuClient = -2;
 
-  /// `ctx`: the libmodbus context (TCP or RTU) that parses requests and writes the replies, owned by
-  /// the caller; `unit_id`: the drive's unit id (RTU slave address; on TCP 0xFF is accepted too);
-  /// `log`: where commits are reported (nullptr: nowhere). Throws std::runtime_error if the
-  /// register map cannot be allocated.
+  /// `ctx`: the libmodbus context of the transport, owned by the caller (RTU: the replies are
+  /// written to its serial line's descriptor); `unit_id`: the drive's unit id (RTU slave address; on
+  /// TCP 0xFF is accepted too);
+  /// `log`: where commits are reported (nullptr: nowhere).
   ModbusRequestHandler(SimulatedDrive& drive, modbus_t* ctx, int unit_id, std::FILE* log = stdout);
-  ~ModbusRequestHandler();
   ModbusRequestHandler(const ModbusRequestHandler&) = delete;
   ModbusRequestHandler& operator=(const ModbusRequestHandler&) = delete;
 
@@ -42,14 +44,14 @@ class ModbusRequestHandler {
     bool keep = true;      ///< false: framing lost or a reply not sent in full: close the connection
   };
   /// Answers every complete Modbus TCP frame at the start of bytes[0, size) sent by `client` (a
-  /// socket: it becomes ctx's socket, the replies go to it). A frame with a protocol id other than 0
-  /// or another unit id is ignored; a PDU whose length contradicts its function gets exception 3
-  /// (illegal data value); the others are answered by answer().
+  /// socket: the replies go to it). A frame with a protocol id other than 0 or another unit id is
+  /// ignored; the others are answered by answer().
   TcpResult serve_tcp(const std::uint8_t* bytes, std::size_t size, int client);
 
-  /// Answers one complete request ADU of `length` bytes (header included, as libmodbus frames it for
-  /// ctx's backend) from `client`, applying a write that passes the access and state rules (else
-  /// the Modbus exception they give). False when the reply could not be sent in full.
+  /// Answers one complete request ADU of `length` bytes from `client`: MBAP header and PDU on TCP,
+  /// address, PDU and CRC on RTU (client kRtuClient, the CRC already checked). lib/'s serve_pdu
+  /// answers it, applying a write that passes the access and state rules (else the Modbus
+  /// exception they give). False when the reply could not be sent in full.
   bool answer(const std::uint8_t* adu, int length, int client);
 
   /// `client`'s connection closed: a session it held ends and it no longer owns the trajectory (its
@@ -68,8 +70,9 @@ class ModbusRequestHandler {
   Clock::time_point started() const { return started_; }
 
  private:
+  struct Bank;  ///< the registers as lib/'s PDU server reads and writes them
+  friend struct Bank;
   void apply_write(int address, int count);
-  bool reply_reserved_function(const std::uint8_t* query, int header_length, int client);
   bool session_open() const;
   bool session_held_by_another() const;
 
@@ -78,7 +81,8 @@ class ModbusRequestHandler {
   modbus_t* ctx_;
   int unit_id_;
   std::FILE* log_;
-  modbus_mapping_t* map_ = nullptr;
+  std::array<std::uint16_t, dyncal::modbus_map::kHoldingWords> holding_{};  ///< the holding registers
+  std::array<std::uint16_t, dyncal::modbus_map::kInputWords> input_{};      ///< the input registers
   int current_client_ = kNoClient;  ///< the client whose request is being answered
   int session_client_ = kNoClient;  ///< the client holding the staging session
   int owner_client_ = kNoClient;    ///< the client that started the trajectory (while connected)
