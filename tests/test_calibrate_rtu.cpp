@@ -2,11 +2,17 @@
 // 115 200 baud (tests/support/serial_line_relay.cpp) where a six-joint 1 kHz stream does not fit
 // live and calibrate traces its runs. And the choice between live and trace itself (stream_plan.hpp).
 #include <gtest/gtest.h>
+#include <modbus/modbus.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <cstring>
+#include <random>
 #include <sstream>
+#include <vector>
 
+#include "dyncal/drive/modbus_frames.hpp"
+#include "dyncal/modbus_map.hpp"
 #include "dyncal_host/calibration/calibrate.hpp"
 #include "dyncal_host/calibration/stream_plan.hpp"
 #include "dyncal_host/common/input_error.hpp"
@@ -33,6 +39,43 @@ TEST(CalibrateRtu, CalibratesAndFlashesOverAPtyPair) {
   ASSERT_TRUE(r.flashed) << r.flash_message;
   for (int j = 0; j < 6; ++j) EXPECT_LT(r.drive_error_after[j], 0.5 * r.drive_error_before[j]) << "joint " << j + 1;
   print_calibrate_report(std::cout, r);
+}
+
+// Noise on the line (issue 69: the drive application frames RTU requests by their length and CRC,
+// dyncal/drive/modbus_frames.hpp): 4 000 random bytes, a request with a wrong CRC and one cut short
+// reach the drive; none is answered, and after the line's silence the next request is answered with
+// the active table unchanged.
+TEST(CalibrateRtu, NoiseOnTheLineIsDroppedAndTheNextRequestIsAnswered) {
+  const char* device = std::getenv("DYNCAL_RTU_DEVICE");
+  ASSERT_TRUE(device) << "run through ctest";
+  namespace mm = dyncal::modbus_map;
+  modbus_t* ctx = modbus_new_rtu(device, 115200, 'N', 8, 1);
+  ASSERT_TRUE(ctx && modbus_set_slave(ctx, 1) == 0 && modbus_connect(ctx) == 0);
+  modbus_set_response_timeout(ctx, 1, 0);
+  std::uint16_t before[2] = {}, after[2] = {};
+  ASSERT_EQ(modbus_read_input_registers(ctx, mm::kActiveCrcReg, 2, before), 2) << modbus_strerror(errno);
+  std::vector<std::uint8_t> noise(4000);
+  std::mt19937 rng(69);
+  for (auto& b : noise) b = static_cast<std::uint8_t>(rng());
+  // A read with its CRC's last byte flipped, and a 16 write that stops after its byte count.
+  std::uint8_t bad[8] = {1, 0x04, 0, 0, 0, 2, 0, 0};
+  const std::uint16_t crc = dyncal::drive::crc16(bad, 6);
+  bad[6] = static_cast<std::uint8_t>(crc & 0xFF), bad[7] = static_cast<std::uint8_t>((crc >> 8) ^ 0x01);
+  const std::uint8_t cut[7] = {1, 0x10, 0, 0, 0, 4, 8};
+  const int fd = modbus_get_socket(ctx);
+  for (const auto& [bytes, n] : {std::pair<const std::uint8_t*, std::size_t>{noise.data(), noise.size()},
+                                 {bad, sizeof bad},
+                                 {cut, sizeof cut}}) {
+    ASSERT_EQ(::write(fd, bytes, n), static_cast<ssize_t>(n));
+    ::usleep(100000);  // a silence: the drive resynchronises after 50 ms
+  }
+  std::uint8_t stray[64];
+  EXPECT_LE(::read(fd, stray, sizeof stray), 0) << "the drive answered noise";
+  ASSERT_EQ(modbus_read_input_registers(ctx, mm::kActiveCrcReg, 2, after), 2) << modbus_strerror(errno);
+  EXPECT_EQ(before[0], after[0]);
+  EXPECT_EQ(before[1], after[1]);
+  modbus_close(ctx);
+  modbus_free(ctx);
 }
 
 // Six joints at 1 kHz over 115 200 baud: the line carries about a quarter of the stream, so both

@@ -17,6 +17,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "dyncal/drive/modbus_frames.hpp"
 #include "modbus_request_handler.hpp"
 
 namespace dyncal::host {
@@ -44,6 +45,9 @@ class Server {
       if (!ctx_ || modbus_set_slave(ctx_, options_.rtu_slave) != 0 || modbus_connect(ctx_) != 0) {
         throw std::runtime_error("cannot open RTU device " + options_.rtu_device + ": " + modbus_strerror(errno));
       }
+      // libmodbus only opens and configures the line; the drive application frames what arrives.
+      const int fd = modbus_get_socket(ctx_);
+      ::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL) | O_NONBLOCK);
       handler_ = std::make_unique<ModbusRequestHandler>(drive_, ctx_, options_.rtu_slave);
       return "rtu:" + options_.rtu_device;
     }
@@ -133,7 +137,7 @@ class Server {
     const int ready = ::ppoll(fds.data(), fds.size(), &ts, nullptr);
     advance();  // as a drive's control loop runs beside its fieldbus: requests see every sample due
     if (!options_.rtu_device.empty()) {
-      if (ready > 0) serve_rtu();
+      serve_rtu(ready > 0);
       return;
     }
     const Clock::time_point now = Clock::now();
@@ -202,18 +206,66 @@ class Server {
     return true;
   }
 
-  // RTU: one point-to-point line; libmodbus receives a frame (its byte time-out ends a partial one).
-  void serve_rtu() {
-    std::uint8_t query[MODBUS_RTU_MAX_ADU_LENGTH];
-    const int rc = modbus_receive(ctx_, query);
-    // 0: addressed to another slave; < 0: a bad frame, keep serving.
-    if (rc > 0) handler_->answer(query, rc, ModbusRequestHandler::kRtuClient);
+  // RTU: one point-to-point line, framed by lib/'s drive application (dyncal/drive/modbus_frames.hpp):
+  // a request ends where its function's length says, and its CRC decides whether it is answered. A
+  // frame that cannot be taken (a wrong CRC, an impossible length, a function whose length is
+  // unknown, bytes that stop mid-frame) is dropped with everything after it until the line has been
+  // silent for kRtuResyncSeconds; a request for another address is skipped without a reply.
+  void serve_rtu(bool readable) {
+    const Clock::time_point now = Clock::now();
+    if (readable) {
+      std::uint8_t buf[512];
+      for (ssize_t n; (n = ::read(modbus_get_socket(ctx_), buf, sizeof buf)) > 0;) {
+        rtu_last_byte_ = now;
+        if (rtu_resync_) continue;  // still inside the bytes of a dropped frame
+        rtu_in_.insert(rtu_in_.end(), buf, buf + n);
+      }
+    }
+    const bool silent = now - rtu_last_byte_ > seconds(kRtuResyncSeconds);
+    if (rtu_resync_) {
+      if (silent) rtu_resync_ = false;
+      return;
+    }
+    while (!rtu_in_.empty()) {
+      const drive::RtuFrame f = drive::next_rtu_request(rtu_in_.data(), rtu_in_.size());
+      if (f.status == drive::RtuFrame::Status::complete && f.crc_ok) {
+        if (f.address == options_.rtu_slave)
+          handler_->answer(rtu_in_.data(), static_cast<int>(f.bytes), ModbusRequestHandler::kRtuClient);
+        rtu_in_.erase(rtu_in_.begin(), rtu_in_.begin() + static_cast<long>(f.bytes));
+        continue;
+      }
+      if (f.status == drive::RtuFrame::Status::needs_silence && silent && rtu_in_.size() >= 4) {
+        // A function whose length its code does not give ends at the silence: answered (illegal
+        // function) when its CRC holds.
+        const std::uint16_t crc = drive::crc16(rtu_in_.data(), rtu_in_.size() - 2);
+        if (rtu_in_[rtu_in_.size() - 2] == (crc & 0xFF) && rtu_in_.back() == (crc >> 8) &&
+            rtu_in_[0] == options_.rtu_slave)
+          handler_->answer(rtu_in_.data(), static_cast<int>(rtu_in_.size()), ModbusRequestHandler::kRtuClient);
+        rtu_in_.clear();
+        return;
+      }
+      if (f.status == drive::RtuFrame::Status::incomplete ||
+          (f.status == drive::RtuFrame::Status::needs_silence && rtu_in_.size() <= drive::kMaxRtuAduBytes)) {
+        if (silent) rtu_in_.clear();  // the rest of the frame never came
+        return;
+      }
+      rtu_in_.clear();  // a wrong CRC or an impossible length: resynchronise at the next silence
+      rtu_resync_ = !silent;
+      return;
+    }
   }
 
   SimulatedDrive& drive_;
   DriveServerOptions options_;
   modbus_t* ctx_ = nullptr;
   std::unique_ptr<ModbusRequestHandler> handler_;  ///< created with ctx_ by open()
+  /// RTU: a silence that ends a frame of unknown length and after which a dropped frame's bytes are
+  /// over. Longer than t3.5 (1.75 ms at 115 200 baud, drive::rtu_silence_us): a pseudo-terminal or a
+  /// USB adapter delivers one frame's bytes with gaps of several milliseconds.
+  static constexpr double kRtuResyncSeconds = 0.05;
+  std::vector<std::uint8_t> rtu_in_;  ///< RTU: the bytes of the next request so far
+  Clock::time_point rtu_last_byte_ = Clock::now();
+  bool rtu_resync_ = false;  ///< RTU: dropping bytes until the line is silent
   int listen_fd_ = -1;
   std::vector<Connection> clients_;
   long refused_ = 0;  ///< connections refused since the cap was last below its limit
