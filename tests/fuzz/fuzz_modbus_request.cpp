@@ -7,7 +7,7 @@
 //     protocol 0, the function code or its exception), and a request gets at most one;
 //   - the active table always decodes (format, CRC) and belongs to this robot;
 //   - a table is committed only after the unlock key was written;
-//   - no request stalls the drive (libmodbus's reply paths could sleep; none is left: see Fixture).
+//   - no request stalls the drive (a 10 s time-out per input in scripts/fuzz).
 // Crashes, leaks, ASan and UBSan findings abort as well. Corpus: tests/fuzz/corpus/modbus_request,
 // request streams recorded from a drive (unlock, stage and commit its own table; start, read the ring,
 // acknowledge, stop; refused and ignored requests).
@@ -39,23 +39,18 @@ void fail(const char* what) {
   std::abort();
 }
 
-// What stays for the whole run: the robot, a socket pair (the handler replies into one end, the
-// target reads the other) and a libmodbus TCP context that is never connected (its socket is set).
+// What stays for the whole run: the robot and a socket pair (the handler replies into one end, the
+// target reads the other).
 struct Fixture {
   dyncal::host::RobotDescription robot = dyncal::host::load_robot(DYNCAL_SOURCE_DIR "/robots", "er20");
   dyncal::host::Scenario scenario = dyncal::host::default_scenario(robot);
   std::string table_path;
   int fds[2] = {-1, -1};
-  modbus_t* ctx = modbus_new_tcp("127.0.0.1", 502);
   Fixture() {
     char dir[] = "/tmp/dyncal_fuzz_XXXXXX";
     if (!::mkdtemp(dir)) fail("mkdtemp");
     table_path = std::string(dir) + "/drive.table";
-    if (!ctx || ::socketpair(AF_UNIX, SOCK_STREAM | SOCK_NONBLOCK, 0, fds) != 0) fail("socket pair");
-    // libmodbus slept its response time-out before some exception replies (and flushed the
-    // socket): the drive must never take those paths. A long time-out turns one into a libFuzzer
-    // time-out (scripts/fuzz: -timeout=10), a finding.
-    modbus_set_response_timeout(ctx, 30, 0);
+    if (::socketpair(AF_UNIX, SOCK_STREAM | SOCK_NONBLOCK, 0, fds) != 0) fail("socket pair");
   }
 };
 
@@ -68,7 +63,7 @@ Fixture& fixture() {
 void check_replies(const std::uint8_t* request, const MbapFrame& f) {
   std::uint8_t reply[4096];
   const ssize_t n = ::recv(fixture().fds[1], reply, sizeof reply, 0);
-  if (n <= 0) return;  // ignored (another protocol or unit), or a request libmodbus does not answer
+  if (n <= 0) return;  // ignored (another protocol or unit)
   const MbapFrame r = dyncal::drive::next_mbap_frame(reply, static_cast<std::size_t>(n));
   if (r.status != MbapFrame::Status::complete || r.bytes != static_cast<std::size_t>(n))
     fail("a reply is not exactly one Modbus TCP frame");
@@ -88,7 +83,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   Fixture& fx = fixture();
   ::unlink(fx.table_path.c_str());
   dyncal::host::SimulatedDrive drive(fx.robot, fx.scenario, fx.table_path);
-  dyncal::host::ModbusRequestHandler handler(drive, fx.ctx, 1, nullptr);
+  dyncal::host::ModbusRequestHandler handler(drive, -1, 1, nullptr);
   const int client = fx.fds[0];
   bool unlocked = false;
   std::size_t used = 0;

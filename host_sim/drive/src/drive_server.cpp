@@ -2,10 +2,10 @@
 
 #include <arpa/inet.h>
 #include <fcntl.h>
-#include <modbus/modbus.h>
 #include <netinet/in.h>
 #include <poll.h>
 #include <sys/socket.h>
+#include <termios.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -13,11 +13,13 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <memory>
 #include <stdexcept>
 #include <vector>
 
 #include "dyncal/drive/modbus_frames.hpp"
+#include "dyncal_host/common/input_error.hpp"
 #include "modbus_request_handler.hpp"
 
 namespace dyncal::host {
@@ -26,6 +28,60 @@ namespace {
 namespace mm = dyncal::modbus_map;
 using Clock = std::chrono::steady_clock;
 
+/// The serial line `device` opened non-blocking, raw, 8N1 at `baud` [bit/s] (a pseudo-terminal
+/// ignores the rate). Throws InputError naming the device and the reason.
+int open_serial_line(const std::string& device, int baud) {
+  static const std::pair<int, speed_t> rates[] = {{9600, B9600},     {19200, B19200},   {38400, B38400},
+                                                  {57600, B57600},   {115200, B115200}, {230400, B230400},
+                                                  {460800, B460800}, {921600, B921600}};
+  speed_t speed = 0;
+  for (const auto& [b, s] : rates)
+    if (b == baud) speed = s;
+  if (speed == 0) throw InputError("RTU baud rate " + std::to_string(baud) + " is not a standard rate");
+  const int fd = ::open(device.c_str(), O_RDWR | O_NOCTTY | O_NONBLOCK);
+  if (fd < 0) throw InputError("cannot open RTU device " + device + ": " + std::strerror(errno));
+  termios t{};
+  if (::tcgetattr(fd, &t) != 0) {
+    const int e = errno;
+    ::close(fd);
+    throw InputError("cannot open RTU device " + device + ": " + std::strerror(e));
+  }
+  ::cfmakeraw(&t);
+  t.c_cflag |= CLOCAL | CREAD;
+  t.c_cflag &= ~static_cast<tcflag_t>(PARENB | CSTOPB);
+  t.c_cc[VMIN] = 0;
+  t.c_cc[VTIME] = 0;
+  ::cfsetispeed(&t, speed);
+  ::cfsetospeed(&t, speed);
+  if (::tcsetattr(fd, TCSANOW, &t) != 0) {
+    const int e = errno;
+    ::close(fd);
+    throw InputError("cannot configure RTU device " + device + ": " + std::strerror(e));
+  }
+  return fd;
+}
+
+/// A non-blocking listening TCP socket on host:port (port 0: any free port). Throws
+/// InputError naming the address and the reason.
+int listen_tcp(const std::string& host, int port) {
+  const std::string where = host + ":" + std::to_string(port);
+  sockaddr_in addr{};
+  addr.sin_family = AF_INET;
+  addr.sin_port = htons(static_cast<std::uint16_t>(port));
+  if (::inet_pton(AF_INET, host.c_str(), &addr.sin_addr) != 1)
+    throw InputError("cannot listen on " + where + ": not an IPv4 address");
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  const int yes = 1;
+  if (fd < 0 || ::setsockopt(fd, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes) != 0 ||
+      ::bind(fd, reinterpret_cast<const sockaddr*>(&addr), sizeof addr) != 0 || ::listen(fd, 64) != 0 ||
+      ::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL) | O_NONBLOCK) != 0) {
+    const int e = errno;
+    if (fd >= 0) ::close(fd);
+    throw InputError("cannot listen on " + where + ": " + std::strerror(e));
+  }
+  return fd;
+}
+
 class Server {
  public:
   Server(SimulatedDrive& drive, const DriveServerOptions& o) : drive_(drive), options_(o) {}
@@ -33,32 +89,17 @@ class Server {
     for (const auto& c : clients_) ::close(c.fd);
     if (listen_fd_ >= 0) ::close(listen_fd_);
     handler_.reset();
-    if (ctx_) {
-      if (!options_.rtu_device.empty()) modbus_close(ctx_);
-      modbus_free(ctx_);
-    }
+    if (rtu_fd_ >= 0) ::close(rtu_fd_);
   }
 
   std::string open() {
     if (!options_.rtu_device.empty()) {
-      ctx_ = modbus_new_rtu(options_.rtu_device.c_str(), options_.rtu_baud, 'N', 8, 1);
-      if (!ctx_ || modbus_set_slave(ctx_, options_.rtu_slave) != 0 || modbus_connect(ctx_) != 0) {
-        throw std::runtime_error("cannot open RTU device " + options_.rtu_device + ": " + modbus_strerror(errno));
-      }
-      // libmodbus only opens and configures the line; the drive application frames what arrives.
-      const int fd = modbus_get_socket(ctx_);
-      ::fcntl(fd, F_SETFL, ::fcntl(fd, F_GETFL) | O_NONBLOCK);
-      handler_ = std::make_unique<ModbusRequestHandler>(drive_, ctx_, options_.rtu_slave);
+      rtu_fd_ = open_serial_line(options_.rtu_device, options_.rtu_baud);
+      handler_ = std::make_unique<ModbusRequestHandler>(drive_, rtu_fd_, options_.rtu_slave);
       return "rtu:" + options_.rtu_device;
     }
-    ctx_ = modbus_new_tcp(options_.tcp_host.c_str(), options_.tcp_port);
-    if (!ctx_) throw std::runtime_error("cannot create a Modbus TCP context");
-    listen_fd_ = modbus_tcp_listen(ctx_, 64);
-    if (listen_fd_ < 0 || ::fcntl(listen_fd_, F_SETFL, ::fcntl(listen_fd_, F_GETFL) | O_NONBLOCK) != 0) {
-      throw std::runtime_error("cannot listen on " + options_.tcp_host + ":" + std::to_string(options_.tcp_port) +
-                               ": " + modbus_strerror(errno));
-    }
-    handler_ = std::make_unique<ModbusRequestHandler>(drive_, ctx_, options_.rtu_slave);
+    listen_fd_ = listen_tcp(options_.tcp_host, options_.tcp_port);
+    handler_ = std::make_unique<ModbusRequestHandler>(drive_, -1, options_.rtu_slave);
     sockaddr_in addr{};
     socklen_t len = sizeof addr;
     ::getsockname(listen_fd_, reinterpret_cast<sockaddr*>(&addr), &len);
@@ -128,7 +169,7 @@ class Server {
   void poll_requests(long timeout_us) {
     std::vector<pollfd> fds;
     if (!options_.rtu_device.empty()) {
-      fds.push_back({modbus_get_socket(ctx_), POLLIN, 0});
+      fds.push_back({rtu_fd_, POLLIN, 0});
     } else {
       fds.push_back({listen_fd_, POLLIN, 0});
       for (const auto& c : clients_) fds.push_back({c.fd, POLLIN, 0});
@@ -215,7 +256,7 @@ class Server {
     const Clock::time_point now = Clock::now();
     if (readable) {
       std::uint8_t buf[512];
-      for (ssize_t n; (n = ::read(modbus_get_socket(ctx_), buf, sizeof buf)) > 0;) {
+      for (ssize_t n; (n = ::read(rtu_fd_, buf, sizeof buf)) > 0;) {
         rtu_last_byte_ = now;
         if (rtu_resync_) continue;  // still inside the bytes of a dropped frame
         rtu_in_.insert(rtu_in_.end(), buf, buf + n);
@@ -257,8 +298,8 @@ class Server {
 
   SimulatedDrive& drive_;
   DriveServerOptions options_;
-  modbus_t* ctx_ = nullptr;
-  std::unique_ptr<ModbusRequestHandler> handler_;  ///< created with ctx_ by open()
+  int rtu_fd_ = -1;                                ///< RTU: the serial line (non-blocking, raw 8N1)
+  std::unique_ptr<ModbusRequestHandler> handler_;  ///< created by open()
   /// RTU: a silence that ends a frame of unknown length and after which a dropped frame's bytes are
   /// over. Longer than t3.5 (1.75 ms at 115 200 baud, drive::rtu_silence_us): a pseudo-terminal or a
   /// USB adapter delivers one frame's bytes with gaps of several milliseconds.

@@ -151,96 +151,97 @@ MonitorSettings monitor_from_registers(const std::uint16_t* h) {
 /// Checks the holding registers after a write (applied to a scratch copy) against the access and
 /// state rules (docs/modbus.md "Access and states"). `session`: the writing connection holds an
 /// open staging session; `session_elsewhere`: another connection does; `stream_elsewhere`: another
-/// connection started the run (and is still connected): the ring's ack is its alone. Returns a
-/// Modbus exception code or 0.
-int check_holding(const SimulatedDrive& d, const std::uint16_t* h, int address, int count, double control_rate,
-                  bool session, bool session_elsewhere, bool stream_elsewhere) {
+/// connection started the run (and is still connected): the ring's ack is its alone. Returns the
+/// Modbus exception, or none.
+drive::ModbusException check_holding(const SimulatedDrive& d, const std::uint16_t* h, int address, int count,
+                                     double control_rate, bool session, bool session_elsewhere, bool stream_elsewhere) {
   const bool playing = d.state() == mm::DriveState::playing;
   const bool fault = d.state() == mm::DriveState::fault;
   // Staging and committing: only in a session, only while no trajectory plays and no fault stands.
-  auto staging_rule = [&]() -> int {
-    if (!session) return MODBUS_EXCEPTION_ILLEGAL_FUNCTION;  // locked: the server is in the wrong state for it
-    if (playing) return MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY;
-    if (fault) return MODBUS_EXCEPTION_SLAVE_OR_SERVER_FAILURE;
-    return 0;
+  auto staging_rule = [&]() -> drive::ModbusException {
+    if (!session) return drive::ModbusException::illegal_function;  // locked: the server is in the wrong state for it
+    if (playing) return drive::ModbusException::server_device_busy;
+    if (fault) return drive::ModbusException::server_device_failure;
+    return drive::ModbusException::none;
   };
   if (overlaps(address, count, mm::kCommandReg, 1)) {
     const std::uint16_t c = h[mm::kCommandReg];
-    if (c > static_cast<std::uint16_t>(mm::Command::trace)) return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+    if (c > static_cast<std::uint16_t>(mm::Command::trace)) return drive::ModbusException::illegal_data_value;
     // identify_payload writes the active table at the run's end: a staging session's right.
     if (c == static_cast<std::uint16_t>(mm::Command::commit_table) ||
         c == static_cast<std::uint16_t>(mm::Command::identify_payload)) {
-      if (const int e = staging_rule()) return e;
+      if (const drive::ModbusException e = staging_rule(); e != drive::ModbusException::none) return e;
     }
     if (c == static_cast<std::uint16_t>(mm::Command::start) ||
         c == static_cast<std::uint16_t>(mm::Command::identify_payload) ||
         c == static_cast<std::uint16_t>(mm::Command::trace)) {
-      if (playing) return MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY;   // would jump the arm back to the start pose
-      if (fault) return MODBUS_EXCEPTION_SLAVE_OR_SERVER_FAILURE;  // only reset clears a fault
+      if (playing) return drive::ModbusException::server_device_busy;   // would jump the arm back to the start pose
+      if (fault) return drive::ModbusException::server_device_failure;  // only reset clears a fault
       const double f_f = mm::get_f32(h + mm::kOmegaFReg), fs = mm::get_f32(h + mm::kSampleRateReg);
       if (!(mm::run_samples(h[mm::kPeriodsReg], f_f, fs) <= mm::kMaxRunSamples))
-        return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;  // the run would outlast the sample counter's resolution
+        return drive::ModbusException::illegal_data_value;  // the run would outlast the sample counter's resolution
       // A trace records the whole run: refused unless the ring holds every sample of it.
       if (c == static_cast<std::uint16_t>(mm::Command::trace) &&
           !(f_f > 0 && fs > 0 && d.run_samples(h[mm::kPeriodsReg], 1.0 / f_f, fs) <= d.ring_capacity))
-        return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+        return drive::ModbusException::illegal_data_value;
       // The run starts with the monitor settings the registers hold: the rule the drive applies
       // them by (monitor_settings_error), checked again here as when they were written.
       if (!monitor_settings_error(monitor_from_registers(h), 1.0 / control_rate).empty())
-        return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+        return drive::ModbusException::illegal_data_value;
     }
   }
   if (overlaps(address, count, mm::kUnlockReg, 1)) {
-    if (h[mm::kUnlockReg] != mm::kUnlockKey) return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+    if (h[mm::kUnlockReg] != mm::kUnlockKey) return drive::ModbusException::illegal_data_value;
     // One session at a time: another connection's open session is not taken over (it would commit
     // what that connection staged).
-    if (session_elsewhere) return MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY;
+    if (session_elsewhere) return drive::ModbusException::server_device_busy;
   }
   // Staging, and the collision monitor's settings (a safety function's): the same rule.
   if (overlaps(address, count, mm::kStagingSizeReg, mm::kRingReg - mm::kStagingSizeReg)) {
-    if (const int e = staging_rule()) return e;
+    if (const drive::ModbusException e = staging_rule(); e != drive::ModbusException::none) return e;
   }
   // The collision monitor's settings when written: the rule the drive applies them by.
   if (overlaps(address, count, mm::kMonitorGainReg, mm::kMonitorBandReg + 2 * mm::kMaxJoints - mm::kMonitorGainReg) &&
       !monitor_settings_error(monitor_from_registers(h), 1.0 / control_rate).empty())
-    return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+    return drive::ModbusException::illegal_data_value;
   if (overlaps(address, count, mm::kAckReg, 2)) {
     // The ring's samples are the run owner's to acknowledge: another connection's ack would free
     // samples the owner has not read, and end its stream with a gap it did not cause.
-    if (stream_elsewhere) return MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY;
+    if (stream_elsewhere) return drive::ModbusException::server_device_busy;
     const std::uint32_t a = mm::get_u32(h + mm::kAckReg);
-    if (a < d.acked() || a > d.produced()) return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+    if (a < d.acked() || a > d.produced()) return drive::ModbusException::illegal_data_value;
   }
   const bool settings =
       overlaps(address, count, mm::kSampleRateReg, mm::kCoefficientsReg + mm::kCoefficientWords - mm::kSampleRateReg);
-  if (settings && playing) return MODBUS_EXCEPTION_SLAVE_OR_SERVER_BUSY;
+  if (settings && playing) return drive::ModbusException::server_device_busy;
   if (overlaps(address, count, mm::kSampleRateReg, 2)) {
     const double fs = mm::get_f32(h + mm::kSampleRateReg);
     const double ratio = control_rate / fs;
     if (!(fs >= mm::kMinSampleRateHz && fs <= mm::kMaxSampleRateHz) || std::fabs(ratio - std::round(ratio)) > 1e-6)
-      return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+      return drive::ModbusException::illegal_data_value;
   }
   if (overlaps(address, count, mm::kOmegaFReg, 2)) {
     const double f = mm::get_f32(h + mm::kOmegaFReg);
-    if (!(f > 0 && f <= mm::kMaxFundamentalHz)) return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+    if (!(f > 0 && f <= mm::kMaxFundamentalHz)) return drive::ModbusException::illegal_data_value;
   }
   if (overlaps(address, count, mm::kHarmonicsReg, 1)) {
     if (h[mm::kHarmonicsReg] < 1 || h[mm::kHarmonicsReg] > mm::kMaxHarmonics)
-      return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+      return drive::ModbusException::illegal_data_value;
   }
   if (overlaps(address, count, mm::kPeriodsReg, 1)) {
-    if (h[mm::kPeriodsReg] < 1 || h[mm::kPeriodsReg] > mm::kMaxPeriods) return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+    if (h[mm::kPeriodsReg] < 1 || h[mm::kPeriodsReg] > mm::kMaxPeriods)
+      return drive::ModbusException::illegal_data_value;
   }
   for (int k = 0; k < mm::kCoefficientWords; k += 2) {
     if (overlaps(address, count, static_cast<std::uint16_t>(mm::kCoefficientsReg + k), 2) &&
         !std::isfinite(mm::get_f32(h + mm::kCoefficientsReg + k))) {
-      return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+      return drive::ModbusException::illegal_data_value;
     }
   }
   if (overlaps(address, count, mm::kStagingSizeReg, 1) && h[mm::kStagingSizeReg] > kTableMaxBytes) {
-    return MODBUS_EXCEPTION_ILLEGAL_DATA_VALUE;
+    return drive::ModbusException::illegal_data_value;
   }
-  return 0;
+  return drive::ModbusException::none;
 }
 
 /// Applies the monitor settings the registers hold before a run starts. check_holding applied the
@@ -269,8 +270,8 @@ void load_trajectory(SimulatedDrive& d, const std::uint16_t* h) {
 
 }  // namespace
 
-ModbusRequestHandler::ModbusRequestHandler(SimulatedDrive& drive, modbus_t* ctx, int unit_id, std::FILE* log)
-    : drive_(drive), ctx_(ctx), unit_id_(unit_id), log_(log) {
+ModbusRequestHandler::ModbusRequestHandler(SimulatedDrive& drive, int rtu_fd, int unit_id, std::FILE* log)
+    : drive_(drive), rtu_fd_(rtu_fd), unit_id_(unit_id), log_(log) {
   // Defaults: the survey's excitation settings (Eq. 27: L = 5, f_f = 0.1 Hz), 2 periods.
   mm::set_f32(holding_.data() + mm::kSampleRateReg, static_cast<float>(drive.sample_rate_hz));
   mm::set_f32(holding_.data() + mm::kOmegaFReg, 0.1f);
@@ -340,9 +341,9 @@ struct ModbusRequestHandler::Bank {
       return drive::ModbusException::illegal_data_address;
     std::vector<std::uint16_t> scratch(h.holding_.data(), h.holding_.data() + mm::kHoldingWords);
     for (int k = 0; k < count; ++k) scratch[static_cast<size_t>(address + k)] = be16(values + 2 * k);
-    return static_cast<drive::ModbusException>(check_holding(
-        h.drive_, scratch.data(), address, count, 1.0 / h.drive_.control_period(), h.session_open(),
-        h.session_held_by_another(), h.owner_client_ != kNoClient && h.owner_client_ != h.current_client_));
+    return (check_holding(h.drive_, scratch.data(), address, count, 1.0 / h.drive_.control_period(), h.session_open(),
+                          h.session_held_by_another(),
+                          h.owner_client_ != kNoClient && h.owner_client_ != h.current_client_));
   }
 
   /// The write, its effect on the drive, and the ring window after it (function 23 reads it next:
@@ -377,7 +378,7 @@ bool ModbusRequestHandler::answer(const std::uint8_t* adu, int length, int clien
     reply[1 + pdu] = static_cast<std::uint8_t>(crc & 0xFF);
     reply[2 + pdu] = static_cast<std::uint8_t>(crc >> 8);
     const std::size_t n = 3 + pdu;
-    return ::write(modbus_get_socket(ctx_), reply, n) == static_cast<ssize_t>(n);
+    return ::write(rtu_fd_, reply, n) == static_cast<ssize_t>(n);
   }
   // MBAP: the request's transaction id, protocol 0, the length of unit id + PDU, its unit id.
   reply[0] = adu[0];

@@ -6,8 +6,6 @@
 // (drive_server.cpp) receives the bytes and hands over what a client sent; the fuzz target
 // tests/fuzz/fuzz_modbus_request.cpp hands over any bytes at all.
 
-#include <modbus/modbus.h>
-
 #include <array>
 #include <chrono>
 #include <cstddef>
@@ -29,11 +27,11 @@ class ModbusRequestHandler {
   /// The client id of the RTU line (one point-to-point client); TCP clients are their sockets.
   static constexpr int kRtuClient = -2;
 
-  /// `ctx`: the libmodbus context of the transport, owned by the caller (RTU: the replies are
-  /// written to its serial line's descriptor); `unit_id`: the drive's unit id (RTU slave address; on
-  /// TCP 0xFF is accepted too);
+  /// `rtu_fd`: the RTU serial line the replies are written to (-1 on TCP, where each client's
+  /// socket is), owned by the caller; `unit_id`: the drive's unit id (RTU slave address; on TCP 0xFF
+  /// is accepted too);
   /// `log`: where commits are reported (nullptr: nowhere).
-  ModbusRequestHandler(SimulatedDrive& drive, modbus_t* ctx, int unit_id, std::FILE* log = stdout);
+  ModbusRequestHandler(SimulatedDrive& drive, int rtu_fd, int unit_id, std::FILE* log = stdout);
   ModbusRequestHandler(const ModbusRequestHandler&) = delete;
   ModbusRequestHandler& operator=(const ModbusRequestHandler&) = delete;
 
@@ -78,7 +76,7 @@ class ModbusRequestHandler {
 
   static constexpr int kNoClient = -1;
   SimulatedDrive& drive_;
-  modbus_t* ctx_;
+  int rtu_fd_;
   int unit_id_;
   std::FILE* log_;
   std::array<std::uint16_t, dyncal::modbus_map::kHoldingWords> holding_{};  ///< the holding registers

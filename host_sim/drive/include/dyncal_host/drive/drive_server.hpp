@@ -1,6 +1,7 @@
 #pragma once
-// The simulated drive's Modbus server (libmodbus): TCP on a host/port or RTU on a serial device
-// (for example one end of a socat pty pair), one register map (dyncal/modbus_map.hpp).
+// The simulated drive's Modbus server (lib/'s drive framing and PDU server): TCP on a host/port or
+// RTU on a serial device (for example one end of a socat pty pair), one register map
+// (dyncal/modbus_map.hpp).
 
 #include <atomic>
 #include <string>
