@@ -81,8 +81,12 @@ struct Request {
   std::size_t reply;  ///< the reply ADU's length the protocol gives
 };
 
-std::uint8_t hi(int v) { return static_cast<std::uint8_t>((v >> 8) & 0xFF); }
-std::uint8_t lo(int v) { return static_cast<std::uint8_t>(v & 0xFF); }
+std::uint8_t hi(int v) {
+  return static_cast<std::uint8_t>((v >> 8) & 0xFF);
+}
+std::uint8_t lo(int v) {
+  return static_cast<std::uint8_t>(v & 0xFF);
+}
 
 Request g_requests[5];
 
@@ -94,14 +98,17 @@ void build_requests() {
   Request& command = g_requests[2];  // 06: a command
   command = {"06 write a register", {0x06, hi(mm::kCommandReg), lo(mm::kCommandReg), 0, 1}, 5, 3 + 5};
   Request& staging = g_requests[3];  // 16: 123 registers of a table staged
-  staging = {"16 write 123 registers", {0x10, hi(mm::kStagingTableReg), lo(mm::kStagingTableReg), 0, 123, 246}, 6 + 246,
+  staging = {"16 write 123 registers",
+             {0x10, hi(mm::kStagingTableReg), lo(mm::kStagingTableReg), 0, 123, 246},
+             6 + 246,
              3 + 5};
   for (int k = 0; k < 246; ++k) staging.pdu[6 + k] = static_cast<std::uint8_t>(k * 7 + 3);
   Request& ring = g_requests[4];  // 23: the acknowledgement written, the sample window read
-  ring = {"23 write 2, read 125 registers",
-          {0x17, hi(mm::kRingReg), lo(mm::kRingReg), 0, 125, hi(mm::kAckReg), lo(mm::kAckReg), 0, 2, 4, 0, 0, 0x12, 0x34},
-          14,
-          3 + 2 + 250};
+  ring = {
+      "23 write 2, read 125 registers",
+      {0x17, hi(mm::kRingReg), lo(mm::kRingReg), 0, 125, hi(mm::kAckReg), lo(mm::kAckReg), 0, 2, 4, 0, 0, 0x12, 0x34},
+      14,
+      3 + 2 + 250};
 }
 
 }  // namespace
@@ -114,8 +121,9 @@ int main() {
   Counter::start();
   bool ok = true;
   constexpr int kRepeats = 50;
-  sh::write("dyncal firmware Modbus RTU request path (lib/ drive framing and PDU server), instructions per "
-            "request (frame, CRC check, answer, reply CRC; qemu -icount, +-40):\n");
+  sh::write(
+      "dyncal firmware Modbus RTU request path (lib/ drive framing and PDU server), instructions per "
+      "request (frame, CRC check, answer, reply CRC; qemu -icount, +-40):\n");
   for (const Request& r : g_requests) {
     std::uint32_t ticks = 0;
     std::size_t reply = 0;
@@ -135,8 +143,7 @@ int main() {
   }
   // What the writes left: the staged bytes and the acknowledgement read back.
   for (int k = 0; k < 123; ++k)
-    ok = ok && g_bank.holding[mm::kStagingTableReg + k] ==
-                   dyncal::drive::be16(g_requests[3].pdu + 6 + 2 * k);
+    ok = ok && g_bank.holding[mm::kStagingTableReg + k] == dyncal::drive::be16(g_requests[3].pdu + 6 + 2 * k);
   ok = ok && g_bank.holding[mm::kAckReg + 1] == 0x1234;
   // A corrupted frame: discarded without a reply.
   const std::size_t n = frame(g_requests[0].pdu, g_requests[0].n);
