@@ -136,12 +136,10 @@ void judge_parameters(const Eigen::VectorXd& scale, const IdentifyPipeline::FitD
   // iv: the undetermined parameters held at the prior's mean where it has one (fit_instrumental).
   const bool held_at_prior = m == "iv" && prior.usable();
   if (map) {
-    basis = "prior";
     rests = "their values are the MAP estimate with robot.json's inertials and friction as prior (+-" +
             std::to_string(static_cast<int>(std::lround(100 * opt.prior_std))) +
             " %, --prior-std; each parameter's data share says how much the log adds)";
   } else if (held_at_prior) {
-    basis = "prior";
     rests =
         "those the log does not determine at all are held at robot.json's values (the prior's mean), the fit "
         "keeps the combination the log determines; the others are the data's wide estimates";
@@ -529,15 +527,10 @@ void IdentifyPipeline::fit(const StackedData& data, const std::vector<char>& tra
     // mostly model error; weighed by their effective information, TX40's joint 1 validated 2.63 Nm
     // instead of 1.73); its std are that estimate's spread with the data's noise S / n_eff times
     // the white variance (parameter_prior.hpp).
-    const bool search = search_prior.usable();
-    const PriorFitStatistics st = prior_fit_statistics(search ? search_prior : prior_, map_data.R, map_data.sigma2,
-                                                       details->inflation, data_weight, map_data.held);
+    const PriorFitStatistics st = prior_fit_statistics(search_prior.usable() ? search_prior : prior_, map_data.R,
+                                                       map_data.sigma2, details->inflation, data_weight, map_data.held);
     stdev = st.stdev;
     for (const int i : map_data.unsupported) stdev[i] = std::numeric_limits<double>::quiet_NaN();
-    if (search) {
-      details->data_stdev *= std::sqrt(details->inflation);
-      return;
-    }
     details->data_share = st.data_share;
     details->data_stdev *= std::sqrt(details->inflation);
     return;
@@ -809,8 +802,14 @@ void fit_validated(const IdentifyPipeline& pipe, const StackedData& data, const 
   for (int i = 0; i < P; ++i) res.params.push_back({model.names[static_cast<size_t>(i)], phi[i], stdev[i]});
   judge_parameters(pipe.scales(), final_fit, opt, pipe.prior(), model.names, res);
   {
-    char line[240];
-    if (final_fit.data_share.size() > 0 || final_fit.consistent.information_data.size() > 0)
+    char line[320];
+    if (is_search_method(opt.method) && final_fit.data_share.size() > 0)
+      std::snprintf(line, sizeof line,
+                    "parameter std: the posterior's spread with robot.json's inertials as prior (the search moves "
+                    "what the log does not determine within its range), the data's noise %.3g times its white "
+                    "variance (S / n_eff)",
+                    final_fit.inflation);
+    else if (final_fit.data_share.size() > 0 || final_fit.consistent.information_data.size() > 0)
       std::snprintf(line, sizeof line,
                     "parameter std: the MAP estimate's spread with the data's noise %.3g times its white "
                     "variance (the residual's autocorrelation, S / n_eff) and the prior's own",

@@ -59,7 +59,9 @@ class IdentifyPipeline {
     double inflation = 1;           ///< the residual's autocorrelation factor S / n_eff
     DeterminedFit decision;         ///< the parameters the log does not determine (identifiability.hpp)
     Eigen::VectorXd data_stdev;     ///< pcls, gd, ga, pf, and ols/wls with a prior: the std of the data alone
-    /// ols/wls with a prior: per parameter, the share of its information from the data (data_share
+    /// ols/wls with a prior, and gd/ga/pf when the log leaves parameters undetermined (their std is
+    /// then the posterior's with the inertials as prior): per parameter, the share of its
+    /// information from the data (data_share
     /// of parameter_prior.hpp; NaN without a prior); empty otherwise.
     Eigen::VectorXd data_share;
     /// Input of the final fit (its folds take it from `decided`): ols/wls with a prior weigh the data
