@@ -3,7 +3,6 @@
 #include <cmath>
 #include <map>
 
-#include "dyncal/centred_slope.hpp"
 #include "dyncal_host/common/input_error.hpp"
 
 namespace dyncal::host {
@@ -18,20 +17,21 @@ std::map<std::string, DrivePlantFactory>& registry() {
 }  // namespace
 
 std::string monitor_settings_error(const MonitorSettings& m, double dt) {
-  if (!std::isfinite(m.gain) || !(m.gain >= 0)) return "the observer gain must be 0 (off) or a number > 0";
-  if (m.gain > 0) {
-    if (!(m.gain * dt <= 1.0))
+  const drive::MonitorCheck c = drive::check_monitor_settings(m, dt);
+  switch (c.refusal) {
+    case drive::MonitorRefusal::none:
+      return {};
+    case drive::MonitorRefusal::gain:
+      return "the observer gain must be 0 (off) or a number > 0";
+    case drive::MonitorRefusal::gain_step:
       return "observer gain " + std::to_string(m.gain) + " 1/s: the discrete observer needs K dt <= 1";
-    if (centred_slope_half_width(m.gain, dt) > modbus_map::kMonitorMaxHalfWidth)
+    case drive::MonitorRefusal::gain_window:
       return "observer gain " + std::to_string(m.gain) + " 1/s: its velocity window is longer than the drive's " +
              std::to_string(2 * modbus_map::kMonitorMaxHalfWidth + 1) + " samples";
+    case drive::MonitorRefusal::joint:
+      return "joint " + std::to_string(c.joint + 1) + ": threshold and band must be numbers >= 0, the mean a number";
   }
-  for (size_t j = 0; j < m.threshold.size(); ++j) {
-    if (!std::isfinite(m.threshold[j]) || !std::isfinite(m.mean[j]) || !std::isfinite(m.band[j]) ||
-        m.threshold[j] < 0 || m.band[j] < 0)
-      return "joint " + std::to_string(j + 1) + ": threshold and band must be numbers >= 0, the mean a number";
-  }
-  return {};
+  return "unknown refusal";
 }
 
 bool register_drive_plant(const std::string& name, DrivePlantFactory factory) {

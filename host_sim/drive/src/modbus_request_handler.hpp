@@ -1,10 +1,10 @@
 #pragma once
-// The simulated drive's Modbus request handler without its transport: the register map
-// (dyncal/modbus_map.hpp), the access and state rules and the staging session (docs/modbus.md
-// "Access and states"), served by lib/'s PDU server and framing (dyncal/drive/modbus_pdu_server.hpp,
-// modbus_frames.hpp: the drive application's, no libmodbus in the replies). The server
-// (drive_server.cpp) receives the bytes and hands over what a client sent; the fuzz target
-// tests/fuzz/fuzz_modbus_request.cpp hands over any bytes at all.
+// The simulated drive's Modbus request handler without its transport: lib/'s drive application
+// serves the requests (dyncal/drive/register_server.hpp: the register map, the access and state
+// rules, the staging session; framed by dyncal/drive/modbus_frames.hpp), over the simulated drive
+// (SimulatedDrive, through the adapter below). The server (drive_server.cpp) receives the bytes and
+// hands over what a client sent; the fuzz target tests/fuzz/fuzz_modbus_request.cpp hands over any
+// bytes at all.
 
 #include <array>
 #include <chrono>
@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <cstdio>
 
+#include "dyncal/drive/register_server.hpp"
 #include "dyncal_host/drive/simulated_drive.hpp"
 
 namespace dyncal::host {
@@ -21,11 +22,38 @@ inline std::chrono::steady_clock::duration seconds(double s) {
   return std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(s));
 }
 
+/// The simulated drive as lib/'s register server sees it (register_server.hpp's Drive): the rules'
+/// queries, the commands, and what the registers show (inputs, the ring window through lib/'s
+/// codec). A store failure on commit is store_failed, its reason logged.
+class DriveRegisters {
+ public:
+  DriveRegisters(SimulatedDrive& drive, std::FILE* log) : d_(drive), log_(log) {}
+  modbus_map::DriveState state() const { return d_.state(); }
+  std::uint32_t acked() const { return d_.acked(); }
+  std::uint32_t produced() const { return d_.produced(); }
+  long ring_capacity_samples() const { return d_.ring_capacity; }
+  long run_samples(double periods, double period_s, double fs) const { return d_.run_samples(periods, period_s, fs); }
+  double control_rate_hz() const { return d_.control_rate_hz(); }
+  void ack(std::uint32_t seq_end) { d_.ack(seq_end); }
+  bool start(modbus_map::Command c, const drive::RunSettings& run, const drive::MonitorSettings& monitor);
+  void stop() { d_.stop(); }
+  void reset() { d_.reset(); }
+  TableStatus commit(const std::uint8_t* bytes, int size);
+  void publish_inputs(std::uint16_t* input) const;
+  void publish_window(std::uint16_t* window) const;
+
+ private:
+  SimulatedDrive& d_;
+  std::FILE* log_;
+  mutable long table_generation_ = -1;  ///< the table generation last copied into the input registers
+};
+
 class ModbusRequestHandler {
  public:
   using Clock = std::chrono::steady_clock;
   /// The client id of the RTU line (one point-to-point client); TCP clients are their sockets.
   static constexpr int kRtuClient = -2;
+  static_assert(kRtuClient != drive::RegisterServer<DriveRegisters>::kNoClient, "the RTU line is a client");
 
   /// `rtu_fd`: the RTU serial line the replies are written to (-1 on TCP, where each client's
   /// socket is), owned by the caller; `unit_id`: the drive's unit id (RTU slave address; on TCP 0xFF
@@ -48,8 +76,8 @@ class ModbusRequestHandler {
 
   /// Answers one complete request ADU of `length` bytes from `client`: MBAP header and PDU on TCP,
   /// address, PDU and CRC on RTU (client kRtuClient, the CRC already checked). lib/'s serve_pdu
-  /// answers it, applying a write that passes the access and state rules (else the Modbus
-  /// exception they give). False when the reply could not be sent in full.
+  /// answers it through lib/'s register server (a write that passes the access and state rules is
+  /// applied, else the Modbus exception they give). False when the reply could not be sent in full.
   bool answer(const std::uint8_t* adu, int length, int client);
 
   /// `client`'s connection closed: a session it held ends and it no longer owns the trajectory (its
@@ -60,34 +88,25 @@ class ModbusRequestHandler {
   /// The last complete request of the client that started the trajectory (the owner; the time of
   /// the start if it has sent nothing since). The watchdog watches this client only: another
   /// client's polling says nothing about the host that commands the run.
-  Clock::time_point owner_last_request() const { return owner_last_request_; }
+  Clock::time_point owner_last_request() const { return at(server_.owner_last_request()); }
   /// `client` must not be disconnected to make room for a newcomer: it owns the trajectory, or
   /// holds an open staging session.
-  bool holds_a_role(int client) const;
+  bool holds_a_role(int client) const { return server_.holds_a_role(client, microseconds(Clock::now())); }
   /// When the last start command was applied (real-time mode follows the wall clock from there).
-  Clock::time_point started() const { return started_; }
+  Clock::time_point started() const { return at(server_.started()); }
 
  private:
-  struct Bank;  ///< the registers as lib/'s PDU server reads and writes them
-  friend struct Bank;
-  void apply_write(int address, int count);
-  bool session_open() const;
-  bool session_held_by_another() const;
+  /// The server's clock: microseconds since the handler was made.
+  drive::Microseconds microseconds(Clock::time_point t) const {
+    return static_cast<drive::Microseconds>(std::chrono::duration_cast<std::chrono::microseconds>(t - epoch_).count());
+  }
+  Clock::time_point at(drive::Microseconds us) const { return epoch_ + std::chrono::microseconds(us); }
 
-  static constexpr int kNoClient = -1;
-  SimulatedDrive& drive_;
+  Clock::time_point epoch_ = Clock::now();
+  DriveRegisters drive_;
+  drive::RegisterServer<DriveRegisters> server_;
   int rtu_fd_;
   int unit_id_;
-  std::FILE* log_;
-  std::array<std::uint16_t, dyncal::modbus_map::kHoldingWords> holding_{};  ///< the holding registers
-  std::array<std::uint16_t, dyncal::modbus_map::kInputWords> input_{};      ///< the input registers
-  int current_client_ = kNoClient;  ///< the client whose request is being answered
-  int session_client_ = kNoClient;  ///< the client holding the staging session
-  int owner_client_ = kNoClient;    ///< the client that started the trajectory (while connected)
-  Clock::time_point session_until_ = Clock::now();
-  Clock::time_point owner_last_request_ = Clock::now();
-  Clock::time_point started_ = Clock::now();
-  long table_generation_ = -1;  ///< the drive's table generation last copied into the registers
 };
 
 }  // namespace dyncal::host

@@ -1,50 +1,106 @@
-// Firmware application: the drive application's Modbus request path on the MCU (lib/
-// dyncal/drive/modbus_frames.hpp and modbus_pdu_server.hpp) over the drive's register counts
-// (dyncal/modbus_map.hpp): RTU requests as a host sends them — a status read (04), a settings read
-// (03), a command write (06), a 123-register table staging write (16) and the ring transaction (23:
-// an acknowledgement written, the sample window read) — framed by length, CRC-checked, answered,
-// and the reply's CRC appended. Prints the instructions per request type (qemu -icount) and the
-// peak stack, and exits 0 only when every reply is the one the Modbus Application Protocol lays
-// out (function, byte count, echoed fields, the written values read back, a valid CRC) and a
-// corrupted frame is refused.
+// Firmware application: the drive application's Modbus server on the MCU — lib/'s register server
+// (dyncal/drive/register_server.hpp: the register map, its access and state rules, the staging
+// session, the commit) behind lib/'s RTU framing (modbus_frames.hpp), over the flash A/B parameter
+// store (dyncal_cortex_m/flash_parameter_store.hpp) of the er20's Eq. 7 model. It serves a host's
+// requests as RTU frames: a status read (04), a settings read (03), the unlock (06), a calibrated
+// table staged in 16-writes of at most 123 registers, the commit (06), the active table read back
+// (04), a table for another robot staged and committed (refused, the active one kept), and the ring
+// transaction (23: an acknowledgement written, the sample window read). Prints the instructions per
+// request type and per table commit (qemu -icount) and the peak stack, and exits 0 only when every
+// reply is the one the Modbus Application Protocol lays out, the tables read back are the ones the
+// store holds, and a corrupted frame is refused. This image has no arm: a start is refused by the
+// drive (the drive image simulates one).
 #include <cstdint>
 
 #include "dyncal/drive/modbus_frames.hpp"
-#include "dyncal/drive/modbus_pdu_server.hpp"
+#include "dyncal/drive/register_server.hpp"
+#include "dyncal/drive/ring_window.hpp"
 #include "dyncal/modbus_map.hpp"
+#include "dyncal/table_check.hpp"
+#include "dyncal_cortex_m/flash_parameter_store.hpp"
 #include "dyncal_cortex_m/instruction_counter.hpp"
 #include "dyncal_cortex_m/semihosting.hpp"
 #include "dyncal_cortex_m/stack_usage.hpp"
+#include "er20_ratings.hpp"
+#include "er20_replay_data.hpp"
+#include "replay.hpp"
 
 namespace {
 
 namespace sh = dyncal::cortex_m;
 namespace mm = dyncal::modbus_map;
-using dyncal::drive::ModbusException;
+namespace data = dyncal::replay::data;
+using dyncal::TableStatus;
 using Counter = sh::InstructionCounter;
+using Model = dyncal::replay::LinearModel;
 
-/// The drive's register banks at their real sizes, every address defined, every write accepted
-/// (the access and state rules are the drive application's, not this image's).
-struct Bank {
-  std::uint16_t holding[mm::kHoldingWords];
-  std::uint16_t input[mm::kInputWords];
-  ModbusException read(bool in, std::uint16_t address, std::uint16_t count, std::uint16_t* out) const {
-    if (address + count > (in ? mm::kInputWords : mm::kHoldingWords)) return ModbusException::illegal_data_address;
-    const std::uint16_t* r = in ? input : holding;
-    for (int k = 0; k < count; ++k) out[k] = r[address + k];
-    return ModbusException::none;
+/// The drive as the register server sees it: the flash store's active table, no arm (idle, an
+/// empty ring; a start is refused).
+struct ImageDrive {
+  sh::FlashParameterStore<Model>& store;
+  dyncal::ParameterTable active{};
+  dyncal::ParameterTable staged{};  ///< the table being committed (not on the stack)
+  std::uint8_t active_bytes[dyncal::kTableMaxBytes] = {};
+  int active_size = 0;
+  std::uint32_t generation = 0;                  ///< +1 per table made active
+  mutable std::uint32_t published = 0xFFFFFFFF;  ///< the generation the input registers show
+
+  mm::DriveState state() const { return mm::DriveState::idle; }
+  std::uint32_t acked() const { return 0; }
+  std::uint32_t produced() const { return 0; }
+  long ring_capacity_samples() const { return 0; }
+  long run_samples(double periods, double period_s, double fs) const {
+    return static_cast<long>(periods * period_s * fs);
   }
-  ModbusException check_write(std::uint16_t address, std::uint16_t count, const std::uint8_t*) const {
-    return address + count > mm::kHoldingWords ? ModbusException::illegal_data_address : ModbusException::none;
+  double control_rate_hz() const { return 1000.0; }
+  void ack(std::uint32_t) {}
+  bool start(mm::Command, const dyncal::drive::RunSettings&, const dyncal::drive::MonitorSettings&) { return false; }
+  void stop() {}
+  void reset() {}
+  /// Decode, check against the model and the ratings, write to the slot not active, verify, then
+  /// read the store's active table back: the registers show what the flash holds.
+  TableStatus commit(const std::uint8_t* bytes, int size) {
+    TableStatus st = dyncal::decode_table(bytes, size, staged);
+    if (st != TableStatus::ok) return st;
+    if (store.write(staged, &st) != dyncal::port::PortStatus::ok)
+      return st != TableStatus::ok ? st : TableStatus::store_failed;
+    return load();
   }
-  void write(std::uint16_t address, std::uint16_t count, const std::uint8_t* values) {
-    for (int k = 0; k < count; ++k) holding[address + k] = dyncal::drive::be16(values + 2 * k);
+  TableStatus load() {
+    TableStatus st;
+    if (store.read(active, &st) != dyncal::port::PortStatus::ok) return st;
+    st = dyncal::encode_table(active, active_bytes, dyncal::kTableMaxBytes, &active_size);
+    ++generation;
+    return st;
+  }
+  void publish_inputs(std::uint16_t* in) const {
+    in[mm::kMapVersionReg] = mm::kMapVersion;
+    in[mm::kNumJointsReg] = Model::kNumJoints;
+    mm::set_u32(in + mm::kRobotIdReg, Model::RobotType::kRobotId);
+    in[mm::kStateReg] = static_cast<std::uint16_t>(state());
+    if (published == generation) return;  // the table registers change with the table only
+    mm::set_u32(in + mm::kActiveModelIdReg, active.model_id);
+    in[mm::kActiveCountReg] = active.count;
+    mm::set_u32(in + mm::kActiveCrcReg, active_size >= 4 ? dyncal::detail::get_u32(active_bytes + active_size - 4) : 0);
+    in[mm::kActiveTableSizeReg] = static_cast<std::uint16_t>(active_size);
+    for (int k = 0; k < mm::kTableWords; ++k) in[mm::kActiveTableReg + k] = 0;
+    mm::bytes_to_regs(active_bytes, active_size, in + mm::kActiveTableReg);
+    published = generation;
+  }
+  void publish_window(std::uint16_t* w) const {
+    const dyncal::port::DriveSample* none = nullptr;
+    dyncal::drive::RingWindowHeader header;
+    dyncal::drive::encode_ring_window(none, 0, header, Model::kNumJoints, mm::RingFormat::float32,
+                                      dyncal::drive::RingResolution{}, w);
   }
 };
 
-Bank g_bank;
 std::uint8_t g_request[dyncal::drive::kMaxRtuAduBytes];
 std::uint8_t g_reply[dyncal::drive::kMaxRtuAduBytes];
+ImageDrive g_drive{sh::flash_parameter_store<Model>()};
+dyncal::drive::RegisterServer<ImageDrive> g_server{g_drive, 1000.0};
+/// The server's clock [us]: this image advances it 1 ms per request (the drive image reads a timer).
+dyncal::drive::Microseconds g_now = 0;
 
 /// An RTU request for server 1: PDU `pdu[0, n)` with its CRC, into g_request; its length.
 std::size_t frame(const std::uint8_t* pdu, std::size_t n) {
@@ -61,7 +117,8 @@ std::size_t frame(const std::uint8_t* pdu, std::size_t n) {
 std::size_t serve(std::size_t n) {
   const dyncal::drive::RtuFrame f = dyncal::drive::next_rtu_request(g_request, n);
   if (f.status != dyncal::drive::RtuFrame::Status::complete || !f.crc_ok || f.address != 1) return 0;
-  const std::size_t pdu = dyncal::drive::serve_pdu(g_bank, g_request + 1, f.bytes - 3, g_reply + 1);
+  g_now += 1000;
+  const std::size_t pdu = g_server.answer(g_request + 1, f.bytes - 3, 0, g_now, g_reply + 1).reply_bytes;
   g_reply[0] = 1;
   const std::uint16_t crc = dyncal::drive::crc16(g_reply, 1 + pdu);
   g_reply[1 + pdu] = static_cast<std::uint8_t>(crc & 0xFF);
@@ -74,13 +131,6 @@ bool reply_crc_ok(std::size_t n) {
   return g_reply[n - 2] == (crc & 0xFF) && g_reply[n - 1] == (crc >> 8);
 }
 
-struct Request {
-  const char* name;
-  std::uint8_t pdu[dyncal::drive::kMaxPduBytes];
-  std::size_t n;
-  std::size_t reply;  ///< the reply ADU's length the protocol gives
-};
-
 std::uint8_t hi(int v) {
   return static_cast<std::uint8_t>((v >> 8) & 0xFF);
 }
@@ -88,71 +138,184 @@ std::uint8_t lo(int v) {
   return static_cast<std::uint8_t>(v & 0xFF);
 }
 
-Request g_requests[5];
+/// Instructions of the last request served by ask().
+std::uint32_t g_instructions = 0;
 
-void build_requests() {
-  Request& status = g_requests[0];  // 04: the state, counters and model error
-  status = {"04 read 60 input registers", {0x04, 0, 0, 0, 60}, 5, 3 + 2 + 120};
-  Request& settings = g_requests[1];  // 03: the trajectory settings
-  settings = {"03 read 125 holding registers", {0x03, 0, 0, 0, 125}, 5, 3 + 2 + 250};
-  Request& command = g_requests[2];  // 06: a command
-  command = {"06 write a register", {0x06, hi(mm::kCommandReg), lo(mm::kCommandReg), 0, 1}, 5, 3 + 5};
-  Request& staging = g_requests[3];  // 16: 123 registers of a table staged
-  staging = {"16 write 123 registers",
-             {0x10, hi(mm::kStagingTableReg), lo(mm::kStagingTableReg), 0, 123, 246},
-             6 + 246,
-             3 + 5};
-  for (int k = 0; k < 246; ++k) staging.pdu[6 + k] = static_cast<std::uint8_t>(k * 7 + 3);
-  Request& ring = g_requests[4];  // 23: the acknowledgement written, the sample window read
-  ring = {
-      "23 write 2, read 125 registers",
-      {0x17, hi(mm::kRingReg), lo(mm::kRingReg), 0, 125, hi(mm::kAckReg), lo(mm::kAckReg), 0, 2, 4, 0, 0, 0x12, 0x34},
-      14,
-      3 + 2 + 250};
+/// Frames PDU pdu[0, n), serves it (counting its instructions) and checks the reply's CRC and
+/// function (or its exception); the reply ADU's length, or 0 when it is not a well-formed answer.
+std::size_t ask(const std::uint8_t* pdu, std::size_t n) {
+  const std::size_t request = frame(pdu, n);
+  const std::uint32_t t0 = Counter::ticks();
+  const std::size_t reply = serve(request);
+  g_instructions = Counter::elapsed(t0, Counter::ticks()) * Counter::kInstructionsPerTick;
+  const bool answers = g_reply[1] == pdu[0] || g_reply[1] == (pdu[0] | 0x80);  // the reply or its exception
+  return reply >= 5 && reply_crc_ok(reply) && answers ? reply : 0;
+}
+
+/// 16: regs[0, count) (count <= 123) to holding registers from `address`; whether the echo came.
+bool write_registers(int address, const std::uint16_t* regs, int count) {
+  std::uint8_t pdu[6 + 2 * dyncal::drive::kMaxWriteRegisters] = {
+      0x10, hi(address), lo(address), 0, lo(count), static_cast<std::uint8_t>(2 * count)};
+  for (int k = 0; k < count; ++k) {
+    pdu[6 + 2 * k] = hi(regs[k]);
+    pdu[7 + 2 * k] = lo(regs[k]);
+  }
+  return ask(pdu, 6 + 2 * static_cast<std::size_t>(count)) == 8;
+}
+
+/// 06: one holding register; whether the echo came.
+bool write_register(int address, int value) {
+  const std::uint8_t pdu[5] = {0x06, hi(address), lo(address), hi(value), lo(value)};
+  return ask(pdu, 5) == 8;
+}
+
+/// 04: input registers [address, address + count) into out (count <= 125).
+bool read_inputs(int address, int count, std::uint16_t* out) {
+  const std::uint8_t pdu[5] = {0x04, hi(address), lo(address), 0, lo(count)};
+  if (ask(pdu, 5) != 5 + 2 * static_cast<std::size_t>(count)) return false;
+  for (int k = 0; k < count; ++k) out[k] = dyncal::drive::be16(g_reply + 3 + 2 * k);
+  return true;
+}
+
+/// Running mean of instructions per request type.
+struct Tally {
+  const char* name;
+  long long sum = 0;
+  int n = 0;
+  void add() {
+    sum += g_instructions;
+    ++n;
+  }
+  void print() const {
+    sh::write("  ");
+    sh::write(name);
+    sh::write(": ");
+    sh::write_int(n > 0 ? sum / n : 0);
+    sh::write("\n");
+  }
+};
+
+Tally g_unlock{"06 write a register (unlock)"};
+static_assert(Model::kNumParams == 48, "the tally's name gives the table's size");
+Tally g_stage{"16 write 108 registers (staging_size and a 48-parameter table)"},
+    g_commit{"06 commit (check, A/B flash write, verify)"};
+
+/// A host's flash transaction: unlock, the encoded table staged (staging_size and its bytes, in
+/// writes of at most 123 registers), commit; the commit_result the drive gives (-1: a request failed).
+int flash(const dyncal::ParameterTable& table) {
+  static std::uint16_t regs[1 + mm::kTableWords];
+  static std::uint8_t bytes[dyncal::kTableMaxBytes];
+  int size = 0;
+  if (dyncal::encode_table(table, bytes, dyncal::kTableMaxBytes, &size) != TableStatus::ok) return -1;
+  regs[0] = static_cast<std::uint16_t>(size);
+  mm::bytes_to_regs(bytes, size, regs + 1);
+  if (!write_register(mm::kUnlockReg, mm::kUnlockKey)) return -1;
+  g_unlock.add();
+  const int words = 1 + (size + 1) / 2;
+  for (int k = 0; k < words; k += dyncal::drive::kMaxWriteRegisters) {
+    const int count = words - k < dyncal::drive::kMaxWriteRegisters ? words - k : dyncal::drive::kMaxWriteRegisters;
+    if (!write_registers(mm::kStagingSizeReg + k, regs + k, count)) return -1;
+    g_stage.add();
+  }
+  if (!write_register(mm::kCommandReg, static_cast<int>(mm::Command::commit_table))) return -1;
+  g_commit.add();
+  std::uint16_t result = 0;
+  return read_inputs(mm::kCommitResultReg, 1, &result) ? result : -1;
+}
+
+/// The active table as a host reads it (active_table_size and the bytes, in reads of at most 125
+/// registers), compared with `expected`'s encoding, and the active_crc register with its CRC field.
+bool reads_back(const dyncal::ParameterTable& expected) {
+  static std::uint16_t regs[1 + mm::kTableWords];
+  static std::uint8_t bytes[dyncal::kTableMaxBytes], read[dyncal::kTableMaxBytes];
+  int size = 0;
+  if (dyncal::encode_table(expected, bytes, dyncal::kTableMaxBytes, &size) != TableStatus::ok) return false;
+  for (int k = 0; k < 1 + mm::kTableWords; k += 125) {
+    const int count = 1 + mm::kTableWords - k < 125 ? 1 + mm::kTableWords - k : 125;
+    if (!read_inputs(mm::kActiveTableSizeReg + k, count, regs + k)) return false;
+  }
+  if (regs[0] != size) return false;
+  mm::regs_to_bytes(regs + 1, size, read);
+  for (int i = 0; i < size; ++i)
+    if (read[i] != bytes[i]) return false;
+  std::uint16_t crc[2];
+  return read_inputs(mm::kActiveCrcReg, 2, crc) && mm::get_u32(crc) == dyncal::detail::get_u32(bytes + size - 4);
 }
 
 }  // namespace
 
 int main() {
   sh::StackUsage::paint();
-  for (int k = 0; k < mm::kHoldingWords; ++k) g_bank.holding[k] = static_cast<std::uint16_t>(k);
-  for (int k = 0; k < mm::kInputWords; ++k) g_bank.input[k] = static_cast<std::uint16_t>(0x8000 + k);
-  build_requests();
+  dyncal::JointRatings<Model::kNumJoints> ratings;
+  for (int j = 0; j < Model::kNumJoints; ++j) {
+    ratings.tau_max[j] = data::kTauMax[j];
+    ratings.qd_max[j] = data::kQdMax[j];
+    ratings.qdd_max[j] = data::kQddMax[j];
+    ratings.q_min[j] = data::kQMin[j];
+    ratings.q_max[j] = data::kQMax[j];
+  }
+  g_drive.store.set_ratings(ratings);
+  g_drive.load();  // the table the flash holds, if any
   Counter::start();
   bool ok = true;
   constexpr int kRepeats = 50;
   sh::write(
-      "dyncal firmware Modbus RTU request path (lib/ drive framing and PDU server), instructions per "
-      "request (frame, CRC check, answer, reply CRC; qemu -icount, +-40):\n");
-  for (const Request& r : g_requests) {
-    std::uint32_t ticks = 0;
-    std::size_t reply = 0;
-    for (int i = 0; i < kRepeats; ++i) {
-      const std::size_t n = frame(r.pdu, r.n);
-      const std::uint32_t t0 = Counter::ticks();
-      reply = serve(n);
-      ticks += Counter::elapsed(t0, Counter::ticks());
-    }
-    // The reply the protocol lays out: its length, the request's function, a valid CRC.
-    ok = ok && reply == r.reply && g_reply[1] == r.pdu[0] && reply_crc_ok(reply);
-    sh::write("  ");
-    sh::write(r.name);
-    sh::write(": ");
-    sh::write_int(static_cast<long long>(ticks) * Counter::kInstructionsPerTick / kRepeats);
-    sh::write("\n");
+      "dyncal firmware Modbus RTU server (lib/ drive register server, framing, flash A/B store; er20), "
+      "instructions per request (frame, CRC check, answer, reply CRC; qemu -icount, +-40):\n");
+  // Reads: the state, counters and model error; the trajectory settings.
+  Tally status{"04 read 60 input registers"}, settings{"03 read 125 holding registers"};
+  const std::uint8_t read_status[5] = {0x04, 0, 0, 0, 60}, read_settings[5] = {0x03, 0, 0, 0, 125};
+  for (int i = 0; i < kRepeats; ++i) {
+    ok = ok && ask(read_status, 5) == 3 + 2 + 120;
+    status.add();
+    ok = ok && ask(read_settings, 5) == 3 + 2 + 250;
+    settings.add();
   }
-  // What the writes left: the staged bytes and the acknowledgement read back.
-  for (int k = 0; k < 123; ++k)
-    ok = ok && g_bank.holding[mm::kStagingTableReg + k] == dyncal::drive::be16(g_requests[3].pdu + 6 + 2 * k);
-  ok = ok && g_bank.holding[mm::kAckReg + 1] == 0x1234;
+  // A calibrated table (the KF replay's estimate), flashed three times: both slots written.
+  static dyncal::ParameterTable table, other;  // static: a table is 0.9 kB, the stack 4 kB
+  dyncal::make_table<Model>(Eigen::Map<const Eigen::Matrix<double, Model::kNumParams, 1>>(data::kReferenceKf), table);
+  for (int i = 0; i < 3; ++i) ok = ok && flash(table) == static_cast<int>(TableStatus::ok);
+  ok = ok && reads_back(table) && g_drive.store.generation() >= 3;
+  // A table for another robot: refused, the active one stays (in flash and in the registers).
+  other = table;
+  other.robot_id ^= 1u;
+  ok = ok && flash(other) == static_cast<int>(TableStatus::wrong_robot) && reads_back(table);
+  // Staging without a session: refused with 01, nothing staged.
+  const std::uint8_t stage_locked[5] = {0x06, hi(mm::kStagingSizeReg), lo(mm::kStagingSizeReg), 0, 4};
+  ok = ok && ask(stage_locked, 5) == 5 && g_reply[1] == 0x86 && g_reply[2] == 0x01;
+  // The longest write: 123 registers of staging, in a session.
+  Tally longest{"16 write 123 registers"};
+  static std::uint16_t words[dyncal::drive::kMaxWriteRegisters];
+  for (int k = 0; k < dyncal::drive::kMaxWriteRegisters; ++k) words[k] = static_cast<std::uint16_t>(k * 7 + 3);
+  ok = ok && write_register(mm::kUnlockReg, mm::kUnlockKey);
+  for (int i = 0; i < kRepeats; ++i) {
+    ok = ok && write_registers(mm::kStagingTableReg, words, dyncal::drive::kMaxWriteRegisters);
+    longest.add();
+  }
+  // The ring transaction: ack 0 written, the (empty) window read.
+  Tally ring{"23 write 2, read 125 registers"};
+  const std::uint8_t ring_pdu[14] = {
+      0x17, hi(mm::kRingReg), lo(mm::kRingReg), 0, 125, hi(mm::kAckReg), lo(mm::kAckReg), 0, 2, 4, 0, 0, 0, 0};
+  for (int i = 0; i < kRepeats; ++i) {
+    ok = ok && ask(ring_pdu, 14) == 3 + 2 + 250;
+    ring.add();
+  }
+  status.print();
+  settings.print();
+  g_unlock.print();
+  longest.print();
+  g_stage.print();
+  g_commit.print();
+  ring.print();
   // A corrupted frame: discarded without a reply.
-  const std::size_t n = frame(g_requests[0].pdu, g_requests[0].n);
+  const std::size_t n = frame(read_status, 5);
   g_request[3] ^= 0x10;
   ok = ok && serve(n) == 0;
   sh::write("  stack: peak ");
   sh::write_int(sh::StackUsage::peak_bytes());
   sh::write(" bytes of ");
   sh::write_int(sh::StackUsage::reserved_bytes());
-  sh::write(ok ? " reserved; every reply as the protocol lays it out\n" : " reserved; a reply is wrong\n");
+  sh::write(ok ? " reserved; every reply as the protocol lays it out, the tables read back as the flash holds them\n"
+               : " reserved; a reply or a table read back is wrong\n");
   return ok ? 0 : 1;
 }

@@ -290,9 +290,9 @@ port::PortStatus ModbusDrive::read_stream_format() {
   format_ = static_cast<mm::RingFormat>(r[0]);
   ring_capacity_ = static_cast<long>(mm::get_u32(r + (mm::kRingCapacityReg - mm::kRingFormatReg)));
   for (int j = 0; j < joints_; ++j) {
-    q_resolution_[j] = mm::get_f32(r + (mm::kQResolutionReg - mm::kRingFormatReg) + 2 * j);
-    tau_resolution_[j] = mm::get_f32(r + (mm::kTauResolutionReg - mm::kRingFormatReg) + 2 * j);
-    if (format_ == mm::RingFormat::counts && !(q_resolution_[j] > 0 && tau_resolution_[j] > 0)) {
+    resolution_.q[j] = mm::get_f32(r + (mm::kQResolutionReg - mm::kRingFormatReg) + 2 * j);
+    resolution_.tau[j] = mm::get_f32(r + (mm::kTauResolutionReg - mm::kRingFormatReg) + 2 * j);
+    if (format_ == mm::RingFormat::counts && !(resolution_.q[j] > 0 && resolution_.tau[j] > 0)) {
       error_ = "the drive streams counts but gives joint " + std::to_string(j + 1) + " no resolution";
       return port::PortStatus::rejected;
     }
@@ -351,10 +351,11 @@ port::PortStatus ModbusDrive::read(port::DriveSample* out, int capacity, int* co
   // One transaction: acknowledge what was received (ack = next seq) and read the window after it.
   std::uint16_t w[mm::kRingWords];
   if (const auto st = ring_transaction(next_seq_, w); st != port::PortStatus::ok) return st;
-  const std::uint32_t first = mm::get_u32(w);
-  const int in_block = w[2];
-  const auto state = static_cast<mm::DriveState>(w[3]);
-  const std::uint32_t produced = mm::get_u32(w + 4), overruns = mm::get_u32(w + 6);
+  const drive::RingWindowHeader header = drive::decode_ring_header(w);
+  const std::uint32_t first = header.first;
+  const int in_block = header.count;
+  const mm::DriveState state = header.state;
+  const std::uint32_t produced = header.produced, overruns = header.overruns;
   if (in_block > per_block) {
     error_ = "ring block of " + std::to_string(in_block) + " samples, at most " + std::to_string(per_block) +
              " fit for " + std::to_string(joints_) + " joints";
@@ -397,22 +398,11 @@ port::PortStatus ModbusDrive::read(port::DriveSample* out, int capacity, int* co
     port::DriveSample& s = out[k];
     s = port::DriveSample{};
     s.seq = first + static_cast<std::uint32_t>(k);
-    for (int j = 0; j < joints_; ++j) {
-      if (format_ == mm::RingFormat::float32) {
-        s.q[j] = mm::get_f32(p + 2 * j);
-        s.qd[j] = mm::get_f32(p + 2 * (joints_ + j));
-        s.tau[j] = mm::get_f32(p + 2 * (2 * joints_ + j));
-        continue;
-      }
-      // Counts: the velocity is the host's (qd stays NaN); an invalid q decodes as NaN, a torque
-      // at full scale is counted as saturated.
-      const auto q = static_cast<std::int32_t>(mm::get_u32(p + 2 * j));
-      const auto tau = static_cast<std::int16_t>(p[2 * joints_ + j]);
-      s.q[j] = q == mm::kQInvalid ? NAN : static_cast<float>(q * q_resolution_[j]);
-      s.qd[j] = NAN;
-      s.tau[j] = static_cast<float>(tau * tau_resolution_[j]);
-      if (tau >= mm::kTauFullScale || tau <= -mm::kTauFullScale) ++saturated_[static_cast<std::size_t>(j)];
-    }
+    // Counts: the velocity is the host's (qd NaN), an invalid q decodes as NaN, a torque at full
+    // scale is counted as saturated.
+    const std::uint32_t saturated = drive::decode_ring_sample(p, joints_, format_, resolution_, s);
+    for (int j = 0; j < joints_; ++j)
+      if (saturated & (1u << j)) ++saturated_[static_cast<std::size_t>(j)];
   }
   const std::uint32_t from = next_seq_;
   next_seq_ = first + static_cast<std::uint32_t>(n);  // acknowledged by the next transaction

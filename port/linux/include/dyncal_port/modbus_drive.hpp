@@ -9,6 +9,7 @@
 #include <memory>
 #include <string>
 
+#include "dyncal/drive/ring_window.hpp"
 #include "dyncal/fourier_trajectory.hpp"
 #include "dyncal/modbus_map.hpp"
 #include "dyncal/port.hpp"
@@ -226,8 +227,8 @@ class ModbusDrive final : public port::SampleSource, public port::ParameterStore
   std::uint32_t drive_overruns_ = 0;  ///< the drive's overrun counter at the last gap
   bool stream_format_known_ = false;  ///< read_stream_format has run (once per connection)
   modbus_map::RingFormat format_ = modbus_map::RingFormat::float32;
-  std::array<double, modbus_map::kMaxJoints> q_resolution_{}, tau_resolution_{};
-  double sample_rate_hz_ = 0;  ///< of the trajectory written last (paces read())
+  drive::RingResolution resolution_{};  ///< format counts: the drive's q and tau per count
+  double sample_rate_hz_ = 0;           ///< of the trajectory written last (paces read())
   std::array<long, modbus_map::kMaxJoints> saturated_{};
   std::chrono::steady_clock::time_point pace_until_{};
   LinkStats link_;

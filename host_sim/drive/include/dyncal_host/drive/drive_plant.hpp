@@ -10,8 +10,10 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <type_traits>
 #include <vector>
 
+#include "dyncal/drive/monitor_settings.hpp"
 #include "dyncal/modbus_map.hpp"
 #include "dyncal/parameter_table.hpp"
 #include "dyncal_host/common/excitation_trajectory.hpp"
@@ -48,23 +50,12 @@ struct PlantStep {
 
 /// The drive's collision monitor (docs/monitor.md "On the drive"): lib/'s momentum observer on the
 /// active table at the control rate, fed the measured q and torque through lib/'s centred slope
-/// (D = round(1 / (K dt)) samples: it judges the state D control periods back). An alarm when
-/// |r_j - mean_j| exceeds threshold_j, widened by the active table's |Fc_j| where joint j's
-/// encoder stalled within the slope's window (static friction); the thresholds come from the
-/// calibration's residual statistics (dyncal monitor, contact_monitor.hpp), never tuned here.
-struct MonitorSettings {
-  double gain = 0;         ///< K [1/s] on every joint; 0: the monitor is off
-  JointArray threshold{};  ///< [Nm]; 0: the joint is not watched
-  JointArray mean{};       ///< the residual's mean on contact-free motion [Nm]
-  JointArray band{};       ///< the friction terms' standstill band [rad/s]: |qd| below it counts as 0
-};
+/// (D = round(1 / (K dt)) samples: it judges the state D control periods back); the settings and
+/// their rule are the drive application's (dyncal/drive/monitor_settings.hpp).
+using MonitorSettings = drive::MonitorSettings;
+static_assert(std::is_same_v<JointArray, decltype(MonitorSettings::threshold)>, "one joint array");
 
-/// The one rule for monitor settings, which the register check (exception 03 when written, and
-/// again at start) and DrivePlant::set_monitor both apply, so that a setting the drive acknowledges
-/// is the setting it runs (docs/modbus.md "Collision monitor"): gain 0 (off) or 0 < K with K dt <= 1
-/// and a centred-slope window of at most 2 modbus_map::kMonitorMaxHalfWidth + 1 periods (dt: the
-/// control period [s]); every joint slot's threshold and band finite and >= 0, its mean finite.
-/// Returns an empty string when the settings are taken, else why not (one line).
+/// lib/'s check_monitor_settings as one line: empty when the settings are taken, else why not.
 std::string monitor_settings_error(const MonitorSettings& m, double dt);
 
 /// The drive's payload estimate (docs/payload.md "On the drive"): the last link's 10 standard
