@@ -4,12 +4,16 @@
 // crc16 of its bytes; a function whose length is unknown or an impossible length is reported as such
 // (the receiver then drops one byte and resynchronises, standing for the line's silence). Every read
 // is from an exact-size copy, so a read past a frame's end is a heap overflow ASan reports.
+// Then the same bytes through the drive's line receiver (rtu_receiver.hpp), in chunks whose sizes
+// and gaps the input's own bytes choose: every request it hands over is for its address, 4..256
+// bytes, with a right CRC, and it never holds more than its capacity.
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
 #include <vector>
 
 #include "dyncal/drive/modbus_frames.hpp"
+#include "dyncal/drive/rtu_receiver.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using dyncal::drive::RtuFrame;
@@ -30,5 +34,24 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     (void)dyncal::drive::request_pdu_consistent(pdu.data(), pdu.size());
     used += f.bytes;
   }
+
+  dyncal::drive::RtuReceiver<> line(1, 50000);
+  std::uint64_t now = 0;
+  auto answer = [](const std::uint8_t* adu, std::size_t n) {
+    if (n < 4 || n > dyncal::drive::kMaxRtuAduBytes || adu[0] != 1) std::abort();
+    const std::vector<std::uint8_t> frame(adu, adu + n);
+    const std::uint16_t crc = dyncal::drive::crc16(frame.data(), n - 2);
+    if (frame[n - 2] != (crc & 0xFF) || frame[n - 1] != (crc >> 8)) std::abort();
+  };
+  for (std::size_t k = 0; k < size;) {
+    const std::size_t chunk = 1 + data[k] % 64;  // a read's size
+    const std::size_t n = chunk < size - k ? chunk : size - k;
+    now += (data[k] & 0x80) ? 60000 : 100;  // a silence longer than the resync, or a short gap
+    line.push(data + k, n, now);
+    line.poll(now, answer);
+    if (line.pending() > 2 * dyncal::drive::kMaxRtuAduBytes) std::abort();
+    k += n;
+  }
+  line.poll(now + 60000, answer);
   return 0;
 }

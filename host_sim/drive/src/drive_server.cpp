@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "dyncal/drive/modbus_frames.hpp"
+#include "dyncal/drive/rtu_receiver.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "modbus_request_handler.hpp"
 
@@ -96,6 +97,8 @@ class Server {
     if (!options_.rtu_device.empty()) {
       rtu_fd_ = open_serial_line(options_.rtu_device, options_.rtu_baud);
       handler_ = std::make_unique<ModbusRequestHandler>(drive_, rtu_fd_, options_.rtu_slave);
+      rtu_ = std::make_unique<drive::RtuReceiver<>>(static_cast<std::uint8_t>(options_.rtu_slave),
+                                                    static_cast<std::uint64_t>(kRtuResyncSeconds * 1e6));
       return "rtu:" + options_.rtu_device;
     }
     listen_fd_ = listen_tcp(options_.tcp_host, options_.tcp_port);
@@ -247,53 +250,24 @@ class Server {
     return true;
   }
 
-  // RTU: one point-to-point line, framed by lib/'s drive application (dyncal/drive/modbus_frames.hpp):
-  // a request ends where its function's length says, and its CRC decides whether it is answered. A
-  // frame that cannot be taken (a wrong CRC, an impossible length, a function whose length is
-  // unknown, bytes that stop mid-frame) is dropped with everything after it until the line has been
-  // silent for kRtuResyncSeconds; a request for another address is skipped without a reply.
+  // RTU: one point-to-point line, received by lib/'s drive application (dyncal/drive/rtu_receiver.hpp):
+  // a request ends where its function's length says, its CRC decides whether it is answered, and a
+  // frame that cannot be taken is dropped until the line has been silent for kRtuResyncSeconds.
   void serve_rtu(bool readable) {
-    const Clock::time_point now = Clock::now();
+    const auto now = static_cast<std::uint64_t>(
+        std::chrono::duration_cast<std::chrono::microseconds>(Clock::now() - rtu_epoch_).count());
+    auto answer = [this](const std::uint8_t* adu, std::size_t n) {
+      handler_->answer(adu, static_cast<int>(n), ModbusRequestHandler::kRtuClient);
+    };
     if (readable) {
-      std::uint8_t buf[512];
+      // At most one ADU per read: the receiver holds a partial frame and the next one's bytes.
+      std::uint8_t buf[drive::kMaxRtuAduBytes];
       for (ssize_t n; (n = ::read(rtu_fd_, buf, sizeof buf)) > 0;) {
-        rtu_last_byte_ = now;
-        if (rtu_resync_) continue;  // still inside the bytes of a dropped frame
-        rtu_in_.insert(rtu_in_.end(), buf, buf + n);
+        rtu_->push(buf, static_cast<std::size_t>(n), now);
+        rtu_->poll(now, answer);
       }
     }
-    const bool silent = now - rtu_last_byte_ > seconds(kRtuResyncSeconds);
-    if (rtu_resync_) {
-      if (silent) rtu_resync_ = false;
-      return;
-    }
-    while (!rtu_in_.empty()) {
-      const drive::RtuFrame f = drive::next_rtu_request(rtu_in_.data(), rtu_in_.size());
-      if (f.status == drive::RtuFrame::Status::complete && f.crc_ok) {
-        if (f.address == options_.rtu_slave)
-          handler_->answer(rtu_in_.data(), static_cast<int>(f.bytes), ModbusRequestHandler::kRtuClient);
-        rtu_in_.erase(rtu_in_.begin(), rtu_in_.begin() + static_cast<long>(f.bytes));
-        continue;
-      }
-      if (f.status == drive::RtuFrame::Status::needs_silence && silent && rtu_in_.size() >= 4) {
-        // A function whose length its code does not give ends at the silence: answered (illegal
-        // function) when its CRC holds.
-        const std::uint16_t crc = drive::crc16(rtu_in_.data(), rtu_in_.size() - 2);
-        if (rtu_in_[rtu_in_.size() - 2] == (crc & 0xFF) && rtu_in_.back() == (crc >> 8) &&
-            rtu_in_[0] == options_.rtu_slave)
-          handler_->answer(rtu_in_.data(), static_cast<int>(rtu_in_.size()), ModbusRequestHandler::kRtuClient);
-        rtu_in_.clear();
-        return;
-      }
-      if (f.status == drive::RtuFrame::Status::incomplete ||
-          (f.status == drive::RtuFrame::Status::needs_silence && rtu_in_.size() <= drive::kMaxRtuAduBytes)) {
-        if (silent) rtu_in_.clear();  // the rest of the frame never came
-        return;
-      }
-      rtu_in_.clear();  // a wrong CRC or an impossible length: resynchronise at the next silence
-      rtu_resync_ = !silent;
-      return;
-    }
+    rtu_->poll(now, answer);
   }
 
   SimulatedDrive& drive_;
@@ -304,9 +278,8 @@ class Server {
   /// over. Longer than t3.5 (1.75 ms at 115 200 baud, drive::rtu_silence_us): a pseudo-terminal or a
   /// USB adapter delivers one frame's bytes with gaps of several milliseconds.
   static constexpr double kRtuResyncSeconds = 0.05;
-  std::vector<std::uint8_t> rtu_in_;  ///< RTU: the bytes of the next request so far
-  Clock::time_point rtu_last_byte_ = Clock::now();
-  bool rtu_resync_ = false;  ///< RTU: dropping bytes until the line is silent
+  Clock::time_point rtu_epoch_ = Clock::now();  ///< the receiver's clock starts here
+  std::unique_ptr<drive::RtuReceiver<>> rtu_;   ///< RTU: the line's receiver (created by open())
   int listen_fd_ = -1;
   std::vector<Connection> clients_;
   long refused_ = 0;  ///< connections refused since the cap was last below its limit

@@ -21,9 +21,10 @@
 #include "dyncal_cortex_m/instruction_counter.hpp"
 #include "dyncal_cortex_m/semihosting.hpp"
 #include "dyncal_cortex_m/stack_usage.hpp"
-#include "er20_ratings.hpp"
+#include "er20_joint_ratings.hpp"
 #include "er20_replay_data.hpp"
 #include "replay.hpp"
+#include "table_drive.hpp"
 
 namespace {
 
@@ -32,73 +33,13 @@ namespace mm = dyncal::modbus_map;
 namespace data = dyncal::replay::data;
 using dyncal::TableStatus;
 using Counter = sh::InstructionCounter;
-using Model = dyncal::replay::LinearModel;
-
-/// The drive as the register server sees it: the flash store's active table, no arm (idle, an
-/// empty ring; a start is refused).
-struct ImageDrive {
-  sh::FlashParameterStore<Model>& store;
-  dyncal::ParameterTable active{};
-  dyncal::ParameterTable staged{};  ///< the table being committed (not on the stack)
-  std::uint8_t active_bytes[dyncal::kTableMaxBytes] = {};
-  int active_size = 0;
-  std::uint32_t generation = 0;                  ///< +1 per table made active
-  mutable std::uint32_t published = 0xFFFFFFFF;  ///< the generation the input registers show
-
-  mm::DriveState state() const { return mm::DriveState::idle; }
-  std::uint32_t acked() const { return 0; }
-  std::uint32_t produced() const { return 0; }
-  long ring_capacity_samples() const { return 0; }
-  long run_samples(double periods, double period_s, double fs) const {
-    return static_cast<long>(periods * period_s * fs);
-  }
-  double control_rate_hz() const { return 1000.0; }
-  void ack(std::uint32_t) {}
-  bool start(mm::Command, const dyncal::drive::RunSettings&, const dyncal::drive::MonitorSettings&) { return false; }
-  void stop() {}
-  void reset() {}
-  /// Decode, check against the model and the ratings, write to the slot not active, verify, then
-  /// read the store's active table back: the registers show what the flash holds.
-  TableStatus commit(const std::uint8_t* bytes, int size) {
-    TableStatus st = dyncal::decode_table(bytes, size, staged);
-    if (st != TableStatus::ok) return st;
-    if (store.write(staged, &st) != dyncal::port::PortStatus::ok)
-      return st != TableStatus::ok ? st : TableStatus::store_failed;
-    return load();
-  }
-  TableStatus load() {
-    TableStatus st;
-    if (store.read(active, &st) != dyncal::port::PortStatus::ok) return st;
-    st = dyncal::encode_table(active, active_bytes, dyncal::kTableMaxBytes, &active_size);
-    ++generation;
-    return st;
-  }
-  void publish_inputs(std::uint16_t* in) const {
-    in[mm::kMapVersionReg] = mm::kMapVersion;
-    in[mm::kNumJointsReg] = Model::kNumJoints;
-    mm::set_u32(in + mm::kRobotIdReg, Model::RobotType::kRobotId);
-    in[mm::kStateReg] = static_cast<std::uint16_t>(state());
-    if (published == generation) return;  // the table registers change with the table only
-    mm::set_u32(in + mm::kActiveModelIdReg, active.model_id);
-    in[mm::kActiveCountReg] = active.count;
-    mm::set_u32(in + mm::kActiveCrcReg, active_size >= 4 ? dyncal::detail::get_u32(active_bytes + active_size - 4) : 0);
-    in[mm::kActiveTableSizeReg] = static_cast<std::uint16_t>(active_size);
-    for (int k = 0; k < mm::kTableWords; ++k) in[mm::kActiveTableReg + k] = 0;
-    mm::bytes_to_regs(active_bytes, active_size, in + mm::kActiveTableReg);
-    published = generation;
-  }
-  void publish_window(std::uint16_t* w) const {
-    const dyncal::port::DriveSample* none = nullptr;
-    dyncal::drive::RingWindowHeader header;
-    dyncal::drive::encode_ring_window(none, 0, header, Model::kNumJoints, mm::RingFormat::float32,
-                                      dyncal::drive::RingResolution{}, w);
-  }
-};
+using dyncal::cortex_m::TableDrive;
+using Model = TableDrive::Model;
 
 std::uint8_t g_request[dyncal::drive::kMaxRtuAduBytes];
 std::uint8_t g_reply[dyncal::drive::kMaxRtuAduBytes];
-ImageDrive g_drive{sh::flash_parameter_store<Model>()};
-dyncal::drive::RegisterServer<ImageDrive> g_server{g_drive, 1000.0};
+TableDrive g_drive{sh::flash_parameter_store<Model>()};
+dyncal::drive::RegisterServer<TableDrive> g_server{g_drive, 1000.0};
 /// The server's clock [us]: this image advances it 1 ms per request (the drive image reads a timer).
 dyncal::drive::Microseconds g_now = 0;
 
@@ -246,15 +187,8 @@ bool reads_back(const dyncal::ParameterTable& expected) {
 
 int main() {
   sh::StackUsage::paint();
-  dyncal::JointRatings<Model::kNumJoints> ratings;
-  for (int j = 0; j < Model::kNumJoints; ++j) {
-    ratings.tau_max[j] = data::kTauMax[j];
-    ratings.qd_max[j] = data::kQdMax[j];
-    ratings.qdd_max[j] = data::kQddMax[j];
-    ratings.q_min[j] = data::kQMin[j];
-    ratings.q_max[j] = data::kQMax[j];
-  }
-  g_drive.store.set_ratings(ratings);
+  static_assert(Model::kNumJoints == 6, "the er20");
+  g_drive.store.set_ratings(dyncal::replay::ratings());
   g_drive.load();  // the table the flash holds, if any
   Counter::start();
   bool ok = true;

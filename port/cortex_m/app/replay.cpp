@@ -12,7 +12,7 @@
 #include "dyncal_cortex_m/instruction_counter.hpp"
 #include "dyncal_cortex_m/semihosting.hpp"
 #include "dyncal_cortex_m/stack_usage.hpp"
-#include "er20_ratings.hpp"
+#include "er20_joint_ratings.hpp"
 #include "er20_replay_data.hpp"
 
 #ifndef DYNCAL_FW_SCALAR
@@ -81,14 +81,7 @@ bool store_round_trip() {
     static dyncal::ParameterTable table;  // one table: RAM is the budget
     dyncal::make_table<dyncal::replay::LinearModel>(g_est.estimate(), table);
     auto& store = sh::flash_parameter_store<dyncal::replay::LinearModel>();
-    dyncal::JointRatings<6> ratings;
-    for (int j = 0; j < 6; ++j) {
-      ratings.tau_max[j] = data::kTauMax[j];
-      ratings.qd_max[j] = data::kQdMax[j];
-      ratings.qdd_max[j] = data::kQddMax[j];
-      ratings.q_min[j] = data::kQMin[j];
-      ratings.q_max[j] = data::kQMax[j];
-    }
+    const dyncal::JointRatings<6> ratings = dyncal::replay::ratings();
     store.set_ratings(ratings);
     dyncal::TableStatus reason = dyncal::TableStatus::ok;
     for (int round = 0; round < 3; ++round) {  // three writes: both slots used, newest wins

@@ -70,6 +70,61 @@ void write_float(double value, int digits) {
   write_int(exponent);
 }
 
+namespace {
+
+int length(const char* s) {
+  int n = 0;
+  while (s[n] != 0) ++n;
+  return n;
+}
+
+/// SYS_OPEN in `mode` (1 "rb", 5 "wb"): the handle, or -1.
+int sys_open(const char* path, int mode) {
+  const std::uintptr_t args[3] = {reinterpret_cast<std::uintptr_t>(path), static_cast<std::uintptr_t>(mode),
+                                  static_cast<std::uintptr_t>(length(path))};
+  return call(0x01, args);
+}
+
+int sys_close(int handle) {
+  const std::uintptr_t args[1] = {static_cast<std::uintptr_t>(handle)};
+  return call(0x02, args);
+}
+
+}  // namespace
+
+bool command_line(char* buf, int size) {
+  std::uintptr_t args[2] = {reinterpret_cast<std::uintptr_t>(buf), static_cast<std::uintptr_t>(size)};
+  return call(0x15, args) == 0;
+}
+
+int read_file(const char* path, void* buf, int size) {
+  const int h = sys_open(path, 1);
+  if (h < 0) return -1;
+  const std::uintptr_t args[3] = {static_cast<std::uintptr_t>(h), reinterpret_cast<std::uintptr_t>(buf),
+                                  static_cast<std::uintptr_t>(size)};
+  const int not_read = call(0x06, args);  // SYS_READ returns the bytes not read
+  sys_close(h);
+  return not_read < 0 || not_read > size ? -1 : size - not_read;
+}
+
+bool write_file_atomically(const char* path, const void* bytes, int size) {
+  char tmp[256];
+  const int n = length(path);
+  if (n + 5 > static_cast<int>(sizeof tmp)) return false;
+  for (int i = 0; i < n; ++i) tmp[i] = path[i];
+  const char suffix[] = ".tmp";
+  for (int i = 0; i < 5; ++i) tmp[n + i] = suffix[i];
+  const int h = sys_open(tmp, 5);
+  if (h < 0) return false;
+  const std::uintptr_t args[3] = {static_cast<std::uintptr_t>(h), reinterpret_cast<std::uintptr_t>(bytes),
+                                  static_cast<std::uintptr_t>(size)};
+  const bool written = call(0x05, args) == 0;  // SYS_WRITE returns the bytes not written
+  if (sys_close(h) != 0 || !written) return false;
+  const std::uintptr_t rename[4] = {reinterpret_cast<std::uintptr_t>(tmp), static_cast<std::uintptr_t>(n + 4),
+                                    reinterpret_cast<std::uintptr_t>(path), static_cast<std::uintptr_t>(n)};
+  return call(0x0F, rename) == 0;
+}
+
 void exit(int status) {
   // SYS_EXIT with ADP_Stopped_ApplicationExit (0x20026) for success, RunTimeErrorUnknown otherwise.
   call(0x18, reinterpret_cast<const void*>(status == 0 ? 0x20026 : 0x20023));

@@ -17,23 +17,68 @@ namespace {
 using Handler = void (*)();
 }
 
-// Initial stack pointer, reset, NMI, HardFault, MemManage, BusFault, UsageFault.
-__attribute__((section(".vectors"), used)) const Handler g_vectors[16] = {reinterpret_cast<Handler>(&__stack_top),
-                                                                          reset_handler,
-                                                                          fault_handler,
-                                                                          fault_handler,
-                                                                          fault_handler,
-                                                                          fault_handler,
-                                                                          fault_handler,
-                                                                          nullptr,
-                                                                          nullptr,
-                                                                          nullptr,
-                                                                          nullptr,
-                                                                          fault_handler,
-                                                                          fault_handler,
-                                                                          nullptr,
-                                                                          fault_handler,
-                                                                          fault_handler};
+// Interrupt handlers an image may define (weak: a fault until then). MPS2 AN386/AN500 (qemu):
+// SysTick, and the CMSDK UART0's receive (IRQ 0) and transmit (IRQ 1) interrupts.
+extern "C" {
+void unhandled_interrupt();
+void systick_handler() __attribute__((weak, alias("unhandled_interrupt")));
+void uart0_rx_handler() __attribute__((weak, alias("unhandled_interrupt")));
+void uart0_tx_handler() __attribute__((weak, alias("unhandled_interrupt")));
+}
+
+// Initial stack pointer, reset, NMI, HardFault, MemManage, BusFault, UsageFault, 4 reserved,
+// SVCall, DebugMonitor, reserved, PendSV, SysTick, then the board's 32 external interrupts (IRQ 0
+// first).
+__attribute__((section(".vectors"), used)) const Handler g_vectors[16 + 32] = {
+    reinterpret_cast<Handler>(&__stack_top),
+    reset_handler,
+    fault_handler,
+    fault_handler,
+    fault_handler,
+    fault_handler,
+    fault_handler,
+    nullptr,
+    nullptr,
+    nullptr,
+    nullptr,
+    fault_handler,
+    fault_handler,
+    nullptr,
+    fault_handler,
+    systick_handler,
+    uart0_rx_handler,
+    uart0_tx_handler,
+    unhandled_interrupt,
+    unhandled_interrupt,
+    unhandled_interrupt,
+    unhandled_interrupt,
+    unhandled_interrupt,
+    unhandled_interrupt,
+    unhandled_interrupt,
+    unhandled_interrupt,
+    unhandled_interrupt,
+    unhandled_interrupt,
+    unhandled_interrupt,
+    unhandled_interrupt,
+    unhandled_interrupt,
+    unhandled_interrupt,
+    unhandled_interrupt,
+    unhandled_interrupt,
+    unhandled_interrupt,
+    unhandled_interrupt,
+    unhandled_interrupt,
+    unhandled_interrupt,
+    unhandled_interrupt,
+    unhandled_interrupt,
+    unhandled_interrupt,
+    unhandled_interrupt,
+    unhandled_interrupt,
+    unhandled_interrupt,
+    unhandled_interrupt,
+    unhandled_interrupt,
+    unhandled_interrupt,
+    unhandled_interrupt,
+};
 
 extern "C" __attribute__((naked, noreturn)) void reset_handler() {
   // CPACR: full access to CP10 and CP11 (the FPU), then barriers, all before any C++ code.
@@ -52,6 +97,10 @@ extern "C" __attribute__((noreturn, used)) void reset_continue() {
   for (std::uint32_t* p = &__bss_start; p < &__bss_end;) *p++ = 0;
   for (void (**f)() = __init_array_start; f < __init_array_end; ++f) (*f)();
   dyncal::cortex_m::exit(main());
+}
+
+extern "C" void unhandled_interrupt() {
+  fault_handler();
 }
 
 extern "C" __attribute__((noreturn)) void fault_handler() {
