@@ -113,7 +113,7 @@ void SimulatedDrive::start() {
   plant_->begin(trajectory, scenario_, gains_fixed_, control_period());
   time_ = 0;
   steps_ = 0;
-  ring_.clear();
+  ring_->clear();
   acked_ = produced_ = overruns_ = 0;
   error_sq_.fill(0.0);
   error_n_ = 0;
@@ -248,7 +248,7 @@ void SimulatedDrive::step() {
     if (ring_full()) {
       ++overruns_;  // the host sees the gap in seq
     } else {
-      ring_.push_back(sample);
+      ring_->push_back(sample);
     }
   }
   ++steps_;
@@ -265,7 +265,7 @@ modbus_map::RingFormat SimulatedDrive::ring_format_in_use() const {
 
 void SimulatedDrive::ack(std::uint32_t seq_end) {
   if (seq_end < acked_ || seq_end > produced_) return;
-  while (!ring_.empty() && ring_.front().seq < seq_end) ring_.pop_front();
+  while (!ring_->empty() && ring_->front().seq < seq_end) ring_->pop_front();
   acked_ = seq_end;
 }
 

@@ -6,12 +6,12 @@
 
 #include <array>
 #include <cstdint>
-#include <deque>
 #include <memory>
 #include <random>
 #include <string>
 #include <vector>
 
+#include "dyncal/drive/sample_ring.hpp"
 #include "dyncal/fourier_trajectory.hpp"
 #include "dyncal/modbus_map.hpp"
 #include "dyncal/parameter_table.hpp"
@@ -82,11 +82,11 @@ class SimulatedDrive {
   long run_samples(double run_periods, double period_s, double sample_rate) const;
 
   /// Ring buffer: samples with seq >= acked() not yet freed, oldest first.
-  const std::deque<port::DriveSample>& ring() const { return ring_; }
+  const drive::SampleRing<kRingCapacity>& ring() const { return *ring_; }
   std::uint32_t acked() const { return acked_; }
   /// Frees samples with seq < seq_end (ignored if it would skip unrecorded samples).
   void ack(std::uint32_t seq_end);
-  bool ring_full() const { return static_cast<int>(ring_.size()) >= ring_capacity; }
+  bool ring_full() const { return static_cast<int>(ring_->size()) >= ring_capacity; }
   /// Samples the ring holds, 1..kRingCapacity (a real drive's trace buffer is often far smaller;
   /// `dyncal drive --ring-samples`). Set while not playing.
   int ring_capacity = kRingCapacity;
@@ -171,7 +171,8 @@ class SimulatedDrive {
   double fault_value_ = 0;
   double time_ = 0, clock_ = 0;
   long steps_ = 0, steps_per_sample_ = 1, total_steps_ = 0;
-  std::deque<port::DriveSample> ring_;
+  /// lib/'s ring (1.4 MB at kRingCapacity: on the heap here, static storage in a firmware drive)
+  std::unique_ptr<drive::SampleRing<kRingCapacity>> ring_ = std::make_unique<drive::SampleRing<kRingCapacity>>();
   std::uint32_t acked_ = 0, produced_ = 0, overruns_ = 0;
   JointArray q_resolution_{}, tau_resolution_{};
   ParameterTable active_;
