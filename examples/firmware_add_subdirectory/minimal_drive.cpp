@@ -79,10 +79,7 @@ void answer(const std::uint8_t* adu, std::size_t n) {
   static std::uint8_t reply[dyncal::drive::kMaxRtuAduBytes];
   const std::size_t pdu = g_server.answer(adu + 1, n - 3, 0, g_now, reply + 1).reply_bytes;
   reply[0] = adu[0];
-  const std::uint16_t crc = dyncal::drive::crc16(reply, 1 + pdu);
-  reply[1 + pdu] = static_cast<std::uint8_t>(crc & 0xFF);
-  reply[2 + pdu] = static_cast<std::uint8_t>(crc >> 8);
-  line_write(reply, 3 + pdu);
+  line_write(reply, dyncal::drive::append_crc16(reply, 1 + pdu));
 }
 
 /// The host sends PDU pdu[0, n) to unit 1 in pieces of 1, 2, 3, ... bytes, 1 ms apart, the drive's
@@ -90,9 +87,7 @@ void answer(const std::uint8_t* adu, std::size_t n) {
 std::size_t transact(const std::uint8_t* pdu, std::size_t n) {
   g_request[0] = 1;
   for (std::size_t k = 0; k < n; ++k) g_request[1 + k] = pdu[k];
-  const std::uint16_t crc = dyncal::drive::crc16(g_request, 1 + n);
-  g_request[1 + n] = static_cast<std::uint8_t>(crc & 0xFF);
-  g_request[2 + n] = static_cast<std::uint8_t>(crc >> 8);
+  dyncal::drive::append_crc16(g_request, 1 + n);
   g_reply_size = 0;
   for (std::size_t sent = 0, piece = 1; sent < n + 3; sent += piece, ++piece) {
     if (piece > n + 3 - sent) piece = n + 3 - sent;
@@ -101,9 +96,7 @@ std::size_t transact(const std::uint8_t* pdu, std::size_t n) {
     g_line.poll(g_now, answer);                   // ... requests answered
   }
   if (g_reply_size < 5) return 0;
-  const std::uint16_t r = dyncal::drive::crc16(g_reply, g_reply_size - 2);
-  const bool ok = g_reply[g_reply_size - 2] == (r & 0xFF) && g_reply[g_reply_size - 1] == (r >> 8);
-  return ok ? g_reply_size - 3 : 0;
+  return dyncal::drive::crc16_holds(g_reply, g_reply_size) ? g_reply_size - 3 : 0;
 }
 
 std::uint8_t hi(int v) {

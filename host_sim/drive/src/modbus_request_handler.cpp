@@ -158,10 +158,7 @@ bool ModbusRequestHandler::answer(const std::uint8_t* adu, int length, int clien
                               .reply_bytes;
   if (rtu) {  // the address, the PDU, the CRC low byte first (MODBUS over Serial Line v1.02, sec. 2.5.1)
     reply[0] = adu[0];
-    const std::uint16_t crc = drive::crc16(reply, 1 + pdu);
-    reply[1 + pdu] = static_cast<std::uint8_t>(crc & 0xFF);
-    reply[2 + pdu] = static_cast<std::uint8_t>(crc >> 8);
-    const std::size_t n = 3 + pdu;
+    const std::size_t n = drive::append_crc16(reply, 1 + pdu);
     return ::write(rtu_fd_, reply, n) == static_cast<ssize_t>(n);
   }
   // MBAP: the request's transaction id, protocol 0, the length of unit id + PDU, its unit id.

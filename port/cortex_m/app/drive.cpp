@@ -93,10 +93,7 @@ void answer(const std::uint8_t* adu, std::size_t n) {
   const std::size_t pdu = g_server.answer(adu + 1, n - 3, 0, sh::clock_us(), g_reply + 1).reply_bytes;
   if (pdu == 0) return;
   g_reply[0] = adu[0];
-  const std::uint16_t crc = dyncal::drive::crc16(g_reply, 1 + pdu);
-  g_reply[1 + pdu] = static_cast<std::uint8_t>(crc & 0xFF);
-  g_reply[2 + pdu] = static_cast<std::uint8_t>(crc >> 8);
-  sh::serial_write(g_reply, 3 + pdu);
+  sh::serial_write(g_reply, dyncal::drive::append_crc16(g_reply, 1 + pdu));
 }
 
 }  // namespace

@@ -47,10 +47,7 @@ dyncal::drive::Microseconds g_now = 0;
 std::size_t frame(const std::uint8_t* pdu, std::size_t n) {
   g_request[0] = 1;
   for (std::size_t k = 0; k < n; ++k) g_request[1 + k] = pdu[k];
-  const std::uint16_t crc = dyncal::drive::crc16(g_request, 1 + n);
-  g_request[1 + n] = static_cast<std::uint8_t>(crc & 0xFF);
-  g_request[2 + n] = static_cast<std::uint8_t>(crc >> 8);
-  return 3 + n;
+  return dyncal::drive::append_crc16(g_request, 1 + n);
 }
 
 /// What a drive does with the bytes of one request: frame, check, answer, append the CRC. The
@@ -61,15 +58,7 @@ std::size_t serve(std::size_t n) {
   g_now += 1000;
   const std::size_t pdu = g_server.answer(g_request + 1, f.bytes - 3, 0, g_now, g_reply + 1).reply_bytes;
   g_reply[0] = 1;
-  const std::uint16_t crc = dyncal::drive::crc16(g_reply, 1 + pdu);
-  g_reply[1 + pdu] = static_cast<std::uint8_t>(crc & 0xFF);
-  g_reply[2 + pdu] = static_cast<std::uint8_t>(crc >> 8);
-  return 3 + pdu;
-}
-
-bool reply_crc_ok(std::size_t n) {
-  const std::uint16_t crc = dyncal::drive::crc16(g_reply, n - 2);
-  return g_reply[n - 2] == (crc & 0xFF) && g_reply[n - 1] == (crc >> 8);
+  return dyncal::drive::append_crc16(g_reply, 1 + pdu);
 }
 
 std::uint8_t hi(int v) {
@@ -90,7 +79,7 @@ std::size_t ask(const std::uint8_t* pdu, std::size_t n) {
   const std::size_t reply = serve(request);
   g_instructions = Counter::elapsed(t0, Counter::ticks()) * Counter::kInstructionsPerTick;
   const bool answers = g_reply[1] == pdu[0] || g_reply[1] == (pdu[0] | 0x80);  // the reply or its exception
-  return reply >= 5 && reply_crc_ok(reply) && answers ? reply : 0;
+  return reply >= 5 && dyncal::drive::crc16_holds(g_reply, reply) && answers ? reply : 0;
 }
 
 /// 16: regs[0, count) (count <= 123) to holding registers from `address`; whether the echo came.

@@ -1,6 +1,7 @@
 #include "dyncal_cortex_m/semihosting.hpp"
 
 #include <cmath>
+#include <cstring>
 
 #include "dyncal/assert.hpp"
 
@@ -72,16 +73,10 @@ void write_float(double value, int digits) {
 
 namespace {
 
-int length(const char* s) {
-  int n = 0;
-  while (s[n] != 0) ++n;
-  return n;
-}
-
 /// SYS_OPEN in `mode` (1 "rb", 5 "wb"): the handle, or -1.
 int sys_open(const char* path, int mode) {
   const std::uintptr_t args[3] = {reinterpret_cast<std::uintptr_t>(path), static_cast<std::uintptr_t>(mode),
-                                  static_cast<std::uintptr_t>(length(path))};
+                                  static_cast<std::uintptr_t>(std::strlen(path))};
   return call(0x01, args);
 }
 
@@ -109,7 +104,7 @@ int read_file(const char* path, void* buf, int size) {
 
 bool write_file_atomically(const char* path, const void* bytes, int size) {
   char tmp[256];
-  const int n = length(path);
+  const int n = static_cast<int>(std::strlen(path));
   if (n + 5 > static_cast<int>(sizeof tmp)) return false;
   for (int i = 0; i < n; ++i) tmp[i] = path[i];
   const char suffix[] = ".tmp";

@@ -140,6 +140,21 @@ constexpr std::uint16_t crc16(const std::uint8_t* bytes, std::size_t n) noexcept
   return crc;
 }
 
+/// Writes the CRC of adu[0, n) at adu[n], adu[n + 1], low byte first (MODBUS over Serial Line
+/// v1.02, sec. 2.5.1); the ADU's length with it, n + 2. adu must hold n + 2 bytes.
+inline std::size_t append_crc16(std::uint8_t* adu, std::size_t n) noexcept {
+  const std::uint16_t crc = crc16(adu, n);
+  adu[n] = static_cast<std::uint8_t>(crc & 0xFFu);
+  adu[n + 1] = static_cast<std::uint8_t>(crc >> 8);
+  return n + 2;
+}
+
+/// Whether the last two bytes of adu[0, n) (n >= 2) are the CRC of the others, low byte first.
+inline bool crc16_holds(const std::uint8_t* adu, std::size_t n) noexcept {
+  const std::uint16_t crc = crc16(adu, n - 2);
+  return adu[n - 2] == (crc & 0xFFu) && adu[n - 1] == (crc >> 8);
+}
+
 /// Largest RTU ADU: address (1) + PDU (253) + CRC (2) (sec. 2.5.1).
 inline constexpr std::size_t kMaxRtuAduBytes = 256;
 
@@ -185,8 +200,7 @@ inline RtuFrame next_rtu_request(const std::uint8_t* buf, std::size_t n) noexcep
   if (n < length) return f;
   f.status = RtuFrame::Status::complete;
   f.bytes = length;
-  const std::uint16_t crc = crc16(buf, length - 2);
-  f.crc_ok = buf[length - 2] == (crc & 0xFFu) && buf[length - 1] == (crc >> 8);
+  f.crc_ok = crc16_holds(buf, length);
   return f;
 }
 

@@ -63,8 +63,7 @@ class RtuReceiver {
       if (f.status == RtuFrame::Status::needs_silence && silent && size_ >= 4) {
         // A function whose length its code does not give ends at the silence: answered (illegal
         // function) when its CRC holds.
-        const std::uint16_t crc = crc16(buf_, size_ - 2);
-        if (buf_[size_ - 2] == (crc & 0xFF) && buf_[size_ - 1] == (crc >> 8) && buf_[0] == address_) {
+        if (crc16_holds(buf_, size_) && buf_[0] == address_) {
           answer(static_cast<const std::uint8_t*>(buf_), size_);
           ++answered;
         }

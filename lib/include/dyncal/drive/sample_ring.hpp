@@ -19,6 +19,10 @@ class SampleRing {
  public:
   using value_type = port::DriveSample;
 
+  /// An empty ring. User-provided so that value-initialisation (make_unique, `{}`) does not zero
+  /// the storage: only held samples are ever read.
+  SampleRing() noexcept {}
+
   /// Samples held.
   std::size_t size() const noexcept { return size_; }
   bool empty() const noexcept { return size_ == 0; }
