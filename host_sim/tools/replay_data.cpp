@@ -9,8 +9,10 @@
 //        again from its own samples (an updater added or changed), the samples kept (CMake target
 //        `replay-references`).
 //        dyncal_replay_data --ratings OUT.hpp: port/replay/er20_ratings.hpp, the er20's ratings from
-//        robots/er20/robot.json for the firmware parameter store's table plausibility (same target;
+//        robots/er20/robot.json for the firmware parameter store's table plausibility, and the arm the
+//        drive image simulates (the host's default scenario of the er20) (same target;
 //        CTest replay_ratings_up_to_date regenerates it and fails on any difference).
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -115,7 +117,7 @@ void write_ratings(const char* path) {
   std::ostringstream o;
   o << "// GENERATED FILE - DO NOT EDIT.\n"
     << "// Generator: host_sim/tools/replay_data.cpp --ratings (cmake --build <build> --target replay-data)\n"
-    << "// Input: robots/er20/robot.json (limits, joint side).\n"
+    << "// Input: robots/er20/robot.json (limits, joint side), robots/er20/drive.json (the simulated arm).\n"
     << "#pragma once\n\n// clang-format off\nnamespace dyncal::replay::data {\n\n"
     << "/// The er20's ratings: tau_max [Nm], qd_max [rad/s], qdd_max [rad/s^2], q_min, q_max [rad]; the\n"
     << "/// parameter store's table plausibility (dyncal/table_check.hpp JointRatings).\n";
@@ -129,6 +131,38 @@ void write_ratings(const char* path) {
     for (int j = 0; j < 6; ++j)
       o << std::showpoint << std::setprecision(9) << static_cast<float>((*v)[j]) << "f" << (j < 5 ? ", " : "};\n");
   }
+  // The arm the drive image simulates: the host simulated drive's default scenario of the robot
+  // (scenario.hpp default_scenario), which is the one every calibrate test of the er20 runs.
+  const dyncal::host::Scenario sc = dyncal::host::default_scenario(robot);
+  for (int m = 0; m < 6; ++m)
+    for (int k = 0; k < 6; ++k)
+      if (sc.motor_map[static_cast<size_t>(m)][static_cast<size_t>(k)] != (m == k ? 1.0 : 0.0))
+        throw std::runtime_error("the drive image simulates one motor per joint; the er20 couples motors");
+  Eigen::VectorXd fc(6), beta(6), ia(6), noise(6), quantum(6);
+  for (int j = 0; j < 6; ++j) {
+    if (sc.friction[j].model != dyncal::host::FrictionModel::eq7)
+      throw std::runtime_error("the drive image simulates Eq. 7 friction");
+    fc[j] = sc.friction[j].Fc;
+    beta[j] = sc.friction[j].beta;
+    ia[j] = sc.effects[j].rotor_inertia;
+    noise[j] = sc.tau_noise_std[j];
+    quantum[j] = 2.0 * M_PI / (sc.encoder_counts * std::fabs(robot.gear_ratios[j]));
+  }
+  o << "\n/// The arm the drive image simulates (port/cortex_m/app/simulated_arm.hpp): the host simulated\n"
+    << "/// drive's default scenario of the er20 (robots/er20/robot.json, drive.json). Eq. 7 friction Fc [Nm],\n"
+    << "/// beta [Nm s/rad]; reflected rotor inertia J_m N^2 [kg m^2]; torque measurement noise std [Nm];\n"
+    << "/// encoder quantum on the joint side 2 pi / (counts N) [rad].\n";
+  const std::pair<const char*, const Eigen::VectorXd*> arm[] = {
+      {"kCoulomb", &fc}, {"kViscous", &beta}, {"kRotorInertia", &ia}, {"kTauNoiseStd", &noise}, {"kQuantum", &quantum}};
+  for (const auto& [name, v] : arm) {
+    o << "inline constexpr double " << name << "[6] = {";
+    for (int j = 0; j < 6; ++j) o << std::setprecision(17) << (*v)[j] << (j < 5 ? ", " : "};\n");
+  }
+  o << "/// The control loop: rate [Hz], RK4 substeps per period, PD natural frequency [Hz] and damping.\n"
+    << "inline constexpr double kControlRateHz = " << sc.control_rate_hz << ";\n"
+    << "inline constexpr int kSubsteps = " << sc.substeps << ";\n"
+    << "inline constexpr double kBandwidthHz = " << sc.bandwidth_hz << ";\n"
+    << "inline constexpr double kDamping = " << sc.damping << ";\n";
   o << "\n}  // namespace dyncal::replay::data\n// clang-format on\n";
   std::ofstream f(path);
   f << o.str();

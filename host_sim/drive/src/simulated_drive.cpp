@@ -132,27 +132,19 @@ void SimulatedDrive::start_payload() {
 }
 
 bool SimulatedDrive::publish_payload() {
-  // The verdict rule of the host's identifiability.hpp: 95 % half-width 1.96 std; the mass must be
-  // determined (at most a tenth of itself) and positive; every other parameter is kept unless its
-  // half-width exceeds its scale (not determined: held at 0 in the table, NaN here).
-  constexpr double kZ = 1.959963984540054, kDeterminedFraction = 0.1;
-  const PayloadFit f = plant_->payload_fit();
-  const bool mass = f.updates > 0 && f.value[9] > 0 && kZ * f.std[9] <= kDeterminedFraction * f.value[9];
+  payload_verdict_ = plant_->payload_verdict();  // lib/'s verdict rule (drive/payload_run.hpp)
   for (size_t i = 0; i < 10; ++i) {
-    const bool kept = mass && std::isfinite(f.std[i]) && kZ * f.std[i] <= f.scale[i];
-    payload_value_[i] = kept ? f.value[i] : std::numeric_limits<double>::quiet_NaN();
-    payload_std_[i] = kept ? f.std[i] : std::numeric_limits<double>::quiet_NaN();
+    payload_value_[i] = payload_verdict_.value[i];
+    payload_std_[i] = payload_verdict_.std[i];
   }
-  return mass;
+  return payload_verdict_.mass_determined;
 }
 
 void SimulatedDrive::finish_payload() {
   if (payload_state_ != modbus_map::PayloadState::running) return;
   payload_state_ = modbus_map::PayloadState::not_written;
   if (!publish_payload()) return;
-  std::array<double, 10> dphi{};
-  for (size_t i = 0; i < 10; ++i) dphi[i] = std::isfinite(payload_value_[i]) ? payload_value_[i] : 0.0;
-  const std::vector<std::uint8_t> bytes = encoded_table(plant_->loaded_table(active_, dphi));
+  const std::vector<std::uint8_t> bytes = encoded_table(plant_->loaded_table(active_, payload_verdict_));
   if (commit(bytes.data(), static_cast<int>(bytes.size())) == TableStatus::ok)
     payload_state_ = modbus_map::PayloadState::written;
 }

@@ -75,6 +75,26 @@ class ParameterStore {
   ~ParameterStore() = default;
 };
 
+/// The arm's joints as the drive application drives them (dyncal/drive/drive_application.hpp),
+/// joint side, SI units, joint 1 first, the robot's joints only: one control period is sense(),
+/// then actuate(). A drive maker implements it over its encoders and current loop; the drive
+/// image implements it with a simulated arm.
+template <typename Scalar>
+class Joints {
+ public:
+  /// Brings the arm to the run's first state, q [rad or m] moving at qd [rad/s or m/s], before the
+  /// run's first period (a real drive plays its own move there; a simulated arm is put there).
+  virtual void place(const Scalar* q, const Scalar* qd) noexcept = 0;
+  /// The measured positions [rad or m] at the period's start (the encoders).
+  virtual void sense(Scalar* q) noexcept = 0;
+  /// Applies the torque command [Nm or N] for one control period and gives the torque the drive
+  /// measured with it (its current sensor times the torque constant, or a torque sensor).
+  virtual void actuate(const Scalar* tau_command, Scalar* tau_measured) noexcept = 0;
+
+ protected:
+  ~Joints() = default;
+};
+
 /// Monotonic time.
 class Clock {
  public:

@@ -1,15 +1,16 @@
 // Firmware application: the drive application's Modbus server on the MCU — lib/'s register server
 // (dyncal/drive/register_server.hpp: the register map, its access and state rules, the staging
-// session, the commit) behind lib/'s RTU framing (modbus_frames.hpp), over the flash A/B parameter
-// store (dyncal_cortex_m/flash_parameter_store.hpp) of the er20's Eq. 7 model. It serves a host's
+// session, the commit) behind lib/'s RTU framing (modbus_frames.hpp), over the er20 drive of the
+// drive image (dyncal/drive/drive_application.hpp on port/replay/er20_drive.hpp) with its table in
+// the flash A/B parameter store (dyncal_cortex_m/flash_parameter_store.hpp). It serves a host's
 // requests as RTU frames: a status read (04), a settings read (03), the unlock (06), a calibrated
 // table staged in 16-writes of at most 123 registers, the commit (06), the active table read back
 // (04), a table for another robot staged and committed (refused, the active one kept), and the ring
 // transaction (23: an acknowledgement written, the sample window read). Prints the instructions per
 // request type and per table commit (qemu -icount) and the peak stack, and exits 0 only when every
 // reply is the one the Modbus Application Protocol lays out, the tables read back are the ones the
-// store holds, and a corrupted frame is refused. This image has no arm: a start is refused by the
-// drive (the drive image simulates one).
+// store holds, and a corrupted frame is refused. No run plays here (the ring window is empty);
+// app/drive_period.cpp counts the control period.
 #include <cstdint>
 
 #include "dyncal/drive/modbus_frames.hpp"
@@ -21,10 +22,10 @@
 #include "dyncal_cortex_m/instruction_counter.hpp"
 #include "dyncal_cortex_m/semihosting.hpp"
 #include "dyncal_cortex_m/stack_usage.hpp"
+#include "er20_drive.hpp"
 #include "er20_joint_ratings.hpp"
 #include "er20_replay_data.hpp"
 #include "replay.hpp"
-#include "table_drive.hpp"
 
 namespace {
 
@@ -33,13 +34,16 @@ namespace mm = dyncal::modbus_map;
 namespace data = dyncal::replay::data;
 using dyncal::TableStatus;
 using Counter = sh::InstructionCounter;
-using dyncal::cortex_m::TableDrive;
-using Model = TableDrive::Model;
+using Model = dyncal::replay::LinearModel;
+using Application = dyncal::replay::Er20Drive<DYNCAL_FW_SCALAR, 64>;
 
 std::uint8_t g_request[dyncal::drive::kMaxRtuAduBytes];
 std::uint8_t g_reply[dyncal::drive::kMaxRtuAduBytes];
-TableDrive g_drive{sh::flash_parameter_store<Model>()};
-dyncal::drive::RegisterServer<TableDrive> g_server{g_drive, 1000.0};
+sh::FlashParameterStore<dyncal::replay::DriveModels>& g_store =
+    sh::flash_parameter_store<dyncal::replay::DriveModels>();
+dyncal::replay::SimulatedArm<dyncal::replay::Er20, DYNCAL_FW_SCALAR> g_arm{dyncal::replay::arm_physics(1)};
+Application g_drive{g_store, g_arm, dyncal::replay::drive_settings<Application>()};
+dyncal::drive::RegisterServer<Application> g_server{g_drive, 1000.0};
 /// The server's clock [us]: this image advances it 1 ms per request (the drive image reads a timer).
 dyncal::drive::Microseconds g_now = 0;
 
@@ -177,7 +181,7 @@ bool reads_back(const dyncal::ParameterTable& expected) {
 int main() {
   sh::StackUsage::paint();
   static_assert(Model::kNumJoints == 6, "the er20");
-  g_drive.store.set_ratings(dyncal::replay::ratings());
+  // The store checks each table against the models; the application has checked it against the ratings too.
   g_drive.load();  // the table the flash holds, if any
   Counter::start();
   bool ok = true;
@@ -198,7 +202,7 @@ int main() {
   static dyncal::ParameterTable table, other;  // static: a table is 0.9 kB, the stack 4 kB
   dyncal::make_table<Model>(Eigen::Map<const Eigen::Matrix<double, Model::kNumParams, 1>>(data::kReferenceKf), table);
   for (int i = 0; i < 3; ++i) ok = ok && flash(table) == static_cast<int>(TableStatus::ok);
-  ok = ok && reads_back(table) && g_drive.store.generation() >= 3;
+  ok = ok && reads_back(table) && g_store.generation() >= 3;
   // A table for another robot: refused, the active one stays (in flash and in the registers).
   other = table;
   other.robot_id ^= 1u;

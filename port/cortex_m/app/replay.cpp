@@ -80,7 +80,7 @@ bool store_round_trip() {
   } else {
     static dyncal::ParameterTable table;  // one table: RAM is the budget
     dyncal::make_table<dyncal::replay::LinearModel>(g_est.estimate(), table);
-    auto& store = sh::flash_parameter_store<dyncal::replay::LinearModel>();
+    auto& store = sh::flash_parameter_store<dyncal::drive::TermSets<dyncal::replay::Robot, dyncal::kFrictionEq7>>();
     const dyncal::JointRatings<6> ratings = dyncal::replay::ratings();
     store.set_ratings(ratings);
     dyncal::TableStatus reason = dyncal::TableStatus::ok;

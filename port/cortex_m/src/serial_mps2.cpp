@@ -58,10 +58,20 @@ std::uint32_t serial_overruns() {
 }
 
 std::uint64_t clock_us() {
+  // The counter may have wrapped with its interrupt not yet taken (qemu takes interrupts between
+  // translated blocks): then the millisecond count is one behind the counter. SysTick's COUNTFLAG
+  // (CSR bit 16, cleared by reading CSR) cannot tell it (the handler's entry does not clear it),
+  // the pending bit can: ICSR.PENDSTSET (bit 26). And the clock never runs backwards.
+  static std::uint64_t last = 0;
   for (;;) {
     const std::uint64_t ms = g_ms;
     const std::uint32_t val = reg(0xE000E018u);
-    if (ms == g_ms) return ms * 1000u + (kTicksPerMs - 1 - val) / (kTicksPerMs / 1000u);
+    const bool wrapped = (reg(0xE000ED04u) & (1u << 26)) != 0;
+    if (ms != g_ms) continue;
+    std::uint64_t t = (ms + (wrapped ? 1u : 0u)) * 1000u + (kTicksPerMs - 1 - val) / (kTicksPerMs / 1000u);
+    if (t < last) t = last;
+    last = t;
+    return t;
   }
 }
 

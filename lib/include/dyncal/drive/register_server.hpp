@@ -317,7 +317,7 @@ class RegisterServer {
     std::uint16_t* h = holding_.data();
     if (overlaps(address, count, mm::kAckReg, 2)) drive_.ack(mm::get_u32(h + mm::kAckReg));
     if (overlaps(address, count, mm::kUnlockReg, 1)) {
-      // A new session starts empty: a commit writes only what its own connection staged.
+      // A session starts empty: a commit writes only what its own connection staged.
       session_client_ = current_client_;
       session_until_ = now_ + static_cast<Microseconds>(mm::kSessionSeconds * 1e6);
       for (int a = mm::kStagingSizeReg; a < mm::kStagingTableReg + mm::kTableWords; ++a)

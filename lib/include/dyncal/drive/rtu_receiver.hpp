@@ -44,7 +44,7 @@ class RtuReceiver {
   /// push() and whenever time passes (a silence ends frames too). Returns the requests handed over.
   template <typename Answer>
   int poll(std::uint64_t now, Answer&& answer) noexcept {
-    const bool silent = now - last_byte_ > resync_us_;
+    const bool silent = now > last_byte_ && now - last_byte_ > resync_us_;  // a clock that steps back is no silence
     if (resync_) {
       if (silent) resync_ = false;
       return 0;

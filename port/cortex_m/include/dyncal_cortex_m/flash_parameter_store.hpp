@@ -10,6 +10,7 @@
 // FlashDevice with its MCU's flash controller.
 #include <cstdint>
 
+#include "dyncal/drive/term_sets.hpp"
 #include "dyncal/parameter_table.hpp"
 #include "dyncal/port.hpp"
 #include "dyncal/table_check.hpp"
@@ -31,11 +32,12 @@ class FlashDevice {
 };
 
 /// Slot layout: magic u32 'DPS1', generation u32, table length u32, then the encoded table (its own
-/// CRC-32, dyncal/parameter_table.hpp). Model: the identification model the drive runs; write()
-/// refuses a table check_table<Model> rejects, and with set_ratings also one that is implausible
+/// CRC-32, dyncal/parameter_table.hpp). Models: the term sets the drive runs
+/// (dyncal/drive/term_sets.hpp); write() refuses a table Models::check rejects (its robot, one of
+/// the models, check_table of that model), and with set_ratings also one that is implausible
 /// against the robot's ratings (check_table with JointRatings: no per-joint term and not the rigid
 /// body beyond 10 x tau_max at rated motion; Yb's N x kNumBase floats on the stack while it runs).
-template <class Model>
+template <class Models>
 class FlashParameterStore final : public port::ParameterStore {
  public:
   static constexpr std::uint32_t kSlotMagic = 0x31535044u;  // "DPS1"
@@ -44,13 +46,13 @@ class FlashParameterStore final : public port::ParameterStore {
   explicit FlashParameterStore(FlashDevice& flash) noexcept : flash_(flash) {}
 
   /// The robot's ratings (robot.json limits, joint side) that write() checks tables against.
-  void set_ratings(const JointRatings<Model::kNumJoints>& ratings) noexcept {
+  void set_ratings(const JointRatings<Models::kNumJoints>& ratings) noexcept {
     ratings_ = ratings;
     has_ratings_ = true;
   }
 
   port::PortStatus write(const ParameterTable& table, TableStatus* reason) noexcept override {
-    TableStatus s = has_ratings_ ? check_table<Model>(table, ratings_) : check_table<Model>(table);
+    TableStatus s = has_ratings_ ? Models::check(table, ratings_) : Models::check(table);
     if (s == TableStatus::ok) s = encode_table(table, buffer_ + kSlotHeader, kTableMaxBytes, &length_);
     if (reason != nullptr) *reason = s;
     if (s != TableStatus::ok) return port::PortStatus::rejected;
@@ -127,7 +129,7 @@ class FlashParameterStore final : public port::ParameterStore {
 
   FlashDevice& flash_;
   std::uint8_t buffer_[kSlotHeader + kTableMaxBytes] = {};
-  JointRatings<Model::kNumJoints> ratings_ = {};
+  JointRatings<Models::kNumJoints> ratings_ = {};
   bool has_ratings_ = false;
   int length_ = 0;
   mutable ParameterTable scratch_;
@@ -138,9 +140,9 @@ class FlashParameterStore final : public port::ParameterStore {
 FlashDevice& mps2_param_flash() noexcept;
 
 /// One store per image, over mps2_param_flash().
-template <class Model>
-FlashParameterStore<Model>& flash_parameter_store() noexcept {
-  static FlashParameterStore<Model> store(mps2_param_flash());
+template <class Models>
+FlashParameterStore<Models>& flash_parameter_store() noexcept {
+  static FlashParameterStore<Models> store(mps2_param_flash());
   return store;
 }
 

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "dyncal/drive/monitor_settings.hpp"
+#include "dyncal/drive/payload_run.hpp"
 #include "dyncal/modbus_map.hpp"
 #include "dyncal/parameter_table.hpp"
 #include "dyncal_host/common/excitation_trajectory.hpp"
@@ -58,18 +59,6 @@ static_assert(std::is_same_v<JointArray, decltype(MonitorSettings::threshold)>, 
 /// lib/'s check_monitor_settings as one line: empty when the settings are taken, else why not.
 std::string monitor_settings_error(const MonitorSettings& m, double dt);
 
-/// The drive's payload estimate (docs/payload.md "On the drive"): the last link's 10 standard
-/// parameters dphi [XX XY XZ YY YZ ZZ (kg m^2) MX MY MZ (kg m) M (kg)], link frame, about its origin.
-struct PayloadFit {
-  std::array<double, 10> value{};  ///< the Kalman filter's estimate (least squares: diffuse prior)
-  /// Standard deviations: the filter's, times the residuals' RMS over their assumed std (the
-  /// measurement variance r covers the sensor's noise only, the residual also the model's error).
-  std::array<double, 10> std{};
-  /// The size each parameter's verdict compares 1.96 std with (lib/ payload_scales, as the host's).
-  std::array<double, 10> scale{};
-  long updates = 0;
-};
-
 class DrivePlant {
  public:
   virtual ~DrivePlant() = default;
@@ -104,10 +93,12 @@ class DrivePlant {
   /// differs from the feed-forward's by about G' e, a bias of G' / kp on the payload); r: the torque
   /// measurement's variance per joint [Nm^2] (> 0). A sample the filter refuses is skipped.
   virtual void update_payload(const PlantStep& p, const JointArray& tau_measured, const JointArray& r) = 0;
-  virtual PayloadFit payload_fit() const = 0;
-  /// `active` with the payload dphi on the last link: its base parameters moved by K_N dphi
-  /// (Gautier's base map of link N), every other value kept.
-  virtual ParameterTable loaded_table(const ParameterTable& active, const std::array<double, 10>& dphi) const = 0;
+  /// The payload run's estimate now, with its verdicts (lib/ drive/payload_run.hpp).
+  virtual drive::PayloadVerdict payload_verdict() const = 0;
+  /// `active` with the payload of `v` on the last link: its base parameters moved by K_N dphi
+  /// (Gautier's base map of link N; the parameters v does not determine held at 0), every other
+  /// value kept.
+  virtual ParameterTable loaded_table(const ParameterTable& active, const drive::PayloadVerdict& v) const = 0;
   /// Turns the collision monitor on (gain > 0) or off for the runs begun after it (dt: the control
   /// period [s]). An empty string when taken, else why not (K dt above 1, a velocity window longer
   /// than the drive's, a threshold, mean or band not finite or negative). A run whose active table

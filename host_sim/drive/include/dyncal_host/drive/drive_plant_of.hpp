@@ -10,12 +10,9 @@
 #include <limits>
 #include <optional>
 
-#include "dyncal/centred_slope.hpp"
+#include "dyncal/drive/collision_monitor.hpp"
 #include "dyncal/effect_terms.hpp"
-#include "dyncal/friction_uncertainty.hpp"
 #include "dyncal/identification_model.hpp"
-#include "dyncal/momentum_observer.hpp"
-#include "dyncal/payload_estimator.hpp"
 #include "dyncal/table_check.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/model_terms.hpp"
@@ -213,10 +210,7 @@ class DrivePlantOf final : public DrivePlant {
   }
 
   void begin_payload() override {
-    // A diffuse prior: 1e6 in the parameters' units makes the estimate least squares'.
-    payload_.reset(Payload::ParamVector::Constant(1e6));
-    innovation_sq_ = Vec::Zero();
-    payload_updates_ = 0;
+    payload_run_.begin();
     payload_running_ = true;
   }
 
@@ -229,42 +223,13 @@ class DrivePlantOf final : public DrivePlant {
       residual[j] = tau_measured[j] - p.tau_model[j];
       var[j] = r[j];
     }
-    if (payload_.update(q, qd, qdd, residual, var) != UpdateStatus::ok) return;
-    typename Payload::Regressor Y;
-    payload_.regressor(q, qd, qdd, Y);
-    const Vec after = residual - Y * payload_.estimate();  // a posteriori: the fit's residual
-    innovation_sq_ += after.cwiseAbs2().cwiseQuotient(var);
-    ++payload_updates_;
+    payload_run_.update(q, qd, qdd, residual, var);
   }
 
-  PayloadFit payload_fit() const override {
-    PayloadFit f;
-    f.updates = payload_updates_;
-    typename Payload::ParamVector var;
-    payload_.variance(var);
-    // The residuals' mean square over r (the worst joint): 1 when r is their variance; above 1 they
-    // hold more than the sensor's noise (the arm model's error), and the std grows with them.
-    const double inflation =
-        payload_updates_ > 0 ? std::max(1.0, innovation_sq_.maxCoeff() / static_cast<double>(payload_updates_)) : 1.0;
-    const typename Payload::ParamVector& x = payload_.estimate();
-    typename Payload::ParamVector scale;
-    payload_scales(x, data_.nominal_standard + Robot::kNumStandard - 10, scale);
-    for (int i = 0; i < 10; ++i) {
-      f.value[static_cast<size_t>(i)] = x[i];
-      f.std[static_cast<size_t>(i)] = std::sqrt(std::max(0.0, var[i]) * inflation);
-      f.scale[static_cast<size_t>(i)] = scale[i];
-    }
-    return f;
-  }
+  drive::PayloadVerdict payload_verdict() const override { return payload_run_.verdict(); }
 
-  ParameterTable loaded_table(const ParameterTable& active, const std::array<double, 10>& dphi) const override {
-    StdVec phi = StdVec::Zero();
-    for (int i = 0; i < 10; ++i) phi[Robot::kNumStandard - 10 + i] = dphi[static_cast<size_t>(i)];
-    Eigen::Matrix<double, Robot::kNumBase, 1> delta;
-    Robot::standard_to_base(phi, delta);
-    ParameterTable t = active;
-    for (int i = 0; i < Robot::kNumBase; ++i) t.values[i] = static_cast<float>(t.values[i] + delta[i]);
-    return t;
+  ParameterTable loaded_table(const ParameterTable& active, const drive::PayloadVerdict& v) const override {
+    return drive::PayloadRun<Robot, double>::loaded(active, v);
   }
 
   std::string set_monitor(const MonitorSettings& m, double dt) override {
@@ -274,43 +239,20 @@ class DrivePlantOf final : public DrivePlant {
   }
 
   Trip monitor(const PlantStep& p, const JointArray& tau_measured) override {
-    if (!monitoring_) return {};
-    Vec q_in, tau_in, q, qd, tau;
+    Vec q_in, tau_in;
     for (int j = 0; j < N; ++j) {
       q_in[j] = p.q_meas[j];
       tau_in[j] = tau_measured[j];
     }
-    typename Slope::Flags still;
-    if (slope_.update(q_in, tau_in, q, qd, tau, still) != UpdateStatus::ok) return {};
-    Vec qd_friction = qd;
-    for (int j = 0; j < N; ++j)
-      if (std::fabs(qd[j]) < monitor_.band[j]) qd_friction[j] = 0;
-    if (observer_.update(q, qd, qd_friction, tau) != UpdateStatus::ok) return {};
-    Vec weight;
-    if (uncertainty_.update(qd_friction, still, weight) != UpdateStatus::ok) return {};
-    // The joint furthest beyond its threshold, widened by the friction the model cannot know.
-    Trip trip;
-    double worst = 1.0;
-    for (int j = 0; j < N; ++j) {
-      residual_[j] = observer_.residual()[j] - monitor_.mean[j];
-      if (!(monitor_.threshold[j] > 0)) continue;
-      widening_[j] = weight[j] * static_friction_[j];
-      const double limit = monitor_.threshold[j] + widening_[j];
-      if (std::fabs(residual_[j]) > worst * limit) {
-        worst = std::fabs(residual_[j]) / limit;
-        trip = {modbus_map::DriveFault::collision, j, residual_[j]};
-      }
-    }
-    return trip;
+    const auto c = collision_monitor_.update(q_in, tau_in);
+    if (!c.tripped) return {};
+    return {modbus_map::DriveFault::collision, c.joint, c.value};
   }
 
-  JointArray monitor_residual() const override { return to_array(residual_); }
-  JointArray monitor_widening() const override { return to_array(widening_); }
+  JointArray monitor_residual() const override { return to_array(collision_monitor_.residual()); }
+  JointArray monitor_widening() const override { return to_array(collision_monitor_.widening()); }
 
-  modbus_map::MonitorState monitor_state() const override {
-    if (monitoring_) return modbus_map::MonitorState::watching;
-    return monitor_refused_ ? modbus_map::MonitorState::refused : modbus_map::MonitorState::off;
-  }
+  modbus_map::MonitorState monitor_state() const override { return collision_monitor_.state(); }
 
   JointArray contact_torque(const JointArray& q, int link, const std::array<double, 3>& point,
                             const std::array<double, 3>& force) const override {
@@ -435,35 +377,17 @@ class DrivePlantOf final : public DrivePlant {
     return a;
   }
 
-  using Payload = PayloadEstimator<Robot, double>;
-  using Observer = MomentumObserver<Robot, double>;
-  static constexpr int kMaxSlopeHalfWidth = modbus_map::kMonitorMaxHalfWidth;
-  using Slope = CentredSlope<double, N, kMaxSlopeHalfWidth>;
-
-  /// Starts the monitor for a run with the active table; off when the settings are off or the
-  /// observer refuses the table (a commit since set_monitor): monitor_refused_ then says so.
+  /// Starts lib/'s collision monitor for a run with the active table (drive/collision_monitor.hpp:
+  /// off when the settings are off, refused when the observer cannot take the table).
   void begin_monitor(double dt) {
-    monitoring_ = false;
-    monitor_refused_ = false;
-    residual_ = Vec::Zero();
-    widening_ = Vec::Zero();
-    if (!(monitor_.gain > 0)) return;
-    if (observer_.configure(active_, Vec::Constant(monitor_.gain), dt) != UpdateStatus::ok ||
-        slope_.reset(centred_slope_half_width(monitor_.gain, dt), dt, N, TorqueHold::zero_order) != UpdateStatus::ok ||
-        uncertainty_.reset(monitor_.gain, dt, N) != UpdateStatus::ok) {
-      monitor_refused_ = true;
-      return;
-    }
-    static_friction_ = Vec::Zero();
-    ops_.coulomb(active_, static_friction_);
-    monitoring_ = true;
+    Vec coulomb = Vec::Zero();
+    if (monitor_.gain > 0) ops_.coulomb(active_, coulomb);
+    collision_monitor_.begin(monitor_, active_, coulomb, dt);
   }
 
   GeneratedRobotData data_;
   StdVec phi_true_;
-  Payload payload_;
-  Vec innovation_sq_ = Vec::Zero();
-  long payload_updates_ = 0;
+  drive::PayloadRun<Robot, double> payload_run_{data_.nominal_standard + Robot::kNumStandard - 10};
   bool payload_running_ = false;
   Mat motor_ = Mat::Identity();             // Scenario::motor_map: motor velocities v = T qd
   Mat rotor_ = Mat::Zero();                 // the motors' rotor inertia on the joints: sum_m Ia_m T_m^T T_m
@@ -478,13 +402,7 @@ class DrivePlantOf final : public DrivePlant {
   ParameterTable active_{};                              // the active table (the monitor's model)
   std::vector<std::optional<Eigen::Vector3d>> anchors_;  // per scenario contact: where its obstacle sits
   MonitorSettings monitor_{};
-  Observer observer_;
-  Slope slope_;
-  FrictionUncertainty<double, N> uncertainty_;
-  bool monitoring_ = false, monitor_refused_ = false;
-  Vec static_friction_ = Vec::Zero();  // |Fc_j| of the active table
-  Vec residual_ = Vec::Zero();         // r - mean of the last monitor step
-  Vec widening_ = Vec::Zero();         // its thresholds' widening [Nm]
+  drive::CollisionMonitor<Robot, double> collision_monitor_;
 };
 
 /// Plant: (M(q) + sum_m Ia_m T_m^T T_m) qdd = tau - h(q, qd) - T^T f(T qd) - effects, RK4 with

@@ -186,6 +186,7 @@ class SimulatedDrive {
   std::normal_distribution<double> normal_{0.0, 1.0};
   modbus_map::PayloadState payload_state_ = modbus_map::PayloadState::none;
   std::array<double, 10> payload_value_{}, payload_std_{};
+  drive::PayloadVerdict payload_verdict_{};
   /// Publishes the plant's payload fit with the verdicts; returns whether the mass is determined.
   bool publish_payload();
   void finish_payload();
