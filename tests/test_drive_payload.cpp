@@ -122,8 +122,9 @@ JointArray effort_with_table(const RobotDescription& robot, const Scenario& sc, 
 
 /// Every parameter both determine: the drive's estimate within 2.58 of its std of the host's on the
 /// same samples. Returns how many were compared.
-int expect_drive_agrees_with_host(const std::array<double, 10>& value, const std::array<double, 10>& std_,
-                                  const PayloadResult& host) {
+/// (Values: the registers' std::array as port/linux reads them, or the in-process drive's arrays.)
+template <class Values>
+int expect_drive_agrees_with_host(const Values& value, const Values& std_, const PayloadResult& host) {
   int compared = 0;
   for (int i = 0; i < 10; ++i) {
     if (!std::isfinite(value[i]) || !std::isfinite(host.standard_std[i])) continue;
@@ -302,8 +303,8 @@ TEST_P(DrivePayloadLoads, EveryArmAndLoad) {
     const dyncal::ParameterTable arm = arm_table(robot, sc);
     const auto drive = drive_with_table(robot, sc, flash, arm, trajectory);
     const JointLog log = play_payload_run(*drive, n);
-    const auto& v = drive->payload_value();
-    const auto& sd = drive->payload_std();
+    const auto& v = drive->payload().value;
+    const auto& sd = drive->payload().std;
     std::printf("%s, %.1f %% load: payload_state %d, mass %.5g kg (true %.5g), std %.2g\n", robot.name.c_str(),
                 100 * fraction, static_cast<int>(drive->payload_state()), v[9], load.m, sd[9]);
     if (drive->payload_state() != mm::PayloadState::written) {

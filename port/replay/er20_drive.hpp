@@ -5,7 +5,7 @@
 // default scenario of the loop and the motors), its simulated arm's physics, and the tables — the
 // factory table (nominal base parameters, no friction) and the arm's true table (its base
 // parameters with the rotor inertias absorbed where the model absorbs them, its Eq. 7 friction and
-// rotor inertias, no offset: what a perfect calibration flashes).
+// rotor inertias, no offset: what a perfect calibration flashes) — and a run inside its ranges.
 #include <Eigen/Core>
 #include <cstdint>
 
@@ -96,6 +96,25 @@ inline ParameterTable true_table() {
   ParameterTable t;
   make_table<FullModel>(phi, t);
   return t;
+}
+
+/// The run settings of a Fourier excitation inside the er20's ranges: f_f [Hz], `periods`, sampled
+/// at `fs` [Hz]; joint j's harmonics scaled by `amplitude` [rad/s].
+inline drive::RunSettings excitation_run(double f_f, int periods, double fs, double amplitude) {
+  drive::RunSettings r;
+  r.sample_rate_hz = fs;
+  r.periods = periods;
+  r.trajectory.f_f = f_f;
+  r.trajectory.harmonics = 3;
+  const double q0[6] = {0.0, 0.5, 0.8, 0.0, 0.0, 0.0};
+  for (int j = 0; j < 6; ++j) {
+    r.trajectory.q0[j] = q0[j];
+    for (int l = 0; l < 3; ++l) {
+      r.trajectory.a(j, l) = amplitude / (l + 1) * (j % 2 == 0 ? 1.0 : -1.0);
+      r.trajectory.b(j, l) = 0.5 * amplitude / (l + 1);
+    }
+  }
+  return r;
 }
 
 }  // namespace dyncal::replay

@@ -23,7 +23,7 @@
 #include "dyncal/drive/modbus_frames.hpp"
 #include "dyncal/drive/register_server.hpp"
 #include "dyncal/drive/rtu_receiver.hpp"
-#include "er20_drive.hpp"
+#include "support/er20_drive_in_memory.hpp"
 
 namespace {
 
@@ -35,27 +35,8 @@ void fail(const char* what) {
   std::abort();
 }
 
-struct MemoryStore final : dyncal::port::ParameterStore {
-  dyncal::ParameterTable table{};
-  bool holds = false;
-  int writes = 0;
-  dyncal::port::PortStatus write(const dyncal::ParameterTable& t, dyncal::TableStatus* reason) noexcept override {
-    table = t;
-    holds = true;
-    ++writes;
-    if (reason) *reason = dyncal::TableStatus::ok;
-    return dyncal::port::PortStatus::ok;
-  }
-  dyncal::port::PortStatus read(dyncal::ParameterTable& t, dyncal::TableStatus* reason) noexcept override {
-    if (reason) *reason = holds ? dyncal::TableStatus::ok : dyncal::TableStatus::bad_magic;
-    if (!holds) return dyncal::port::PortStatus::rejected;
-    t = table;
-    return dyncal::port::PortStatus::ok;
-  }
-};
-
 struct Drive {
-  MemoryStore store;
+  dyncal::test::er20_drive::MemoryStore store;
   dyncal::replay::SimulatedArm<dyncal::replay::Er20, double> arm{dyncal::replay::arm_physics(1)};
   Application app{store, arm, dyncal::replay::drive_settings<Application>()};
   dyncal::drive::RegisterServer<Application> server{app, 1000.0};

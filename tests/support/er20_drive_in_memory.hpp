@@ -44,23 +44,9 @@ replay::SimulatedArm<Robot, Scalar> arm(std::uint64_t seed = 2026) {
   return replay::SimulatedArm<Robot, Scalar>{arm_physics(seed)};
 }
 
-/// The run settings of a Fourier excitation inside the er20's ranges: f_f [Hz], `periods`, sampled
-/// at `fs` [Hz]; joint j's harmonics scaled by `amplitude` [rad/s].
+/// A run inside the er20's ranges (er20_drive.hpp).
 inline drive::RunSettings run(double f_f, int periods, double fs, double amplitude = 0.3) {
-  drive::RunSettings r;
-  r.sample_rate_hz = fs;
-  r.periods = periods;
-  r.trajectory.f_f = f_f;
-  r.trajectory.harmonics = 3;
-  const double q0[6] = {0.0, 0.5, 0.8, 0.0, 0.0, 0.0};
-  for (int j = 0; j < 6; ++j) {
-    r.trajectory.q0[j] = q0[j];
-    for (int l = 0; l < 3; ++l) {
-      r.trajectory.a(j, l) = amplitude / (l + 1) * (j % 2 == 0 ? 1.0 : -1.0);
-      r.trajectory.b(j, l) = 0.5 * amplitude / (l + 1);
-    }
-  }
-  return r;
+  return excitation_run(f_f, periods, fs, amplitude);
 }
 
 /// Plays the run the drive started to its end as a host reading every sample would (acknowledging

@@ -49,8 +49,8 @@ void DriveRegisters::publish_inputs(std::uint16_t* in) const {
   in[mm::kPayloadStateReg] = static_cast<std::uint16_t>(d.payload_state());
   in[mm::kMonitorStateReg] = static_cast<std::uint16_t>(d.monitor_state());
   for (int i = 0; i < 10; ++i) {
-    mm::set_f32(in + mm::kPayloadReg + 2 * i, static_cast<float>(d.payload_value()[static_cast<size_t>(i)]));
-    mm::set_f32(in + mm::kPayloadStdReg + 2 * i, static_cast<float>(d.payload_std()[static_cast<size_t>(i)]));
+    mm::set_f32(in + mm::kPayloadReg + 2 * i, static_cast<float>(d.payload().value[i]));
+    mm::set_f32(in + mm::kPayloadStdReg + 2 * i, static_cast<float>(d.payload().std[i]));
   }
   // The table registers change only with the table: copy them when it changed.
   if (table_generation != static_cast<long>(d.table_generation())) {

@@ -7,7 +7,6 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <limits>
 #include <optional>
 #include <stdexcept>
 #include <thread>
@@ -127,16 +126,11 @@ void SimulatedDrive::start_payload() {
   start();
   plant_->begin_payload();
   payload_state_ = modbus_map::PayloadState::running;
-  payload_value_.fill(std::numeric_limits<double>::quiet_NaN());
-  payload_std_.fill(std::numeric_limits<double>::quiet_NaN());
+  payload_verdict_ = drive::PayloadVerdict::unknown();
 }
 
 bool SimulatedDrive::publish_payload() {
   payload_verdict_ = plant_->payload_verdict();  // lib/'s verdict rule (drive/payload_run.hpp)
-  for (size_t i = 0; i < 10; ++i) {
-    payload_value_[i] = payload_verdict_.value[i];
-    payload_std_[i] = payload_verdict_.std[i];
-  }
   return payload_verdict_.mass_determined;
 }
 

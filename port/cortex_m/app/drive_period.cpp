@@ -66,31 +66,14 @@ Application g_drive{sh::flash_parameter_store<dyncal::replay::DriveModels>(), g_
                     dyncal::replay::drive_settings<Application>()};
 std::uint16_t g_inputs[mm::kInputWords];
 
-/// The run's settings: the er20 inside its ranges, 3 harmonics at f_f = 0.5 Hz, sampled at 100 Hz.
-dyncal::drive::RunSettings run() {
-  dyncal::drive::RunSettings r;
-  r.sample_rate_hz = 100;
-  r.periods = 1;
-  r.trajectory.f_f = 0.5;
-  r.trajectory.harmonics = 3;
-  const double q0[6] = {0.0, 0.5, 0.8, 0.0, 0.0, 0.0};
-  for (int j = 0; j < 6; ++j) {
-    r.trajectory.q0[j] = q0[j];
-    for (int l = 0; l < 3; ++l) {
-      r.trajectory.a(j, l) = 0.3 / (l + 1) * (j % 2 == 0 ? 1.0 : -1.0);
-      r.trajectory.b(j, l) = 0.15 / (l + 1);
-    }
-  }
-  return r;
-}
-
 /// One run to its end as a host reading every sample would; false when it does not record every
 /// sample or trips. Prints its tallies.
 bool play(const char* name, mm::Command command, double monitor_gain, long long& largest) {
   dyncal::drive::MonitorSettings monitor;
   monitor.gain = monitor_gain;
   std::uint32_t t0 = Counter::ticks();
-  if (!g_drive.start(command, run(), monitor)) return false;
+  // 3 harmonics at f_f = 0.5 Hz, one period sampled at 100 Hz, inside the er20's ranges.
+  if (!g_drive.start(command, dyncal::replay::excitation_run(0.5, 1, 100, 0.3), monitor)) return false;
   const long long start = static_cast<long long>(Counter::elapsed(t0, Counter::ticks())) * 40;
   Tally application, recording, arm;
   long long last = 0;  // the call that ends the run (a payload run's verdict and commit)

@@ -78,7 +78,7 @@ class DriveApplication {
       resolution_.q[j] = s.q_resolution[j];
       resolution_.tau[j] = 2.0f * s.ratings.tau_max[j] / static_cast<float>(modbus_map::kTauFullScale);
     }
-    clear_payload_verdict();  // NaN until a payload run ends
+    payload_verdict_ = PayloadVerdict::unknown();  // NaN until a payload run ends
   }
   DriveApplication(const DriveApplication&) = delete;
   DriveApplication& operator=(const DriveApplication&) = delete;
@@ -153,7 +153,8 @@ class DriveApplication {
     if (c == modbus_map::Command::identify_payload) {
       payload_.begin();
       payload_state_ = modbus_map::PayloadState::running;
-      clear_payload_verdict();
+      payload_verdict_ = PayloadVerdict::unknown();
+      ++payload_generation_;
     }
     state_ = modbus_map::DriveState::playing;
     return true;
@@ -336,13 +337,6 @@ class DriveApplication {
     if (store_.read(read_back_, &st) != port::PortStatus::ok || !same_table(read_back_, staged_))
       return TableStatus::store_failed;
     return activate(read_back_);
-  }
-
-  void clear_payload_verdict() noexcept {
-    payload_verdict_ = PayloadVerdict{};
-    for (int i = 0; i < 10; ++i)
-      payload_verdict_.value[i] = payload_verdict_.std[i] = std::numeric_limits<double>::quiet_NaN();
-    ++payload_generation_;
   }
 
   /// One recorded sample of a payload run: the residual of the active table's torque at the

@@ -28,6 +28,13 @@ struct PayloadVerdict {
   double value[10] = {};         ///< NaN where the run does not determine the parameter
   double std[10] = {};           ///< NaN likewise
   long updates = 0;              ///< samples the filter took
+
+  /// No estimate yet (a payload run that has not ended): every value and std NaN.
+  static PayloadVerdict unknown() noexcept {
+    PayloadVerdict v;
+    for (int i = 0; i < 10; ++i) v.value[i] = v.std[i] = std::numeric_limits<double>::quiet_NaN();
+    return v;
+  }
 };
 
 template <class Robot, typename Scalar>

@@ -11,7 +11,7 @@
 #include <optional>
 
 #include "dyncal/drive/collision_monitor.hpp"
-#include "dyncal/effect_terms.hpp"
+#include "dyncal/drive/term_sets.hpp"
 #include "dyncal/identification_model.hpp"
 #include "dyncal/table_check.hpp"
 #include "dyncal_host/common/input_error.hpp"
@@ -277,27 +277,15 @@ class DrivePlantOf final : public DrivePlant {
     void (*coulomb)(const ParameterTable&, Vec&) = nullptr;  ///< |Fc_j| of the table (0 without the column)
   };
 
+  /// lib/'s dispatch of one term set (drive/term_sets.hpp), as the firmware drive runs it.
   template <unsigned Terms>
   static void coulomb(const ParameterTable& t, Vec& fc) {
-    using Model = IdentificationModel<Robot, Terms>;
-    fc = Vec::Zero();
-    for (int i = Robot::kNumBase; i < Model::kNumParams; ++i) {
-      const ParamInfo info = Model::info(i);
-      if (info.term == term::coulomb) fc[info.joint - 1] = std::fabs(static_cast<double>(t.values[i]));
-    }
+    drive::TermSets<Robot, Terms>::coulomb(t, fc);
   }
 
   template <unsigned Terms>
   static void feedforward(const ParameterTable& t, const Vec& q, const Vec& qd, const Vec& qdd, Vec& tau) {
-    using Model = IdentificationModel<Robot, Terms>;
-    typename Model::template Regressor<double> K;
-    Model::regressor(q, qd, qdd, Vec::Zero().eval(), K);
-    typename Model::template ParamVector<double> phi;
-    for (int i = 0; i < Model::kNumParams; ++i) phi[i] = t.values[i];
-    tau = K * phi;
-    // Effect terms of the table (dyncal diagnose); load friction needs the rigid-body torque.
-    const Vec tau_rb = K.template leftCols<Robot::kNumBase>() * phi.template head<Robot::kNumBase>();
-    add_effect_torques(t.effects, t.effect_count, q, qd, qdd, tau_rb, tau);
+    drive::TermSets<Robot, Terms>::torque(t, q, qd, qdd, tau);
   }
 
   template <unsigned Terms>

@@ -49,10 +49,10 @@ class SimulatedDrive {
   /// the drive").
   void start_payload();
   modbus_map::PayloadState payload_state() const { return payload_state_; }
-  /// The estimate when the run ended or was stopped (NaN before): values, NaN where the run does
-  /// not determine the parameter (1.96 std beyond its scale, or the mass not determined), and std.
-  const std::array<double, 10>& payload_value() const { return payload_value_; }
-  const std::array<double, 10>& payload_std() const { return payload_std_; }
+  /// The estimate when the run ended or was stopped (NaN while a payload run plays): values, NaN
+  /// where the run does not determine the parameter (1.96 std beyond its scale, or the mass not
+  /// determined), and std (lib/ drive/payload_run.hpp).
+  const drive::PayloadVerdict& payload() const { return payload_verdict_; }
   void stop();
   /// Stops a playing trajectory with `fault` (no joint; `value` in its unit), as a trip does: the
   /// arm holds, no further sample is recorded. No-op unless playing.
@@ -185,7 +185,6 @@ class SimulatedDrive {
   std::mt19937_64 rng_;
   std::normal_distribution<double> normal_{0.0, 1.0};
   modbus_map::PayloadState payload_state_ = modbus_map::PayloadState::none;
-  std::array<double, 10> payload_value_{}, payload_std_{};
   drive::PayloadVerdict payload_verdict_{};
   /// Publishes the plant's payload fit with the verdicts; returns whether the mass is determined.
   bool publish_payload();
