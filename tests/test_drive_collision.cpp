@@ -28,6 +28,7 @@
 #include <memory>
 #include <random>
 
+#include "dyncal/inertial_parameters.hpp"
 #include "dyncal/modbus_map.hpp"
 #include "dyncal_host/calibration/calibrate.hpp"
 #include "dyncal_host/common/input_error.hpp"
@@ -163,12 +164,10 @@ TEST_P(DriveCollision, ContactTorqueIsTheGravityTorqueOfAPointMassThere) {
     for (int j = 0; j < n; ++j) qv[j] = q[static_cast<size_t>(j)] = 3.0 * u(rng);
     const int link = 1 + trial % n;
     const std::array<double, 3> point{0.3 * u(rng), 0.3 * u(rng), 0.3 * u(rng)};
-    // A point mass m at `point` of the link: its standard parameters (about the link origin).
+    // A point mass m at `point` of the link.
     Eigen::VectorXd dphi = phi;
-    const Eigen::Vector3d p(point[0], point[1], point[2]);
-    const Eigen::Matrix3d I = m * (p.squaredNorm() * Eigen::Matrix3d::Identity() - p * p.transpose());
-    const double add[10] = {I(0, 0), I(0, 1), I(0, 2), I(1, 1), I(1, 2), I(2, 2), m * p[0], m * p[1], m * p[2], m};
-    for (int k = 0; k < 10; ++k) dphi[10 * (link - 1) + k] += add[k];
+    const double point_mass[6] = {};
+    dyncal::add_rigid_load(dphi.data() + 10 * (link - 1), m, point.data(), point_mass);
     // The motors hold the mass: tau_id gains -J^T (m g_vec); the force the mass puts on the arm is m g_vec.
     const Eigen::VectorXd held = c.inverse_dynamics(qv, zero, zero, dphi) - c.inverse_dynamics(qv, zero, zero, phi);
     const JointArray tau = d.contact_torque(q, link, point, {0.0, 0.0, -m * g});
@@ -208,7 +207,7 @@ TEST_P(DriveCollision, ContactsStopTheDriveWithin20msAndUnseenMotionRaisesNoAlar
     sc.seed = 100 + i;  // each run its own noise and its own excitation
     // Every other run point-to-point (moves of 3 s, stops of 1.5 s, braking and starting over 0.4 s
     // without a jerk limit), where the plant's static friction holds the resting joints.
-    if (i % 2 == 1) sc.stop_and_go = StopAndGo{3.0, 1.5, 0.4};
+    if (i % 2 == 1) sc.stop_and_go = drive::StopAndGo{3.0, 1.5, 0.4};
     auto dp = monitored_drive(cal, sc, cal.monitor);
     SimulatedDrive& d = *dp;
     d.trajectory = default_excitation(robot, 0.1, 5, 1, 11 + i, nullptr);
@@ -354,7 +353,7 @@ INSTANTIATE_TEST_SUITE_P(TestRobots, DriveCollision, ::testing::Values("arm3", "
 // grid), w the integral of w', u advances `move` per cycle, run_time inverts u; the scenario reads it
 // and refuses a ramp longer than a phase with one line naming the field; and its stiction flag.
 TEST(DriveCollisionSettings, StopAndGoClockAndTheScenarioFields) {
-  const StopAndGo clock{3.0, 1.5, 0.4};
+  const drive::StopAndGo clock{3.0, 1.5, 0.4};
   ASSERT_TRUE(clock.on() && clock.valid());
   double u_integral = 0, w_integral = 1, worst_u = 0, worst_w = 0;
   const double h = 1e-4;
@@ -449,7 +448,7 @@ TEST(DrivePlantStiction, RestingJointsStallUntilAPushExceedsTheirFriction) {
     sc.friction[static_cast<size_t>(j)].Fc = 0.02 * robot.tau_max[j];
     sc.friction[static_cast<size_t>(j)].beta = 0.01 * robot.tau_max[j] / robot.qd_max[j];
   }
-  sc.stop_and_go = StopAndGo{3.0, 1.5, 0.4};  // at rest from 3.0 s to 4.1 s
+  sc.stop_and_go = drive::StopAndGo{3.0, 1.5, 0.4};  // at rest from 3.0 s to 4.1 s
   const std::string flash = flash_path("cobot7_stiction");
   // Per joint, the spread of the encoder reading over [from, to) s of a run of the scenario.
   auto spread = [&](const Scenario& s, double from, double to) {

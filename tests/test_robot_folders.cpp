@@ -15,8 +15,9 @@
 #include <fstream>
 #include <random>
 
+#include "dyncal_host/common/temporary_folder.hpp"
 #include "dyncal_host/diagnosis/diagnose.hpp"
-#include "dyncal_host/drive/drive_plant.hpp"
+#include "dyncal_host/drive/simulated_drive.hpp"
 #include "dyncal_host/identification/excitation/excitation.hpp"
 #include "dyncal_host/identification/logs/column_map.hpp"
 #include "dyncal_host/identification/pipeline/compiled_robot.hpp"
@@ -232,21 +233,27 @@ TEST_P(RobotFolderFits, OptimisersFitAsWellAsLeastSquares) {
   }
 }
 
-// The simulated drive's table plausibility on any robot (table_check.hpp): its nominal table is
-// taken; the same with every base parameter x100 demands far more than 10 x tau_max at the rated
-// states (the rigid body alone: its friction is 0) and is refused; x -5 stays within and is taken.
+// The simulated drive's table plausibility on any robot (table_check.hpp, through the drive
+// application's commit): its nominal table is taken; the same with every base parameter x100
+// demands far more than 10 x tau_max at the rated states (the rigid body alone: its friction is 0)
+// and is refused, the nominal one staying active; x -5 stays within and is taken.
 TEST_P(RobotFolder, DriveRefusesARigidBodyFarBeyondItsRatings) {
   const RobotDescription robot = test_robot(GetParam());
-  const std::unique_ptr<DrivePlant> plant = make_drive_plant(robot);
-  plant->configure(robot, default_scenario(robot));
-  const dyncal::ParameterTable nominal = plant->nominal_table(JointArray{}, JointArray{});
-  EXPECT_EQ(plant->check(nominal), dyncal::TableStatus::ok);
+  const dyncal::host::TemporaryFolder folder("dyncal_robot_folder_drive");
+  SimulatedDrive drive(robot, default_scenario(robot), folder.path() + "/table.bin");
+  const dyncal::ParameterTable nominal = nominal_table(robot.name);
+  const auto commit = [&](const dyncal::ParameterTable& t) {
+    const std::vector<std::uint8_t> bytes = encoded_table(t);
+    return drive.commit(bytes.data(), static_cast<int>(bytes.size()));
+  };
+  EXPECT_EQ(commit(nominal), dyncal::TableStatus::ok);
   const int num_base = compiled_robot_for(robot).num_base;
   for (const float factor : {100.0f, -5.0f}) {
     dyncal::ParameterTable t = nominal;
     for (int i = 0; i < num_base; ++i) t.values[i] *= factor;
-    EXPECT_EQ(plant->check(t), factor > 10 ? dyncal::TableStatus::out_of_range : dyncal::TableStatus::ok)
+    EXPECT_EQ(commit(t), factor > 10 ? dyncal::TableStatus::out_of_range : dyncal::TableStatus::ok)
         << "base parameters x " << factor;
+    if (factor > 10) EXPECT_EQ(drive.active_table_bytes(), encoded_table(nominal));
   }
 }
 

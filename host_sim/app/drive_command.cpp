@@ -32,8 +32,8 @@ int run_drive(DriveSettings& s) {
   if (s.table_file.empty()) s.table_file = "dyncal-drive-" + robot.name + ".table";
   host::SimulatedDrive drive(robot, scenario, s.table_file);
   drive.lockstep = s.lockstep;
-  drive.flash_chunk_delay_ms = s.flash_delay_ms;
-  drive.ring_capacity = s.ring_samples;
+  drive.set_flash_chunk_delay(s.flash_delay_ms);
+  drive.set_ring_capacity(s.ring_samples);
   std::cout << "dyncal drive: " << robot.name << ", " << (s.lockstep ? "lockstep" : "real-time") << ", "
             << drive.startup_note() << std::endl;
   host::DriveServerOptions o;

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "dyncal_host/common/stop_and_go.hpp"
+#include "dyncal/drive/stop_and_go.hpp"
 #include "dyncal_host/identification/excitation/excitation.hpp"
 #include "dyncal_host/identification/logs/joint_log.hpp"
 #include "dyncal_host/identification/pipeline/compiled_robot.hpp"
@@ -33,7 +33,7 @@ using ExtraTorque = std::function<void(const Eigen::VectorXd& q, const Eigen::Ve
                                        Eigen::VectorXd& tau)>;
 
 /// The arm's motion clock: u(t) = t without rests; with rests, point-to-point operation
-/// (host_sim's StopAndGo, as the simulated drive plays it): the designed trajectory is played for
+/// (lib's drive::StopAndGo, as the simulated drive plays it): the designed trajectory is played for
 /// `move` seconds, then held still for `rest` seconds, repeatedly, with ramps of constant
 /// deceleration and acceleration of the clock (0.4 s) between, as a robot stops and starts.
 /// rate: the trajectory's speed without rests (0.1: a tenth of the designed speed, a slow log).
@@ -46,7 +46,7 @@ struct MotionClock {
     w = rate, wd = 0;
     if (!rests) return;
     double u = 0;
-    host::StopAndGo{move, rest, ramp}.at(t, u, w, wd);
+    drive::StopAndGo{move, rest, ramp}.at(t, u, w, wd);
   }
 };
 

@@ -5,10 +5,8 @@
 
 #include <cstdio>
 #include <cstring>
-#include <exception>
 
 #include "dyncal/drive/modbus_frames.hpp"
-#include "dyncal/drive/ring_window.hpp"
 
 namespace dyncal::host {
 namespace {
@@ -21,94 +19,23 @@ using drive::next_mbap_frame;
 
 }  // namespace
 
-void DriveRegisters::publish_inputs(std::uint16_t* in) const {
-  const SimulatedDrive& d = d_;
-  long& table_generation = table_generation_;
-  in[mm::kMapVersionReg] = mm::kMapVersion;
-  const int n_joints = d.num_joints();
-  in[mm::kNumJointsReg] = static_cast<std::uint16_t>(n_joints);
-  mm::set_u32(in + mm::kRobotIdReg, d.robot_id());
-  mm::set_u32(in + mm::kActiveModelIdReg, d.active_table().model_id);
-  in[mm::kActiveCountReg] = d.active_table().count;
-  in[mm::kStateReg] = static_cast<std::uint16_t>(d.state());
-  mm::set_f32(in + mm::kSimTimeReg, static_cast<float>(d.time()));
-  mm::set_u32(in + mm::kProducedReg, d.produced());
-  mm::set_u32(in + mm::kOverrunReg, d.overruns());
-  const auto err = d.model_error_rms();
-  for (int j = 0; j < n_joints; ++j) mm::set_f32(in + mm::kModelErrorReg + 2 * j, static_cast<float>(err[j]));
-  in[mm::kFaultReg] = static_cast<std::uint16_t>(d.fault());
-  in[mm::kFaultJointReg] = static_cast<std::uint16_t>(d.fault_joint());
-  mm::set_f32(in + mm::kFaultValueReg, static_cast<float>(d.fault_value()));
-  // The control law of the run started last: what IDIM-IV simulates (identify --method iv --law).
-  mm::set_f32(in + mm::kControlRateReg, static_cast<float>(d.control_rate_hz()));
-  const JointArray kp = d.kp(), kd = d.kd();
-  for (int j = 0; j < n_joints; ++j) {
-    mm::set_f32(in + mm::kGainKpReg + 2 * j, static_cast<float>(kp[j]));
-    mm::set_f32(in + mm::kGainKdReg + 2 * j, static_cast<float>(kd[j]));
-  }
-  in[mm::kPayloadStateReg] = static_cast<std::uint16_t>(d.payload_state());
-  in[mm::kMonitorStateReg] = static_cast<std::uint16_t>(d.monitor_state());
-  for (int i = 0; i < 10; ++i) {
-    mm::set_f32(in + mm::kPayloadReg + 2 * i, static_cast<float>(d.payload().value[i]));
-    mm::set_f32(in + mm::kPayloadStdReg + 2 * i, static_cast<float>(d.payload().std[i]));
-  }
-  // The table registers change only with the table: copy them when it changed.
-  if (table_generation != static_cast<long>(d.table_generation())) {
-    const auto& bytes = d.active_table_bytes();
-    mm::set_u32(in + mm::kActiveCrcReg, dyncal::detail::get_u32(bytes.data() + bytes.size() - 4));
-    in[mm::kActiveTableSizeReg] = static_cast<std::uint16_t>(bytes.size());
-    std::memset(in + mm::kActiveTableReg, 0, 2 * mm::kTableWords);
-    mm::bytes_to_regs(bytes.data(), static_cast<int>(bytes.size()), in + mm::kActiveTableReg);
-    table_generation = static_cast<long>(d.table_generation());
-  }
-  in[mm::kRingFormatReg] = static_cast<std::uint16_t>(d.ring_format_in_use());
-  mm::set_u32(in + mm::kRingCapacityReg, static_cast<std::uint32_t>(d.ring_capacity));
-  for (int j = 0; j < n_joints; ++j) {
-    mm::set_f32(in + mm::kQResolutionReg + 2 * j, static_cast<float>(d.q_resolution(j)));
-    mm::set_f32(in + mm::kTauResolutionReg + 2 * j, static_cast<float>(d.tau_resolution(j)));
-  }
-}
-
-void DriveRegisters::publish_window(std::uint16_t* window) const {
-  const int n_joints = d_.num_joints();
-  drive::RingResolution res;
-  for (int j = 0; j < n_joints; ++j) {
-    res.q[j] = static_cast<float>(d_.q_resolution(j));
-    res.tau[j] = static_cast<float>(d_.tau_resolution(j));
-  }
-  drive::RingWindowHeader header;
-  header.state = d_.state();
-  header.produced = d_.produced();
-  header.overruns = d_.overruns();
-  drive::encode_ring_window(d_.ring(), d_.ring().size(), header, n_joints, d_.ring_format_in_use(), res, window);
-}
-
 bool DriveRegisters::start(mm::Command c, const drive::RunSettings& run, const drive::MonitorSettings& monitor) {
-  d_.sample_rate_hz = run.sample_rate_hz;
-  d_.periods = run.periods;
-  d_.trajectory = run.trajectory;
   // The register server applied the same rule (check_monitor_settings) before the reply, so a
   // refusal here means the drive's state changed in between: the run does not start, the log says why.
-  if (const std::string why = d_.set_monitor(monitor); !why.empty()) {
-    if (log_) std::fprintf(log_, "dyncal drive: run not started: collision monitor: %s\n", why.c_str());
-    return false;
+  if (d_.start(c, run, monitor)) return true;
+  if (log_) {
+    std::fprintf(log_, "dyncal drive: run not started: collision monitor: %s\n",
+                 monitor_settings_error(monitor, d_.control_period()).c_str());
+    std::fflush(log_);
   }
-  if (c == mm::Command::identify_payload)
-    d_.start_payload();
-  else
-    d_.start();
-  return true;
+  return false;
 }
 
 TableStatus DriveRegisters::commit(const std::uint8_t* bytes, int size) {
-  TableStatus st;
-  try {
-    st = d_.commit(bytes, size);
-  } catch (const std::exception& e) {
-    if (log_) std::fprintf(log_, "dyncal drive: flash write failed: %s\n", e.what());
-    st = TableStatus::store_failed;  // the store's own failure, not the table's (the active one stays)
-  }
+  const TableStatus st = d_.commit(bytes, size);
   if (log_) {
+    if (st == TableStatus::store_failed && !d_.store_error().empty())
+      std::fprintf(log_, "dyncal drive: flash write failed: %s\n", d_.store_error().c_str());
     std::fprintf(log_, "dyncal drive: commit %s\n", to_string(st));
     std::fflush(log_);
   }

@@ -22,16 +22,15 @@ inline std::chrono::steady_clock::duration seconds(double s) {
   return std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(s));
 }
 
-/// The simulated drive as lib/'s register server sees it (register_server.hpp's Drive): the rules'
-/// queries, the commands, and what the registers show (inputs, the ring window through lib/'s
-/// codec). A store failure on commit is store_failed, its reason logged.
+/// The simulated drive as lib/'s register server sees it (register_server.hpp's Drive): lib/'s
+/// drive application, whose commit's store failure is logged with its reason.
 class DriveRegisters {
  public:
   DriveRegisters(SimulatedDrive& drive, std::FILE* log) : d_(drive), log_(log) {}
   modbus_map::DriveState state() const { return d_.state(); }
   std::uint32_t acked() const { return d_.acked(); }
   std::uint32_t produced() const { return d_.produced(); }
-  long ring_capacity_samples() const { return d_.ring_capacity; }
+  long ring_capacity_samples() const { return d_.ring_capacity(); }
   long run_samples(double periods, double period_s, double fs) const { return d_.run_samples(periods, period_s, fs); }
   double control_rate_hz() const { return d_.control_rate_hz(); }
   void ack(std::uint32_t seq_end) { d_.ack(seq_end); }
@@ -39,13 +38,12 @@ class DriveRegisters {
   void stop() { d_.stop(); }
   void reset() { d_.reset(); }
   TableStatus commit(const std::uint8_t* bytes, int size);
-  void publish_inputs(std::uint16_t* input) const;
-  void publish_window(std::uint16_t* window) const;
+  void publish_inputs(std::uint16_t* input) const { d_.publish_inputs(input); }
+  void publish_window(std::uint16_t* window) const { d_.publish_window(window); }
 
  private:
   SimulatedDrive& d_;
   std::FILE* log_;
-  mutable long table_generation_ = -1;  ///< the table generation last copied into the input registers
 };
 
 class ModbusRequestHandler {

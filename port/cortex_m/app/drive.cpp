@@ -20,6 +20,7 @@
 #include "dyncal/drive/modbus_frames.hpp"
 #include "dyncal/drive/register_server.hpp"
 #include "dyncal/drive/rtu_receiver.hpp"
+#include "dyncal/inertial_parameters.hpp"
 #include "dyncal_cortex_m/flash_parameter_store.hpp"
 #include "dyncal_cortex_m/semihosting.hpp"
 #include "dyncal_cortex_m/serial_mps2.hpp"
@@ -112,24 +113,12 @@ bool parse_number(const char* text, int& i, double& value) {
   return true;
 }
 
-/// The arm's standard parameters with a point mass M [kg] at c [m] on the last link (its frame,
-/// about its origin: first moments M c, inertia M (|c|^2 I - c c^T)).
+/// The arm's standard parameters with a point mass M [kg] at c [m] on the last link (its frame).
 double g_loaded_standard[Robot::kNumStandard];
 void load_the_arm(const double load[4]) {
-  const double m = load[0], c[3] = {load[1], load[2], load[3]};
-  const double cc = c[0] * c[0] + c[1] * c[1] + c[2] * c[2];
-  const double d[10] = {m * (cc - c[0] * c[0]),
-                        -m * c[0] * c[1],
-                        -m * c[0] * c[2],
-                        m * (cc - c[1] * c[1]),
-                        -m * c[1] * c[2],
-                        m * (cc - c[2] * c[2]),
-                        m * c[0],
-                        m * c[1],
-                        m * c[2],
-                        m};
+  const double com[3] = {load[1], load[2], load[3]}, point_mass[6] = {};
   for (int i = 0; i < Robot::kNumStandard; ++i) g_loaded_standard[i] = dyncal::generated::er20::kNominalStandard[i];
-  for (int i = 0; i < 10; ++i) g_loaded_standard[Robot::kNumStandard - 10 + i] += d[i];
+  dyncal::add_rigid_load(g_loaded_standard + Robot::kNumStandard - 10, load[0], com, point_mass);
   g_arm.set_standard(g_loaded_standard);
 }
 

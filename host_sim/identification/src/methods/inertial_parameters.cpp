@@ -5,51 +5,6 @@
 
 namespace dyncal::host {
 
-std::array<double, 10> physical_parameters(const double* p) {
-  const double m = p[9];
-  // A zero mass (a minimum-norm estimate of an unidentifiable link) has no centre of mass: taken
-  // at the origin, so that its errors count as 100 % instead of undefined.
-  const Eigen::Vector3d c =
-      m != 0.0 ? Eigen::Vector3d(Eigen::Vector3d(p[6], p[7], p[8]) / m) : Eigen::Vector3d(Eigen::Vector3d::Zero());
-  Eigen::Matrix3d I;
-  I << p[0], p[1], p[2], p[1], p[3], p[4], p[2], p[4], p[5];
-  // Parallel axis (Huygens-Steiner): I_origin = I_com + m (c^T c 1 - c c^T).
-  const Eigen::Matrix3d Ic = I - m * (c.squaredNorm() * Eigen::Matrix3d::Identity() - c * c.transpose());
-  return {m, c[0], c[1], c[2], Ic(0, 0), Ic(0, 1), Ic(0, 2), Ic(1, 1), Ic(1, 2), Ic(2, 2)};
-}
-
-void standard_from_physical(const std::array<double, 10>& v, double* p, double* jac) {
-  const double m = v[0];
-  const Eigen::Vector3d c(v[1], v[2], v[3]);
-  Eigen::Matrix3d Ic;
-  Ic << v[4], v[5], v[6], v[5], v[7], v[8], v[6], v[8], v[9];
-  const Eigen::Matrix3d S = c.squaredNorm() * Eigen::Matrix3d::Identity() - c * c.transpose();
-  const Eigen::Matrix3d I = Ic + m * S;
-  constexpr int kRow[6] = {0, 0, 0, 1, 1, 2}, kCol[6] = {0, 1, 2, 1, 2, 2};
-  for (int k = 0; k < 6; ++k) p[k] = I(kRow[k], kCol[k]);
-  for (int a = 0; a < 3; ++a) p[6 + a] = m * c[a];
-  p[9] = m;
-  if (!jac) return;
-  Eigen::Map<Eigen::Matrix<double, 10, 10, Eigen::RowMajor>> J(jac);
-  J.setZero();
-  for (int k = 0; k < 6; ++k) {
-    J(k, 0) = S(kRow[k], kCol[k]);
-    J(k, 4 + k) = 1.0;
-    for (int a = 0; a < 3; ++a) {
-      // d/dc_a of m (c^T c 1 - c c^T) = m (2 c_a 1 - e_a c^T - c e_a^T).
-      Eigen::Matrix3d E = 2.0 * c[a] * Eigen::Matrix3d::Identity();
-      E.row(a) -= c.transpose();
-      E.col(a) -= c;
-      J(k, 1 + a) = m * E(kRow[k], kCol[k]);
-    }
-  }
-  for (int a = 0; a < 3; ++a) {
-    J(6 + a, 0) = c[a];
-    J(6 + a, 1 + a) = m;
-  }
-  J(9, 0) = 1.0;
-}
-
 Eigen::Matrix4d pseudo_inertia(const double* p) {
   Eigen::Matrix3d I;
   I << p[0], p[1], p[2], p[1], p[3], p[4], p[2], p[4], p[5];

@@ -15,8 +15,7 @@
 // the active table every control period, a residual beyond its threshold trips the run) and the
 // payload run (payload_run.hpp: the last link's load identified on the recorded samples, written
 // into the active table at the run's end when its mass is determined). The Linux simulated drive
-// runs its own plant and control law (host_sim/drive) and shares the register server, framing,
-// ring, codec, monitor and payload run.
+// runs it too, in double, over its scenario's plant (host_sim/drive): one source for every drive.
 
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
@@ -31,6 +30,7 @@
 #include "dyncal/drive/register_server.hpp"
 #include "dyncal/drive/ring_window.hpp"
 #include "dyncal/drive/sample_ring.hpp"
+#include "dyncal/drive/stop_and_go.hpp"
 #include "dyncal/modbus_map.hpp"
 #include "dyncal/parameter_table.hpp"
 #include "dyncal/port.hpp"
@@ -52,13 +52,16 @@ class DriveApplication {
   /// What the drive is: its loop and its robot.
   struct Settings {
     double control_rate_hz = 1000;  ///< control periods per second [Hz]
-    /// The PD loop's natural frequency [Hz] and damping: gains from the inertia the drive's model
-    /// gives the arm at the run's first pose, M_jj(q0) of `nominal_standard` plus the motor's
-    /// reflected rotor inertia (survey Fig. 3).
+    /// The PD loop's natural frequency [Hz] and damping: gains from the inertia of the arm the loop
+    /// is tuned on at the run's first pose, M_jj(q0) of `loop_standard` (else `nominal_standard`)
+    /// plus the motor's reflected rotor inertia (survey Fig. 3).
     double bandwidth_hz = 8, damping = 1;
     /// The motors' rotor inertias reflected to the joints, J_m N^2 [kg m^2] (the motor data sheet's;
-    /// 0: none), for the gains.
+    /// 0: none), for the gains: motor m adds Ia_m T_m^T T_m to the arm's inertia.
     double rotor_inertia[N] = {};
+    /// The transmission, motor velocities v = T qd (robot.json's motor_velocity_map): N x N,
+    /// row-major, row m motor m's; nullptr: the identity (every motor turns with its own joint).
+    const double* motor_map = nullptr;
     /// The robot's ratings (robot.json, joint side): the limit trips (q_min, q_max, qd_max), the
     /// tables' plausibility, the torque's full scale in the ring (2 tau_max).
     JointRatings<N> ratings{};
@@ -67,7 +70,15 @@ class DriveApplication {
     /// run's measurement variance.
     double tau_noise_std[N] = {};
     const double* nominal_standard = nullptr;  ///< the robot's CAD standard parameters [kNumStandard]
+    /// The standard parameters [kNumStandard] of the arm the loop is tuned on, as commissioning
+    /// tunes a drive on its arm, load included (read at each start; nullptr: nominal_standard).
+    const double* loop_standard = nullptr;
+    /// How the ring window packs a sample (set_ring_format).
     modbus_map::RingFormat ring_format = modbus_map::RingFormat::counts;
+    /// The trajectory's clock (stop_and_go.hpp; off by default): a run plays its periods in moves
+    /// with rests between, q_d = q(u), qd_d = w qd(u), qdd_d = w^2 qdd(u) + w' qd(u), and lasts
+    /// longer by the rests.
+    StopAndGo stop_and_go{};
   };
 
   DriveApplication(port::ParameterStore& store, port::Joints<Scalar>& joints, const Settings& s) noexcept
@@ -78,6 +89,7 @@ class DriveApplication {
       resolution_.q[j] = s.q_resolution[j];
       resolution_.tau[j] = 2.0f * s.ratings.tau_max[j] / static_cast<float>(modbus_map::kTauFullScale);
     }
+    set_ring_format(s.ring_format);
     payload_verdict_ = PayloadVerdict::unknown();  // NaN until a payload run ends
   }
   DriveApplication(const DriveApplication&) = delete;
@@ -101,15 +113,54 @@ class DriveApplication {
     return TableStatus::ok;
   }
   const ParameterTable& active_table() const noexcept { return active_; }
+  /// The active table as encoded (parameter_table.hpp), *size its bytes.
+  const std::uint8_t* active_table_bytes(int* size) const noexcept {
+    *size = active_size_;
+    return active_bytes_;
+  }
+  /// +1 each time a table becomes active.
+  std::uint32_t table_generation() const noexcept { return generation_; }
+
+  // --- settings of the runs started after them (false, unchanged, while a run plays)
+
+  /// The samples the ring holds, 1..RingCapacity (a drive's trace buffer may be smaller than the
+  /// type's; the register ring_capacity shows it).
+  bool set_ring_limit(long samples) noexcept {
+    if (state_ == modbus_map::DriveState::playing || samples < 1 || samples > static_cast<long>(RingCapacity))
+      return false;
+    ring_limit_ = samples;
+    return true;
+  }
+  /// How the ring window packs a sample (docs/modbus.md "Measurement stream"); counts needs every
+  /// joint's torque resolution (a tau_max rating): without one the drive packs float32.
+  bool set_ring_format(modbus_map::RingFormat f) noexcept {
+    if (state_ == modbus_map::DriveState::playing) return false;
+    ring_format_ = f;
+    for (int j = 0; j < N; ++j)
+      if (!(resolution_.tau[j] > 0)) ring_format_ = modbus_map::RingFormat::float32;
+    return true;
+  }
+  modbus_map::RingFormat ring_format() const noexcept { return ring_format_; }
+  /// Holds the PD gains kp [Nm/rad], kd [Nm s/rad] instead of setting them from M(q0) at each
+  /// start: a drive whose loop is tuned (the known law IDIM-IV simulates, survey Eq. 17).
+  bool fix_gains(const Vec& kp, const Vec& kd) noexcept {
+    if (state_ == modbus_map::DriveState::playing) return false;
+    kp_ = kp;
+    kd_ = kd;
+    gains_fixed_ = true;
+    return true;
+  }
 
   // --- the Drive of register_server.hpp
 
   modbus_map::DriveState state() const noexcept { return state_; }
   std::uint32_t acked() const noexcept { return acked_; }
   std::uint32_t produced() const noexcept { return produced_; }
-  long ring_capacity_samples() const noexcept { return static_cast<long>(RingCapacity); }
+  long ring_capacity_samples() const noexcept { return ring_limit_; }
+  /// The samples a run of `periods` periods of `period_s` [s] at `fs` [Hz] records (the rests of
+  /// the trajectory's clock included): what the ring must hold to record it whole.
   long run_samples(double periods, double period_s, double fs) const noexcept {
-    const long per_sample = steps_per_sample(fs), total = std::lround(periods * period_s * settings_.control_rate_hz);
+    const long per_sample = steps_per_sample(fs), total = run_steps(periods * period_s);
     return (total + per_sample - 1) / per_sample;
   }
   double control_rate_hz() const noexcept { return settings_.control_rate_hz; }
@@ -133,10 +184,10 @@ class DriveApplication {
     trajectory_.a = run.trajectory.a.template topRows<N>().template cast<Scalar>();
     trajectory_.b = run.trajectory.b.template topRows<N>().template cast<Scalar>();
     per_sample_ = steps_per_sample(run.sample_rate_hz);
-    total_steps_ = std::lround(run.periods * static_cast<double>(run.trajectory.period()) * settings_.control_rate_hz);
+    total_steps_ = run_steps(run.periods * static_cast<double>(run.trajectory.period()));
     Vec q0, qd0, qdd0;
     trajectory_.evaluate(Scalar(0), q0, qd0, qdd0);
-    set_gains(q0);
+    if (!gains_fixed_) set_gains(q0);
     joints_.place(q0.data(), qd0.data());
     Vec q;
     joints_.sense(q.data());
@@ -144,6 +195,7 @@ class DriveApplication {
     ring_.clear();
     acked_ = produced_ = overruns_ = 0;
     steps_ = 0;
+    time_ = 0;
     for (int j = 0; j < N; ++j) error_sq_[j] = 0;
     error_n_ = 0;
     clear_fault();
@@ -204,12 +256,11 @@ class DriveApplication {
     mm::set_u32(in + mm::kActiveModelIdReg, active_.model_id);
     in[mm::kActiveCountReg] = active_.count;
     in[mm::kStateReg] = static_cast<std::uint16_t>(state_);
-    mm::set_f32(in + mm::kSimTimeReg, static_cast<float>(static_cast<double>(steps_) / settings_.control_rate_hz));
+    mm::set_f32(in + mm::kSimTimeReg, static_cast<float>(time_));
     mm::set_u32(in + mm::kProducedReg, produced_);
     mm::set_u32(in + mm::kOverrunReg, overruns_);
     for (int j = 0; j < N; ++j) {
-      const double e = error_n_ > 0 ? std::sqrt(error_sq_[j] / static_cast<double>(error_n_)) : 0.0;
-      mm::set_f32(in + mm::kModelErrorReg + 2 * j, static_cast<float>(e));
+      mm::set_f32(in + mm::kModelErrorReg + 2 * j, static_cast<float>(model_error_rms(j)));
       mm::set_f32(in + mm::kGainKpReg + 2 * j, static_cast<float>(kp_[j]));
       mm::set_f32(in + mm::kGainKdReg + 2 * j, static_cast<float>(kd_[j]));
       mm::set_f32(in + mm::kQResolutionReg + 2 * j, resolution_.q[j]);
@@ -228,8 +279,8 @@ class DriveApplication {
       }
       published_payload_ = payload_generation_;
     }
-    in[mm::kRingFormatReg] = static_cast<std::uint16_t>(settings_.ring_format);
-    mm::set_u32(in + mm::kRingCapacityReg, static_cast<std::uint32_t>(RingCapacity));
+    in[mm::kRingFormatReg] = static_cast<std::uint16_t>(ring_format_);
+    mm::set_u32(in + mm::kRingCapacityReg, static_cast<std::uint32_t>(ring_limit_));
     if (published_ == generation_) return;  // the table registers change with the table only
     mm::set_u32(in + mm::kActiveCrcReg,
                 active_size_ >= 4 ? dyncal::detail::get_u32(active_bytes_ + active_size_ - 4) : 0);
@@ -244,7 +295,7 @@ class DriveApplication {
     header.state = state_;
     header.produced = produced_;
     header.overruns = overruns_;
-    encode_ring_window(ring_, ring_.size(), header, N, settings_.ring_format, resolution_, w);
+    encode_ring_window(ring_, ring_.size(), header, N, ring_format_, resolution_, w);
   }
 
   // --- the control loop
@@ -252,7 +303,7 @@ class DriveApplication {
   /// Whether a control period is due: a run plays and the ring has room for its sample (lockstep:
   /// the drive waits for the host to acknowledge rather than drop a sample).
   bool wants_period() const noexcept {
-    return state_ == modbus_map::DriveState::playing && ring_.size() < RingCapacity;
+    return state_ == modbus_map::DriveState::playing && static_cast<long>(ring_.size()) < ring_limit_;
   }
 
   /// One control period (no-op unless playing): sense, check the limits, control law, actuate,
@@ -269,8 +320,7 @@ class DriveApplication {
     qd = (q - q_previous_) / dt();
     q_previous_ = q;
     if (check_limits(q, qd)) return;
-    trajectory_.evaluate(static_cast<Scalar>(static_cast<double>(steps_) / settings_.control_rate_hz), q_d, qd_d,
-                         qdd_d);
+    desired(time_, q_d, qd_d, qdd_d);
     if (!Models::torque(active_, q_d, qd_d, qdd_d, tau_ff)) tau_ff.setZero();  // active tables passed the check
     tau_cmd = tau_ff + kp_.cwiseProduct(q_d - q) + kd_.cwiseProduct(qd_d - qd);
     joints_.actuate(tau_cmd.data(), tau_measured.data());
@@ -292,10 +342,13 @@ class DriveApplication {
         s.qd[j] = static_cast<float>(qd[j]);
         s.tau[j] = static_cast<float>(tau_measured[j]);
       }
-      if (!ring_.push_back(s)) ++overruns_;  // only when the caller ran a period it did not want
+      // A full ring drops the sample (the host sees the gap in seq): only when the caller ran a
+      // period it did not want (real time).
+      if (static_cast<long>(ring_.size()) >= ring_limit_ || !ring_.push_back(s)) ++overruns_;
       if (payload_state_ == modbus_map::PayloadState::running) update_payload(q, qd_d, qdd_d, tau_measured);
     }
     ++steps_;
+    time_ += 1.0 / settings_.control_rate_hz;
   }
 
   /// The payload run's state and its estimate (at the run's end or stop; NaN before and where the
@@ -312,10 +365,30 @@ class DriveApplication {
   modbus_map::DriveFault fault() const noexcept { return fault_; }
   int fault_joint() const noexcept { return fault_joint_; }
   double fault_value() const noexcept { return fault_value_; }
-  double time() const noexcept { return static_cast<double>(steps_) / settings_.control_rate_hz; }
+  /// The run's time [s]: control periods played since the start.
+  double time() const noexcept { return time_; }
+  /// Samples dropped by a full ring since the start (0 in lockstep).
+  std::uint32_t overruns() const noexcept { return overruns_; }
+  /// Joint j's (0-based) RMS of tau_cmd - tau_ff since the start [Nm]: the drive's own model error.
+  double model_error_rms(int j) const noexcept {
+    return error_n_ > 0 ? std::sqrt(error_sq_[j] / static_cast<double>(error_n_)) : 0.0;
+  }
 
  private:
   Scalar dt() const noexcept { return static_cast<Scalar>(1.0 / settings_.control_rate_hz); }
+  /// Control periods of a run playing `play_s` seconds of the trajectory (its clock's rests included).
+  long run_steps(double play_s) const noexcept {
+    return std::lround(settings_.stop_and_go.run_time(play_s) * settings_.control_rate_hz);
+  }
+  /// The desired state at run time t [s], on the trajectory's clock.
+  void desired(double t, Vec& q, Vec& qd, Vec& qdd) const noexcept {
+    double u = t, w = 1, wd = 0;
+    settings_.stop_and_go.at(t, u, w, wd);
+    trajectory_.evaluate(static_cast<Scalar>(u), q, qd, qdd);
+    if (!settings_.stop_and_go.on()) return;
+    qdd = static_cast<Scalar>(w * w) * qdd + static_cast<Scalar>(wd) * qd;
+    qd *= static_cast<Scalar>(w);
+  }
   long steps_per_sample(double fs) const noexcept {
     const long k = fs > 0 ? std::lround(settings_.control_rate_hz / fs) : 1;
     return k < 1 ? 1 : k;
@@ -408,27 +481,36 @@ class DriveApplication {
     return false;
   }
 
-  /// PD gains from the drive model's inertia at the first pose, M_jj(q0) + Ia_j: natural frequency w,
-  /// damping zeta. Capped where the arm is light: the loop closes on a backward-difference velocity
-  /// and the discrete velocity loop needs kd dt / m_eff < 2 at every pose (m_eff = 1 / M^-1_jj, the
-  /// joint's effective inertia, of M + diag(Ia)); with half that margin the inertia the gains are set for is at most
-  /// min over the trajectory of m_eff / (2 zeta w dt), on 400 points of one period.
+  /// PD gains from the tuned-on arm's inertia at the first pose, (M + R)_jj(q0) with the motors'
+  /// R = sum_m Ia_m T_m^T T_m: natural frequency w, damping zeta. Capped where the arm is light: the
+  /// loop closes on a backward-difference velocity and the discrete velocity loop needs
+  /// kd dt / m_eff < 2 at every pose (m_eff = 1 / (M + R)^-1_jj, the joint's effective inertia);
+  /// with half that margin the inertia the gains are set for is at most min over the trajectory of
+  /// m_eff / (2 zeta w dt), on 400 points of one period.
   void set_gains(const Vec& q0) noexcept {
     constexpr int kGrid = 400;
     const Scalar w = static_cast<Scalar>(6.283185307179586 * settings_.bandwidth_hz);
     const Scalar zeta = static_cast<Scalar>(settings_.damping);
-    Vec rotor;
-    for (int j = 0; j < N; ++j) rotor[j] = static_cast<Scalar>(settings_.rotor_inertia[j]);
+    Mat rotor = Mat::Zero();  // sum_m Ia_m T_m^T T_m
+    for (int m = 0; m < N; ++m) {
+      Vec t = Vec::Unit(m);
+      if (settings_.motor_map)
+        for (int k = 0; k < N; ++k) t[k] = static_cast<Scalar>(settings_.motor_map[N * m + k]);
+      rotor += static_cast<Scalar>(settings_.rotor_inertia[m]) * t * t.transpose();
+    }
+    Eigen::Matrix<Scalar, Robot::kNumStandard, 1> phi = phi_nominal_;
+    if (settings_.loop_standard)
+      for (int i = 0; i < Robot::kNumStandard; ++i) phi[i] = static_cast<Scalar>(settings_.loop_standard[i]);
     Mat M;
-    Robot::mass_matrix(q0, phi_nominal_, M);
-    M.diagonal() += rotor;
+    Robot::mass_matrix(q0, phi, M);
+    M += rotor;
     Vec lightest = Vec::Constant(Scalar(1e30));
     for (int k = 0; k < kGrid; ++k) {
       Vec q, qd, qdd;
       trajectory_.evaluate(trajectory_.period() * static_cast<Scalar>(k) / Scalar(kGrid), q, qd, qdd);
       Mat Mk;
-      Robot::mass_matrix(q, phi_nominal_, Mk);
-      Mk.diagonal() += rotor;
+      Robot::mass_matrix(q, phi, Mk);
+      Mk += rotor;
       const Eigen::LDLT<Mat> ldlt(Mk);
       for (int j = 0; j < N; ++j) {  // column by column: a matrix right-hand side would allocate
         const Vec column = ldlt.solve(Vec::Unit(j));
@@ -458,6 +540,12 @@ class DriveApplication {
   double fault_value_ = 0;
   Trajectory trajectory_{};
   long per_sample_ = 1, total_steps_ = 0, steps_ = 0;
+  long ring_limit_ = static_cast<long>(RingCapacity);
+  modbus_map::RingFormat ring_format_ = modbus_map::RingFormat::counts;
+  bool gains_fixed_ = false;
+  /// The run's time [s]: + one control period per period played, in double on every target (a
+  /// float clock would lose the period's digits within minutes).
+  double time_ = 0;
   Vec q_previous_ = Vec::Zero(), kp_ = Vec::Zero(), kd_ = Vec::Zero();
   double error_sq_[N] = {};
   long error_n_ = 0;

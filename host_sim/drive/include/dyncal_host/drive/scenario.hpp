@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
+#include "dyncal/drive/stop_and_go.hpp"
 #include "dyncal_host/common/friction_model.hpp"
 #include "dyncal_host/common/robot_description.hpp"
-#include "dyncal_host/common/stop_and_go.hpp"
 
 namespace dyncal::host {
 
@@ -106,7 +106,7 @@ struct Scenario {
   /// Point-to-point operation: the trajectory played in moves with stops between (off by default;
   /// its clock drives the reference q_d, qd_d = w qd(u), qdd_d = w^2 qdd(u) + w' qd(u)); a run
   /// plays the trajectory's periods on that clock, so it lasts longer by the rests.
-  StopAndGo stop_and_go;
+  drive::StopAndGo stop_and_go;
   /// Static friction (off by default: the survey's friction laws are kinetic): a motor whose
   /// velocity reaches zero stays at rest while the torque that holds it there lies within its
   /// friction's values just above and below zero velocity, friction(+0) and friction(-0) (Fs for

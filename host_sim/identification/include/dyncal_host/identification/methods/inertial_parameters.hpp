@@ -1,20 +1,19 @@
 #pragma once
 // One link's inertial parameters, for any robot: the 10 standard parameters [XX XY XZ YY YZ ZZ MX
 // MY MZ M] (Khalil-Kleinfinger, link frame; kg m^2, kg m, kg), the physical parametrisation (mass,
-// centre of mass, inertia about it; survey Table 5), and the pseudo-inertia that decides physical
+// centre of mass, inertia about it; survey Table 5, lib/'s), and the pseudo-inertia that decides physical
 // consistency (Wensing et al. 2017).
 
 #include <Eigen/Core>
 #include <array>
 
+#include "dyncal/inertial_parameters.hpp"
+
 namespace dyncal::host {
 
-/// Table 5's parametrisation of one link from its 10 standard parameters: m [kg], centre of mass
-/// X Y Z [m] (link frame), inertia about the centre of mass I11 I12 I13 I22 I23 I33 [kg m^2].
-std::array<double, 10> physical_parameters(const double* phi10);
-/// The inverse: the 10 standard parameters of Table 5's (m, X Y Z, I about the centre of mass), and
-/// if `jac` is given d phi10 / d physical (10 x 10, row-major) (parallel axis theorem).
-void standard_from_physical(const std::array<double, 10>& physical, double* phi10, double* jac = nullptr);
+/// Table 5's parametrisation and its inverse (lib/: dyncal/inertial_parameters.hpp).
+using dyncal::physical_parameters;
+using dyncal::standard_from_physical;
 
 /// Pseudo-inertia J = [Sigma h; h^T m] (4 x 4) of one link (Wensing et al. 2017): Sigma the second
 /// moment about the link frame origin; physically consistent iff J is positive definite.

@@ -1,11 +1,12 @@
 #pragma once
 // Point-to-point operation of a designed trajectory: played for a while, stopped, held, started
-// again, as a robot moves between stations. Used by the simulated drive's scenario
-// ("stop_and_go", docs/modbus.md "Scenario file") and by the tests' simulated logs.
+// again, as a robot moves between stations. The drive application's trajectory clock
+// (drive_application.hpp Settings::stop_and_go; the Linux simulated drive's scenario "stop_and_go",
+// docs/modbus.md "Scenario file") and the tests' simulated logs. Heap-free, exception-free.
 
 #include <cmath>
 
-namespace dyncal::host {
+namespace dyncal::drive {
 
 /// The trajectory's clock u(t) [s] against the run's time t [s]: each cycle of `move` + `rest`
 /// seconds plays `move` seconds of the trajectory at full speed, slows to a stop over the last
@@ -17,17 +18,17 @@ namespace dyncal::host {
 struct StopAndGo {
   double move = 3.0, rest = 0.0, ramp = 0.4;  ///< [s]
 
-  bool on() const { return rest > 0; }
+  bool on() const noexcept { return rest > 0; }
 
   /// True when the parameters describe a clock: ramp > 0, move >= ramp, rest >= ramp (each ramp
   /// inside its phase), or off.
-  bool valid() const {
+  bool valid() const noexcept {
     if (!on()) return rest == 0.0;
     return ramp > 0 && move >= ramp && rest >= ramp && std::isfinite(move) && std::isfinite(rest);
   }
 
   /// At run time t >= 0: u, w = du/dt and dw/dt.
-  void at(double t, double& u, double& w, double& wd) const {
+  void at(double t, double& u, double& w, double& wd) const noexcept {
     u = t, w = 1, wd = 0;
     if (!on()) return;
     const double cycle = move + rest;
@@ -47,14 +48,14 @@ struct StopAndGo {
   }
 
   /// The run time [s] at which the clock reaches u >= 0 (the first such t).
-  double run_time(double u) const {
+  double run_time(double u) const noexcept {
     if (!on()) return u;
     const double cycle = move + rest;
     const double n = std::floor(u / move), v = u - n * move;
     if (v <= move - ramp) return n * cycle + v;
     if (v <= move - ramp / 2) {  // on the slowing ramp: v = move - ramp + y - y^2 / (2 ramp)
       const double z = v - (move - ramp);
-      return n * cycle + move - ramp + ramp * (1 - std::sqrt(std::max(0.0, 1 - 2 * z / ramp)));
+      return n * cycle + move - ramp + ramp * (1 - std::sqrt(std::fmax(0.0, 1 - 2 * z / ramp)));
     }
     // On the starting ramp: v = move - ramp / 2 + y^2 / (2 ramp).
     const double z = v - (move - ramp / 2);
@@ -62,4 +63,4 @@ struct StopAndGo {
   }
 };
 
-}  // namespace dyncal::host
+}  // namespace dyncal::drive
