@@ -8,7 +8,6 @@
 #include "commands.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/drive/closed_loop.hpp"
-#include "dyncal_host/drive/scenario.hpp"
 #include "dyncal_host/identification/logs/drive_law.hpp"
 #include "dyncal_host/identification/methods/friction_comparison.hpp"
 #include "dyncal_host/identification/monitoring/contact_monitor.hpp"
@@ -71,54 +70,6 @@ host::RobotDescription torque_constants_from_load(const IdentifySettings& s, con
   return out;
 }
 
-/// IDIM-IV's closed loop (IdentifyOptions::closed_loop): the law's run on the simulated drive of
-/// `robot` with the iterate's plant, noise-free (no torque noise, no encoder quantisation: the
-/// instruments are the model's states), Eq. 7 friction only, the law's gains, feed-forward table and
-/// control rate; the plant's q interpolated linearly to the grid's times.
-host::JointLog simulate_law(const host::RobotDescription& robot, const host::DriveLaw& law, const host::JointLog& grid,
-                            const Eigen::VectorXd& phi, const Eigen::VectorXd& Fc, const Eigen::VectorXd& Fv) {
-  host::Scenario sc = host::default_scenario(robot);
-  sc.tau_noise_std.fill(0.0);
-  sc.encoder_counts = 0;
-  sc.couplings.clear();
-  sc.motor_map = host::identity_motor_map();  // the plant IDIM-IV fits: Eq. 7 friction per joint
-  if (law.control_rate_hz > 0) sc.control_rate_hz = law.control_rate_hz;
-  sc.sample_rate_hz = law.sample_rate_hz;
-  host::JointArray kp{}, kd{};
-  for (int j = 0; j < robot.num_joints; ++j) {
-    sc.friction[j] = host::JointFriction{};
-    sc.friction[j].model = host::FrictionModel::eq7;
-    sc.friction[j].Fc = Fc[j];
-    sc.friction[j].beta = Fv[j];
-    sc.effects[j] = host::JointEffects{};
-    kp[j] = law.kp[static_cast<size_t>(j)];
-    kd[j] = law.kd[static_cast<size_t>(j)];
-  }
-  const auto bytes = host::encoded_table(law.has_table ? law.table : host::nominal_table(robot.name));
-  const auto run = host::play_closed_loop(robot, sc, law.trajectory, law.periods, law.sample_rate_hz, bytes,
-                                          std::vector<double>(phi.data(), phi.data() + phi.size()), &kp, &kd);
-  host::JointLog out;
-  out.t = grid.t;
-  out.segment_starts = grid.segment_starts;
-  out.period = grid.period;
-  out.q.resize(grid.t.size(), robot.num_joints);
-  out.tau = Eigen::MatrixXd::Zero(grid.t.size(), robot.num_joints);
-  const double dt = 1.0 / law.sample_rate_hz;
-  for (Eigen::Index s = 0; s < grid.t.size(); ++s) {
-    const double x = grid.t[s] / dt;
-    auto k = static_cast<size_t>(std::max(0.0, std::floor(x)));
-    // The run's last sample itself (a log as long as the law's run) within rounding of its time.
-    if (!run.empty() && k + 1 == run.size() && x - static_cast<double>(k) < 1e-6) --k;
-    if (!(grid.t[s] >= 0.0) || k + 1 >= run.size())
-      throw host::InputError(
-          law.source + ": the log's t = " + std::to_string(grid.t[s]) + " s lies outside the law's run (0.." +
-          std::to_string(dt * static_cast<double>(run.size() - 1)) + " s: t = 0 at the trajectory's start)");
-    const double a = x - static_cast<double>(k);
-    for (int j = 0; j < robot.num_joints; ++j) out.q(s, j) = (1.0 - a) * run[k].q[j] + a * run[k + 1].q[j];
-  }
-  return out;
-}
-
 int run_identify(IdentifySettings& s) {
   prepare_report_outputs(s.out);
   check_outputs({{s.params, "parameters"}});
@@ -151,7 +102,13 @@ int run_identify(IdentifySettings& s) {
     const auto law = std::make_shared<host::DriveLaw>(host::read_drive_law(s.law, robot));
     s.options.closed_loop = [robot, law](const host::JointLog& grid, const Eigen::VectorXd& phi,
                                          const Eigen::VectorXd& Fc, const Eigen::VectorXd& Fv) {
-      return simulate_law(robot, *law, grid, phi, Fc, Fv);
+      host::JointLog out;  // the law's run on the grid's times (drive/closed_loop.hpp)
+      out.t = grid.t;
+      out.segment_starts = grid.segment_starts;
+      out.period = grid.period;
+      out.q = host::play_law(robot, *law, grid.t, phi, Fc, Fv);
+      out.tau = Eigen::MatrixXd::Zero(grid.t.size(), robot.num_joints);
+      return out;
     };
   }
   nlohmann::json torque_constants;
@@ -273,7 +230,7 @@ void add_identify_command(CLI::App& app, Action& run) {
       ->capture_default_str();
   cmd->add_option("--validate-on", s->validate_on,
                   "also predict this other log (same --format) with the final fit and report its per-joint RMS, R^2 "
-                  "and e_T; repeat for several")
+                  "and e_T_abs; repeat for several")
       ->take_all();
   cmd->add_flag("--sign-constraints", opt.sign_constraints,
                 "wls, ols: Coulomb, viscous friction and rotor inertia held >= 0 (Lawson-Hanson), as a drive table "

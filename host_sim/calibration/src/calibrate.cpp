@@ -489,10 +489,10 @@ void print_calibrate_report(std::ostream& out, const CalibrateResult& r) {
   out << "batch fit (" << r.batch.method << ", " << r.batch.model
       << (r.friction_per_motor ? ", friction and rotor inertia per motor" : "")
       << "), cross-validated on the excitation run:\n";
-  out << "  joint    RMS [Nm]   rel. RMS      R2     e_T\n";
+  out << "  joint    RMS [Nm]   rel. RMS      R2 e_T_abs\n";
   for (const auto& j : r.batch.joints) {
     out << "  " << std::setw(5) << j.joint << std::setprecision(3) << std::setw(11) << j.rms << std::setw(11)
-        << j.relative_rms << std::setprecision(4) << std::setw(8) << j.r2 << std::setw(8) << j.e_T << "\n";
+        << j.relative_rms << std::setprecision(4) << std::setw(8) << j.r2 << std::setw(8) << j.e_T_abs << "\n";
   }
   out << "fresh trajectory, prediction RMS [Nm] of each estimate (online path, causal filter):\n";
   out << "  joint     RMS tau       batch          KF         RLS\n";

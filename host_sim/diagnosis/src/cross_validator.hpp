@@ -57,7 +57,7 @@ class CrossValidator {
   }
 
   /// Out-of-fold predictions of the base design alone (each block predicted by the fit without its
-  /// fold), for the per-sample indices e_T and e_T_Std.
+  /// fold), for the per-sample indices e_T_abs and e_T_abs_std.
   VectorXd predict_out_of_fold() const {
     const MatrixXd& X = *X_;
     const Index S = d_.t.size();

@@ -272,7 +272,7 @@ DiagnoseTraces traces(const StackedData& d, const VectorXd& before, const Vector
   return tr;
 }
 
-/// e_T and e_T_Std (survey Sec. 5.1) of joint j: mean and standard deviation of |tau - tau_hat| /
+/// e_T_abs and e_T_abs_std of joint j (beside survey Sec. 5.1's e_T): mean and standard deviation of |tau - tau_hat| /
 /// tau_max over the out-of-fold predictions (rows in the fit only, as the validation RSS).
 void torque_indices(const StackedData& d, int j, double tau_max, const VectorXd& pred, double& mean, double& stdev) {
   const int N = static_cast<int>(d.q.cols());
@@ -289,7 +289,7 @@ void torque_indices(const StackedData& d, int j, double tau_max, const VectorXd&
   stdev = std::sqrt(std::max(0.0, sa2 / std::max(1.0, n_rows) - mean * mean));
 }
 
-/// Per joint: validation and training RMS, R², e_T and e_T_Std before and after the effects.
+/// Per joint: validation and training RMS, R², e_T_abs and e_T_abs_std before and after the effects.
 std::vector<DiagnoseJoint> joint_metrics(const StackedData& d, const RobotDescription& robot, const Model& before,
                                          const Model& after, const VectorXd& oof_before, const VectorXd& oof_after) {
   const int N = static_cast<int>(d.q.cols());
@@ -311,8 +311,8 @@ std::vector<DiagnoseJoint> joint_metrics(const StackedData& d, const RobotDescri
     m.rms_validation_after = std::sqrt(after.val[j] / n);
     m.r2_validation_before = 1 - before.val[j] / ss_tot;
     m.r2_validation_after = 1 - after.val[j] / ss_tot;
-    torque_indices(d, j, robot.tau_max[j], oof_before, m.e_T_before, m.e_T_std_before);
-    torque_indices(d, j, robot.tau_max[j], oof_after, m.e_T_after, m.e_T_std_after);
+    torque_indices(d, j, robot.tau_max[j], oof_before, m.e_T_abs_before, m.e_T_abs_std_before);
+    torque_indices(d, j, robot.tau_max[j], oof_after, m.e_T_abs_after, m.e_T_abs_std_after);
     out.push_back(m);
   }
   return out;

@@ -33,14 +33,14 @@ void print_diagnose_report(std::ostream& out, const DiagnoseResult& r) {
     for (int j : c.joints) out << " " << j;
     out << ": " << c.reason << "\n";
   }
-  out << "\njoint   RMS val before   after [Nm]   R2 before   after   rel. RMS after     e_T before  after   e_T_Std "
+  out << "\njoint   RMS val before   after [Nm]   R2 before   after   rel. RMS after e_T_abs before  after e_T_abs_std "
          "before  after\n"
       << std::fixed;
   for (const auto& j : r.joints) {
     out << std::setw(5) << j.joint << std::setprecision(4) << std::setw(17) << j.rms_validation_before << std::setw(12)
         << j.rms_validation_after << std::setw(12) << j.r2_validation_before << std::setw(8) << j.r2_validation_after
-        << std::setw(17) << j.rms_validation_after / j.rms_tau << std::setw(15) << j.e_T_before << std::setw(7)
-        << j.e_T_after << std::setw(15) << j.e_T_std_before << std::setw(7) << j.e_T_std_after << "\n";
+        << std::setw(17) << j.rms_validation_after / j.rms_tau << std::setw(15) << j.e_T_abs_before << std::setw(7)
+        << j.e_T_abs_after << std::setw(15) << j.e_T_abs_std_before << std::setw(7) << j.e_T_abs_std_after << "\n";
   }
   out << "\njoint   RMS train before   after [Nm]   rel. RMS train before   after\n";
   for (const auto& j : r.joints) {
@@ -139,10 +139,10 @@ nlohmann::json diagnose_report_json(const DiagnoseResult& r) {
                            {"relative_rms_validation_after", m.rms_validation_after / m.rms_tau},
                            {"r2_validation_before", m.r2_validation_before},
                            {"r2_validation_after", m.r2_validation_after},
-                           {"e_T_before", m.e_T_before},
-                           {"e_T_after", m.e_T_after},
-                           {"e_T_std_before", m.e_T_std_before},
-                           {"e_T_std_after", m.e_T_std_after}});
+                           {"e_T_abs_before", m.e_T_abs_before},
+                           {"e_T_abs_after", m.e_T_abs_after},
+                           {"e_T_abs_std_before", m.e_T_abs_std_before},
+                           {"e_T_abs_std_after", m.e_T_abs_std_after}});
   }
   return j;
 }

@@ -58,4 +58,44 @@ std::vector<SimulatedDrive::PlantSample> play_closed_loop(const RobotDescription
   return out;
 }
 
+Eigen::MatrixXd play_law(const RobotDescription& robot, const DriveLaw& law, const Eigen::VectorXd& t,
+                         const Eigen::VectorXd& phi_standard, const Eigen::VectorXd& Fc, const Eigen::VectorXd& Fv) {
+  Scenario sc = default_scenario(robot);
+  sc.tau_noise_std.fill(0.0);
+  sc.encoder_counts = 0;
+  sc.couplings.clear();
+  sc.motor_map = identity_motor_map();  // the plant IDIM-IV fits: Eq. 7 friction per joint
+  if (law.control_rate_hz > 0) sc.control_rate_hz = law.control_rate_hz;
+  sc.sample_rate_hz = law.sample_rate_hz;
+  JointArray kp{}, kd{};
+  for (int j = 0; j < robot.num_joints; ++j) {
+    sc.friction[j] = JointFriction{};
+    sc.friction[j].model = FrictionModel::eq7;
+    sc.friction[j].Fc = Fc[j];
+    sc.friction[j].beta = Fv[j];
+    sc.effects[j] = JointEffects{};
+    kp[j] = law.kp[static_cast<size_t>(j)];
+    kd[j] = law.kd[static_cast<size_t>(j)];
+  }
+  const auto bytes = encoded_table(law.has_table ? law.table : nominal_table(robot.name));
+  const auto run =
+      play_closed_loop(robot, sc, law.trajectory, law.periods, law.sample_rate_hz, bytes,
+                       std::vector<double>(phi_standard.data(), phi_standard.data() + phi_standard.size()), &kp, &kd);
+  Eigen::MatrixXd q(t.size(), robot.num_joints);
+  const double dt = 1.0 / law.sample_rate_hz;
+  for (Eigen::Index s = 0; s < t.size(); ++s) {
+    const double x = t[s] / dt;
+    auto k = static_cast<size_t>(std::max(0.0, std::floor(x)));
+    // The run's last sample itself (a log as long as the law's run) within rounding of its time.
+    if (!run.empty() && k + 1 == run.size() && x - static_cast<double>(k) < 1e-6) --k;
+    if (!(t[s] >= 0.0) || k + 1 >= run.size())
+      throw InputError(law.source + ": the log's t = " + std::to_string(t[s]) + " s lies outside the law's run (0.." +
+                       std::to_string(dt * static_cast<double>(run.size() - 1)) +
+                       " s: t = 0 at the trajectory's start)");
+    const double a = x - static_cast<double>(k);
+    for (int j = 0; j < robot.num_joints; ++j) q(s, j) = (1.0 - a) * run[k].q[j] + a * run[k + 1].q[j];
+  }
+  return q;
+}
+
 }  // namespace dyncal::host

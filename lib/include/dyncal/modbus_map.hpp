@@ -5,6 +5,7 @@
 
 #include <cstdint>
 
+#include "dyncal/joint_capacity.hpp"
 #include "dyncal/parameter_table.hpp"
 
 namespace dyncal::modbus_map {
@@ -25,7 +26,7 @@ struct Field {
   const char* description;
 };
 
-inline constexpr int kMaxJoints = 7;  ///< dyncal::kMaxRobotJoints (dyncal/robot_model.hpp)
+inline constexpr int kMaxJoints = kMaxRobotJoints;  ///< the joint capacity (joint_capacity.hpp)
 inline constexpr int kMaxHarmonics = 8;
 /// 4: up to 7 joints (model error and coefficients sized for 7; ring samples packed for the
 /// drive's num_joints, as many per block as fit). 5: the `unlock` register and the `reset`

@@ -4,11 +4,12 @@
 
 #include <cstdint>
 
+#include "dyncal/joint_capacity.hpp"
 #include "dyncal/parameter_table.hpp"
 
 namespace dyncal::port {
 
-inline constexpr int kMaxJoints = 7;  ///< dyncal::kMaxRobotJoints (dyncal/robot_model.hpp)
+inline constexpr int kMaxJoints = kMaxRobotJoints;  ///< the joint capacity (joint_capacity.hpp)
 
 /// One sample as a drive records it, joint side: q [rad], qd [rad/s], tau [Nm] (motor torque
 /// reflected to the joint), float32 as on the wire. `seq` counts samples from the trajectory start.

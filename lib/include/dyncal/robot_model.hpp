@@ -9,10 +9,9 @@
 #include <type_traits>
 #include <utility>
 
-namespace dyncal {
+#include "dyncal/joint_capacity.hpp"
 
-/// Joints an arm may have: serial chains of 1 to 7 revolute joints.
-inline constexpr int kMaxRobotJoints = 7;
+namespace dyncal {
 
 /// A robot model type R provides (N = R::kNumJoints, n = R::kNumStandard, b = R::kNumBase; every
 /// function static, constexpr or noexcept, allocation-free, templated on the scalar where it

@@ -19,11 +19,11 @@ std::string format(const char* fmt, double v) {
 
 /// The per-joint validation table of identify and predict.
 void print_joint_table(std::ostream& out, const std::vector<JointMetrics>& joints) {
-  out << "joint   RMS [Nm]   rel. RMS      R^2       e_T    e_T_Std   RMS tau [Nm]\n";
+  out << "joint   RMS [Nm]   rel. RMS      R^2   e_T_abs e_T_abs_std RMS tau [Nm]\n";
   for (const auto& j : joints) {
     char line[160];
     std::snprintf(line, sizeof line, "%5d %10.4f %10.4f %8.4f %9.5f %10.5f %14.4f\n", j.joint, j.rms, j.relative_rms,
-                  j.r2, j.e_T, j.e_T_std, j.rms_tau);
+                  j.r2, j.e_T_abs, j.e_T_abs_std, j.rms_tau);
     out << line;
   }
 }
@@ -126,8 +126,8 @@ nlohmann::json joint_metrics_json(const std::vector<JointMetrics>& joints) {
                  {"rms_validation", m.rms},
                  {"relative_rms_validation", m.relative_rms},
                  {"r2_validation", m.r2},
-                 {"e_T", m.e_T},
-                 {"e_T_Std", m.e_T_std},
+                 {"e_T_abs", m.e_T_abs},
+                 {"e_T_abs_std", m.e_T_abs_std},
                  {"rms_tau", m.rms_tau}});
   }
   return a;

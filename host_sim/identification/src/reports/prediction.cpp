@@ -267,8 +267,8 @@ std::vector<JointMetrics> torque_metrics(const Eigen::VectorXd& y, int N, const 
       m.rms_tau = std::sqrt((st[j] + dn * mean_tau[j] * mean_tau[j]) / dn);
       m.relative_rms = m.rms / m.rms_tau;
       m.r2 = 1.0 - se[j] / st[j];
-      m.e_T = sum_abs[j] / dn;
-      m.e_T_std = std::sqrt(std::max(0.0, sum_abs2[j] / dn - m.e_T * m.e_T));
+      m.e_T_abs = sum_abs[j] / dn;
+      m.e_T_abs_std = std::sqrt(std::max(0.0, sum_abs2[j] / dn - m.e_T_abs * m.e_T_abs));
     }
     out.push_back(m);
   }

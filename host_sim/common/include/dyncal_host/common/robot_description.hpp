@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include "dyncal/joint_capacity.hpp"
+
 namespace dyncal::host {
 
 /// A joint's nominal friction from robot.json's "friction" list (survey Eq. 4 parameters; zeros
@@ -22,8 +24,8 @@ struct LinkInertialSpec {
   std::array<double, 6> inertia{};
 };
 
-/// Joints a robot may have (the register map's and the firmware's kMaxJoints).
-inline constexpr int kMaxRobotDescriptionJoints = 7;
+/// Joints a robot may have (lib/'s joint capacity).
+inline constexpr int kMaxRobotDescriptionJoints = kMaxRobotJoints;
 /// qdd_max when robot.json gives none: kDefaultQddPerQd * qd_max [rad/s^2], top speed in 0.25 s.
 inline constexpr double kDefaultQddPerQd = 4.0;
 

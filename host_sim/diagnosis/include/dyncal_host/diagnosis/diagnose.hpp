@@ -73,7 +73,8 @@ struct DiagnoseJoint {
   double rms_validation_before = 0, rms_validation_after = 0;
   double rms_tau = 0;
   double r2_validation_before = 0, r2_validation_after = 0;
-  double e_T_before = 0, e_T_after = 0, e_T_std_before = 0, e_T_std_after = 0;
+  /// mean and std of |tau - tau_hat| / tau_max (not the survey's e_T, the |mean| of the signed error)
+  double e_T_abs_before = 0, e_T_abs_after = 0, e_T_abs_std_before = 0, e_T_abs_std_after = 0;
 };
 
 /// What the plots show, per joint (kept samples, decimated rate).

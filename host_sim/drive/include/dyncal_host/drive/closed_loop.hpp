@@ -4,9 +4,11 @@
 // whose parameters the caller chooses. The survey's data and IDIM-IV's instruments (Gautier,
 // Janot and Vandanjon 2013) both come from it.
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <vector>
 
+#include "dyncal_host/common/drive_law.hpp"
 #include "dyncal_host/common/robot_description.hpp"
 #include "dyncal_host/drive/scenario.hpp"
 #include "dyncal_host/drive/simulated_drive.hpp"
@@ -24,5 +26,15 @@ std::vector<SimulatedDrive::PlantSample> play_closed_loop(const RobotDescription
                                                           double rate_hz, const std::vector<std::uint8_t>& table,
                                                           const std::vector<double>& plant_standard,
                                                           const JointArray* kp, const JointArray* kd);
+
+/// IDIM-IV's closed loop (Gautier, Janot and Vandanjon 2013): `law`'s run on the simulated drive of
+/// `robot` with a plant of standard parameters `phi_standard` (10 N) and Eq. 7 friction Fc [Nm],
+/// Fv [Nm s/rad] per joint, noise-free (no torque noise, no encoder quantisation: the instruments
+/// are the model's states), with the law's gains, feed-forward table and control rate. Returns the
+/// plant's q [rad] at the times `t` [s] (t = 0 at the trajectory's start; rows of t, N columns),
+/// interpolated linearly between the law's samples. Throws InputError naming law.source for a time
+/// outside the run, or as play_closed_loop.
+Eigen::MatrixXd play_law(const RobotDescription& robot, const DriveLaw& law, const Eigen::VectorXd& t,
+                         const Eigen::VectorXd& phi_standard, const Eigen::VectorXd& Fc, const Eigen::VectorXd& Fv);
 
 }  // namespace dyncal::host

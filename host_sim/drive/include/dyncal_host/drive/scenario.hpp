@@ -9,13 +9,14 @@
 #include <vector>
 
 #include "dyncal/drive/stop_and_go.hpp"
+#include "dyncal/joint_capacity.hpp"
 #include "dyncal_host/common/friction_model.hpp"
 #include "dyncal_host/common/robot_description.hpp"
 
 namespace dyncal::host {
 
 /// Joints a simulated drive can have (the register map's).
-inline constexpr int kMaxDriveJoints = 7;
+inline constexpr int kMaxDriveJoints = kMaxRobotJoints;
 /// Torque noise of a robot without a drive.json: this fraction of each joint's tau_max [Nm].
 inline constexpr double kDefaultNoiseFractionOfTauMax = 0.005;
 
@@ -127,7 +128,10 @@ Scenario default_scenario(const RobotDescription& robot);
 /// Reads a scenario JSON file over the defaults of `robot`. Throws InputError naming the field.
 Scenario load_scenario(const std::string& path, const RobotDescription& robot);
 
-/// Friction torque [Nm] of one joint at velocity qd [rad/s], load torque tau_load [Nm].
+/// Friction torque [Nm] of one joint at velocity qd [rad/s], load torque tau_load [Nm]: the
+/// simulated arm's truth, written apart from lib/'s friction laws (friction.hpp,
+/// nonlinear_friction.hpp) on purpose: the tests identify those laws against this one, so a mistake
+/// in either shows instead of cancelling.
 double friction_torque(const JointFriction& f, double qd, double tau_load);
 
 }  // namespace dyncal::host

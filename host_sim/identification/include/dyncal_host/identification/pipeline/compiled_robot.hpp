@@ -110,7 +110,7 @@ inline constexpr unsigned kDerivedTauMaxSeed = 20;
 /// Fills robot.tau_max when robot.json gives none (docs/robots.md): per joint, the largest |tau| of
 /// the nominal model's inverse dynamics (robot.json's inertials, no friction) over
 /// kDerivedTauMaxSamples seeded uniform samples of the rated envelope q in [q_min, q_max],
-/// |qd| <= qd_max, |qdd| <= qdd_max; sets tau_max_derived. A scale for the e_T indices and the
+/// |qd| <= qd_max, |qdd| <= qdd_max; sets tau_max_derived. A scale for the e_T_abs indices and the
 /// simulated drive, not a rating. No-op when tau_max is set. Throws InputError (robot not compiled,
 /// a joint with no torque at all).
 void derive_tau_max(RobotDescription& robot);

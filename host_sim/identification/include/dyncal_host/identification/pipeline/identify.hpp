@@ -68,8 +68,9 @@ struct JointMetrics {
   double rms_tau = 0;       ///< RMS of the measured torque [Nm]
   double relative_rms = 0;  ///< rms / rms_tau
   double r2 = 0;            ///< 1 - SS_res / SS_tot
-  double e_T = 0;           ///< mean(|tau - tau_hat| / tau_max), survey Sec. 5.1
-  double e_T_std = 0;       ///< std(|tau - tau_hat| / tau_max)
+  /// mean and std of |tau - tau_hat| / tau_max: the absolute error beside the survey's e_T (Sec.
+  /// 5.1, |mean of the signed error|, docs/survey.md), named apart from it
+  double e_T_abs = 0, e_T_abs_std = 0;
 };
 
 struct ParamEstimate {

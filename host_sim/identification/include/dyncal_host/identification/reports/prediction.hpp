@@ -1,7 +1,7 @@
 #pragma once
 // A model validated on logs it was not fitted to: the identified parameters (a parameter file, or
 // identify's own result) predict the torque of another log, through the same filtering and
-// regressor as identification; per-joint RMS, R^2 and e_T of the prediction error.
+// regressor as identification; per-joint RMS, R^2 and e_T_abs of the prediction error.
 
 #include <Eigen/Core>
 #include <functional>
@@ -61,7 +61,7 @@ nlohmann::json link_inertials_json(const std::vector<LinkInertial>& links);
 ParameterSet parameter_set(const IdentifyResult& r);
 
 /// Per-joint metrics of a prediction: y and prediction stacked (row s * N + j), rows whose
-/// prediction is NaN skipped; e_T and e_T_std relative to tau_max (survey Sec. 5.1).
+/// prediction is NaN skipped; e_T_abs and e_T_abs_std: mean and std of |error| / tau_max.
 std::vector<JointMetrics> torque_metrics(const Eigen::VectorXd& y, const Eigen::VectorXd& prediction, int N,
                                          const Eigen::VectorXd& tau_max);
 
