@@ -328,6 +328,132 @@ VectorXd residual_std_per_joint(const StackedData& d, const VectorXd& train_rss,
   return joint_noise_std(train_rss, n, p);
 }
 
+/// Folds as in identify: blocks of block_seconds dealt to the folds in turn. Throws InputError when
+/// the log is too short for two blocks per fold.
+std::vector<int> blocked_folds(Index S, double rate_hz, const IdentifyOptions& io) {
+  const Index block = std::max<Index>(1, std::lround(io.block_seconds * rate_hz));
+  if (S < block * io.folds * 2) throw InputError("too few samples for a diagnosis (" + std::to_string(S) + ")");
+  std::vector<int> fold(static_cast<size_t>(S));
+  for (Index s = 0; s < S; ++s) fold[s] = static_cast<int>((s / block) % io.folds);
+  return fold;
+}
+
+/// The log's segments [begin, end) of samples: a step longer than 1.5 periods starts a new one.
+std::vector<std::pair<Index, Index>> time_segments(const StackedData& d) {
+  std::vector<std::pair<Index, Index>> segments;
+  const Index S = d.t.size();
+  for (Index s = 0, a = 0; s < S; ++s)
+    if (s + 1 == S || d.t[s + 1] - d.t[s] > 1.5 / d.rate_hz) {
+      segments.emplace_back(a, s + 1);
+      a = s + 1;
+    }
+  return segments;
+}
+
+/// A candidate that would be chosen (gain above best_score) but for a ratio the data do not bound
+/// is named in a note, once per kind and joints (`noted`), not added.
+void note_unbounded(const std::vector<Candidate>& cands, const std::vector<Evidence>& ev, double best_score,
+                    const DiagnoseOptions& o, std::set<std::string>& noted, std::vector<std::string>& notes) {
+  int unbounded = -1;
+  for (size_t c = 0; c < cands.size(); ++c) {
+    Evidence e = ev[c];
+    if (!e.unbounded) continue;
+    e.unbounded = false;
+    if (qualifies(e, o) && e.gain > best_score && (unbounded < 0 || e.gain > ev[static_cast<size_t>(unbounded)].gain))
+      unbounded = static_cast<int>(c);
+  }
+  if (unbounded < 0) return;
+  const Candidate& u = cands[static_cast<size_t>(unbounded)];
+  std::ostringstream note;
+  note << std::setprecision(3) << effect_name(u.effect) << " on joints " << u.joints[0] + 1 << " and "
+       << u.joints[1] + 1 << " would explain the most (validation RSS -"
+       << 100 * ev[static_cast<size_t>(unbounded)].gain << " %), but its ratio is not bounded by the data (" << u.detail
+       << ": the interval reaches the end of the searched 1/5..5 or ends at the estimate): not added; what is "
+          "added after it may be standing in for it";
+  const std::string key =
+      std::string(effect_name(u.effect)) + " " + std::to_string(u.joints[0]) + " " + std::to_string(u.joints[1]);
+  if (noted.insert(key).second) notes.push_back(note.str());
+}
+
+/// What weighted least squares weighs each joint by (Gautier: 1 / sigma_j), as a note.
+std::string wls_note(const VectorXd& weights) {
+  std::ostringstream note;
+  note << std::setprecision(3) << "weighted least squares (Gautier): joint j's rows weighted by 1/sigma_j, sigma = [";
+  for (Index j = 0; j < weights.size(); ++j) note << (j ? ", " : "") << 1.0 / weights[j];
+  note << "] Nm from the declared model's OLS residual, re-estimated after each effect";
+  return note.str();
+}
+
+/// The declared model's parameters in the final fit m, by name: a declared column a coupled motor
+/// replaced is 0 (its value is the motor's term).
+std::vector<double> declared_params(const Model& declared, const Model& m) {
+  std::vector<double> out;
+  for (const std::string& name : declared.names) {
+    const auto it = std::find(m.names.begin(), m.names.end(), name);
+    out.push_back(it == m.names.end() ? 0.0 : m.phi[it - m.names.begin()]);
+  }
+  return out;
+}
+
+/// Each candidate weighed on its own against model m (each task writes its own slot:
+/// parallel_tasks.hpp), in the library's order, as one thread would.
+std::vector<Evidence> weigh_all(const CrossValidator& cv, std::vector<Candidate>& cands, const Model& m,
+                                const VectorXd& n_eff, const VectorXd& declared_val, int step) {
+  std::vector<Evidence> ev(cands.size());
+  std::vector<ParallelTask> weighing;
+  for (size_t c = 0; c < cands.size(); ++c)
+    weighing.push_back({1.0, [&, c] { ev[c] = weigh(cv, cands[c], m, n_eff, declared_val); }});
+  run_parallel(std::move(weighing), default_jobs(), "diagnose: step " + std::to_string(step + 1) + ", weighing",
+               "candidates");
+  return ev;
+}
+
+/// The model's design [X C], less the columns C replaces, and its names.
+void add_columns(const Candidate& c, Model& m) {
+  const std::vector<Index> replaced = replaced_columns(c, m);
+  MatrixXd A(m.X.rows(), m.X.cols() - static_cast<Index>(replaced.size()) + c.columns.cols());
+  std::vector<std::string> names;
+  for (Index k = 0, col = 0; k < m.X.cols(); ++k) {
+    if (std::find(replaced.begin(), replaced.end(), k) != replaced.end()) continue;
+    A.col(col++) = m.X.col(k);
+    names.push_back(m.names[static_cast<size_t>(k)]);
+  }
+  A.rightCols(c.columns.cols()) = c.columns;
+  m.X = std::move(A);
+  m.names = std::move(names);
+  for (const auto& n : c.names) m.names.push_back(n);
+}
+
+/// The effect candidate c adds, with its parameters from the model's fit m (its columns last).
+DiagnosedEffect diagnosed_effect(const Candidate& c, const Model& m, const Evidence& ev,
+                                 std::vector<std::string> alternatives) {
+  DiagnosedEffect e;
+  e.kind = c.effect;
+  for (int j : c.joints) e.joints.push_back(j + 1);
+  e.param_names = c.names;
+  e.inertia_held = c.inertia_held;
+  for (Index k = 0; k < c.columns.cols(); ++k) e.params.push_back(m.phi[m.X.cols() - c.columns.cols() + k]);
+  e.delta_bic = ev.delta_bic;
+  e.shape = c.shape;
+  e.shape_interval = c.shape_interval;
+  e.sign = c.sign;
+  e.validation_gain = ev.gain;
+  e.explanation = detail::explain(c, e.params);
+  e.alternatives = std::move(alternatives);
+  return e;
+}
+
+/// The report never hides a joint the effects made worse (shared rigid-body parameters): a note each.
+void note_worse_joints(DiagnoseResult& res) {
+  for (const DiagnoseJoint& j : res.joints) {
+    if (res.effects.empty() || !(j.rms_validation_after > j.rms_validation_before)) continue;
+    std::ostringstream note;
+    note << std::setprecision(4) << "joint " << j.joint << ": validation RMS rises " << j.rms_validation_before
+         << " -> " << j.rms_validation_after << " Nm with the effects added";
+    res.notes.push_back(note.str());
+  }
+}
+
 }  // namespace
 
 DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, const DiagnoseOptions& o) {
@@ -346,11 +472,7 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
   res.samples = static_cast<long>(S);
   res.notes = d.notes;
   check_every_joint_moves(d);
-  // Folds as in identify (blocked).
-  const Index block = std::max<Index>(1, std::lround(io.block_seconds * d.rate_hz));
-  if (S < block * io.folds * 2) throw InputError("too few samples for a diagnosis (" + std::to_string(S) + ")");
-  std::vector<int> fold(static_cast<size_t>(S));
-  for (Index s = 0; s < S; ++s) fold[s] = static_cast<int>((s / block) % io.folds);
+  const std::vector<int> fold = blocked_folds(S, d.rate_hz, io);
   res.validation = "blocked " + std::to_string(io.folds) + "-fold cross-validation";
 
   CrossValidator cv(d, N, fold, io.folds);
@@ -378,13 +500,7 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
     cv.evaluate(none, m.val, m.train, &m.phi);
   };
   reweigh();
-  if (io.method == "wls") {
-    std::ostringstream note;
-    note << std::setprecision(3) << "weighted least squares (Gautier): joint j's rows weighted by 1/sigma_j, sigma = [";
-    for (int j = 0; j < N; ++j) note << (j ? ", " : "") << 1.0 / weights[j];
-    note << "] Nm from the declared model's OLS residual, re-estimated after each effect";
-    res.notes.push_back(note.str());
-  }
+  if (io.method == "wls") res.notes.push_back(wls_note(weights));
   const Model declared = m;
   const VectorXd oof_before = cv.predict_out_of_fold();
   detail::CandidateContext library{d, o.max_cycles, load_torques(d, m.phi), {}, {}, weights, &m.X, &m.phi, {}, nullptr,
@@ -393,11 +509,7 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
   // the decimated rate, within each segment: a step longer than 1.5 periods starts a new one).
   const ButterworthLowPass filter(io.filter_order, io.cutoff_hz, d.rate_hz);
   if (io.cutoff_hz < 0.5 * d.rate_hz) library.filter = &filter;
-  for (Index s = 0, a = 0; s < S; ++s)
-    if (s + 1 == S || d.t[s + 1] - d.t[s] > 1.5 / d.rate_hz) {
-      library.segments.emplace_back(a, s + 1);
-      a = s + 1;
-    }
+  library.segments = time_segments(d);
 
   std::set<std::string> unbounded_noted;  // one note per unbounded candidate (kind and joints)
   for (int step = 0; step < o.max_effects; ++step) {
@@ -413,45 +525,16 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
     if (step == 0) res.effective_samples_per_joint = n_eff.mean();
     // Selection on validation error only: the largest relative validation gain among candidates
     // whose BIC evidence is very strong and whose parameters are physical.
-    int best = -1;
+    const std::vector<Evidence> ev = weigh_all(cv, cands, m, n_eff, declared.val, step);
     double best_score = 0;
-    std::vector<Evidence> ev(cands.size());
-    // Each candidate weighed on its own (each task writes its own slots: parallel_tasks.hpp), then
-    // chosen in the library's order, as one thread would.
-    std::vector<ParallelTask> weighing;
-    for (size_t c = 0; c < cands.size(); ++c)
-      weighing.push_back({1.0, [&, c] { ev[c] = weigh(cv, cands[c], m, n_eff, declared.val); }});
-    run_parallel(std::move(weighing), default_jobs(), "diagnose: step " + std::to_string(step + 1) + ", weighing",
-                 "candidates");
+    int best = -1;
     for (size_t c = 0; c < cands.size(); ++c) {
-      const Evidence& e = ev[c];
-      if (qualifies(e, o) && e.gain > best_score) {
-        best_score = e.gain;
+      if (qualifies(ev[c], o) && ev[c].gain > best_score) {
+        best_score = ev[c].gain;
         best = static_cast<int>(c);
       }
     }
-    // A candidate that would be chosen but for a ratio the data do not bound is named, not added.
-    int unbounded = -1;
-    for (size_t c = 0; c < cands.size(); ++c) {
-      Evidence e = ev[c];
-      if (!e.unbounded) continue;
-      e.unbounded = false;
-      if (qualifies(e, o) && e.gain > best_score && (unbounded < 0 || e.gain > ev[static_cast<size_t>(unbounded)].gain))
-        unbounded = static_cast<int>(c);
-    }
-    if (unbounded >= 0) {
-      const Candidate& u = cands[static_cast<size_t>(unbounded)];
-      std::ostringstream note;
-      note << std::setprecision(3) << effect_name(u.effect) << " on joints " << u.joints[0] + 1 << " and "
-           << u.joints[1] + 1 << " would explain the most (validation RSS -"
-           << 100 * ev[static_cast<size_t>(unbounded)].gain << " %), but its ratio is not bounded by the data ("
-           << u.detail
-           << ": the interval reaches the end of the searched 1/5..5 or ends at the estimate): not added; what is "
-              "added after it may be standing in for it";
-      const std::string key =
-          std::string(effect_name(u.effect)) + " " + std::to_string(u.joints[0]) + " " + std::to_string(u.joints[1]);
-      if (unbounded_noted.insert(key).second) res.notes.push_back(note.str());
-    }
+    note_unbounded(cands, ev, best_score, o, unbounded_noted, res.notes);
     if (best < 0) {
       res.rejected = strongest_rejected(cands, ev, o.bic_threshold);
       break;
@@ -459,54 +542,18 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
     best = most_parsimonious(cands, ev, best, o);
     const Candidate& c = cands[static_cast<size_t>(best)];
     std::vector<std::string> alternatives = indistinguishable(cands, ev, best, m.X, n_eff);
-    // [X C], less the columns C replaces.
-    const std::vector<Index> replaced = replaced_columns(c, m);
-    MatrixXd A(S * N, m.X.cols() - static_cast<Index>(replaced.size()) + c.columns.cols());
-    std::vector<std::string> names;
-    for (Index k = 0, col = 0; k < m.X.cols(); ++k) {
-      if (std::find(replaced.begin(), replaced.end(), k) != replaced.end()) continue;
-      A.col(col++) = m.X.col(k);
-      names.push_back(m.names[static_cast<size_t>(k)]);
-    }
-    A.rightCols(c.columns.cols()) = c.columns;
-    m.X = std::move(A);
-    m.names = std::move(names);
-    for (const auto& n : c.names) m.names.push_back(n);
+    add_columns(c, m);
     cv.set_base(m.X);
     cv.evaluate(none, m.val, m.train, &m.phi);
-    DiagnosedEffect e;
-    e.kind = c.effect;
-    for (int j : c.joints) e.joints.push_back(j + 1);
-    e.param_names = c.names;
-    e.inertia_held = c.inertia_held;
-    for (Index k = 0; k < c.columns.cols(); ++k) e.params.push_back(m.phi[m.X.cols() - c.columns.cols() + k]);
-    e.delta_bic = ev[static_cast<size_t>(best)].delta_bic;
-    e.shape = c.shape;
-    e.shape_interval = c.shape_interval;
-    e.sign = c.sign;
-    e.validation_gain = ev[static_cast<size_t>(best)].gain;
-    e.explanation = detail::explain(c, e.params);
-    e.alternatives = std::move(alternatives);
-    res.effects.push_back(e);
+    res.effects.push_back(diagnosed_effect(c, m, ev[static_cast<size_t>(best)], std::move(alternatives)));
     reweigh();
   }
 
   res.declared_names = declared.names;
-  // By name: a declared column a coupled motor replaced is 0 (its value is the motor's term).
-  for (const std::string& name : declared.names) {
-    const auto it = std::find(m.names.begin(), m.names.end(), name);
-    res.declared_params.push_back(it == m.names.end() ? 0.0 : m.phi[it - m.names.begin()]);
-  }
+  res.declared_params = declared_params(declared, m);
   res.traces = traces(d, declared.X * declared.phi, m.X * m.phi, o.max_cycles);
   res.joints = joint_metrics(d, robot, declared, m, oof_before, cv.predict_out_of_fold());
-  // The report never hides a joint the effects made worse (shared rigid-body parameters).
-  for (const DiagnoseJoint& j : res.joints) {
-    if (res.effects.empty() || !(j.rms_validation_after > j.rms_validation_before)) continue;
-    std::ostringstream note;
-    note << std::setprecision(4) << "joint " << j.joint << ": validation RMS rises " << j.rms_validation_before
-         << " -> " << j.rms_validation_after << " Nm with the effects added";
-    res.notes.push_back(note.str());
-  }
+  note_worse_joints(res);
   return res;
 }
 
