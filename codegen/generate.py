@@ -10,6 +10,7 @@ import hashlib
 import os
 import sys
 import time
+import types
 
 import sympy as sp
 
@@ -119,25 +120,12 @@ def fmt(x):
     return repr(float(x))
 
 
-def main():
-    if len(sys.argv) != 3:
-        print(__doc__, file=sys.stderr)
-        return 2
-    robot_dir, out_dir = sys.argv[1], sys.argv[2]
-    t0 = time.time()
-    try:
-        desc, joints = description.load(robot_dir)
-    except description.DescriptionError as e:
-        print(f"generate.py: {e}", file=sys.stderr)
-        return 2
-    name = desc["name"]
+def regressor_header(joints, desc, gravity, name, inputs):
+    """regressor.hpp: the standard and base regressors; with the base parameters (bp), Y and the
+    operation counts."""
     n = len(joints)
     n_std = 10 * n
-    gravity = [sp.Float(g) if g != 0 else sp.Integer(0) for g in desc["gravity"]]
-    inputs = input_digest(robot_dir, desc)
     ns = f"dyncal::generated::{name}"
-
-    # --- regressors and base parameters
     tr, Y, sym = dynamics.standard_regressor(joints, gravity)
     flat = [Y[i][k] for i in range(n) for k in range(n_std)]
     Yfun = base_parameters.compile_program(live_program(tr.defs, flat), flat, sym)
@@ -191,7 +179,17 @@ inline void base_regressor({args}, Eigen::Matrix<Scalar, {n}, Cols>& Yb) noexcep
 }}  // namespace {ns}
 """
 
-    # --- inverse dynamics and mass matrix
+    return regressor_hpp, bp, Y, (std_m, std_a, base_m, base_a)
+
+
+def dynamics_header(joints, gravity, name, inputs):
+    """dynamics.hpp: inverse dynamics (recursive Newton-Euler) and the mass matrix; with the operation
+    counts."""
+    n = len(joints)
+    n_std = 10 * n
+    ns = f"dyncal::generated::{name}"
+    vec = f"Eigen::Matrix<Scalar, {n}, 1>"
+    args = f"const {vec}& q, const {vec}& qd, const {vec}& qdd"
     trd, tau, _ = dynamics.inverse_dynamics(joints, gravity)
     id_assign = [(f"tau[{i}]", tau[i]) for i in range(n)]
     id_defs = live_program(trd.defs, tau)
@@ -237,7 +235,14 @@ inline void mass_matrix(const {vec}& q, const {pvec}& phi, Eigen::Matrix<Scalar,
 }}  // namespace {ns}
 """
 
-    # --- parameters header
+    return dynamics_hpp, (id_m, id_a, mm_m, mm_a)
+
+
+def parameter_tables(joints, desc, bp, Y, name):
+    """What parameters.hpp lists: base-parameter names and groupings, the standard -> base map, each
+    base column's rows, the rotor inertias' places, the joints' origins and kinds, the robot id."""
+    n = len(joints)
+    n_std = 10 * n
     base_names = []
     groupings = []
     for b, k in enumerate(bp.independent):
@@ -281,6 +286,16 @@ inline void mass_matrix(const {vec}& q, const {pvec}& phi, Eigen::Matrix<Scalar,
     std_enum = ",\n".join(f"  {std_name(k)} = {k}" for k in range(n_std))
     base_enum = ",\n".join(f"  {nm} = {b}" for b, nm in enumerate(base_names))
     zero_list = ", ".join(std_name(k) for k in bp.zero_columns if k < n_std)
+    return types.SimpleNamespace(absorbed=absorbed, absorbed_coeff=absorbed_coeff, base_enum=base_enum, base_names=base_names, col_rows=col_rows, declared_ia=declared_ia, groupings=groupings, kinds=kinds, map_lines=map_lines, nominal=nominal, origins=origins, prismatic_list=prismatic_list, robot_id=robot_id, rotor_sep=rotor_sep, std_enum=std_enum, zero_list=zero_list)
+
+
+def parameters_header(joints, desc, bp, Y, name, inputs):
+    """parameters.hpp: parameter index names, the standard -> base map, kinematic data."""
+    n = len(joints)
+    n_std = 10 * n
+    ns = f"dyncal::generated::{name}"
+    nb = len(bp.independent)
+    t = parameter_tables(joints, desc, bp, Y, name)
     params_hpp = banner(name, inputs, "parameter index names, standard->base map, kinematic data", {})
     params_hpp += f"""#pragma once
 
@@ -292,7 +307,7 @@ namespace {ns} {{
 inline constexpr const char* kRobotName = "{name}";
 /// Robot id of parameter tables (dyncal/parameter_table.hpp): FNV-1a 32 of the robot name, the
 /// base-parameter groupings and the joint origins, i.e. of what a base-parameter value means.
-inline constexpr std::uint32_t kRobotId = 0x{robot_id:08x}u;
+inline constexpr std::uint32_t kRobotId = 0x{t.robot_id:08x}u;
 inline constexpr int kNumJoints = {n};
 /// Standard parameters: 10 per link, [XX XY XZ YY YZ ZZ] [kg m^2] about the link frame origin,
 /// [MX MY MZ] [kg m], M [kg] (Khalil-Kleinfinger order).
@@ -301,7 +316,7 @@ inline constexpr int kNumStandard = {n_std};
 inline constexpr int kNumBase = {nb};
 
 enum class StandardParam : int {{
-{std_enum}
+{t.std_enum}
 }};
 
 inline constexpr const char* kStandardParamNames[kNumStandard] = {{
@@ -310,14 +325,14 @@ inline constexpr const char* kStandardParamNames[kNumStandard] = {{
 /// Base parameter names: the standard parameter each one is anchored on, with suffix _R where
 /// other parameters are regrouped onto it. The groupings (numeric QR, tolerance
 /// {base_parameters.RANK_TOLERANCE:g}, {base_parameters.NUM_SAMPLES} random states):
-{chr(10).join(groupings)}
-/// Standard parameters with no effect on the torques: {zero_list or "none"}.
+{chr(10).join(t.groupings)}
+/// Standard parameters with no effect on the torques: {t.zero_list or "none"}.
 enum class BaseParam : int {{
-{base_enum}
+{t.base_enum}
 }};
 
 inline constexpr const char* kBaseParamNames[kNumBase] = {{
-{", ".join('"' + nm + '"' for nm in base_names)}}};
+{", ".join('"' + nm + '"' for nm in t.base_names)}}};
 
 /// Standard index each base parameter is anchored on.
 inline constexpr int kBaseAnchor[kNumBase] = {{{", ".join(str(k) for k in bp.independent)}}};
@@ -325,19 +340,19 @@ inline constexpr int kBaseAnchor[kNumBase] = {{{", ".join(str(k) for k in bp.ind
 /// Structural sparsity of the base regressor: column b of Y_b can be nonzero only in rows
 /// kBaseColumnRows[b][0]..kBaseColumnRows[b][1] (0-based joints; a link's parameters act on its
 /// own joint and the joints before it). Rows outside the range are written as exact zeros.
-inline constexpr int kBaseColumnRows[kNumBase][2] = {{{", ".join(col_rows)}}};
+inline constexpr int kBaseColumnRows[kNumBase][2] = {{{", ".join(t.col_rows)}}};
 
 /// Rotor inertia Ia_j (q_dd_j column, reflected to the joint side): true where it is identifiable
 /// as a parameter of its own; otherwise it is absorbed into base parameter
 /// kRotorInertiaAbsorbedInto[j] with coefficient kRotorInertiaAbsorbedCoefficient[j].
-/// Computed only when the description declares rotor inertia ({"yes" if declared_ia else "no"}).
-inline constexpr bool kRotorInertiaSeparate[kNumJoints] = {{{rotor_sep}}};
-inline constexpr int kRotorInertiaAbsorbedInto[kNumJoints] = {{{", ".join(absorbed)}}};
-inline constexpr double kRotorInertiaAbsorbedCoefficient[kNumJoints] = {{{", ".join(absorbed_coeff)}}};
+/// Computed only when the description declares rotor inertia ({"yes" if t.declared_ia else "no"}).
+inline constexpr bool kRotorInertiaSeparate[kNumJoints] = {{{t.rotor_sep}}};
+inline constexpr int kRotorInertiaAbsorbedInto[kNumJoints] = {{{", ".join(t.absorbed)}}};
+inline constexpr double kRotorInertiaAbsorbedCoefficient[kNumJoints] = {{{", ".join(t.absorbed_coeff)}}};
 
 /// Joint kinds: true where joint i is prismatic (q [m] along its z axis, tau a force [N]), false
 /// where it is revolute (q [rad] about z, tau [Nm]).
-inline constexpr bool kJointPrismatic[kNumJoints] = {{{prismatic_list}}};
+inline constexpr bool kJointPrismatic[kNumJoints] = {{{t.prismatic_list}}};
 
 /// Gravity [m/s^2] in the base frame.
 inline constexpr double kGravity[3] = {{{", ".join(fmt(g) for g in desc["gravity"])}}};
@@ -349,20 +364,26 @@ struct JointOrigin {{
   double p[3];
 }};
 inline constexpr JointOrigin kJointOrigins[kNumJoints] = {{
-{("," + chr(10)).join(origins)}}};
+{("," + chr(10)).join(t.origins)}}};
 
 /// Nominal standard parameters from the description (CAD / URDF values), StandardParam order.
-inline constexpr double kNominalStandard[kNumStandard] = {{{nominal}}};
+inline constexpr double kNominalStandard[kNumStandard] = {{{t.nominal}}};
 
 /// Standard -> base parameters: phi_b ({nb}) from phi ({n_std}). Rotor inertia is not included.
 template <typename Scalar>
 inline void standard_to_base(const Eigen::Matrix<Scalar, {n_std}, 1>& phi, Eigen::Matrix<Scalar, {nb}, 1>& phi_b) noexcept {{
-{chr(10).join(map_lines)}
+{chr(10).join(t.map_lines)}
 }}
 
 }}  // namespace {ns}
 """
 
+    return params_hpp
+
+
+def robot_header(name, inputs):
+    """robot.hpp: the Robot traits type gathering the generated model."""
+    ns = f"dyncal::generated::{name}"
     robot_hpp = banner(name, inputs, "the Robot traits type gathering the generated model", {})
     robot_hpp += f"""#pragma once
 
@@ -433,6 +454,29 @@ static_assert(dyncal::is_robot_model_v<Robot>, "the generated {name} model does 
 
 }}  // namespace {ns}
 """
+    return robot_hpp
+
+
+def main():
+    if len(sys.argv) != 3:
+        print(__doc__, file=sys.stderr)
+        return 2
+    robot_dir, out_dir = sys.argv[1], sys.argv[2]
+    t0 = time.time()
+    try:
+        desc, joints = description.load(robot_dir)
+    except description.DescriptionError as e:
+        print(f"generate.py: {e}", file=sys.stderr)
+        return 2
+    name = desc["name"]
+    n = len(joints)
+    gravity = [sp.Float(g) if g != 0 else sp.Integer(0) for g in desc["gravity"]]
+    inputs = input_digest(robot_dir, desc)
+    regressor_hpp, bp, Y, (std_m, std_a, base_m, base_a) = regressor_header(joints, desc, gravity, name, inputs)
+    nb = len(bp.independent)
+    dynamics_hpp, (id_m, id_a, mm_m, mm_a) = dynamics_header(joints, gravity, name, inputs)
+    params_hpp = parameters_header(joints, desc, bp, Y, name, inputs)
+    robot_hpp = robot_header(name, inputs)
     os.makedirs(out_dir, exist_ok=True)
     for fname, text in (("parameters.hpp", params_hpp), ("regressor.hpp", regressor_hpp),
                         ("dynamics.hpp", dynamics_hpp), ("robot.hpp", robot_hpp)):

@@ -1,19 +1,34 @@
-# cmake -DHOST_SIM=<dir> -DPARTS=a,b,... -DALLOWED_<part>=x,y,... -P check_dependency_rule.cmake
-# Fails when a file of a host_sim part includes a header of a part it does not depend on.
+# cmake -DHOST_SIM=<dir> -DPARTS=a,b,... -DALLOWED_<part>=x,y,... [-DSUBLAYERS_<part>=s1,s2,...]
+#   -P check_dependency_rule.cmake
+# Fails when a file of a host_sim part includes a header of a part it does not depend on, or, inside a
+# part with sublayers (its subfolders, bottom first), a header of a sublayer above its own.
 cmake_minimum_required(VERSION 3.25)
 string(REPLACE "," ";" parts "${PARTS}")
 set(violations "")
 foreach(part ${parts})
   string(REPLACE "," ";" allowed "${ALLOWED_${part}}")
   list(APPEND allowed ${part})
+  string(REPLACE "," ";" sublayers "${SUBLAYERS_${part}}")
   file(GLOB_RECURSE files "${HOST_SIM}/${part}/*.cpp" "${HOST_SIM}/${part}/*.hpp")
   foreach(f ${files})
+    file(RELATIVE_PATH rel ${HOST_SIM} ${f})
+    # The file's own sublayer: the folder after src/ or include/dyncal_host/<part>/.
+    set(own -1)
+    if(rel MATCHES "^${part}/(src|include/dyncal_host/${part})/([a-z_]+)/")
+      list(FIND sublayers "${CMAKE_MATCH_2}" own)
+    endif()
     file(STRINGS ${f} lines REGEX "^#include \"dyncal_host/[a-z_]+/")
     foreach(line ${lines})
       string(REGEX REPLACE "^#include \"dyncal_host/([a-z_]+)/.*" "\\1" used "${line}")
       if(NOT used IN_LIST allowed)
-        file(RELATIVE_PATH rel ${HOST_SIM} ${f})
         string(APPEND violations "  host_sim/${rel}: ${line} (part '${part}' may include: ${allowed})\n")
+      elseif(used STREQUAL part AND own GREATER -1 AND line MATCHES "^#include \"dyncal_host/${part}/([a-z_]+)/")
+        list(FIND sublayers "${CMAKE_MATCH_1}" theirs)
+        if(theirs GREATER own)
+          list(GET sublayers ${own} own_name)
+          string(APPEND violations
+                 "  host_sim/${rel}: ${line} (sublayer '${own_name}' of '${part}' may not include the layer above it)\n")
+        endif()
       endif()
     endforeach()
   endforeach()

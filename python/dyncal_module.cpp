@@ -13,17 +13,23 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "../host_sim/app/commands.hpp"
+#include "../host_sim/app/options.hpp"
 #include "../host_sim/app/report_outputs.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/interrupt.hpp"
+#include "dyncal_host/common/model_effects.hpp"
 #include "dyncal_host/common/progress.hpp"
 #include "dyncal_host/common/robot_description.hpp"
-#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
+#include "dyncal_host/identification/pipeline/identify.hpp"
+#include "dyncal_host/identification/pipeline/prediction.hpp"
+#include "dyncal_host/model/compiled_robot.hpp"
+#include "dyncal_host/model/parameter_set.hpp"
 
 namespace py = pybind11;
 
@@ -221,6 +227,94 @@ py::dict run_command(const std::string& command, const py::kwargs& kwargs) {
   return out;
 }
 
+/// A log read as the CLI reads --data (LogOption: formats, columns, currents, several files, the
+/// plausibility check against the robot's limits).
+dyncal::host::JointLog read_log(const Robot& r, const std::vector<std::string>& paths, const std::string& format,
+                                const std::string& columns, const std::string& torque_from, bool merge_on_time,
+                                bool drop_outliers, const std::string& topic, const std::string& effort,
+                                const std::string& clock) {
+  dyncal::app::LogOption o;
+  o.robot.name = r.description.name;
+  o.robot.robots_dir = r.robots_dir;
+  o.format = format;
+  o.columns = columns;
+  o.torque_from = torque_from;
+  o.data = paths;
+  o.merge_on_time = merge_on_time;
+  o.drop_outliers = drop_outliers;
+  o.topic = topic;
+  o.effort = effort;
+  o.clock = clock;
+  if (paths.empty()) throw InputError("read_log: no log path given");
+  return o.load_log(r.description);
+}
+
+/// A log from arrays: t (S) [s], q and tau (S, N) [rad, Nm], qd (S, N) optional.
+dyncal::host::JointLog log_of(const Robot& r, const Eigen::VectorXd& t, const Eigen::MatrixXd& q,
+                              const Eigen::MatrixXd& tau, const std::optional<Eigen::MatrixXd>& qd) {
+  const int n = r.description.num_joints;
+  if (q.rows() != t.size() || tau.rows() != t.size() || q.cols() != n || tau.cols() != n ||
+      (qd && (qd->rows() != t.size() || qd->cols() != n)))
+    throw InputError("Log: t (S), q, tau" + std::string(qd ? ", qd" : "") + " (S, " + std::to_string(n) +
+                     "), one row per sample");
+  if (!t.allFinite() || !q.allFinite() || !tau.allFinite() || (qd && !qd->allFinite()))
+    throw InputError("Log: a value is NaN or infinite");
+  dyncal::host::JointLog log;
+  log.t = t;
+  log.q = q;
+  log.tau = tau;
+  log.has_qd = qd.has_value();
+  log.qd = qd ? *qd : Eigen::MatrixXd::Zero(q.rows(), n);
+  log.qdd = Eigen::MatrixXd::Zero(q.rows(), n);
+  log.source = "arrays";
+  return log;
+}
+
+/// identify()'s options from the CLI's option names (defaults the CLI's): the model string parsed as
+/// --model parses it.
+dyncal::host::IdentifyOptions identify_options(const Robot& r, const std::string& method, const std::string& model,
+                                               double cutoff_hz, int filter_order, int decimate, int folds,
+                                               double block_seconds, double validate_last, double prior_std,
+                                               double min_speed, bool sign_constraints, bool friction_per_joint,
+                                               bool strict, std::uint64_t seed) {
+  dyncal::host::IdentifyOptions o;
+  const dyncal::host::ModelSpec spec = dyncal::host::parse_model_spec(model, r.description.num_joints);
+  o.method = method;
+  o.terms = spec.terms;
+  o.effects = spec.effects;
+  o.motors = spec.motors;
+  o.cutoff_hz = cutoff_hz;
+  o.filter_order = filter_order;
+  o.decimate = decimate;
+  o.folds = folds;
+  o.block_seconds = block_seconds;
+  o.validate_last = validate_last;
+  o.prior_std = prior_std;
+  o.min_speed_fraction = min_speed;
+  o.sign_constraints = sign_constraints;
+  o.friction_per_joint = friction_per_joint;
+  o.strict = strict;
+  o.seed = seed;
+  return o;
+}
+
+/// Per-joint metrics as numpy arrays keyed by name (index j: joint j + 1).
+py::dict metrics_of(const std::vector<dyncal::host::JointMetrics>& joints) {
+  const auto column = [&](double dyncal::host::JointMetrics::*field) {
+    Eigen::VectorXd v(static_cast<Eigen::Index>(joints.size()));
+    for (size_t j = 0; j < joints.size(); ++j) v[static_cast<Eigen::Index>(j)] = joints[j].*field;
+    return v;
+  };
+  py::dict d;
+  d["rms"] = column(&dyncal::host::JointMetrics::rms);
+  d["rms_tau"] = column(&dyncal::host::JointMetrics::rms_tau);
+  d["relative_rms"] = column(&dyncal::host::JointMetrics::relative_rms);
+  d["r2"] = column(&dyncal::host::JointMetrics::r2);
+  d["e_T_abs"] = column(&dyncal::host::JointMetrics::e_T_abs);
+  d["e_T_abs_std"] = column(&dyncal::host::JointMetrics::e_T_abs_std);
+  return d;
+}
+
 }  // namespace
 
 PYBIND11_MODULE(dyncal, m) {
@@ -315,4 +409,147 @@ PYBIND11_MODULE(dyncal, m) {
          "its 'gate' saying which items failed.")
             .c_str());
   }
+
+  // The library's functions and types, bound directly (no command line in between).
+  using dyncal::host::IdentifyResult;
+  using dyncal::host::JointLog;
+  using dyncal::host::ParameterSet;
+  py::class_<JointLog>(m, "Log",
+                       "A joint log: t (S) [s], q, qd, tau (S, N) [rad, rad/s, Nm; m, m/s, N on a prismatic joint]. "
+                       "Log(robot, t, q, tau, qd=None) from arrays; dyncal.read_log reads files as the CLI does.")
+      .def(py::init(&log_of), py::arg("robot"), py::arg("t"), py::arg("q"), py::arg("tau"), py::arg("qd") = py::none())
+      .def_readonly("t", &JointLog::t)
+      .def_readonly("q", &JointLog::q)
+      .def_readonly("qd", &JointLog::qd)
+      .def_readonly("tau", &JointLog::tau)
+      .def_readonly("has_qd", &JointLog::has_qd)
+      .def_readonly("source", &JointLog::source)
+      .def_property_readonly("samples", &JointLog::samples)
+      .def_property_readonly("joints", &JointLog::joints)
+      .def("__repr__", [](const JointLog& l) {
+        return "<dyncal.Log " + l.source + ", " + std::to_string(l.samples()) + " samples, " +
+               std::to_string(l.joints()) + " joints>";
+      });
+  m.def(
+      "read_log",
+      [](const Robot& r, const py::object& data, const std::string& format, const std::string& columns,
+         const std::string& torque_from, bool merge_on_time, bool drop_outliers, const std::string& topic,
+         const std::string& effort, const std::string& clock) {
+        std::vector<std::string> paths;
+        if (py::isinstance<py::str>(data))
+          paths.push_back(data.cast<std::string>());
+        else
+          paths = data.cast<std::vector<std::string>>();
+        return read_log(r, paths, format, columns, torque_from, merge_on_time, drop_outliers, topic, effort, clock);
+      },
+      py::arg("robot"), py::arg("data"), py::arg("format") = "csv", py::arg("columns") = "",
+      py::arg("torque_from") = "torque", py::arg("merge_on_time") = false, py::arg("drop_outliers") = false,
+      py::arg("topic") = "", py::arg("effort") = "", py::arg("clock") = "header",
+      "The log at `data` (a path, or a list of paths stacked as segments) as `dyncal identify --data` reads it "
+      "(--format csv|ur-rtde|tx40|ros2-bag, --columns, --torque-from, --merge-on-time, --drop-outliers, the bag "
+      "options), checked against the robot's limits. Raises InputError with the CLI's message.");
+
+  py::class_<ParameterSet>(m, "ParameterSet",
+                           "Identified parameters of one robot and model (a `dyncal identify --params` file).")
+      .def_static("read", &dyncal::host::read_parameter_file, py::arg("path"),
+                  "Reads a parameter file; raises InputError naming what is wrong.")
+      .def(
+          "write",
+          [](const ParameterSet& p, const std::string& path, const std::string& method) {
+            dyncal::app::write_json_file(path, dyncal::host::parameter_file_json(p, method), "parameter file");
+          },
+          py::arg("path"), py::arg("method") = "wls", "Writes the parameter file (all or nothing).")
+      .def_readonly("robot", &ParameterSet::robot)
+      .def_readonly("model", &ParameterSet::model)
+      .def_readonly("source", &ParameterSet::source)
+      .def_readonly("names", &ParameterSet::names)
+      .def_readonly("values", &ParameterSet::values)
+      .def_readonly("std", &ParameterSet::stdev, "NaN where the parameter was not determined")
+      .def("__repr__", [](const ParameterSet& p) {
+        return "<dyncal.ParameterSet " + p.robot + ", " + p.model + ", " + std::to_string(p.values.size()) +
+               " parameters>";
+      });
+
+  py::class_<IdentifyResult>(m, "Fit", "What dyncal.fit identified (the identify report's content).")
+      .def_readonly("robot", &IdentifyResult::robot)
+      .def_readonly("method", &IdentifyResult::method)
+      .def_readonly("model", &IdentifyResult::model)
+      .def_readonly("validation", &IdentifyResult::validation)
+      .def_readonly("notes", &IdentifyResult::notes)
+      .def_readonly("condition_number", &IdentifyResult::condition_number)
+      .def_readonly("samples_used", &IdentifyResult::samples_used)
+      .def_property_readonly("names",
+                             [](const IdentifyResult& r) {
+                               std::vector<std::string> v;
+                               for (const auto& p : r.params) v.push_back(p.name);
+                               return v;
+                             })
+      .def_property_readonly("values",
+                             [](const IdentifyResult& r) {
+                               Eigen::VectorXd v(static_cast<Eigen::Index>(r.params.size()));
+                               for (size_t i = 0; i < r.params.size(); ++i)
+                                 v[static_cast<Eigen::Index>(i)] = r.params[i].value;
+                               return v;
+                             })
+      .def_property_readonly("std",
+                             [](const IdentifyResult& r) {
+                               Eigen::VectorXd v(static_cast<Eigen::Index>(r.params.size()));
+                               for (size_t i = 0; i < r.params.size(); ++i)
+                                 v[static_cast<Eigen::Index>(i)] = r.params[i].std;
+                               return v;
+                             })
+      .def_property_readonly("verdicts",
+                             [](const IdentifyResult& r) {
+                               std::vector<std::string> v;
+                               for (const auto& p : r.params) v.push_back(dyncal::host::to_string(p.verdict));
+                               return v;
+                             })
+      .def_property_readonly(
+          "joints", [](const IdentifyResult& r) { return metrics_of(r.joints); },
+          "the validation's per-joint metrics: rms, rms_tau, relative_rms, r2, e_T_abs, e_T_abs_std (numpy, joint j "
+          "at index j - 1)")
+      .def("parameter_set", &dyncal::host::parameter_set, "The fit as a ParameterSet (what --params writes).");
+
+  m.def(
+      "fit",
+      [](const Robot& r, const JointLog& log, const std::string& method, const std::string& model, double cutoff_hz,
+         int filter_order, int decimate, int folds, double block_seconds, double validate_last, double prior_std,
+         double min_speed, bool sign_constraints, bool friction_per_joint, bool strict, std::uint64_t seed) {
+        const auto o =
+            identify_options(r, method, model, cutoff_hz, filter_order, decimate, folds, block_seconds, validate_last,
+                             prior_std, min_speed, sign_constraints, friction_per_joint, strict, seed);
+        py::gil_scoped_release release;
+        return dyncal::host::identify(r.description, log, o);
+      },
+      py::arg("robot"), py::arg("log"), py::arg("method") = "wls", py::arg("model") = "eq7,rotor_inertia,offset",
+      py::arg("cutoff_hz") = 20.0, py::arg("filter_order") = 4, py::arg("decimate") = 0, py::arg("folds") = 5,
+      py::arg("block_seconds") = 0.5, py::arg("validate_last") = 0.0, py::arg("prior_std") = 0.5,
+      py::arg("min_speed") = 0.0, py::arg("sign_constraints") = false, py::arg("friction_per_joint") = false,
+      py::arg("strict") = false, py::arg("seed") = 1,
+      "Identifies the model from `log` (identify.hpp: the CLI's identify, its options by the same names and "
+      "defaults: --method, --model, --cutoff, --filter-order, --decimate, --folds, --block, --validate-last, "
+      "--prior-std, --min-speed, --sign-constraints, --friction-per-joint, --strict, --seed). Returns a Fit. "
+      "Raises InputError.");
+  m.def(
+      "predict_log",
+      [](const Robot& r, const JointLog& log, const ParameterSet& params, double cutoff_hz, int filter_order,
+         int decimate) {
+        dyncal::host::IdentifyOptions o;
+        o.cutoff_hz = cutoff_hz;
+        o.filter_order = filter_order;
+        o.decimate = decimate;
+        dyncal::host::LogPrediction p;
+        {
+          py::gil_scoped_release release;
+          p = dyncal::host::predict(r.description, log, o, params);
+        }
+        py::dict d = metrics_of(p.joints);
+        d["samples"] = p.samples;
+        d["notes"] = p.notes;
+        return d;
+      },
+      py::arg("robot"), py::arg("log"), py::arg("params"), py::arg("cutoff_hz") = 20.0, py::arg("filter_order") = 4,
+      py::arg("decimate") = 0,
+      "The torque of `log` predicted by `params`, filtered as identify filters (prediction.hpp): per-joint "
+      "metrics as numpy arrays (rms, rms_tau, relative_rms, r2, e_T_abs, e_T_abs_std), samples, notes.");
 }

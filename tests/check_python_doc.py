@@ -1,6 +1,9 @@
 #!/usr/bin/env python3
 """Runs docs/python.md's example with the built module and checks it against the dyncal program.
 
+- the bound functions (read_log, fit, ParameterSet, predict_log) give identify's and predict's figures,
+  bit for bit;
+
 - every identified parameter and standard deviation equals `dyncal identify`'s with the same
   options, bit for bit;
 - the regressor times the base parameters equals the generated inverse dynamics (Newton-Euler,
@@ -85,6 +88,30 @@ def main():
     if json.dumps({**to_lists(predicted), "command_line": ""}, sort_keys=True) != json.dumps(
             {**cli_predicted, "report_text": predicted["report_text"], "command_line": ""}, sort_keys=True):
         failures.append("predict: the module's document differs from the CLI's")
+
+    # The library's functions bound directly (no command line): the same fit and prediction, bit for bit.
+    tx40 = dyncal.Robot("tx40")
+    log = dyncal.read_log(tx40, "tests/data/staubli_tx40", format="tx40")
+    fit = dyncal.fit(tx40, log, model="eq7,rotor_inertia,offset")
+    if list(fit.names) != [p["name"] for p in cli["params"]]:
+        failures.append("fit: its parameter names are not the CLI's")
+    for name, value, std, b in zip(fit.names, fit.values, fit.std, cli["params"]):
+        std = None if std != std else float(std)  # the report's null: not determined
+        if float(value) != b["value"] or std != b["std"]:
+            failures.append(f"fit {name}: python {value!r} +- {std!r}, CLI {b['value']!r} +- {b['std']!r}")
+    for j, b in enumerate(cli["joints"]):
+        if float(fit.joints["r2"][j]) != b["r2_validation"]:
+            failures.append(f"fit joint {j + 1} r2: python {fit.joints['r2'][j]!r}, CLI {b['r2_validation']!r}")
+    with tempfile.TemporaryDirectory() as tmp:
+        path = os.path.join(tmp, "fit.json")
+        fit.parameter_set().write(path)
+        back = dyncal.ParameterSet.read(path)
+        if list(back.values) != list(fit.values) or list(back.names) != list(fit.names):
+            failures.append("ParameterSet: the file written does not read back as the fit")
+        bound = dyncal.predict_log(tx40, log, back)
+    for j, b in enumerate(cli_predicted["joints"]):
+        if float(bound["rms"][j]) != b["rms_validation"]:
+            failures.append(f"predict_log joint {j + 1} rms: python {bound['rms'][j]!r}, CLI {b['rms_validation']!r}")
 
     # Y_b phi_b against the generated Newton-Euler.
     robot, q, qd, qdd, tau, phi = (scope[k] for k in ("robot", "q", "qd", "qdd", "tau", "phi_b"))

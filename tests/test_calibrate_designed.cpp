@@ -2,7 +2,7 @@
 // the limits) instead of the random one, on its own fixture drive (a calibration flashes the
 // drive's table, and the before/after check needs the factory table): the drive follows it and
 // the fit meets the same bounds as with the random excitation.
-#include "dyncal_host/identification/excitation/excitation.hpp"
+#include "dyncal_host/excitation/excitation.hpp"
 #include "support/calibration_check.hpp"
 #include "support/test_paths.hpp"
 

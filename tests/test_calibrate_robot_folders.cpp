@@ -21,7 +21,7 @@
 #include "dyncal_host/calibration/calibrate.hpp"
 #include "dyncal_host/drive/ground_truth.hpp"
 #include "dyncal_host/drive/scenario.hpp"
-#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
+#include "dyncal_host/model/compiled_robot.hpp"
 #include "support/test_paths.hpp"
 #include "support/torque_share.hpp"
 

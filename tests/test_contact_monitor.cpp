@@ -18,9 +18,9 @@
 #include <functional>
 #include <random>
 
-#include "dyncal_host/identification/monitoring/contact_monitor.hpp"
 #include "dyncal_host/identification/pipeline/identify.hpp"
-#include "dyncal_host/identification/reports/prediction.hpp"
+#include "dyncal_host/identification/pipeline/prediction.hpp"
+#include "dyncal_host/monitoring/contact_monitor.hpp"
 #include "support/dyncal_cli.hpp"
 #include "support/simulated_log.hpp"
 #include "support/test_paths.hpp"

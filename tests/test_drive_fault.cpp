@@ -26,7 +26,7 @@
 #include "dyncal_host/calibration/calibrate.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/robot_description.hpp"
-#include "dyncal_host/identification/logs/joint_log.hpp"
+#include "dyncal_host/logs/joint_log.hpp"
 #include "dyncal_port/modbus_drive.hpp"
 #include "support/drive_uri.hpp"
 #include "support/test_paths.hpp"

@@ -8,7 +8,7 @@
 #include "dyncal/generated/er20/robot.hpp"
 #include "dyncal/identification_model.hpp"
 #include "dyncal_host/common/input_error.hpp"
-#include "dyncal_host/identification/excitation/excitation.hpp"
+#include "dyncal_host/excitation/excitation.hpp"
 
 namespace {
 

@@ -11,8 +11,8 @@
 #include <Eigen/Dense>
 #include <filesystem>
 
-#include "dyncal_host/identification/methods/inertial_parameters.hpp"
-#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
+#include "dyncal_host/model/compiled_robot.hpp"
+#include "dyncal_host/model/inertial_parameters.hpp"
 #include "support/dyncal_cli.hpp"
 #include "support/simulated_log.hpp"
 #include "support/test_paths.hpp"

@@ -14,8 +14,8 @@
 #include <fstream>
 #include <sstream>
 
-#include "dyncal_host/identification/logs/joint_log.hpp"
-#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
+#include "dyncal_host/logs/joint_log.hpp"
+#include "dyncal_host/model/compiled_robot.hpp"
 #include "support/dyncal_cli.hpp"
 #include "support/simulated_log.hpp"
 #include "support/test_paths.hpp"

@@ -9,10 +9,10 @@
 
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/robot_description.hpp"
-#include "dyncal_host/identification/logs/joint_log.hpp"
 #include "dyncal_host/identification/methods/friction_comparison.hpp"
 #include "dyncal_host/identification/pipeline/identify.hpp"
-#include "dyncal_host/identification/pipeline/stacked_data.hpp"
+#include "dyncal_host/logs/joint_log.hpp"
+#include "dyncal_host/model/stacked_data.hpp"
 #include "support/test_paths.hpp"
 
 namespace {

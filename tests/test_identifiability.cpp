@@ -13,9 +13,9 @@
 
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/identification/methods/identifiability.hpp"
-#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
 #include "dyncal_host/identification/pipeline/identify.hpp"
 #include "dyncal_host/identification/reports/identify_report.hpp"
+#include "dyncal_host/model/compiled_robot.hpp"
 #include "support/simulated_log.hpp"
 
 namespace {

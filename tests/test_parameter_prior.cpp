@@ -13,8 +13,8 @@
 #include <random>
 
 #include "dyncal_host/identification/methods/identifiability.hpp"
-#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
 #include "dyncal_host/identification/pipeline/identify.hpp"
+#include "dyncal_host/model/compiled_robot.hpp"
 #include "support/simulated_log.hpp"
 
 namespace {

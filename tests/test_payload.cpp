@@ -13,10 +13,10 @@
 #include <random>
 
 #include "dyncal_host/common/input_error.hpp"
-#include "dyncal_host/identification/logs/joint_log.hpp"
-#include "dyncal_host/identification/payload/payload.hpp"
-#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
-#include "dyncal_host/identification/reports/prediction.hpp"
+#include "dyncal_host/identification/pipeline/prediction.hpp"
+#include "dyncal_host/logs/joint_log.hpp"
+#include "dyncal_host/model/compiled_robot.hpp"
+#include "dyncal_host/payload/payload.hpp"
 #include "support/dyncal_cli.hpp"
 #include "support/payload_load.hpp"
 #include "support/simulated_log.hpp"

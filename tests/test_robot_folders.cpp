@@ -18,10 +18,10 @@
 #include "dyncal_host/common/temporary_folder.hpp"
 #include "dyncal_host/diagnosis/diagnose.hpp"
 #include "dyncal_host/drive/simulated_drive.hpp"
-#include "dyncal_host/identification/excitation/excitation.hpp"
-#include "dyncal_host/identification/logs/column_map.hpp"
-#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
+#include "dyncal_host/excitation/excitation.hpp"
 #include "dyncal_host/identification/pipeline/identify.hpp"
+#include "dyncal_host/logs/column_map.hpp"
+#include "dyncal_host/model/compiled_robot.hpp"
 #include "support/simulated_log.hpp"
 #include "support/torque_share.hpp"
 

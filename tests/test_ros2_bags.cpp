@@ -19,7 +19,7 @@
 #include <vector>
 
 #include "dyncal_host/common/robot_description.hpp"
-#include "dyncal_host/identification/logs/joint_log.hpp"
+#include "dyncal_host/logs/joint_log.hpp"
 #include "support/dyncal_cli.hpp"
 #include "support/test_paths.hpp"
 

@@ -14,8 +14,8 @@
 
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/normal_quantile.hpp"
-#include "dyncal_host/identification/logs/joint_log.hpp"
-#include "dyncal_host/identification/payload/torque_constants.hpp"
+#include "dyncal_host/logs/joint_log.hpp"
+#include "dyncal_host/payload/torque_constants.hpp"
 #include "support/dyncal_cli.hpp"
 #include "support/payload_load.hpp"
 #include "support/simulated_log.hpp"

@@ -26,7 +26,7 @@
 #include <string>
 #include <vector>
 
-#include "dyncal_host/identification/logs/joint_log.hpp"
+#include "dyncal_host/logs/joint_log.hpp"
 #include "support/dyncal_cli.hpp"
 #include "support/simulated_log.hpp"
 #include "support/test_paths.hpp"

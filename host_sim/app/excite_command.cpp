@@ -4,7 +4,7 @@
 #include <memory>
 
 #include "commands.hpp"
-#include "dyncal_host/identification/excitation/excitation.hpp"
+#include "dyncal_host/excitation/excitation.hpp"
 
 namespace dyncal::app {
 namespace {

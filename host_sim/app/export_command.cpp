@@ -18,9 +18,9 @@
 #include "dyncal_host/common/model_effects.hpp"
 #include "dyncal_host/common/output_file.hpp"
 #include "dyncal_host/common/temporary_folder.hpp"
-#include "dyncal_host/identification/methods/inertial_parameters.hpp"
-#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
-#include "dyncal_host/identification/reports/prediction.hpp"
+#include "dyncal_host/identification/pipeline/prediction.hpp"
+#include "dyncal_host/model/compiled_robot.hpp"
+#include "dyncal_host/model/inertial_parameters.hpp"
 #include "mujoco_model.hpp"
 
 namespace dyncal::app {

@@ -8,9 +8,9 @@
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/model_terms.hpp"
 #include "dyncal_host/common/robot_description.hpp"
-#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
-#include "dyncal_host/identification/reports/drive_table.hpp"
-#include "dyncal_host/identification/reports/prediction.hpp"
+#include "dyncal_host/identification/pipeline/prediction.hpp"
+#include "dyncal_host/model/compiled_robot.hpp"
+#include "dyncal_host/model/drive_table.hpp"
 
 namespace dyncal::app {
 namespace {

@@ -8,9 +8,9 @@
 
 #include "commands.hpp"
 #include "dyncal_host/common/input_error.hpp"
-#include "dyncal_host/identification/monitoring/contact_monitor.hpp"
-#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
-#include "dyncal_host/identification/reports/prediction.hpp"
+#include "dyncal_host/identification/pipeline/prediction.hpp"
+#include "dyncal_host/model/compiled_robot.hpp"
+#include "dyncal_host/monitoring/contact_monitor.hpp"
 #include "dyncal_host/report/torque_series.hpp"
 #include "dyncal_port/modbus_drive.hpp"
 #include "report_outputs.hpp"
@@ -101,14 +101,10 @@ int write_drive_monitor(const MonitorSettings& s, const host::RobotDescription& 
                        {s.params});
 }
 
-int run_monitor(MonitorSettings& s) {
-  prepare_report_outputs(s.out);
-  const host::ParameterSet params = host::read_parameter_file(s.params);
-  if (s.log.robot.name.empty()) s.log.robot.name = params.robot;
-  if (s.log.robot.name != params.robot)
-    throw host::InputError(s.params + ": parameters are for robot '" + params.robot + "', not '" + s.log.robot.name +
-                           "'");
-  const auto robot = s.log.load_robot();
+/// The residual statistics the thresholds come from: --reference's contact-free log observed with
+/// --gain, else the parameter file's ("monitor"). Throws InputError.
+host::ResidualStatistics monitor_statistics(const MonitorSettings& s, const host::RobotDescription& robot,
+                                            const host::ParameterSet& params) {
   host::ResidualStatistics stats;
   if (!s.reference.empty()) {
     const host::ObserverRun ref = host::run_observer(robot, s.log.load_logs(robot, {s.reference}), params, s.gain);
@@ -125,22 +121,13 @@ int run_monitor(MonitorSettings& s) {
                              "--reference LOG, a log of contact-free motion");
     stats = host::read_residual_statistics(file["monitor"], s.params);
   }
-  if (static_cast<int>(stats.std.size()) != robot.num_joints)
-    throw host::InputError(s.params + ": the residual statistics are for " + std::to_string(stats.std.size()) +
-                           " joints, the robot has " + std::to_string(robot.num_joints));
-  if (!s.drive.empty()) {
-    if (!s.log.data.empty() || !s.plots.empty())
-      throw host::InputError(
-          "--drive sets the drive's collision monitor; --data and --plots read a log: one or the other");
-    return write_drive_monitor(s, robot, stats);
-  }
-  if (s.log.data.empty()) throw host::InputError("--data LOG is required (or --drive URI)");
-  // The statistics at the log's own rate (docs/monitor.md "Another rate"): their gain, lowered to
-  // 1 / dt where this log is a little slower, within the tolerance the false-alarm rate allows.
-  const std::vector<host::ContactThreshold> thresholds = host::contact_thresholds(stats, s.alarms_per_hour);
-  const double tolerance = host::statistics_rate_tolerance(stats, thresholds);
-  host::ObserverRun run = host::run_observer(robot, s.log.load_log(robot), params, stats.gain, stats.band,
-                                             host::ResidualKind::momentum_observer, 1.0);
+  return stats;
+}
+
+/// Refuses (InputError) a log whose rate or gain is further from the statistics' than `tolerance`
+/// allows (their false-alarm rate at most doubles, docs/monitor.md "Another rate"); notes a change
+/// within it.
+void check_log_rate(host::ObserverRun& run, const host::ResidualStatistics& stats, double tolerance) {
   const double period_change = std::abs(run.period / stats.period - 1.0);
   const double gain_change = std::abs(run.gain / stats.gain - 1.0);
   if (std::max(period_change, gain_change) > tolerance)
@@ -159,6 +146,34 @@ int run_monitor(MonitorSettings& s) {
          << " % where the false-alarm rate at most doubles (docs/monitor.md \"Another rate\")";
     run.notes.push_back(note.str());
   }
+}
+
+int run_monitor(MonitorSettings& s) {
+  prepare_report_outputs(s.out);
+  const host::ParameterSet params = host::read_parameter_file(s.params);
+  if (s.log.robot.name.empty()) s.log.robot.name = params.robot;
+  if (s.log.robot.name != params.robot)
+    throw host::InputError(s.params + ": parameters are for robot '" + params.robot + "', not '" + s.log.robot.name +
+                           "'");
+  const auto robot = s.log.load_robot();
+  const host::ResidualStatistics stats = monitor_statistics(s, robot, params);
+  if (static_cast<int>(stats.std.size()) != robot.num_joints)
+    throw host::InputError(s.params + ": the residual statistics are for " + std::to_string(stats.std.size()) +
+                           " joints, the robot has " + std::to_string(robot.num_joints));
+  if (!s.drive.empty()) {
+    if (!s.log.data.empty() || !s.plots.empty())
+      throw host::InputError(
+          "--drive sets the drive's collision monitor; --data and --plots read a log: one or the other");
+    return write_drive_monitor(s, robot, stats);
+  }
+  if (s.log.data.empty()) throw host::InputError("--data LOG is required (or --drive URI)");
+  // The statistics at the log's own rate (docs/monitor.md "Another rate"): their gain, lowered to
+  // 1 / dt where this log is a little slower, within the tolerance the false-alarm rate allows.
+  const std::vector<host::ContactThreshold> thresholds = host::contact_thresholds(stats, s.alarms_per_hour);
+  const double tolerance = host::statistics_rate_tolerance(stats, thresholds);
+  host::ObserverRun run = host::run_observer(robot, s.log.load_log(robot), params, stats.gain, stats.band,
+                                             host::ResidualKind::momentum_observer, 1.0);
+  check_log_rate(run, stats, tolerance);
   const std::vector<host::Contact> contacts = host::detect_contacts(run, stats, thresholds);
 
   std::cout << "monitor: generalised-momentum observer, K = " << stats.gain << " 1/s (time constant "

@@ -1,18 +1,19 @@
 // Options and files several subcommands share.
+#include "options.hpp"
+
 #include <fstream>
 #include <optional>
 #include <utility>
 
-#include "commands.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/output_file.hpp"
 #include "dyncal_host/common/robot_description.hpp"
-#include "dyncal_host/identification/logs/column_map.hpp"
-#include "dyncal_host/identification/logs/log_plausibility.hpp"
-#include "dyncal_host/identification/logs/merged_files.hpp"
-#include "dyncal_host/identification/logs/ros2_bag.hpp"
-#include "dyncal_host/identification/logs/uniform_grid.hpp"
-#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
+#include "dyncal_host/logs/column_map.hpp"
+#include "dyncal_host/logs/log_plausibility.hpp"
+#include "dyncal_host/logs/merged_files.hpp"
+#include "dyncal_host/logs/ros2_bag.hpp"
+#include "dyncal_host/logs/uniform_grid.hpp"
+#include "dyncal_host/model/compiled_robot.hpp"
 
 namespace dyncal::app {
 

@@ -9,10 +9,10 @@
 #include "dyncal/modbus_map.hpp"
 #include "dyncal_host/calibration/calibrate.hpp"
 #include "dyncal_host/common/input_error.hpp"
-#include "dyncal_host/identification/excitation/excitation.hpp"
-#include "dyncal_host/identification/payload/payload.hpp"
-#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
-#include "dyncal_host/identification/reports/prediction.hpp"
+#include "dyncal_host/excitation/excitation.hpp"
+#include "dyncal_host/identification/pipeline/prediction.hpp"
+#include "dyncal_host/model/compiled_robot.hpp"
+#include "dyncal_host/payload/payload.hpp"
 #include "report_outputs.hpp"
 
 namespace dyncal::app {

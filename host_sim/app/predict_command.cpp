@@ -4,8 +4,8 @@
 
 #include "commands.hpp"
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/identification/pipeline/prediction.hpp"
 #include "dyncal_host/identification/reports/identify_report.hpp"
-#include "dyncal_host/identification/reports/prediction.hpp"
 #include "dyncal_host/report/torque_series.hpp"
 #include "report_outputs.hpp"
 

@@ -3,10 +3,10 @@
 
 #include <iostream>
 
-#include "commands.hpp"
 #include "dyncal_host/common/output_file.hpp"
 #include "dyncal_host/report/input_digest.hpp"
 #include "dyncal_host/report/report_page.hpp"
+#include "options.hpp"
 
 namespace dyncal::app {
 namespace {

@@ -13,7 +13,7 @@
 
 #include "commands.hpp"
 #include "dyncal_host/common/input_error.hpp"
-#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
+#include "dyncal_host/model/compiled_robot.hpp"
 
 namespace dyncal::app {
 namespace {

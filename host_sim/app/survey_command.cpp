@@ -5,7 +5,9 @@
 
 #include "commands.hpp"
 #include "dyncal_host/common/input_error.hpp"
-#include "dyncal_host/survey/survey.hpp"
+#include "dyncal_host/survey/compare_survey.hpp"
+#include "dyncal_host/survey/print_survey.hpp"
+#include "dyncal_host/survey/run_survey.hpp"
 #include "dyncal_host/survey/survey_plots.hpp"
 #include "entry_points.hpp"
 

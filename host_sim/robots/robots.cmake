@@ -10,7 +10,7 @@
 # (UNITY_GROUP <robot>), so that their Eigen instantiations are compiled once. Adding a robot
 # compiles only its own unit. The test robots (tests/robots/) go into the test programs and
 # dyncal_test_cli, not into the dyncal program. Part `robots` of the dependency rule: it depends on
-# calibration, identification and drive.
+# model (the registry) and drive.
 set(DYNCAL_ROBOTS_GENERATED ${CMAKE_BINARY_DIR}/robots_generated)
 file(GLOB codegen_sources ${PROJECT_SOURCE_DIR}/codegen/*.py ${PROJECT_SOURCE_DIR}/codegen/dyncal_codegen/*.py)
 set(robot_sources "")       # robots/*: the robots the dyncal program ships with (and the user's)
@@ -56,15 +56,15 @@ foreach(target dyncal_host_robots dyncal_host_test_robots)
   else()
     add_library(${target} OBJECT ${test_robot_sources})
   endif()
-  target_include_directories(${target} PRIVATE ${DYNCAL_ROBOTS_GENERATED})
-  target_link_libraries(${target} PUBLIC dyncal_host_identification dyncal_host_drive dyncal_host_calibration)
+  target_include_directories(${target} PRIVATE ${DYNCAL_ROBOTS_GENERATED} ${CMAKE_CURRENT_LIST_DIR}/include)
+  target_link_libraries(${target} PUBLIC dyncal_host_model dyncal_host_drive)
   target_compile_options(${target} PRIVATE ${DYNCAL_WARNINGS})
   set_target_properties(${target} PROPERTIES UNITY_BUILD ON UNITY_BUILD_MODE GROUP)
 endforeach()
 # One precompiled header for every robot's unit: the headers all of them parse (Eigen, the drive
 # plant's and the registry's templates).
 target_precompile_headers(dyncal_host_robots PRIVATE <Eigen/Dense> <dyncal_host/drive/drive_plant_of.hpp>
-  <dyncal_host/identification/pipeline/register_robot.hpp> <utility>)
+  <dyncal_host/robots/register_robot.hpp> <utility>)
 target_precompile_headers(dyncal_host_test_robots REUSE_FROM dyncal_host_robots)
-set_property(GLOBAL PROPERTY DYNCAL_HOST_CLOSURE_robots "calibration;diagnosis;identification;drive;common")
+set_property(GLOBAL PROPERTY DYNCAL_HOST_CLOSURE_robots "model;logs;drive;common")
 set_property(GLOBAL APPEND PROPERTY DYNCAL_HOST_PARTS robots)

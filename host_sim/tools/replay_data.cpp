@@ -26,8 +26,8 @@
 #include "dyncal_host/common/robot_description.hpp"
 #include "dyncal_host/drive/scenario.hpp"
 #include "dyncal_host/drive/simulated_drive.hpp"
-#include "dyncal_host/identification/excitation/excitation.hpp"
-#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
+#include "dyncal_host/excitation/excitation.hpp"
+#include "dyncal_host/model/compiled_robot.hpp"
 #include "er20_replay_data.hpp"
 #include "replay.hpp"
 
@@ -169,6 +169,55 @@ void write_ratings(const char* path) {
   if (!f) throw std::runtime_error(std::string("cannot write ") + path);
 }
 
+/// The recording: the er20's simulated drive (its default scenario with Eq. 4 friction, seed kSeed,
+/// kRate) playing two periods of the default excitation; q[6] and tau[6] per sample. `scenario`
+/// receives the drive's scenario, `cond` the excitation's cond(K). Throws std::runtime_error when
+/// the drive faults.
+std::vector<std::array<float, 12>> recorded_samples(dyncal::host::Scenario& scenario, double& cond) {
+  const auto robot = dyncal::host::load_robot(dyncal::host::default_robots_dir(), "er20");
+  scenario = dyncal::host::default_scenario(robot);
+  scenario.seed = kSeed;
+  scenario.sample_rate_hz = kRate;
+  for (int j = 0; j < 6; ++j) {
+    scenario.friction[j].model = dyncal::host::FrictionModel::eq4;  // Fc, Fs, qds, beta of robot.json
+    scenario.effects[j].rotor_inertia = 0.0;                        // the replayed models declare none
+  }
+  const auto traj = dyncal::host::default_excitation(robot, 0.1, 5, 16, kSeed, &cond);
+  const std::string table = (std::filesystem::temp_directory_path() / "dyncal_replay_table.bin").string();
+  std::filesystem::remove(table);
+  dyncal::host::SimulatedDrive drive(robot, scenario, table);
+  for (int j = 0; j < 6; ++j) {
+    for (int l = 0; l < dyncal::modbus_map::kMaxHarmonics; ++l) {
+      drive.trajectory.a(j, l) = traj.a(j, l);
+      drive.trajectory.b(j, l) = traj.b(j, l);
+    }
+    drive.trajectory.q0[j] = traj.q0[j];
+  }
+  drive.trajectory.f_f = traj.f_f;
+  drive.trajectory.harmonics = traj.harmonics;
+  drive.periods = 2;
+  drive.sample_rate_hz = kRate;
+  drive.start();
+  std::vector<std::array<float, 12>> samples;
+  while (drive.state() == dyncal::modbus_map::DriveState::playing) {
+    drive.step();
+    for (const auto& s : drive.ring()) {
+      std::array<float, 12> row{};
+      for (int j = 0; j < 6; ++j) {
+        row[j] = s.q[j];
+        row[6 + j] = s.tau[j];
+      }
+      samples.push_back(row);
+    }
+    if (!drive.ring().empty()) drive.ack(drive.ring().back().seq + 1);
+  }
+  std::filesystem::remove(table);
+  if (drive.state() == dyncal::modbus_map::DriveState::fault)
+    throw std::runtime_error("the simulated drive stopped: joint " + std::to_string(drive.fault_joint()) + " " +
+                             dyncal::modbus_map::to_string(drive.fault()));
+  return samples;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -195,50 +244,9 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
-    const auto robot = dyncal::host::load_robot(dyncal::host::default_robots_dir(), "er20");
-    dyncal::host::Scenario scenario = dyncal::host::default_scenario(robot);
-    scenario.seed = kSeed;
-    scenario.sample_rate_hz = kRate;
-    for (int j = 0; j < 6; ++j) {
-      scenario.friction[j].model = dyncal::host::FrictionModel::eq4;  // Fc, Fs, qds, beta of robot.json
-      scenario.effects[j].rotor_inertia = 0.0;                        // the replayed models declare none
-    }
     double cond = 0;
-    const auto traj = dyncal::host::default_excitation(robot, 0.1, 5, 16, kSeed, &cond);
-    const std::string table = (std::filesystem::temp_directory_path() / "dyncal_replay_table.bin").string();
-    std::filesystem::remove(table);
-    dyncal::host::SimulatedDrive drive(robot, scenario, table);
-    for (int j = 0; j < 6; ++j) {
-      for (int l = 0; l < dyncal::modbus_map::kMaxHarmonics; ++l) {
-        drive.trajectory.a(j, l) = traj.a(j, l);
-        drive.trajectory.b(j, l) = traj.b(j, l);
-      }
-      drive.trajectory.q0[j] = traj.q0[j];
-    }
-    drive.trajectory.f_f = traj.f_f;
-    drive.trajectory.harmonics = traj.harmonics;
-    drive.periods = 2;
-    drive.sample_rate_hz = kRate;
-    drive.start();
-    std::vector<std::array<float, 12>> samples;
-    while (drive.state() == dyncal::modbus_map::DriveState::playing) {
-      drive.step();
-      for (const auto& s : drive.ring()) {
-        std::array<float, 12> row{};
-        for (int j = 0; j < 6; ++j) {
-          row[j] = s.q[j];
-          row[6 + j] = s.tau[j];
-        }
-        samples.push_back(row);
-      }
-      if (!drive.ring().empty()) drive.ack(drive.ring().back().seq + 1);
-    }
-    std::filesystem::remove(table);
-    if (drive.state() == dyncal::modbus_map::DriveState::fault) {
-      std::fprintf(stderr, "replay_data: the simulated drive stopped: joint %d %s\n", drive.fault_joint(),
-                   dyncal::modbus_map::to_string(drive.fault()));
-      return 1;
-    }
+    dyncal::host::Scenario scenario;
+    const std::vector<std::array<float, 12>> samples = recorded_samples(scenario, cond);
     const double* sigma = scenario.tau_noise_std.data();
     const References refs = references(samples, sigma);
 

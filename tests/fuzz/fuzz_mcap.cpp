@@ -1,4 +1,4 @@
-// libFuzzer target: the MCAP reader (host_sim/identification/src/logs/mcap_reader.cpp) and the
+// libFuzzer target: the MCAP reader (host_sim/logs/src/mcap_reader.cpp) and the
 // JointState CDR decoder (joint_state_cdr.cpp) on any bytes. Bad input must end in InputError with a
 // message (the reader) or false with an error (the decoder); anything else (a crash, another
 // exception, an out-of-bounds access, undefined behaviour, a huge allocation) is a finding.
@@ -8,8 +8,8 @@
 #include <string>
 
 #include "dyncal_host/common/input_error.hpp"
-#include "dyncal_host/identification/logs/joint_state_cdr.hpp"
-#include "dyncal_host/identification/logs/mcap_reader.hpp"
+#include "dyncal_host/logs/joint_state_cdr.hpp"
+#include "dyncal_host/logs/mcap_reader.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   std::istringstream in(std::string(reinterpret_cast<const char*>(data), size));

@@ -1,4 +1,4 @@
-// libFuzzer target: the CSV reader (host_sim/identification/src/logs/numeric_csv.cpp) on any text. Bad
+// libFuzzer target: the CSV reader (host_sim/logs/src/numeric_csv.cpp) on any text. Bad
 // input must end in InputError with a message; anything else (a crash, another exception, an
 // out-of-bounds access, undefined behaviour) is a finding. A parsed table must be consistent.
 #include <cmath>
@@ -8,7 +8,7 @@
 #include <string>
 
 #include "dyncal_host/common/input_error.hpp"
-#include "dyncal_host/identification/logs/numeric_csv.hpp"
+#include "dyncal_host/logs/numeric_csv.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   std::istringstream in(std::string(reinterpret_cast<const char*>(data), size));

@@ -14,7 +14,7 @@
 #include "dyncal_host/calibration/calibrate.hpp"
 #include "dyncal_host/drive/ground_truth.hpp"
 #include "dyncal_host/drive/scenario.hpp"
-#include "dyncal_host/identification/logs/joint_log.hpp"
+#include "dyncal_host/logs/joint_log.hpp"
 #include "support/drive_uri.hpp"
 
 namespace dyncal::host {

@@ -4,7 +4,7 @@
 #include <Eigen/Geometry>
 #include <random>
 
-#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
+#include "dyncal_host/model/compiled_robot.hpp"
 #include "support/random_physical.hpp"
 #include "support/simulated_log.hpp"
 

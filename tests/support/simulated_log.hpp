@@ -11,9 +11,9 @@
 #include <vector>
 
 #include "dyncal/drive/stop_and_go.hpp"
-#include "dyncal_host/identification/excitation/excitation.hpp"
-#include "dyncal_host/identification/logs/joint_log.hpp"
-#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
+#include "dyncal_host/excitation/excitation.hpp"
+#include "dyncal_host/logs/joint_log.hpp"
+#include "dyncal_host/model/compiled_robot.hpp"
 #include "support/test_paths.hpp"
 
 namespace dyncal::test {

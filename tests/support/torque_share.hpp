@@ -5,7 +5,7 @@
 #include <Eigen/Core>
 #include <cmath>
 
-#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
+#include "dyncal_host/model/compiled_robot.hpp"
 
 namespace dyncal::test {
 

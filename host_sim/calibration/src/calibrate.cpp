@@ -20,11 +20,11 @@
 #include "dyncal_host/common/number_text.hpp"
 #include "dyncal_host/common/output_file.hpp"
 #include "dyncal_host/common/progress.hpp"
-#include "dyncal_host/identification/excitation/excitation.hpp"
-#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
-#include "dyncal_host/identification/reports/drive_table.hpp"
+#include "dyncal_host/excitation/excitation.hpp"
+#include "dyncal_host/identification/pipeline/prediction.hpp"
 #include "dyncal_host/identification/reports/identify_report.hpp"
-#include "dyncal_host/identification/reports/prediction.hpp"
+#include "dyncal_host/model/compiled_robot.hpp"
+#include "dyncal_host/model/drive_table.hpp"
 
 namespace dyncal::host {
 namespace {
@@ -109,6 +109,43 @@ class StopOnExit {
   bool armed_ = true;
 };
 
+namespace {
+
+/// The error of a run that delivered nothing new for `stall_seconds`: which side stopped, from the
+/// drive's own counter (samples it produced past the last one received are in its ring: the link
+/// does not deliver them; none: the drive stopped).
+InputError stall_error(linux_port::ModbusDrive& drive, const std::vector<port::DriveSample>& samples, long expected,
+                       const std::string& run_name, double stall_seconds) {
+  linux_port::DriveInfo now;
+  if (drive.read_info(now) != port::PortStatus::ok) throw InputError("drive: " + drive.error());
+  const std::uint32_t next = samples.empty() ? 0 : samples.back().seq + 1;
+  const std::string after = " s after " + std::to_string(samples.size()) + " of " + std::to_string(expected) +
+                            " samples (" + run_name + " run): ";
+  if (now.produced > next)
+    return InputError("drive: no new sample for " + std::to_string(static_cast<int>(stall_seconds)) + after +
+                      "the drive has produced " + std::to_string(now.produced - next) +
+                      " more, but the link does not deliver them");
+  return InputError("drive: no new sample for " + std::to_string(static_cast<int>(stall_seconds)) + after +
+                    "the drive has stalled (its produced counter stays at " + std::to_string(now.produced) + ")");
+}
+
+/// The error of a run the drive stopped with a fault; the samples recorded before it written to the
+/// run's fault log (its path, or why they are lost, in the message).
+DriveFaultError fault_error(linux_port::ModbusDrive& drive, const std::vector<port::DriveSample>& samples,
+                            const StreamRun& run, int joints) {
+  if (samples.empty()) return DriveFaultError(drive.error() + "; no sample was recorded before it");
+  const std::string path = fault_log_path(run);
+  const std::string count = std::to_string(samples.size()) + " samples recorded before it (" + run.name + " run)";
+  try {
+    write_csv_log(path, samples_to_log(samples, run.sample_rate_hz, joints));
+  } catch (const InputError& e) {
+    return DriveFaultError(drive.error() + "; the " + count + " are lost: " + e.what());
+  }
+  return DriveFaultError(drive.error() + "; the " + count + " are in " + path);
+}
+
+}  // namespace
+
 JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory& trajectory, const StreamRun& run,
                     std::ostream* progress, std::uint32_t* lost, double* seconds,
                     const std::function<void(const port::DriveSample&)>& on_sample) {
@@ -160,33 +197,13 @@ JointLog stream_run(linux_port::ModbusDrive& drive, const linux_port::Trajectory
     if (n > 0) {
       last_progress = SteadyClock::now();
     } else if (std::chrono::duration<double>(SteadyClock::now() - last_progress).count() > kStallSeconds) {
-      // Which side stopped, from the drive's own counter: samples it produced past the last one
-      // received are in its ring (the link does not deliver them); none means the drive stopped.
-      linux_port::DriveInfo now;
-      if (drive.read_info(now) != port::PortStatus::ok) throw InputError("drive: " + drive.error());
-      const std::uint32_t next = samples.empty() ? 0 : samples.back().seq + 1;
-      const std::string after = " s after " + std::to_string(samples.size()) + " of " + std::to_string(expected) +
-                                " samples (" + run.name + " run): ";
-      if (now.produced > next)
-        throw InputError("drive: no new sample for " + std::to_string(static_cast<int>(kStallSeconds)) + after +
-                         "the drive has produced " + std::to_string(now.produced - next) +
-                         " more, but the link does not deliver them");
-      throw InputError("drive: no new sample for " + std::to_string(static_cast<int>(kStallSeconds)) + after +
-                       "the drive has stalled (its produced counter stays at " + std::to_string(now.produced) + ")");
+      throw stall_error(drive, samples, expected, run.name, kStallSeconds);
     }
     if (st == port::PortStatus::transport_error) throw InputError("drive: " + drive.error());
     if (st == port::PortStatus::device_fault) {
       stop_on_exit.disarm();  // the drive stopped the run itself; its fault stands until a reset
       bar.reset();            // the progress line erased before the fault is told
-      if (samples.empty()) throw DriveFaultError(drive.error() + "; no sample was recorded before it");
-      const std::string path = fault_log_path(run);
-      const std::string count = std::to_string(samples.size()) + " samples recorded before it (" + run.name + " run)";
-      try {
-        write_csv_log(path, samples_to_log(samples, run.sample_rate_hz, joints));
-      } catch (const InputError& e) {
-        throw DriveFaultError(drive.error() + "; the " + count + " are lost: " + e.what());
-      }
-      throw DriveFaultError(drive.error() + "; the " + count + " are in " + path);
+      throw fault_error(drive, samples, run, joints);
     }
     if (st == port::PortStatus::sequence_gap) {
       throw InputError(
@@ -319,12 +336,11 @@ void write_law_file(const std::string& path, const RobotDescription& robot, cons
 
 }  // namespace
 
-CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions& o, std::ostream& progress) {
-  const auto t0 = SteadyClock::now();
-  check_run_options(o);
-  const CompiledRobot& compiled = compiled_robot_for(robot);
-  const int term_set = built_term_set_index(o.terms);
-  const TermSetModel& model = compiled.models[static_cast<size_t>(term_set)];
+namespace {
+
+/// Refuses (InputError) a fault directory that is not one, or a --save-log / --save-law path in no
+/// directory, before any motion.
+void check_output_folders(const CalibrateOptions& o) {
   if (!std::filesystem::is_directory(o.fault_dir))
     throw InputError("fault directory '" + o.fault_dir + "' is not a directory");
   for (const auto& [what, path] : {std::pair{"log", o.save_log}, std::pair{"law", o.save_law}}) {
@@ -334,8 +350,13 @@ CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions&
       throw InputError(std::string("cannot write the ") + what + " '" + path + "': no directory '" + parent.string() +
                        "'");
   }
+}
+
+/// The drive at `uri`, checked to be the robot's (joint count, robot id). Throws InputError.
+std::unique_ptr<linux_port::ModbusDrive> connected_drive(const std::string& uri, const RobotDescription& robot,
+                                                         const CompiledRobot& compiled) {
   std::string error;
-  auto drive = linux_port::ModbusDrive::connect(o.uri, &error);
+  auto drive = linux_port::ModbusDrive::connect(uri, &error);
   if (!drive) throw InputError(error);
   linux_port::DriveInfo info;
   if (drive->read_info(info) != port::PortStatus::ok) throw InputError("drive: " + drive->error());
@@ -345,29 +366,22 @@ CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions&
   if (info.robot_id != compiled.robot_id)
     throw InputError("the drive's robot id does not match robot '" + robot.name + "'");
 
-  CalibrateResult r;
-  r.num_joints = robot.num_joints;
-  std::ostream* prog = o.progress ? &progress : nullptr;
-  // The link, as the stream uses it: its transaction time with the samples a block carries, and
-  // the drive's ring; each run then streams live or is traced (stream_plan.hpp).
-  {
-    constexpr int kProbeTransactions = 8;
-    if (drive->measure_link(kProbeTransactions, &r.link.capacity.transaction_seconds) != port::PortStatus::ok)
-      throw InputError("drive: " + drive->error());
-    r.link.transport = drive->transport();
-    r.link.capacity.samples_per_second =
-        drive->samples_per_block() / std::max(1e-9, r.link.capacity.transaction_seconds);
-    r.link.capacity.ring_capacity = drive->ring_capacity();
-  }
-  const linux_port::ModbusDrive::LinkStats link_before = drive->link_stats();
-  auto plan = [&](const char* name, const linux_port::Trajectory& t, int periods) {
-    const long samples = std::lround(periods * t.period() * o.sample_rate_hz);
-    const StreamPlan p = plan_stream(o.stream, r.link.capacity, name, samples, o.sample_rate_hz, periods);
-    progress << p.line << "\n";
-    r.link.plans.push_back(p.line);
-    return p.trace;
-  };
-  // 1. Excitation: stream, then online estimators sample by sample and the batch fit.
+  return drive;
+}
+
+/// r.link's capacity: the transaction time with the samples a block carries, and the drive's ring.
+void measure_link(linux_port::ModbusDrive& drive, CalibrateResult& r) {
+  constexpr int kProbeTransactions = 8;
+  if (drive.measure_link(kProbeTransactions, &r.link.capacity.transaction_seconds) != port::PortStatus::ok)
+    throw InputError("drive: " + drive.error());
+  r.link.transport = drive.transport();
+  r.link.capacity.samples_per_second = drive.samples_per_block() / std::max(1e-9, r.link.capacity.transaction_seconds);
+  r.link.capacity.ring_capacity = drive.ring_capacity();
+}
+
+/// The excitation: --excitation's, else the best of o.candidates random ones; its cond(K) into r.
+linux_port::Trajectory chosen_excitation(const RobotDescription& robot, const CalibrateOptions& o, CalibrateResult& r,
+                                         std::ostream& progress) {
   linux_port::Trajectory excitation;
   if (o.excitation) {
     excitation = *o.excitation;
@@ -378,16 +392,67 @@ CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions&
   progress << "excitation: Fourier series (Eq. 27), L = " << excitation.harmonics << ", f_f = " << excitation.f_f
            << " Hz" << (o.excitation ? " (designed)" : "") << ", " << o.periods << " periods at " << o.sample_rate_hz
            << " Hz, cond(K) = " << std::setprecision(3) << r.trajectory_cond << "\n";
+  return excitation;
+}
+
+/// The bytes of the drive's active table. Throws InputError.
+std::vector<std::uint8_t> active_table(linux_port::ModbusDrive& drive) {
+  std::vector<std::uint8_t> bytes(kTableMaxBytes);
+  int size = 0;
+  if (drive.read_active_bytes(bytes.data(), kTableMaxBytes, &size) != port::PortStatus::ok)
+    throw InputError("drive: " + drive.error());
+  bytes.resize(static_cast<size_t>(size));
+  return bytes;
+}
+
+/// `batch_set` with the effects `dyncal diagnose` finds on the excitation `log` and the declared
+/// parameters re-estimated with them (r.effects, r.effects_not_flashed).
+ParameterSet with_diagnosed_effects(const RobotDescription& robot, const JointLog& log, const IdentifyOptions& io,
+                                    const ParameterSet& batch_set, CalibrateResult& r, std::ostream& progress) {
+  DiagnoseOptions dopt;
+  dopt.identify = io;
+  dopt.identify.sign_constraints = false;  // the diagnosis's statistics are unconstrained fits
+  const DiagnoseResult d = diagnose(robot, log, dopt);
+  ParameterSet out = diagnosed_parameter_set(batch_set, d, &r.effects_not_flashed);
+  for (const auto& e : d.effects) r.effects.push_back(e.explanation);
+  progress << "diagnosis: " << d.effects.size() << " effect(s) found";
+  for (const auto& e : d.effects) progress << "\n  " << e.explanation;
+  progress << "\n";
+  return out;
+}
+
+}  // namespace
+
+CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions& o, std::ostream& progress) {
+  const auto t0 = SteadyClock::now();
+  check_run_options(o);
+  const CompiledRobot& compiled = compiled_robot_for(robot);
+  const int term_set = built_term_set_index(o.terms);
+  const TermSetModel& model = compiled.models[static_cast<size_t>(term_set)];
+  check_output_folders(o);
+  const std::unique_ptr<linux_port::ModbusDrive> drive = connected_drive(o.uri, robot, compiled);
+
+  CalibrateResult r;
+  r.num_joints = robot.num_joints;
+  std::ostream* prog = o.progress ? &progress : nullptr;
+  // The link, as the stream uses it: its transaction time with the samples a block carries, and
+  // the drive's ring; each run then streams live or is traced (stream_plan.hpp).
+  measure_link(*drive, r);
+  const linux_port::ModbusDrive::LinkStats link_before = drive->link_stats();
+  auto plan = [&](const char* name, const linux_port::Trajectory& t, int periods) {
+    const long samples = std::lround(periods * t.period() * o.sample_rate_hz);
+    const StreamPlan p = plan_stream(o.stream, r.link.capacity, name, samples, o.sample_rate_hz, periods);
+    progress << p.line << "\n";
+    r.link.plans.push_back(p.line);
+    return p.trace;
+  };
+  // 1. Excitation: stream, then online estimators sample by sample and the batch fit.
+  const linux_port::Trajectory excitation = chosen_excitation(robot, o, r, progress);
   SampleSink sink;
   start_online_estimators(model, robot.qd_max, o, sink);
-  std::vector<std::uint8_t> feed_forward;  // the table active during the excitation (--save-law)
-  if (!o.save_law.empty()) {
-    feed_forward.resize(kTableMaxBytes);
-    int size = 0;
-    if (drive->read_active_bytes(feed_forward.data(), kTableMaxBytes, &size) != port::PortStatus::ok)
-      throw InputError("drive: " + drive->error());
-    feed_forward.resize(static_cast<size_t>(size));
-  }
+  // The table active during the excitation (--save-law).
+  const std::vector<std::uint8_t> feed_forward =
+      o.save_law.empty() ? std::vector<std::uint8_t>() : active_table(*drive);
   StreamRun excitation_run{"excitation", o.periods, o.sample_rate_hz, o.fault_dir};
   excitation_run.trace = plan("excitation", excitation, o.periods);
   const JointLog log = stream_run(*drive, excitation, excitation_run, prog, &r.lost, &r.stream_seconds, sink.push);
@@ -437,15 +502,7 @@ CalibrateResult calibrate(const RobotDescription& robot, const CalibrateOptions&
     if (o.diagnose) {
       // The same analysis as `dyncal diagnose` on the excitation; the table then carries the effects
       // found and the declared parameters re-estimated with them.
-      DiagnoseOptions dopt;
-      dopt.identify = io;
-      dopt.identify.sign_constraints = false;  // the diagnosis's statistics are unconstrained fits
-      const DiagnoseResult d = diagnose(robot, log, dopt);
-      batch_set = diagnosed_parameter_set(batch_set, d, &r.effects_not_flashed);
-      for (const auto& e : d.effects) r.effects.push_back(e.explanation);
-      progress << "diagnosis: " << d.effects.size() << " effect(s) found";
-      for (const auto& e : d.effects) progress << "\n  " << e.explanation;
-      progress << "\n";
+      batch_set = with_diagnosed_effects(robot, log, io, batch_set, r, progress);
     }
     const ParameterTable table = parameter_table(batch_set, robot, &r.table_notes);
     const FlashOutcome f = flash_and_verify(*drive, table, [&] {

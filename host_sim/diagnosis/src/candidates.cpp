@@ -9,7 +9,7 @@
 #include "dyncal/friction.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/parallel_tasks.hpp"
-#include "dyncal_host/identification/pipeline/signal.hpp"
+#include "dyncal_host/identification/methods/signal.hpp"
 #include "harmonic_fit.hpp"
 #include "shape_search.hpp"
 

@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <vector>
 
-#include "dyncal_host/identification/pipeline/stacked_data.hpp"
+#include "dyncal_host/model/stacked_data.hpp"
 
 namespace dyncal::host::detail {
 

@@ -17,9 +17,9 @@
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/parallel_tasks.hpp"
 #include "dyncal_host/identification/methods/effect_model.hpp"
+#include "dyncal_host/identification/methods/signal.hpp"
 #include "dyncal_host/identification/pipeline/butterworth.hpp"
-#include "dyncal_host/identification/pipeline/signal.hpp"
-#include "dyncal_host/identification/pipeline/stacked_data.hpp"
+#include "dyncal_host/model/stacked_data.hpp"
 #include "harmonic_fit.hpp"
 #include "shape_search.hpp"
 

@@ -11,8 +11,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "candidates.hpp"
-#include "dyncal_host/identification/pipeline/signal.hpp"
+#include "candidate_context.hpp"
+#include "dyncal_host/identification/methods/signal.hpp"
 
 namespace dyncal::host::detail {
 

@@ -129,6 +129,99 @@ Scenario default_scenario(const RobotDescription& robot) {
   return s;
 }
 
+namespace {
+
+/// The scenario's "couplings": friction that couples two joints. Throws InputError naming `w` (the file).
+void read_couplings(const json& value, const std::string& w, Scenario& s) {
+  for (const json& c : value) {
+    CoupledFriction cf;
+    if (!c.contains("joints") || c["joints"].size() != 2) throw InputError(w + ": a coupling needs \"joints\": [i, j]");
+    cf.joint_i = c["joints"][0].get<int>() - 1;
+    cf.joint_j = c["joints"][1].get<int>() - 1;
+    if (cf.joint_i < 0 || cf.joint_j < 0 || cf.joint_i >= s.num_joints || cf.joint_j >= s.num_joints ||
+        cf.joint_i == cf.joint_j) {
+      throw InputError(w + ": coupling joints must be two different joints 1.." + std::to_string(s.num_joints));
+    }
+    cf.sign = number(c, "sign", 1.0, w + ".couplings");
+    cf.Fc = number(c, "Fc", 0, w + ".couplings");
+    cf.beta = number(c, "beta", 0, w + ".couplings");
+    s.couplings.push_back(cf);
+  }
+}
+
+/// The scenario's "payload" {mass, com, inertia_about_com} on the last link. Throws InputError naming `w` (the file).
+void read_payload(const json& value, const std::string& w, Scenario& s) {
+  const json& pl = value;
+  const std::string where = w + ": payload";
+  if (!pl.is_object()) throw InputError(where + " must be an object {mass, com, inertia_about_com}");
+  s.payload.mass = number(pl, "mass", 0.0, where);
+  if (!(s.payload.mass >= 0) || !std::isfinite(s.payload.mass)) throw InputError(where + ".mass must be >= 0");
+  auto list = [&](const char* key, double* out, size_t n) {
+    if (!pl.contains(key)) return;
+    const json& a = pl[key];
+    if (!a.is_array() || a.size() != n)
+      throw InputError(where + "." + key + " must be " + std::to_string(n) + " numbers");
+    for (size_t k = 0; k < n; ++k) {
+      if (!a[k].is_number() || !std::isfinite(a[k].get<double>()))
+        throw InputError(where + "." + key + " must be " + std::to_string(n) + " numbers");
+      out[k] = a[k].get<double>();
+    }
+  };
+  list("com", s.payload.com.data(), 3);
+  list("inertia_about_com", s.payload.inertia.data(), 6);
+}
+
+/// The scenario's "contacts": external forces on links, each for a time. Throws InputError naming `w` (the file).
+void read_contacts(const json& value, const std::string& w, Scenario& s) {
+  const json& cs = value;
+  if (!cs.is_array()) throw InputError(w + ": contacts must be an array of objects");
+  for (size_t k = 0; k < cs.size(); ++k) {
+    const json& c = cs[k];
+    const std::string where = w + ": contacts[" + std::to_string(k + 1) + "]";
+    if (!c.is_object()) throw InputError(where + " must be an object {link, point, force, start, duration}");
+    ExternalContact e;
+    if (!c.contains("link") || !c["link"].is_number_integer() || c["link"].get<int>() < 1 ||
+        c["link"].get<int>() > s.num_joints)
+      throw InputError(where + ".link must be a link 1.." + std::to_string(s.num_joints));
+    e.link = c["link"].get<int>();
+    auto vec3 = [&](const char* key, std::array<double, 3>& out) {
+      if (!c.contains(key)) return;
+      const json& a = c[key];
+      if (!a.is_array() || a.size() != 3) throw InputError(where + "." + key + " must be 3 numbers");
+      for (size_t i = 0; i < 3; ++i) {
+        if (!a[i].is_number() || !std::isfinite(a[i].get<double>()))
+          throw InputError(where + "." + key + " must be 3 numbers");
+        out[i] = a[i].get<double>();
+      }
+    };
+    vec3("point", e.point);
+    vec3("force", e.force);
+    e.start = number(c, "start", 0.0, where);
+    e.duration = number(c, "duration", 0.0, where);
+    e.stiffness = number(c, "stiffness", 0.0, where);
+    if (!(e.start >= 0) || !(e.duration > 0) || !(e.stiffness >= 0))
+      throw InputError(where + ": start must be >= 0, duration > 0, stiffness >= 0");
+    if (e.force[0] == 0 && e.force[1] == 0 && e.force[2] == 0)
+      throw InputError(where + ".force must not be zero (with a stiffness: its direction)");
+    s.contacts.push_back(e);
+  }
+}
+
+/// The scenario's "stop_and_go" {move, rest, ramp}: a trajectory played with rests. Throws InputError naming `w` (the
+/// file).
+void read_stop_and_go(const json& value, const std::string& w, Scenario& s) {
+  const json& g = value;
+  const std::string where = w + ": stop_and_go";
+  if (!g.is_object()) throw InputError(where + " must be an object {move, rest, ramp}");
+  s.stop_and_go.move = number(g, "move", s.stop_and_go.move, where);
+  s.stop_and_go.rest = number(g, "rest", 1.5, where);
+  s.stop_and_go.ramp = number(g, "ramp", s.stop_and_go.ramp, where);
+  if (!(s.stop_and_go.rest > 0) || !s.stop_and_go.valid())
+    throw InputError(where + ": ramp must be > 0, move and rest >= ramp [s]");
+}
+
+}  // namespace
+
 Scenario load_scenario(const std::string& path, const RobotDescription& robot) {
   Scenario s = default_scenario(robot);
   const json j = read_json(path);
@@ -157,91 +250,14 @@ Scenario load_scenario(const std::string& path, const RobotDescription& robot) {
       throw InputError(w + ": tau_noise_std must be a number or an array of " + std::to_string(s.num_joints));
     }
   }
-  if (j.contains("couplings")) {
-    for (const json& c : j["couplings"]) {
-      CoupledFriction cf;
-      if (!c.contains("joints") || c["joints"].size() != 2)
-        throw InputError(w + ": a coupling needs \"joints\": [i, j]");
-      cf.joint_i = c["joints"][0].get<int>() - 1;
-      cf.joint_j = c["joints"][1].get<int>() - 1;
-      if (cf.joint_i < 0 || cf.joint_j < 0 || cf.joint_i >= s.num_joints || cf.joint_j >= s.num_joints ||
-          cf.joint_i == cf.joint_j) {
-        throw InputError(w + ": coupling joints must be two different joints 1.." + std::to_string(s.num_joints));
-      }
-      cf.sign = number(c, "sign", 1.0, w + ".couplings");
-      cf.Fc = number(c, "Fc", 0, w + ".couplings");
-      cf.beta = number(c, "beta", 0, w + ".couplings");
-      s.couplings.push_back(cf);
-    }
-  }
-  if (j.contains("payload")) {
-    const json& pl = j["payload"];
-    const std::string where = w + ": payload";
-    if (!pl.is_object()) throw InputError(where + " must be an object {mass, com, inertia_about_com}");
-    s.payload.mass = number(pl, "mass", 0.0, where);
-    if (!(s.payload.mass >= 0) || !std::isfinite(s.payload.mass)) throw InputError(where + ".mass must be >= 0");
-    auto list = [&](const char* key, double* out, size_t n) {
-      if (!pl.contains(key)) return;
-      const json& a = pl[key];
-      if (!a.is_array() || a.size() != n)
-        throw InputError(where + "." + key + " must be " + std::to_string(n) + " numbers");
-      for (size_t k = 0; k < n; ++k) {
-        if (!a[k].is_number() || !std::isfinite(a[k].get<double>()))
-          throw InputError(where + "." + key + " must be " + std::to_string(n) + " numbers");
-        out[k] = a[k].get<double>();
-      }
-    };
-    list("com", s.payload.com.data(), 3);
-    list("inertia_about_com", s.payload.inertia.data(), 6);
-  }
-  if (j.contains("contacts")) {
-    const json& cs = j["contacts"];
-    if (!cs.is_array()) throw InputError(w + ": contacts must be an array of objects");
-    for (size_t k = 0; k < cs.size(); ++k) {
-      const json& c = cs[k];
-      const std::string where = w + ": contacts[" + std::to_string(k + 1) + "]";
-      if (!c.is_object()) throw InputError(where + " must be an object {link, point, force, start, duration}");
-      ExternalContact e;
-      if (!c.contains("link") || !c["link"].is_number_integer() || c["link"].get<int>() < 1 ||
-          c["link"].get<int>() > s.num_joints)
-        throw InputError(where + ".link must be a link 1.." + std::to_string(s.num_joints));
-      e.link = c["link"].get<int>();
-      auto vec3 = [&](const char* key, std::array<double, 3>& out) {
-        if (!c.contains(key)) return;
-        const json& a = c[key];
-        if (!a.is_array() || a.size() != 3) throw InputError(where + "." + key + " must be 3 numbers");
-        for (size_t i = 0; i < 3; ++i) {
-          if (!a[i].is_number() || !std::isfinite(a[i].get<double>()))
-            throw InputError(where + "." + key + " must be 3 numbers");
-          out[i] = a[i].get<double>();
-        }
-      };
-      vec3("point", e.point);
-      vec3("force", e.force);
-      e.start = number(c, "start", 0.0, where);
-      e.duration = number(c, "duration", 0.0, where);
-      e.stiffness = number(c, "stiffness", 0.0, where);
-      if (!(e.start >= 0) || !(e.duration > 0) || !(e.stiffness >= 0))
-        throw InputError(where + ": start must be >= 0, duration > 0, stiffness >= 0");
-      if (e.force[0] == 0 && e.force[1] == 0 && e.force[2] == 0)
-        throw InputError(where + ".force must not be zero (with a stiffness: its direction)");
-      s.contacts.push_back(e);
-    }
-  }
+  if (j.contains("couplings")) read_couplings(j["couplings"], w, s);
+  if (j.contains("payload")) read_payload(j["payload"], w, s);
+  if (j.contains("contacts")) read_contacts(j["contacts"], w, s);
   if (j.contains("stiction")) {
     if (!j["stiction"].is_boolean()) throw InputError(w + ": stiction must be true or false");
     s.stiction = j["stiction"].get<bool>();
   }
-  if (j.contains("stop_and_go")) {
-    const json& g = j["stop_and_go"];
-    const std::string where = w + ": stop_and_go";
-    if (!g.is_object()) throw InputError(where + " must be an object {move, rest, ramp}");
-    s.stop_and_go.move = number(g, "move", s.stop_and_go.move, where);
-    s.stop_and_go.rest = number(g, "rest", 1.5, where);
-    s.stop_and_go.ramp = number(g, "ramp", s.stop_and_go.ramp, where);
-    if (!(s.stop_and_go.rest > 0) || !s.stop_and_go.valid())
-      throw InputError(where + ": ramp must be > 0, move and rest >= ramp [s]");
-  }
+  if (j.contains("stop_and_go")) read_stop_and_go(j["stop_and_go"], w, s);
   if (j.contains("joints")) {
     const json& js = j["joints"];
     if (!js.is_array() || static_cast<int>(js.size()) != s.num_joints)

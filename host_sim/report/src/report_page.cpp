@@ -346,6 +346,89 @@ const char* kStyle =
 
 }  // namespace
 
+namespace {
+
+/// The gate's section: passed or failed, the failed items, every item.
+std::string gate_section(const Json& g) {
+  const bool passed = g.value("passed", false);
+  std::string failed;
+  for (size_t i = 0; i < g["items"].size(); ++i) {
+    const Json& item = g["items"][i];
+    if (item.value("passed", false)) continue;
+    const std::string p = "/gate/items/" + std::to_string(i);
+    failed += "<li>" + escape(item.value("key", "")) + ": " + escape(item.value("what", "")) + " " +
+              value_html(item["value"], p + "/value") + ", required " + escape(item.value("bound", "")) + " " +
+              value_html(item["limit"], p + "/limit") + "</li>";
+  }
+  return std::string("<section id=\"gate\"><h2>Gate</h2><div class=\"") + (passed ? "pass" : "fail") + "\">" +
+         (passed ? "PASSED" : "FAILED") + ": " + std::to_string(g["items"].size()) + " items checked" +
+         (failed.empty() ? "" : "; failed:<ul>" + failed + "</ul>") + "</div><details><summary>every item</summary>" +
+         table_html(g["items"], "/gate/items", {"passed", "key", "what", "value", "bound", "limit"}, {"joint"}) +
+         "</details></section>";
+}
+
+/// diagnose's sections: the effects found, before and after per joint, the series, the candidates
+/// rejected, the notes.
+std::string diagnose_sections(const Json& report, Plots& plots) {
+  std::string body;
+  if (report.contains("effects")) {
+    body +=
+        "<section id=\"effects\"><h2>Effects found</h2>" +
+        (report["effects"].empty() ? std::string("<p>None beyond the declared model.</p>")
+                                   : table_html(report["effects"], "/effects", {"kind", "joints", "item"}, {"joint"})) +
+        "</section>";
+  }
+  if (report.contains("joints")) {
+    body += "<section id=\"joints\"><h2>Before and after, per joint</h2>" +
+            table_html(report["joints"], "/joints", {"joint"}) + diagnose_plot(report["joints"], plots) + "</section>";
+  }
+  if (report.contains("series")) body += series_plots(report["series"], plots);
+  if (report.contains("rejected") && !report["rejected"].empty())
+    body += "<section id=\"rejected\"><h2>Candidates tested and rejected</h2>" +
+            table_html(report["rejected"], "/rejected", {"kind", "joints"}) + "</section>";
+  body += notes_html(report, "notes", "Notes");
+  return body;
+}
+
+/// payload's table of quantities with their 95 % intervals.
+std::string payload_section(const Json& q) {
+  std::string body =
+      "<section id=\"payload\"><h2>Payload</h2><table><thead><tr><th>name</th><th>value</th><th>std</th><th>95 % "
+      "interval</th><th>unit</th><th>verdict</th></tr></thead><tbody>";
+  for (size_t i = 0; i < q.size(); ++i) {
+    const std::string base = "/quantities/" + std::to_string(i);
+    const double v = num(q[i], "value"), sd = num(q[i], "std");
+    body +=
+        "<tr><td>" + escape(q[i].value("name", "")) + "</td><td>" + value_html(q[i]["value"], base + "/value") +
+        "</td><td>" + value_html(q[i]["std"], base + "/std") + "</td><td>" +
+        (std::isfinite(v) && std::isfinite(sd) ? "[" + g6(v - kZ95 * sd) + ", " + g6(v + kZ95 * sd) + "]" : "&ndash;") +
+        "</td><td>" + escape(q[i].value("unit", "")) + "</td><td>" + escape(q[i].value("verdict", "")) + "</td></tr>";
+  }
+  body += "</tbody></table></section>";
+  return body;
+}
+
+/// monitor's sections: the contacts, the residual plots, the thresholds, the notes.
+std::string monitor_sections(const Json& report, Plots& plots) {
+  std::string body;
+  if (report.contains("contacts")) {
+    body += "<section id=\"contacts\"><h2>Contacts</h2>" +
+            (report["contacts"].empty() ? std::string("<p>None.</p>")
+                                        : table_html(report["contacts"], "/contacts", {"start", "end"}) +
+                                              contact_plot(report["contacts"], plots)) +
+            "</section>";
+  }
+  if (report.contains("residual_series"))
+    body += monitor_plots(report["residual_series"], report.value("contacts", Json::array()), plots);
+  if (report.contains("thresholds"))
+    body += "<section id=\"thresholds\"><h2>Thresholds</h2>" +
+            table_html(report["thresholds"], "/thresholds", {"joint"}) + "</section>";
+  body += notes_html(report, "notes", "Notes");
+  return body;
+}
+
+}  // namespace
+
 std::string report_page(const std::string& command, const Json& report) {
   Plots plots;
   std::string body;
@@ -355,25 +438,7 @@ std::string report_page(const std::string& command, const Json& report) {
     body += "<p>Command: <code id=\"command-line\">" + escape(report.value("command_line", "")) + "</code></p>";
   if (report.contains("inputs"))
     body += "<section id=\"inputs\"><h2>Inputs</h2>" + table_html(report["inputs"], "/inputs", {"path"}) + "</section>";
-  if (report.contains("gate")) {
-    const Json& g = report["gate"];
-    const bool passed = g.value("passed", false);
-    std::string failed;
-    for (size_t i = 0; i < g["items"].size(); ++i) {
-      const Json& item = g["items"][i];
-      if (item.value("passed", false)) continue;
-      const std::string p = "/gate/items/" + std::to_string(i);
-      failed += "<li>" + escape(item.value("key", "")) + ": " + escape(item.value("what", "")) + " " +
-                value_html(item["value"], p + "/value") + ", required " + escape(item.value("bound", "")) + " " +
-                value_html(item["limit"], p + "/limit") + "</li>";
-    }
-    body += std::string("<section id=\"gate\"><h2>Gate</h2><div class=\"") + (passed ? "pass" : "fail") + "\">" +
-            (passed ? "PASSED" : "FAILED") + ": " + std::to_string(g["items"].size()) + " items checked" +
-            (failed.empty() ? "" : "; failed:<ul>" + failed + "</ul>") +
-            "</div><details><summary>every item</summary>" +
-            table_html(g["items"], "/gate/items", {"passed", "key", "what", "value", "bound", "limit"}, {"joint"}) +
-            "</details></section>";
-  }
+  if (report.contains("gate")) body += gate_section(report["gate"]);
   if (command == "calibrate" && report.contains("batch")) {
     body += "<h2>Batch fit on the drive's run</h2>" + fit_sections(report["batch"], "/batch", plots);
     if (report.contains("joints"))
@@ -384,59 +449,15 @@ std::string report_page(const std::string& command, const Json& report) {
               table_html(report["params"], "/params", {"name"}) + "</section>";
     body += notes_html(report["batch"], "notes", "Notes") + notes_html(report, "table_notes", "Table notes");
   } else if (command == "diagnose") {
-    if (report.contains("effects")) {
-      body += "<section id=\"effects\"><h2>Effects found</h2>" +
-              (report["effects"].empty()
-                   ? std::string("<p>None beyond the declared model.</p>")
-                   : table_html(report["effects"], "/effects", {"kind", "joints", "item"}, {"joint"})) +
-              "</section>";
-    }
-    if (report.contains("joints")) {
-      body += "<section id=\"joints\"><h2>Before and after, per joint</h2>" +
-              table_html(report["joints"], "/joints", {"joint"}) + diagnose_plot(report["joints"], plots) +
-              "</section>";
-    }
-    if (report.contains("series")) body += series_plots(report["series"], plots);
-    if (report.contains("rejected") && !report["rejected"].empty())
-      body += "<section id=\"rejected\"><h2>Candidates tested and rejected</h2>" +
-              table_html(report["rejected"], "/rejected", {"kind", "joints"}) + "</section>";
-    body += notes_html(report, "notes", "Notes");
+    body += diagnose_sections(report, plots);
   } else if (command == "payload") {
-    if (report.contains("quantities")) {
-      Json q = report["quantities"];
-      body +=
-          "<section id=\"payload\"><h2>Payload</h2><table><thead><tr><th>name</th><th>value</th><th>std</th><th>95 % "
-          "interval</th><th>unit</th><th>verdict</th></tr></thead><tbody>";
-      for (size_t i = 0; i < q.size(); ++i) {
-        const std::string base = "/quantities/" + std::to_string(i);
-        const double v = num(q[i], "value"), sd = num(q[i], "std");
-        body += "<tr><td>" + escape(q[i].value("name", "")) + "</td><td>" + value_html(q[i]["value"], base + "/value") +
-                "</td><td>" + value_html(q[i]["std"], base + "/std") + "</td><td>" +
-                (std::isfinite(v) && std::isfinite(sd) ? "[" + g6(v - kZ95 * sd) + ", " + g6(v + kZ95 * sd) + "]"
-                                                       : "&ndash;") +
-                "</td><td>" + escape(q[i].value("unit", "")) + "</td><td>" + escape(q[i].value("verdict", "")) +
-                "</td></tr>";
-      }
-      body += "</tbody></table></section>";
-    }
+    if (report.contains("quantities")) body += payload_section(report["quantities"]);
     if (report.contains("joints"))
       body += "<section id=\"joints\"><h2>Per joint</h2>" + table_html(report["joints"], "/joints", {"joint"}) +
               "</section>";
     body += notes_html(report, "notes", "Notes");
   } else if (command == "monitor") {
-    if (report.contains("contacts")) {
-      body += "<section id=\"contacts\"><h2>Contacts</h2>" +
-              (report["contacts"].empty() ? std::string("<p>None.</p>")
-                                          : table_html(report["contacts"], "/contacts", {"start", "end"}) +
-                                                contact_plot(report["contacts"], plots)) +
-              "</section>";
-    }
-    if (report.contains("residual_series"))
-      body += monitor_plots(report["residual_series"], report.value("contacts", Json::array()), plots);
-    if (report.contains("thresholds"))
-      body += "<section id=\"thresholds\"><h2>Thresholds</h2>" +
-              table_html(report["thresholds"], "/thresholds", {"joint"}) + "</section>";
-    body += notes_html(report, "notes", "Notes");
+    body += monitor_sections(report, plots);
   } else {
     body += fit_sections(report, "", plots);
     body += notes_html(report, "notes", "Notes");

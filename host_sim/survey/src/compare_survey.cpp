@@ -1,11 +1,11 @@
 // compare_survey: a study's result against a committed reference, within a relative tolerance.
+#include "dyncal_host/survey/compare_survey.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <functional>
 #include <iomanip>
 #include <sstream>
-
-#include "dyncal_host/survey/survey.hpp"
 
 namespace dyncal::host::survey {
 

@@ -1,4 +1,6 @@
 // print_survey: the study's tables next to the published ones, one function per table.
+#include "dyncal_host/survey/print_survey.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -9,7 +11,6 @@
 #include <vector>
 
 #include "dyncal_host/survey/indices.hpp"
-#include "dyncal_host/survey/survey.hpp"
 #include "dyncal_host/survey/tracking.hpp"
 
 namespace dyncal::host::survey {

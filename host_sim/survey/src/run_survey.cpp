@@ -1,4 +1,6 @@
 // run_survey: the study's runs, one function per table.
+#include "dyncal_host/survey/run_survey.hpp"
+
 #include <cmath>
 #include <functional>
 #include <iomanip>
@@ -13,7 +15,6 @@
 #include "dyncal_host/survey/methods/optimisers.hpp"
 #include "dyncal_host/survey/methods/physically_consistent.hpp"
 #include "dyncal_host/survey/methods/standard_parameters.hpp"
-#include "dyncal_host/survey/survey.hpp"
 #include "dyncal_host/survey/survey_data.hpp"
 #include "dyncal_host/survey/survey_plots.hpp"
 #include "dyncal_host/survey/tracking.hpp"

@@ -12,7 +12,7 @@
 #include "dyncal/table_check.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/drive/closed_loop.hpp"
-#include "dyncal_host/identification/excitation/excitation.hpp"
+#include "dyncal_host/excitation/excitation.hpp"
 #include "dyncal_host/identification/methods/friction_parameters.hpp"
 
 namespace dyncal::host::survey {

@@ -24,17 +24,17 @@ const char* model_title(const std::string& model) {
 
 }  // namespace
 
-std::vector<std::string> write_survey_plots(const nlohmann::json& result, const SurveySeries& series,
-                                            const std::string& dir) {
-  PlotFolder folder(dir);
-  const std::string& w = folder.work();
-  std::vector<std::string> files;
-  std::ofstream gp = open_data(w + "/plots.gp");
-  gp << "set terminal svg size 900,600 dynamic background rgb 'white' noenhanced\nset grid\n";
-  auto out = [&](const std::string& name) {
-    files.push_back(name);
-    gp << "set output '" << name << "'\n";
-  };
+namespace {
+
+/// Adds `name` to `files` and sets it as gnuplot's output.
+void svg_output(std::ofstream& gp, std::vector<std::string>& files, const std::string& name) {
+  files.push_back(name);
+  gp << "set output '" << name << "'\n";
+}
+
+/// Fig. 2: each model's excitation as the drive played it (data and script in the work folder `w`).
+void plot_trajectories(const SurveySeries& series, const std::string& w, std::ofstream& gp,
+                       std::vector<std::string>& files) {
   for (const SurveySeries::Trajectory& tr : series.trajectories) {
     const std::string data = "trajectory_" + tr.model + ".dat";
     std::ofstream f = open_data(w + "/" + data);
@@ -44,11 +44,16 @@ std::vector<std::string> write_survey_plots(const nlohmann::json& result, const 
       for (Eigen::Index j = 0; j < tr.q.cols(); ++j) f << " " << tr.q(s, j);
       f << "\n";
     }
-    out("fig2_trajectories_" + tr.model + ".svg");
+    svg_output(gp, files, "fig2_trajectories_" + tr.model + ".svg");
     gp << "set title 'Fig. 2: joint positions of the excitation designed for " << model_title(tr.model)
        << " (cond(K) minimised, L = 5, f_f = 0.1 Hz)'\nset key outside\nset xlabel 't [s]'\nset ylabel 'q [rad]'\n"
        << "plot for [j=1:" << tr.q.cols() << "] '" << data << "' u 1:(column(j+1)) w l lw 2 t sprintf('joint %d', j)\n";
   }
+}
+
+/// The RMS torque residual per joint and method, without and with noise, per model.
+void plot_residual_rms(const nlohmann::json& result, const std::string& w, std::ofstream& gp,
+                       std::vector<std::string>& files) {
   for (const char* model : {"eq7", "eq4"}) {
     if (!result.contains("models") || !result["models"].contains(model)) continue;
     const nlohmann::json& methods = result["models"][model]["methods"];
@@ -67,7 +72,7 @@ std::vector<std::string> write_survey_plots(const nlohmann::json& result, const 
       }
       f << "\n\n";
     }
-    out(std::string("residual_rms_") + model + ".svg");
+    svg_output(gp, files, std::string("residual_rms_") + model + ".svg");
     gp << "set terminal svg size 1000,900 dynamic background rgb 'white' noenhanced\n"
        << "set multiplot layout 2,1 title 'RMS torque residual per joint and method, " << model_title(model)
        << " runs'\nset style data histograms\nset style histogram cluster gap 1\nset style fill solid 0.9 noborder\n"
@@ -85,6 +90,11 @@ std::vector<std::string> write_survey_plots(const nlohmann::json& result, const 
     gp << "unset multiplot\nunset logscale y\nset format y\nset style data lines\n"
        << "set terminal svg size 900,600 dynamic background rgb 'white' noenhanced\n";
   }
+}
+
+/// Fig. 4: joint 3's beta followed by each method, per change profile.
+void plot_tracking(const SurveySeries& series, const std::string& w, std::ofstream& gp,
+                   std::vector<std::string>& files) {
   for (const SurveySeries::Tracking& tk : series.tracking) {
     const std::string data = "tracking_" + tk.model + ".dat";
     std::ofstream f = open_data(w + "/" + data);
@@ -110,7 +120,7 @@ std::vector<std::string> write_survey_plots(const nlohmann::json& result, const 
       }
       f << "\n\n";
     }
-    out("fig4_tracking_" + tk.model + ".svg");
+    svg_output(gp, files, "fig4_tracking_" + tk.model + ".svg");
     gp << "set terminal svg size 900,900 dynamic background rgb 'white' noenhanced\n"
        << "set multiplot layout " << profiles.size() << ",1 title 'Fig. 4: following beta of joint 3, "
        << model_title(tk.model) << " run with Table 7 noise'\nset key inside top left opaque font ',9'\n"
@@ -126,6 +136,20 @@ std::vector<std::string> write_survey_plots(const nlohmann::json& result, const 
     gp << "unset multiplot\nset autoscale y\n"
        << "set terminal svg size 900,600 dynamic background rgb 'white' noenhanced\n";
   }
+}
+
+}  // namespace
+
+std::vector<std::string> write_survey_plots(const nlohmann::json& result, const SurveySeries& series,
+                                            const std::string& dir) {
+  PlotFolder folder(dir);
+  const std::string& w = folder.work();
+  std::vector<std::string> files;
+  std::ofstream gp = open_data(w + "/plots.gp");
+  gp << "set terminal svg size 900,600 dynamic background rgb 'white' noenhanced\nset grid\n";
+  plot_trajectories(series, w, gp, files);
+  plot_residual_rms(result, w, gp, files);
+  plot_tracking(series, w, gp, files);
   gp.close();
   return folder.draw(files);
 }

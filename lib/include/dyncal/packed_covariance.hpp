@@ -159,86 +159,22 @@ class PackedCovariance {
   UpdateStatus assimilate(const Regressor& H, const MeasVector& y, const MeasVector& r, Scalar gate, Scalar scale,
                           ParamVector& phi) noexcept {
     const Scalar* h = H.data();  // column-major: column c at h + c * N
-    // Innovation e = y - H phi over H's structure (non-finite H, y or phi shows up here), and the
-    // bit patterns of every entry outside the structure OR-ed together: any bit but the sign
-    // means a nonzero (or non-finite) entry where the structure promises zero.
     Scalar e[N];
-    for (int k = 0; k < N; ++k) e[k] = y[k];
-    Bits outside = 0;
-    for (int n = 0; n < num_runs_; ++n) {
-      const Run& u = runs_[n];
-      with_rows(u.code, [&](auto r0, auto r1) DYNCAL_ALWAYS_INLINE_LAMBDA {
-        constexpr int R0 = decltype(r0)::value, R1 = decltype(r1)::value;
-        for (int c = u.begin; c < u.end; ++c) {
-          const Scalar pc = phi[c];
-          const Scalar* hc = h + c * N;
-          DYNCAL_UNROLL
-          for (int k = 0; k < N; ++k) {
-            if (k >= R0 && k <= R1) {
-              e[k] -= hc[k] * pc;
-            } else {
-              outside |= bits(hc[k]);
-            }
-          }
-        }
-      });
-    }
-    for (int n = 0; n < num_zero_columns_; ++n) {
-      for (int k = 0; k < N; ++k) outside |= bits(h[zero_columns_[n] * N + k]);
-    }
+    const Bits outside = innovation(h, y, phi, e);
     if ((outside << 1) != 0) return outside_status(h);
     for (int k = 0; k < N; ++k) {
       if (!std::isfinite(e[k]) || !std::isfinite(r[k])) return UpdateStatus::rejected_non_finite;
       if (!(r[k] > Scalar(0))) return UpdateStatus::not_positive_definite;
     }
     compute_v(h);
-    // S = H V + diag(r), lower triangle: S_ks = sum over columns c with H(k, c) != 0.
-    Scalar S[N][N];
-    if constexpr (kAsmW) {
-      float packed[N * (N + 1) / 2] = {};
-      for (int k = 0; k < N; ++k) packed[k * (k + 1) / 2 + k] = r[k];
-      const int runs = term_columns_ > 0 ? num_base_runs_ : num_runs_;
-      for (int n = 0; n < runs; ++n) {
-        const Run& u = runs_[n];
-        with_rows(u.code, [&](auto r0, auto r1) DYNCAL_ALWAYS_INLINE_LAMBDA {
-          s_run_float6<decltype(r0)::value, decltype(r1)::value>(packed, v_[u.begin], h + u.begin * N, u.end - u.begin);
-        });
-      }
-      if (term_columns_ > 0) {
-        const int b = size() - term_columns_ * N;
-        s_terms_float6(packed, v_[b], h + b * N, term_columns_);
-      }
-      for (int k = 0; k < N; ++k) {
-        for (int t = 0; t <= k; ++t) S[k][t] = packed[k * (k + 1) / 2 + t];
-      }
-    } else {
-      s_runs(h, r, S);
-    }
-    for (int k = 0; k < N; ++k) {
-      for (int s = 0; s <= k; ++s) {
-        if (!std::isfinite(S[k][s])) return UpdateStatus::rejected_non_finite;
-      }
-    }
+    Scalar S[N][N];  // H V + diag(r), then its Cholesky factor
+    if (!innovation_covariance(h, r, S)) return UpdateStatus::rejected_non_finite;
     if (gate > Scalar(0)) {
       for (int k = 0; k < N; ++k) {
         if (e[k] * e[k] > gate * gate * S[k][k]) return UpdateStatus::rejected_outlier;
       }
     }
-    // Cholesky S = L L^T in place (lower), inv_d_ = 1 / L_kk.
-    for (int k = 0; k < N; ++k) {
-      for (int s = 0; s <= k; ++s) {
-        Scalar x = S[k][s];
-        for (int t = 0; t < s; ++t) x -= S[k][t] * S[s][t];
-        if (s == k) {
-          if (!(x > Scalar(0))) return UpdateStatus::not_positive_definite;
-          const Scalar d = std::sqrt(x);
-          S[k][k] = d;
-          inv_d_[k] = Scalar(1) / d;
-        } else {
-          S[k][s] = x * inv_d_[s];
-        }
-      }
-    }
+    if (!cholesky_in_place(S)) return UpdateStatus::not_positive_definite;
     // z = L^-1 e.
     Scalar z[N];
     for (int k = 0; k < N; ++k) {
@@ -309,6 +245,87 @@ class PackedCovariance {
     Bits b;
     std::memcpy(&b, &x, sizeof b);
     return b;
+  }
+
+  /// The innovation e = y - H phi over H's structure (a non-finite H, y or phi shows up in it), and
+  /// the bit patterns of every entry outside the structure OR-ed together: any bit but the sign
+  /// means a nonzero (or non-finite) entry where the structure promises zero.
+  DYNCAL_ALWAYS_INLINE Bits innovation(const Scalar* h, const MeasVector& y, const ParamVector& phi,
+                                       Scalar (&e)[N]) const noexcept {
+    for (int k = 0; k < N; ++k) e[k] = y[k];
+    Bits outside = 0;
+    for (int n = 0; n < num_runs_; ++n) {
+      const Run& u = runs_[n];
+      with_rows(u.code, [&](auto r0, auto r1) DYNCAL_ALWAYS_INLINE_LAMBDA {
+        constexpr int R0 = decltype(r0)::value, R1 = decltype(r1)::value;
+        for (int c = u.begin; c < u.end; ++c) {
+          const Scalar pc = phi[c];
+          const Scalar* hc = h + c * N;
+          DYNCAL_UNROLL
+          for (int k = 0; k < N; ++k) {
+            if (k >= R0 && k <= R1) {
+              e[k] -= hc[k] * pc;
+            } else {
+              outside |= bits(hc[k]);
+            }
+          }
+        }
+      });
+    }
+    for (int n = 0; n < num_zero_columns_; ++n) {
+      for (int k = 0; k < N; ++k) outside |= bits(h[zero_columns_[n] * N + k]);
+    }
+    return outside;
+  }
+
+  /// S = H V + diag(r), lower triangle (S_ks = sum over columns c with H(k, c) != 0; V from
+  /// compute_v). False when an entry is not finite.
+  DYNCAL_ALWAYS_INLINE bool innovation_covariance(const Scalar* h, const MeasVector& r, Scalar (&S)[N][N]) noexcept {
+    if constexpr (kAsmW) {
+      float packed[N * (N + 1) / 2] = {};
+      for (int k = 0; k < N; ++k) packed[k * (k + 1) / 2 + k] = r[k];
+      const int runs = term_columns_ > 0 ? num_base_runs_ : num_runs_;
+      for (int n = 0; n < runs; ++n) {
+        const Run& u = runs_[n];
+        with_rows(u.code, [&](auto r0, auto r1) DYNCAL_ALWAYS_INLINE_LAMBDA {
+          s_run_float6<decltype(r0)::value, decltype(r1)::value>(packed, v_[u.begin], h + u.begin * N, u.end - u.begin);
+        });
+      }
+      if (term_columns_ > 0) {
+        const int b = size() - term_columns_ * N;
+        s_terms_float6(packed, v_[b], h + b * N, term_columns_);
+      }
+      for (int k = 0; k < N; ++k) {
+        for (int t = 0; t <= k; ++t) S[k][t] = packed[k * (k + 1) / 2 + t];
+      }
+    } else {
+      s_runs(h, r, S);
+    }
+    for (int k = 0; k < N; ++k) {
+      for (int s = 0; s <= k; ++s) {
+        if (!std::isfinite(S[k][s])) return false;
+      }
+    }
+    return true;
+  }
+
+  /// Cholesky S = L L^T in place (lower), inv_d_ = 1 / L_kk. False when S is not positive definite.
+  DYNCAL_ALWAYS_INLINE bool cholesky_in_place(Scalar (&S)[N][N]) noexcept {
+    for (int k = 0; k < N; ++k) {
+      for (int s = 0; s <= k; ++s) {
+        Scalar x = S[k][s];
+        for (int t = 0; t < s; ++t) x -= S[k][t] * S[s][t];
+        if (s == k) {
+          if (!(x > Scalar(0))) return false;
+          const Scalar d = std::sqrt(x);
+          S[k][k] = d;
+          inv_d_[k] = Scalar(1) / d;
+        } else {
+          S[k][s] = x * inv_d_[s];
+        }
+      }
+    }
+    return true;
   }
 
   /// S = H V + diag(r) (lower triangle) over H's runs: S_kt = sum of H(k, c) V(c, t), t <= k.

@@ -43,6 +43,83 @@ dyncal::ParameterTable g_table;
 dyncal::CentredSlope<Scalar, 6, 8> g_slope;
 dyncal::FrictionUncertainty<Scalar, 6> g_uncertainty;
 
+/// The observer over the replay's samples against the double reference: updates, rejected ones,
+/// the counter's ticks in the updates, and the sums of the squared difference, reference residual
+/// and torque.
+struct ObserverRun {
+  int updates = 0, rejected = 0;
+  std::uint32_t ticks = 0;
+  double sd = 0, sr = 0, st = 0;
+};
+
+ObserverRun observe_replay() {
+  using V = Eigen::Matrix<Scalar, 6, 1>;
+  using Vd = Eigen::Matrix<double, 6, 1>;
+  ObserverRun r;
+  for (int k = 0; k < data::kCount; ++k) {
+    V q_in, tau_in, q, qd, qdd, tau;
+    Vd qd_in, taud_in, q_d, qd_d, qdd_d, tau_d;
+    for (int j = 0; j < 6; ++j) {
+      q_in[j] = Scalar(data::kSamples[k][j]);
+      tau_in[j] = Scalar(data::kSamples[k][6 + j]);
+      qd_in[j] = double(data::kSamples[k][j]);
+      taud_in[j] = double(data::kSamples[k][6 + j]);
+    }
+    const bool ready = g_diff.update(q_in, tau_in, q, qd, qdd, tau) == dyncal::UpdateStatus::ok;
+    const bool ready_d = g_diff_reference.update(qd_in, taud_in, q_d, qd_d, qdd_d, tau_d) == dyncal::UpdateStatus::ok;
+    if (!ready || !ready_d) continue;
+    const std::uint32_t t0 = Counter::ticks();
+    const dyncal::UpdateStatus s = g_observer.update(q, qd, tau);
+    r.ticks += Counter::elapsed(t0, Counter::ticks());
+    ++r.updates;
+    if (s != dyncal::UpdateStatus::ok || g_reference.update(q_d, qd_d, tau_d) != dyncal::UpdateStatus::ok) {
+      ++r.rejected;
+      continue;
+    }
+    for (int j = 0; j < 6; ++j) {
+      const double a = double(g_observer.residual()[j]), b = g_reference.residual()[j];
+      r.sd += (a - b) * (a - b);
+      r.sr += b * b;
+      r.st += tau_d[j] * tau_d[j];
+    }
+  }
+  return r;
+}
+
+/// The monitor step's other parts over the same samples (slope, friction weight, threshold check):
+/// steps, the counter's ticks in them, alarms. False when a part refuses its settings.
+struct MonitorRun {
+  int steps = 0, alarms = 0;
+  std::uint32_t ticks = 0;
+};
+
+bool monitor_replay(MonitorRun& r) {
+  using V = Eigen::Matrix<Scalar, 6, 1>;
+  if (g_slope.reset(5, Scalar(1e-3), 6, dyncal::TorqueHold::zero_order) != dyncal::UpdateStatus::ok ||
+      g_uncertainty.reset(Scalar(200), Scalar(1e-3), 6) != dyncal::UpdateStatus::ok)
+    return false;
+  for (int k = 0; k < data::kCount; ++k) {
+    V q_in, tau_in, q, qd, tau, weight;
+    for (int j = 0; j < 6; ++j) {
+      q_in[j] = Scalar(data::kSamples[k][j]);
+      tau_in[j] = Scalar(data::kSamples[k][6 + j]);
+    }
+    dyncal::CentredSlope<Scalar, 6, 8>::Flags still;
+    const std::uint32_t t0 = Counter::ticks();
+    if (g_slope.update(q_in, tau_in, q, qd, tau, still) == dyncal::UpdateStatus::ok) {
+      V qd_friction = qd;
+      for (int j = 0; j < 6; ++j)
+        if (std::fabs(qd[j]) < Scalar(1e-3)) qd_friction[j] = Scalar(0);
+      if (g_uncertainty.update(qd_friction, still, weight) == dyncal::UpdateStatus::ok) {
+        for (int j = 0; j < 6; ++j) r.alarms += std::fabs(tau[j]) > Scalar(1e6) + weight[j] ? 1 : 0;
+        r.ticks += Counter::elapsed(t0, Counter::ticks());
+        ++r.steps;
+      }
+    }
+  }
+  return true;
+}
+
 }  // namespace
 
 int main() {
@@ -59,61 +136,15 @@ int main() {
   g_diff.reset(Scalar(dt), Scalar(dyncal::replay::Settings::kCutoffHz));
   g_diff_reference.reset(dt, dyncal::replay::Settings::kCutoffHz);
   Counter::start();
-  std::uint32_t ticks = 0;
-  int updates = 0, rejected = 0;
-  double sd = 0, sr = 0, st = 0;
-  for (int k = 0; k < data::kCount; ++k) {
-    V q_in, tau_in, q, qd, qdd, tau;
-    Vd qd_in, taud_in, q_d, qd_d, qdd_d, tau_d;
-    for (int j = 0; j < 6; ++j) {
-      q_in[j] = Scalar(data::kSamples[k][j]);
-      tau_in[j] = Scalar(data::kSamples[k][6 + j]);
-      qd_in[j] = double(data::kSamples[k][j]);
-      taud_in[j] = double(data::kSamples[k][6 + j]);
-    }
-    const bool ready = g_diff.update(q_in, tau_in, q, qd, qdd, tau) == dyncal::UpdateStatus::ok;
-    const bool ready_d = g_diff_reference.update(qd_in, taud_in, q_d, qd_d, qdd_d, tau_d) == dyncal::UpdateStatus::ok;
-    if (!ready || !ready_d) continue;
-    const std::uint32_t t0 = Counter::ticks();
-    const dyncal::UpdateStatus s = g_observer.update(q, qd, tau);
-    ticks += Counter::elapsed(t0, Counter::ticks());
-    ++updates;
-    if (s != dyncal::UpdateStatus::ok || g_reference.update(q_d, qd_d, tau_d) != dyncal::UpdateStatus::ok) {
-      ++rejected;
-      continue;
-    }
-    for (int j = 0; j < 6; ++j) {
-      const double a = double(g_observer.residual()[j]), b = g_reference.residual()[j];
-      sd += (a - b) * (a - b);
-      sr += b * b;
-      st += tau_d[j] * tau_d[j];
-    }
-  }
+  const ObserverRun run = observe_replay();
+  const int updates = run.updates, rejected = run.rejected;
+  const std::uint32_t ticks = run.ticks;
+  const double sd = run.sd, sr = run.sr, st = run.st;
   // The monitor step's other parts over the same samples: slope, friction weight, threshold check.
-  std::uint32_t monitor_ticks = 0;
-  int monitor_steps = 0, alarms = 0;
-  if (g_slope.reset(5, Scalar(1e-3), 6, dyncal::TorqueHold::zero_order) != dyncal::UpdateStatus::ok ||
-      g_uncertainty.reset(Scalar(200), Scalar(1e-3), 6) != dyncal::UpdateStatus::ok)
-    return 3;
-  for (int k = 0; k < data::kCount; ++k) {
-    V q_in, tau_in, q, qd, tau, weight;
-    for (int j = 0; j < 6; ++j) {
-      q_in[j] = Scalar(data::kSamples[k][j]);
-      tau_in[j] = Scalar(data::kSamples[k][6 + j]);
-    }
-    dyncal::CentredSlope<Scalar, 6, 8>::Flags still;
-    const std::uint32_t t0 = Counter::ticks();
-    if (g_slope.update(q_in, tau_in, q, qd, tau, still) == dyncal::UpdateStatus::ok) {
-      V qd_friction = qd;
-      for (int j = 0; j < 6; ++j)
-        if (std::fabs(qd[j]) < Scalar(1e-3)) qd_friction[j] = Scalar(0);
-      if (g_uncertainty.update(qd_friction, still, weight) == dyncal::UpdateStatus::ok) {
-        for (int j = 0; j < 6; ++j) alarms += std::fabs(tau[j]) > Scalar(1e6) + weight[j] ? 1 : 0;
-        monitor_ticks += Counter::elapsed(t0, Counter::ticks());
-        ++monitor_steps;
-      }
-    }
-  }
+  MonitorRun monitor;
+  if (!monitor_replay(monitor)) return 3;
+  const std::uint32_t monitor_ticks = monitor.ticks;
+  const int monitor_steps = monitor.steps, alarms = monitor.alarms;
   const double difference = sr > 0 ? std::sqrt(sd / sr) : 1.0, residual = st > 0 ? std::sqrt(sr / st) : 0.0;
   // Float: the thresholds scale with the residual's RMS, so a float error within 1 % of that RMS
   // moves them by at most 1 % (the observer subtracts momenta of about the torque times the time

@@ -9,8 +9,9 @@
 
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/normal_quantile.hpp"
-#include "dyncal_host/identification/methods/inertial_parameters.hpp"
-#include "dyncal_host/identification/pipeline/identify.hpp"
+#include "dyncal_host/model/identify_options.hpp"
+#include "dyncal_host/model/identify_result.hpp"
+#include "dyncal_host/model/inertial_parameters.hpp"
 
 namespace dyncal::host {
 namespace detail {

@@ -6,8 +6,8 @@
 #include <unsupported/Eigen/LevenbergMarquardt>
 
 #include "dyncal_host/common/input_error.hpp"
-#include "dyncal_host/identification/methods/inertial_parameters.hpp"
 #include "dyncal_host/identification/methods/log_cholesky.hpp"
+#include "dyncal_host/model/inertial_parameters.hpp"
 
 namespace dyncal::host {
 namespace {

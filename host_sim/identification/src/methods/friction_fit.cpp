@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "dyncal_host/identification/pipeline/signal.hpp"
+#include "dyncal_host/identification/methods/signal.hpp"
 
 namespace dyncal::host {
 

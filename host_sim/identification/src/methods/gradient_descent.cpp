@@ -6,8 +6,8 @@
 #include <nlopt.hpp>
 
 #include "dyncal_host/common/input_error.hpp"
-#include "dyncal_host/identification/methods/inertial_parameters.hpp"
 #include "dyncal_host/identification/methods/search_problem.hpp"
+#include "dyncal_host/model/inertial_parameters.hpp"
 
 namespace dyncal::host {
 namespace {

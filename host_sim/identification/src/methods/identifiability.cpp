@@ -9,23 +9,6 @@
 
 namespace dyncal::host {
 
-Verdict verdict_of(double std, double scale) {
-  if (!std::isfinite(std) || !(kVerdictZ * std <= scale)) return Verdict::not_determined;
-  return kVerdictZ * std <= kDeterminedFraction * scale ? Verdict::determined : Verdict::poorly_determined;
-}
-
-const char* to_string(Verdict v) {
-  switch (v) {
-    case Verdict::determined:
-      return "determined";
-    case Verdict::poorly_determined:
-      return "poorly determined";
-    case Verdict::not_determined:
-      return "not determined";
-  }
-  return "?";
-}
-
 DeterminedFit determined_least_squares(const Eigen::MatrixXd& R, const Eigen::VectorXd& z, double rss, long rows,
                                        const Eigen::VectorXd& scale, double inflation, const std::vector<int>* forced) {
   const Eigen::Index P = R.cols();

@@ -8,10 +8,11 @@
 #include <string>
 
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/identification/methods/autocorrelation.hpp"
 #include "dyncal_host/identification/methods/consistent_least_squares.hpp"
 #include "dyncal_host/identification/methods/instrumental_iteration.hpp"
-#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
-#include "dyncal_host/identification/reports/prediction.hpp"
+#include "dyncal_host/model/compiled_robot.hpp"
+#include "dyncal_host/model/torque_metrics.hpp"
 
 namespace dyncal::host {
 namespace {
@@ -37,6 +38,117 @@ int param_index(const StackedData& d, const std::string& name) {
 
 }  // namespace
 
+namespace {
+
+/// Gautier's weights from the OLS residual and the weighted data: w (S N; 0 on rows left out of the
+/// fit), K = diag(w) W, y = diag(w) tau and K's triangular factor R (R^T R = K^T K).
+struct WeightedData {
+  VectorXd w, y;
+  MatrixXd K, R;
+};
+
+WeightedData weighted_data(const StackedData& d) {
+  const int N = static_cast<int>(d.q.cols());
+  const Index rows = d.t.size() * N, P = d.W.cols();
+  VectorXd fit = VectorXd::Zero(rows);
+  for (Index r = 0; r < rows; ++r) fit[r] = d.fit_row.empty() || d.fit_row[static_cast<size_t>(r)] ? 1.0 : 0.0;
+
+  // Gautier's weights from the OLS residual, then the WLS start.
+  const MatrixXd Kf = d.W.array().colwise() * fit.array();
+  const VectorXd ols = Kf.colPivHouseholderQr().solve(d.y.cwiseProduct(fit));
+  const VectorXd r_ols = (d.y - d.W * ols).cwiseProduct(fit);
+  VectorXd rss = VectorXd::Zero(N), n = VectorXd::Zero(N);
+  for (Index r = 0; r < rows; ++r) rss[r % N] += r_ols[r] * r_ols[r], n[r % N] += fit[r];
+  const VectorXd sigma = joint_noise_std(rss, n, P);
+  WeightedData out;
+  VectorXd& w = out.w;
+  w.resize(rows);
+  for (Index r = 0; r < rows; ++r) w[r] = fit[r] / sigma[r % N];
+  out.K = d.W.array().colwise() * w.array();
+  out.y = d.y.cwiseProduct(w);
+  // The weighted data's triangular factor R (R^T R = K^T K).
+  const Eigen::HouseholderQR<MatrixXd> qr(out.K);
+  out.R = qr.matrixQR().topRows(P).triangularView<Eigen::Upper>();
+  return out;
+}
+
+/// The parameters an IV estimate reports (those the log determines) and the values the others are
+/// held at.
+struct KeptParameters {
+  std::vector<Index> kept;  ///< ascending
+  VectorXd held;            ///< P: the undetermined parameters' values (held_at), 0 elsewhere
+  KeptParameters(const std::vector<int>& dropped, const VectorXd& held_at, Index P) : held(VectorXd::Zero(P)) {
+    for (Index i = 0; i < P; ++i)
+      if (std::find(dropped.begin(), dropped.end(), static_cast<int>(i)) == dropped.end()) kept.push_back(i);
+    for (const int i : dropped) held[i] = held_at[i];
+  }
+  /// A's kept columns.
+  MatrixXd columns(const MatrixXd& A) const {
+    MatrixXd B(A.rows(), static_cast<Index>(kept.size()));
+    for (size_t k = 0; k < kept.size(); ++k) B.col(static_cast<Index>(k)) = A.col(kept[k]);
+    return B;
+  }
+  /// The full parameter vector (P) of the kept parameters' values x.
+  VectorXd full(const VectorXd& x) const {
+    VectorXd v = held;
+    for (size_t k = 0; k < kept.size(); ++k) v[kept[k]] = x[static_cast<Index>(k)];
+    return v;
+  }
+};
+
+/// The torque each fold's IV estimate (from the other folds' rows) predicts on its own samples; NaN on
+/// the rows --min-speed leaves out of the fit.
+VectorXd fold_predictions(const StackedData& d, const MatrixXd& Kk, const MatrixXd& Z, const VectorXd& y_held,
+                          const std::vector<int>& fold, int folds, const KeptParameters& kp) {
+  const int N = static_cast<int>(d.q.cols());
+  const Index S = d.t.size(), rows = S * N;
+  VectorXd pred = VectorXd::Constant(rows, std::nan(""));
+  for (int f = 0; f < folds; ++f) {
+    VectorXd train(rows);
+    for (Index r = 0; r < rows; ++r) train[r] = fold[static_cast<size_t>(r / N)] != f ? 1.0 : 0.0;
+    const VectorXd phi_f = kp.full(iv_solve(Kk, Z, y_held, train));
+    for (Index s = 0; s < S; ++s)
+      if (fold[static_cast<size_t>(s)] == f) pred.segment(s * N, N) = d.W.middleRows(s * N, N) * phi_f;
+  }
+  for (Index r = 0; r < pred.size(); ++r)
+    if (!d.fit_row.empty() && !d.fit_row[static_cast<size_t>(r)]) pred[r] = std::nan("");
+  return pred;
+}
+
+/// res.params with the IV covariance's std, inflated by the residual's autocorrelation, and the
+/// iteration's notes.
+void report_instrumental(const StackedData& d, const MatrixXd& K, const MatrixXd& Kk, const MatrixXd& Z,
+                         const VectorXd& y, const VectorXd& phi, const KeptParameters& kp, const IvIteration& it,
+                         IdentifyResult& res) {
+  const int N = static_cast<int>(d.q.cols());
+  const Index S = d.t.size(), rows = S * N, P = d.W.cols(), Pk = static_cast<Index>(kp.kept.size());
+  const VectorXd residual = y - K * phi;
+  const double s2 = residual.squaredNorm() / (static_cast<double>(rows) - static_cast<double>(Pk));
+  const MatrixXd ZK_inv = (Z.transpose() * Kk).inverse();
+  const MatrixXd C = s2 * ZK_inv * (Z.transpose() * Z) * ZK_inv.transpose();
+  const std::vector<char> all(static_cast<size_t>(S), 1);
+  const double inflation = autocorrelation_inflation(d, all, d.y - d.W * phi);
+  VectorXd stdev = VectorXd::Constant(P, std::nan(""));
+  for (Index k = 0; k < Pk; ++k) stdev[kp.kept[static_cast<size_t>(k)]] = std::sqrt(std::max(0.0, C(k, k)) * inflation);
+  for (Index i = 0; i < P; ++i) res.params.push_back({d.names[static_cast<size_t>(i)], phi[i], stdev[i]});
+  char line[240];
+  std::snprintf(line, sizeof line,
+                "IDIM-IV: %s after %d closed-loop simulations of the law, last step %.2g standard errors (converged "
+                "at %.2g); instruments from the plant of the last iterate",
+                it.converged ? "converged" : "not converged", it.simulations, it.last_step_se, kIvTolerance);
+  res.notes.push_back(line);
+  if (it.tripped > 0)
+    res.notes.push_back(
+        "IDIM-IV: " + std::to_string(it.tripped) +
+        " plant(s) tripped the simulated drive and were replaced by one half way back (last: " + it.trip + ")");
+  std::snprintf(line, sizeof line,
+                "parameter std: the IV covariance times %.3g for the residual's autocorrelation (S / n_eff)",
+                std::sqrt(inflation));
+  res.notes.push_back(line);
+}
+
+}  // namespace
+
 void fit_instrumental(const StackedData& d, const JointLog& grid, const std::vector<int>& fold, int folds,
                       const RobotDescription& robot, const IdentifyOptions& o, const PrepareLog& prepare,
                       const std::vector<int>& dropped, const VectorXd& held_at, IdentifyResult& res) {
@@ -51,23 +163,11 @@ void fit_instrumental(const StackedData& d, const JointLog& grid, const std::vec
     fc[static_cast<size_t>(j)] = param_index(d, "Fc" + std::to_string(j + 1));
     fv[static_cast<size_t>(j)] = param_index(d, "Fv" + std::to_string(j + 1));
   }
-  VectorXd fit = VectorXd::Zero(rows);
-  for (Index r = 0; r < rows; ++r) fit[r] = d.fit_row.empty() || d.fit_row[static_cast<size_t>(r)] ? 1.0 : 0.0;
-
-  // Gautier's weights from the OLS residual, then the WLS start.
-  const MatrixXd Kf = d.W.array().colwise() * fit.array();
-  const VectorXd ols = Kf.colPivHouseholderQr().solve(d.y.cwiseProduct(fit));
-  const VectorXd r_ols = (d.y - d.W * ols).cwiseProduct(fit);
-  VectorXd rss = VectorXd::Zero(N), n = VectorXd::Zero(N);
-  for (Index r = 0; r < rows; ++r) rss[r % N] += r_ols[r] * r_ols[r], n[r % N] += fit[r];
-  const VectorXd sigma = joint_noise_std(rss, n, P);
-  VectorXd w(rows);
-  for (Index r = 0; r < rows; ++r) w[r] = fit[r] / sigma[r % N];
-  const MatrixXd K = d.W.array().colwise() * w.array();
-  const VectorXd y = d.y.cwiseProduct(w);
-  // The weighted data's triangular factor R (R^T R = K^T K).
-  const Eigen::HouseholderQR<MatrixXd> qr(K);
-  const MatrixXd R = qr.matrixQR().topRows(P).triangularView<Eigen::Upper>();
+  const WeightedData wd = weighted_data(d);
+  const VectorXd& w = wd.w;
+  const MatrixXd& K = wd.K;
+  const VectorXd& y = wd.y;
+  const MatrixXd& R = wd.R;
   res.condition_number = [&] {
     const VectorXd sv = Eigen::JacobiSVD<MatrixXd>(R).singularValues();
     return sv[0] / sv[sv.size() - 1];
@@ -76,23 +176,8 @@ void fit_instrumental(const StackedData& d, const JointLog& grid, const std::vec
   // pull the plant away from what the data say at the white-noise level); the reported IV estimate
   // holds the parameters the log does not determine at held_at (the prior's mean), with the final
   // instruments.
-  std::vector<Index> kept;
-  for (Index i = 0; i < P; ++i)
-    if (std::find(dropped.begin(), dropped.end(), static_cast<int>(i)) == dropped.end()) kept.push_back(i);
-  const auto Pk = static_cast<Index>(kept.size());
-  auto kept_columns = [&](const MatrixXd& A) {
-    MatrixXd B(A.rows(), Pk);
-    for (Index k = 0; k < Pk; ++k) B.col(k) = A.col(kept[static_cast<size_t>(k)]);
-    return B;
-  };
-  VectorXd held = VectorXd::Zero(P);  // the undetermined parameters' values, 0 elsewhere
-  for (const int i : dropped) held[i] = held_at[i];
-  auto full = [&](const VectorXd& x) {
-    VectorXd v = held;
-    for (Index k = 0; k < Pk; ++k) v[kept[static_cast<size_t>(k)]] = x[k];
-    return v;
-  };
-  const MatrixXd Kk = kept_columns(K);
+  const KeptParameters kp(dropped, held_at, P);
+  const MatrixXd Kk = kp.columns(K);
 
   // Each iterate's plant: consistent inertials nearest it in the data's metric, the prior deciding
   // what the data do not see; friction at least 0.
@@ -137,50 +222,17 @@ void fit_instrumental(const StackedData& d, const JointLog& grid, const std::vec
   const IvIteration it = iterate_instruments(K, y, K.colPivHouseholderQr().solve(y), instruments, iteration);
   // The IV estimate of the last instruments (the iterate may be a half step), of the parameters the
   // log determines.
-  const MatrixXd Z = kept_columns(it.Z);
-  const VectorXd y_held = y - K * held;  // the held parameters' torque moved to the left-hand side
-  const VectorXd phi = full(iv_solve(Kk, Z, y_held, VectorXd::Ones(rows)));
+  const MatrixXd Z = kp.columns(it.Z);
+  const VectorXd y_held = y - K * kp.held;  // the held parameters' torque moved to the left-hand side
+  const VectorXd phi = kp.full(iv_solve(Kk, Z, y_held, VectorXd::Ones(rows)));
   if (!phi.allFinite()) throw InputError("--method iv: the instrumental estimate is not finite");
   res.fit_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   // Cross-validation with the final instruments: each fold's IV estimate from the others' rows.
-  VectorXd pred = VectorXd::Constant(rows, std::nan(""));
-  for (int f = 0; f < folds; ++f) {
-    VectorXd train(rows);
-    for (Index r = 0; r < rows; ++r) train[r] = fold[static_cast<size_t>(r / N)] != f ? 1.0 : 0.0;
-    const VectorXd phi_f = full(iv_solve(Kk, Z, y_held, train));
-    for (Index s = 0; s < S; ++s)
-      if (fold[static_cast<size_t>(s)] == f) pred.segment(s * N, N) = d.W.middleRows(s * N, N) * phi_f;
-  }
-  // Rows --min-speed leaves out of the fit are left out of the scores too.
-  for (Index r = 0; r < pred.size(); ++r)
-    if (!d.fit_row.empty() && !d.fit_row[static_cast<size_t>(r)]) pred[r] = std::nan("");
-  res.joints = torque_metrics(d.y, pred, N, robot.tau_max);
+  res.joints = torque_metrics(d.y, fold_predictions(d, Kk, Z, y_held, fold, folds, kp), N, robot.tau_max);
 
   // Standard deviations: the IV covariance, inflated by the residual's autocorrelation.
-  const VectorXd residual = y - K * phi;
-  const double s2 = residual.squaredNorm() / (static_cast<double>(rows) - static_cast<double>(Pk));
-  const MatrixXd ZK_inv = (Z.transpose() * Kk).inverse();
-  const MatrixXd C = s2 * ZK_inv * (Z.transpose() * Z) * ZK_inv.transpose();
-  const std::vector<char> all(static_cast<size_t>(S), 1);
-  const double inflation = autocorrelation_inflation(d, all, d.y - d.W * phi);
-  VectorXd stdev = VectorXd::Constant(P, std::nan(""));
-  for (Index k = 0; k < Pk; ++k) stdev[kept[static_cast<size_t>(k)]] = std::sqrt(std::max(0.0, C(k, k)) * inflation);
-  for (Index i = 0; i < P; ++i) res.params.push_back({d.names[static_cast<size_t>(i)], phi[i], stdev[i]});
-  char line[240];
-  std::snprintf(line, sizeof line,
-                "IDIM-IV: %s after %d closed-loop simulations of the law, last step %.2g standard errors (converged "
-                "at %.2g); instruments from the plant of the last iterate",
-                it.converged ? "converged" : "not converged", it.simulations, it.last_step_se, kIvTolerance);
-  res.notes.push_back(line);
-  if (it.tripped > 0)
-    res.notes.push_back(
-        "IDIM-IV: " + std::to_string(it.tripped) +
-        " plant(s) tripped the simulated drive and were replaced by one half way back (last: " + it.trip + ")");
-  std::snprintf(line, sizeof line,
-                "parameter std: the IV covariance times %.3g for the residual's autocorrelation (S / n_eff)",
-                std::sqrt(inflation));
-  res.notes.push_back(line);
+  report_instrumental(d, K, Kk, Z, y, phi, kp, it, res);
 }
 
 }  // namespace dyncal::host

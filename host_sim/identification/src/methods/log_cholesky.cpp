@@ -3,7 +3,7 @@
 #include <Eigen/Dense>
 #include <cmath>
 
-#include "dyncal_host/identification/methods/inertial_parameters.hpp"
+#include "dyncal_host/model/inertial_parameters.hpp"
 
 namespace dyncal::host {
 namespace {

@@ -7,12 +7,12 @@
 #include "dyncal/friction.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/number_text.hpp"
-#include "dyncal_host/identification/logs/uniform_grid.hpp"
-#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
+#include "dyncal_host/identification/methods/signal.hpp"
 #include "dyncal_host/identification/pipeline/identify_pipeline.hpp"
 #include "dyncal_host/identification/pipeline/poor_fit.hpp"
-#include "dyncal_host/identification/pipeline/signal.hpp"
-#include "dyncal_host/identification/pipeline/stacked_data.hpp"
+#include "dyncal_host/logs/uniform_grid.hpp"
+#include "dyncal_host/model/compiled_robot.hpp"
+#include "dyncal_host/model/stacked_data.hpp"
 
 namespace dyncal::host {
 namespace {
@@ -111,56 +111,6 @@ IdentifyResult identify(const RobotDescription& robot, JointLog raw, const Ident
   r.notes.insert(r.notes.begin(), note);
   for (std::string& n : poor_fit_notes(facts, robot, r.joints)) r.notes.push_back(std::move(n));
   return r;
-}
-
-namespace {
-
-// autocorrelation_inflation from each joint's residual series over its rows with train and
-// fit_row, written by series(j, e) into e (S long) in sample order; returns its length.
-template <class Series>
-double inflation_of_series(const StackedData& d, Series series) {
-  const int N = static_cast<int>(d.q.cols());
-  double rows = 0, weighted = 0;
-  Eigen::VectorXd e(d.t.size());
-  for (int j = 0; j < N; ++j) {
-    const Eigen::Index n = series(j, e);
-    if (n < 8) continue;
-    const double dn = static_cast<double>(n);
-    rows += dn;
-    weighted += dn * dn / effective_samples(e.head(n));
-  }
-  return rows > 0 ? std::max(1.0, weighted / rows) : 1.0;
-}
-
-}  // namespace
-
-double autocorrelation_inflation(const StackedData& d, const std::vector<char>& train,
-                                 const Eigen::VectorXd& residual) {
-  const int N = static_cast<int>(d.q.cols());
-  return inflation_of_series(d, [&](int j, Eigen::VectorXd& e) {
-    Eigen::Index n = 0;
-    for (Eigen::Index s = 0; s < d.t.size(); ++s) {
-      if (train[static_cast<size_t>(s)] && d.fit_row[s * N + j]) e[n++] = residual[s * N + j];
-    }
-    return n;
-  });
-}
-
-double streamed_autocorrelation_inflation(const StackedData& d, const std::vector<char>& train,
-                                          const Eigen::VectorXd& phi) {
-  const int N = static_cast<int>(d.q.cols());
-  Eigen::MatrixXd K;
-  Eigen::VectorXd tau_hat(N);
-  return inflation_of_series(d, [&](int j, Eigen::VectorXd& e) {
-    Eigen::Index n = 0;
-    for (Eigen::Index s = 0; s < d.t.size(); ++s) {
-      if (!train[static_cast<size_t>(s)] || !d.fit_row[s * N + j]) continue;
-      d.regressor(s, K);
-      tau_hat.noalias() = K * phi;
-      e[n++] = d.y[s * N + j] - tau_hat[j];
-    }
-    return n;
-  });
 }
 
 StackedData prepare_stacked(const RobotDescription& robot, const JointLog& raw, const IdentifyOptions& options) {

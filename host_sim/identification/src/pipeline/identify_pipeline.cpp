@@ -10,15 +10,16 @@
 
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/progress.hpp"
+#include "dyncal_host/identification/methods/autocorrelation.hpp"
 #include "dyncal_host/identification/methods/effect_model.hpp"
 #include "dyncal_host/identification/methods/instrumental_variables.hpp"
 #include "dyncal_host/identification/methods/sign_constrained.hpp"
-#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
+#include "dyncal_host/identification/methods/signal.hpp"
 #include "dyncal_host/identification/pipeline/parameter_prior.hpp"
 #include "dyncal_host/identification/pipeline/parameter_scales.hpp"
+#include "dyncal_host/identification/pipeline/prediction.hpp"
 #include "dyncal_host/identification/pipeline/recursive_fit.hpp"
-#include "dyncal_host/identification/pipeline/signal.hpp"
-#include "dyncal_host/identification/reports/prediction.hpp"
+#include "dyncal_host/model/compiled_robot.hpp"
 
 namespace dyncal::host {
 
@@ -249,6 +250,86 @@ IdentifyPipeline::IdentifyPipeline(const RobotDescription& robot, const Identify
   }
 }
 
+namespace {
+
+/// W (and W_load with `load`) of `out` as dense matrices, from its regressor's rows.
+void fill_dense_regressor(StackedData& out, bool load) {
+  const int N = static_cast<int>(out.q.cols());
+  const Eigen::Index kept = out.t.size(), P = static_cast<Eigen::Index>(out.names.size());
+  Eigen::MatrixXd K;
+  out.W.resize(kept * N, P);
+  if (load) out.W_load.resize(kept * N, P);
+  for (Eigen::Index s = 0; s < kept; ++s) {
+    out.regressor(s, K);
+    out.W.middleRows(s * N, N) = K;
+    if (!load) continue;
+    out.regressor(s, K, true);
+    out.W_load.middleRows(s * N, N) = K;
+  }
+}
+
+/// fit_row: 0 on the rows of a joint slower than min_speed_fraction of its top speed (with a note).
+void leave_out_slow_rows(StackedData& out, double min_speed_fraction) {
+  const int N = static_cast<int>(out.q.cols());
+  const Eigen::Index kept = out.t.size();
+  const Eigen::VectorXd threshold = out.qd.cwiseAbs().colwise().maxCoeff().transpose() * min_speed_fraction;
+  out.fit_row.assign(static_cast<size_t>(kept * N), 1);
+  for (Eigen::Index r = 0; r < kept; ++r) {
+    for (int j = 0; j < N; ++j) {
+      if (std::abs(out.qd(r, j)) < threshold[j]) out.fit_row[static_cast<size_t>(r * N + j)] = 0;
+    }
+  }
+  if (min_speed_fraction > 0.0) {
+    const auto slow = std::count(out.fit_row.begin(), out.fit_row.end(), 0);
+    char m[200];
+    std::snprintf(m, sizeof m,
+                  "--min-speed %g: %.3g %% of the joint rows (slower than that fraction of the joint's top speed) "
+                  "left out of the fit and of the validation metrics",
+                  min_speed_fraction, 100.0 * static_cast<double>(slow) / static_cast<double>(kept * N));
+    out.notes.push_back(m);
+  }
+}
+
+/// The note on the standstill band (per joint [rad/s]) and the share of joint samples at rest.
+std::string standstill_note(const Eigen::VectorXd& band, const StackedData& out) {
+  const int N = static_cast<int>(out.q.cols());
+  const Eigen::Index kept = out.t.size();
+  std::string line = "standstill: an unfiltered |qd| below " + std::to_string(kStandstillQuantile).substr(0, 4) +
+                     " x its own noise counts as rest (friction sign 0); dead band [rad/s]";
+  char v[32];
+  for (int j = 0; j < N; ++j) {
+    std::snprintf(v, sizeof v, " %.3g", band[j]);
+    line += v;
+  }
+  const double at_rest = static_cast<double>((out.qd.array() == 0.0).count()) / static_cast<double>(kept * N);
+  std::snprintf(v, sizeof v, "; %.3g %%", 100.0 * at_rest);
+  return line + v + " of the joint samples at rest";
+}
+
+/// Per coupled motor, a note on the joints it turns with and where its terms act.
+void add_motor_notes(const std::vector<int>& coupled, const Eigen::MatrixXd& motor,
+                     const std::vector<CoupledMotor>& declared_motors, StackedData& out) {
+  const int N = static_cast<int>(out.q.cols());
+  char v[32];
+  for (const int m : coupled) {
+    const bool declared = std::none_of(declared_motors.begin(), declared_motors.end(),
+                                       [m](const CoupledMotor& c) { return c.motor == m; });
+    std::string t = std::string(declared ? "transmission (robot.json)" : "coupled motor (model)") + ": motor " +
+                    std::to_string(m + 1) + " turns with";
+    std::string on;
+    for (int j = 0; j < N; ++j) {
+      if (motor(m, j) == 0.0) continue;
+      std::snprintf(v, sizeof v, " %+.4g q%d", motor(m, j), j + 1);
+      t += v;
+      on += (on.empty() ? "" : ", ") + std::to_string(j + 1);
+    }
+    out.notes.push_back(t + "; its friction and rotor inertia terms (joint " + std::to_string(m + 1) +
+                        "'s columns) act on joints " + on + " through the transmission's transpose");
+  }
+}
+
+}  // namespace
+
 StackedData IdentifyPipeline::prepare(JointLog&& log, bool dense, const Eigen::VectorXd* band_override) const {
   const double fs = 1.0 / log.sample_period();
   const ButterworthLowPass filter(opt_.filter_order, opt_.cutoff_hz, fs);
@@ -308,64 +389,40 @@ StackedData IdentifyPipeline::prepare(JointLog&& log, bool dense, const Eigen::V
                            const StackedData& data, Eigen::Index s, bool load, Eigen::MatrixXd& K) {
     regressor_at(data, s, load, model, motor, coupled, filtered, K);
   };
-  if (dense) {
-    Eigen::MatrixXd K;
-    out.W.resize(kept * N, P);
-    if (opt_.load_regressor) out.W_load.resize(kept * N, P);
-    for (Eigen::Index s = 0; s < kept; ++s) {
-      out.regressor(s, K);
-      out.W.middleRows(s * N, N) = K;
-      if (!opt_.load_regressor) continue;
-      out.regressor(s, K, true);
-      out.W_load.middleRows(s * N, N) = K;
-    }
-  }
+  if (dense) fill_dense_regressor(out, opt_.load_regressor);
   // Rows of a joint moving slower than min_speed_fraction of its top speed stay out of the fit:
   // there a real joint sticks and Coulomb friction takes any value in [-Fc, Fc], which sgn(qd)
   // cannot represent. They are left out of the validation metrics too.
-  const Eigen::VectorXd threshold = out.qd.cwiseAbs().colwise().maxCoeff().transpose() * opt_.min_speed_fraction;
-  out.fit_row.assign(static_cast<size_t>(kept * N), 1);
-  for (Eigen::Index r = 0; r < kept; ++r) {
-    for (int j = 0; j < N; ++j) {
-      if (std::abs(out.qd(r, j)) < threshold[j]) out.fit_row[static_cast<size_t>(r * N + j)] = 0;
-    }
-  }
-  if (opt_.min_speed_fraction > 0.0) {
-    const auto slow = std::count(out.fit_row.begin(), out.fit_row.end(), 0);
-    char m[200];
-    std::snprintf(m, sizeof m,
-                  "--min-speed %g: %.3g %% of the joint rows (slower than that fraction of the joint's top speed) "
-                  "left out of the fit and of the validation metrics",
-                  opt_.min_speed_fraction, 100.0 * static_cast<double>(slow) / static_cast<double>(kept * N));
-    out.notes.push_back(m);
-  }
-  std::string line = "standstill: an unfiltered |qd| below " + std::to_string(kStandstillQuantile).substr(0, 4) +
-                     " x its own noise counts as rest (friction sign 0); dead band [rad/s]";
-  char v[32];
-  for (int j = 0; j < N; ++j) {
-    std::snprintf(v, sizeof v, " %.3g", band[j]);
-    line += v;
-  }
-  const double at_rest = static_cast<double>((out.qd.array() == 0.0).count()) / static_cast<double>(kept * N);
-  std::snprintf(v, sizeof v, "; %.3g %%", 100.0 * at_rest);
-  out.notes.push_back(line + v + " of the joint samples at rest");
-  for (const int m : coupled_) {
-    const bool declared =
-        std::none_of(opt_.motors.begin(), opt_.motors.end(), [m](const CoupledMotor& c) { return c.motor == m; });
-    std::string t = std::string(declared ? "transmission (robot.json)" : "coupled motor (model)") + ": motor " +
-                    std::to_string(m + 1) + " turns with";
-    std::string on;
-    for (int j = 0; j < N; ++j) {
-      if (motor_(m, j) == 0.0) continue;
-      std::snprintf(v, sizeof v, " %+.4g q%d", motor_(m, j), j + 1);
-      t += v;
-      on += (on.empty() ? "" : ", ") + std::to_string(j + 1);
-    }
-    out.notes.push_back(t + "; its friction and rotor inertia terms (joint " + std::to_string(m + 1) +
-                        "'s columns) act on joints " + on + " through the transmission's transpose");
-  }
+  leave_out_slow_rows(out, opt_.min_speed_fraction);
+  out.notes.push_back(standstill_note(band, out));
+  add_motor_notes(coupled_, motor_, opt_.motors, out);
   return out;
 }
+
+namespace {
+
+/// Per-joint residual std of the fit phi on the training samples' fitted rows (Gautier's WLS weights;
+/// KF/RLS noise): joint_noise_std.
+Eigen::VectorXd ols_joint_noise(const StackedData& data, const std::vector<char>& train, const Eigen::VectorXd& phi,
+                                Eigen::Index P) {
+  const int N = static_cast<int>(data.q.cols());
+  const Eigen::Index S = data.t.size();
+  Eigen::MatrixXd K;
+  Eigen::VectorXd ss = Eigen::VectorXd::Zero(N), n = Eigen::VectorXd::Zero(N);
+  for (Eigen::Index s = 0; s < S; ++s) {
+    if (!train[static_cast<size_t>(s)]) continue;
+    data.regressor(s, K);
+    for (int j = 0; j < N; ++j) {
+      if (!data.fit_row[static_cast<size_t>(s * N + j)]) continue;
+      const double e = data.y[s * N + j] - K.row(j).dot(phi);
+      ss[j] += e * e;
+      n[j] += 1;
+    }
+  }
+  return joint_noise_std(ss, n, P);
+}
+
+}  // namespace
 
 void IdentifyPipeline::fit(const StackedData& data, const std::vector<char>& train, Eigen::VectorXd& phi,
                            Eigen::VectorXd& stdev, FitDetails* details, const FitDetails* decided) const {
@@ -390,63 +447,24 @@ void IdentifyPipeline::fit(const StackedData& data, const std::vector<char>& tra
   // OLS of the parameters the data determine (white noise: the weights need only a fit).
   Eigen::VectorXd ols_std;
   least_squares(*ls, dropped, 1.0, false, phi, ols_std, nullptr, nullptr, nullptr);
-  // Per-joint residual variance of the OLS fit (Gautier's WLS weights; KF/RLS noise).
-  Eigen::VectorXd ss = Eigen::VectorXd::Zero(N), n = Eigen::VectorXd::Zero(N);
-  for (Eigen::Index s = 0; s < S; ++s) {
-    if (!train[static_cast<size_t>(s)]) continue;
-    data.regressor(s, K);
-    for (int j = 0; j < N; ++j) {
-      if (!data.fit_row[static_cast<size_t>(s * N + j)]) continue;
-      const double e = data.y[s * N + j] - K.row(j).dot(phi);
-      ss[j] += e * e;
-      n[j] += 1;
-    }
-  }
-  const Eigen::VectorXd sigma = joint_noise_std(ss, n, P);
+  // Per-joint residual std of the OLS fit (Gautier's WLS weights; KF/RLS noise).
+  const Eigen::VectorXd sigma = ols_joint_noise(data, train, phi, P);
   // The final fit decides with the residual's autocorrelation (the std it reports are inflated so).
   const double decision_inflation = decided   ? decided->decision_inflation
                                     : details ? streamed_autocorrelation_inflation(data, train, phi)
                                               : 1.0;
   if (details) details->decision_inflation = decision_inflation;
   double* cond = details ? &details->cond : nullptr;
-  std::vector<int>* held = details ? &details->held : nullptr;
-  DeterminedFit* decision = details ? &details->decision : nullptr;
   const std::string& m = opt_.method;
   // ols, wls: the MAP estimate with the robot's prior where it has one (parameter_prior.hpp). The
   // data alone decide first which parameters they determine (the verdict; their std is the data's);
   // the prior then enters as pseudo-rows weighed against the data rows' residual variance, and only
   // a parameter the data do not determine and the prior does not cover is held at 0.
-  struct {
-    Eigen::MatrixXd R;             // the data's triangular factor (without the prior's rows); empty: no MAP fit
-    double sigma2 = 1;             // the data rows' residual variance
-    std::vector<int> held;         // parameters held at 0 (no prior and undetermined, or sign constraints)
-    std::vector<int> unsupported;  // of them, those without a prior the data do not determine (std NaN)
-  } map_data;
+  MapData map_data;
   const double data_weight = details ? details->data_weight : decided ? decided->data_weight : 1.0;
   ParameterPrior search_prior;  // gd, ga, pf: the spread of what the log determines only with the prior
   auto fit_least_squares = [&]() {
-    if (!prior_.usable() || m == "iv") {  // iv: its start (fit_instrumental) decides on the data alone
-      least_squares(*ls, dropped, decision_inflation, opt_.sign_constraints, phi, stdev, cond, held, decision);
-      return;
-    }
-    DeterminedFit d;
-    Eigen::VectorXd data_std;
-    least_squares(*ls, dropped, decision_inflation, false, phi, data_std, cond, nullptr, &d);
-    const std::vector<int>& undetermined = dropped ? *dropped : d.dropped;
-    std::vector<int> unsupported;
-    for (const int i : undetermined)
-      if (!prior_.has[static_cast<size_t>(i)]) unsupported.push_back(i);
-    const double kept = static_cast<double>(P) - static_cast<double>(undetermined.size());
-    const Eigen::MatrixXd R = ls->r_factor().triangularView<Eigen::Upper>();
-    const double sigma2 = (ls->residual_sum_of_squares() + (R * phi - ls->rotated_rhs()).squaredNorm()) /
-                          std::max(1.0, static_cast<double>(ls->rows()) - kept);
-    check(add_prior_rows(*ls, prior_, std::sqrt(sigma2 / data_weight)));
-    least_squares(*ls, &unsupported, 1.0, opt_.sign_constraints, phi, stdev, nullptr, held, nullptr);
-    if (!details) return;
-    details->data_stdev = data_std;
-    details->decision = std::move(d);
-    map_data = {R, sigma2, unsupported, unsupported};
-    if (held) map_data.held.insert(map_data.held.end(), held->begin(), held->end());
+    fit_least_squares_with_prior(*ls, dropped, decision_inflation, data_weight, phi, stdev, details, map_data);
   };
   if (m == "ols") {
     fit_least_squares();
@@ -456,56 +474,7 @@ void IdentifyPipeline::fit(const StackedData& data, const std::vector<char>& tra
     if (m == "wls" || m == "iv") {
       fit_least_squares();
     } else {  // the WLS solution starts the consistent fit of the same weighted data
-      DeterminedFit d;
-      Eigen::VectorXd data_std;
-      least_squares(*ls, dropped, decision_inflation, false, phi, data_std, cond, nullptr, &d);
-      const CompiledRobot& compiled = compiled_robot_for(robot_);
-      ConsistentProblem p;
-      p.R = ls->r_factor().triangularView<Eigen::Upper>();
-      p.z = ls->rotated_rhs();
-      p.num_base = model_.num_base;
-      p.K = base_map(compiled);
-      p.prior = Eigen::Map<const Eigen::VectorXd>(compiled.nominal_standard.data(), compiled.num_standard);
-      p.sigma2 = d.dropped.empty() ? ls->residual_sum_of_squares() / std::max(1.0, static_cast<double>(ls->rows() - P))
-                                   : d.sigma2;
-      p.start = phi;
-      p.prior_relative_std = opt_.prior_std;
-      p.nonnegative = nonnegative_terms(model_.names, model_.num_base);
-      ConsistentSolution sol;
-      if (m == "pcls") {
-        // The data weigh against the prior as white noise of the WLS residual's variance. Weighed
-        // by their effective information instead (sigma2 times S / n_eff, 200 on the TX40 log),
-        // the prior pulled the TX40's links 1 and 2 to robot.json and joint 1's validation RMS rose
-        // 1.74 -> 2.64 Nm (WLS 1.70): the autocorrelation there is model error, not noise.
-        sol = consistent_least_squares(p);
-        stdev = sol.params_std;
-      } else {
-        // The optimisers: the model is linear, so the parameters' spread is least squares' (the
-        // Fisher information does not depend on where the search ends). The particle filter's
-        // likelihood takes the residual's autocorrelation into account (S / n_eff).
-        p.sigma2 *= streamed_autocorrelation_inflation(data, train, phi);
-        sol = search_consistent(p, search_method(m), search_settings(opt_));
-        stdev = data_std;
-        if (details && !d.dropped.empty()) {
-          // The search moves the parameters the log does not determine within its range, and those
-          // the log determines only together with them move along: their spread is the posterior's
-          // with robot.json's inertials as prior (the search's centre), not the data's with the
-          // undetermined ones held at 0 (which understated it 4-fold on a coupled motor's Ia).
-          search_prior = parameter_prior(robot_, model_, opt_.prior_std > 0 ? opt_.prior_std : kPriorRelativeStd);
-          if (search_prior.usable()) {
-            std::vector<int> unsupported;
-            for (const int i : d.dropped)
-              if (!search_prior.has[static_cast<size_t>(i)]) unsupported.push_back(i);
-            map_data = {p.R, d.sigma2, unsupported, d.dropped};
-          }
-        }
-      }
-      phi = sol.params;
-      if (details) {
-        details->consistent = std::move(sol);
-        details->data_stdev = data_std;
-        details->decision = std::move(d);
-      }
+      fit_consistent(*ls, data, train, dropped, decision_inflation, phi, stdev, details, map_data, search_prior);
     }
   } else if (m == "kf" || m == "rls") {
     UpdateStatus status = UpdateStatus::ok;
@@ -521,27 +490,126 @@ void IdentifyPipeline::fit(const StackedData& data, const std::vector<char>& tra
     throw InputError("unknown method '" + m + "' (expected wls, ols, kf, rls, pcls, gd, ga or pf)");
   }
   if (!details) return;
-  details->inflation = streamed_autocorrelation_inflation(data, train, phi);
+  final_statistics(data, train, phi, stdev, *details, map_data, search_prior, data_weight);
+}
+
+void IdentifyPipeline::fit_least_squares_with_prior(LeastSquaresFit& ls, const std::vector<int>* dropped,
+                                                    double decision_inflation, double data_weight, Eigen::VectorXd& phi,
+                                                    Eigen::VectorXd& stdev, FitDetails* details,
+                                                    MapData& map_data) const {
+  double* cond = details ? &details->cond : nullptr;
+  std::vector<int>* held = details ? &details->held : nullptr;
+  DeterminedFit* decision = details ? &details->decision : nullptr;
+  const std::string& m = opt_.method;
+  LeastSquaresFit* lsp = &ls;
+  if (!prior_.usable() || m == "iv") {  // iv: its start (fit_instrumental) decides on the data alone
+    least_squares(*lsp, dropped, decision_inflation, opt_.sign_constraints, phi, stdev, cond, held, decision);
+    return;
+  }
+  DeterminedFit d;
+  Eigen::VectorXd data_std;
+  least_squares(*lsp, dropped, decision_inflation, false, phi, data_std, cond, nullptr, &d);
+  const std::vector<int>& undetermined = dropped ? *dropped : d.dropped;
+  std::vector<int> unsupported;
+  for (const int i : undetermined)
+    if (!prior_.has[static_cast<size_t>(i)]) unsupported.push_back(i);
+  const double kept = static_cast<double>(P) - static_cast<double>(undetermined.size());
+  const Eigen::MatrixXd R = lsp->r_factor().triangularView<Eigen::Upper>();
+  const double sigma2 = (lsp->residual_sum_of_squares() + (R * phi - lsp->rotated_rhs()).squaredNorm()) /
+                        std::max(1.0, static_cast<double>(lsp->rows()) - kept);
+  check(add_prior_rows(*lsp, prior_, std::sqrt(sigma2 / data_weight)));
+  least_squares(*lsp, &unsupported, 1.0, opt_.sign_constraints, phi, stdev, nullptr, held, nullptr);
+  if (!details) return;
+  details->data_stdev = data_std;
+  details->decision = std::move(d);
+  map_data = {R, sigma2, unsupported, unsupported};
+  if (held) map_data.held.insert(map_data.held.end(), held->begin(), held->end());
+}
+
+void IdentifyPipeline::fit_consistent(LeastSquaresFit& ls, const StackedData& data, const std::vector<char>& train,
+                                      const std::vector<int>* dropped, double decision_inflation, Eigen::VectorXd& phi,
+                                      Eigen::VectorXd& stdev, FitDetails* details, MapData& map_data,
+                                      ParameterPrior& search_prior) const {
+  double* cond = details ? &details->cond : nullptr;
+  const std::string& m = opt_.method;
+  LeastSquaresFit* lsp = &ls;
+  DeterminedFit d;
+  Eigen::VectorXd data_std;
+  least_squares(*lsp, dropped, decision_inflation, false, phi, data_std, cond, nullptr, &d);
+  const CompiledRobot& compiled = compiled_robot_for(robot_);
+  ConsistentProblem p;
+  p.R = lsp->r_factor().triangularView<Eigen::Upper>();
+  p.z = lsp->rotated_rhs();
+  p.num_base = model_.num_base;
+  p.K = base_map(compiled);
+  p.prior = Eigen::Map<const Eigen::VectorXd>(compiled.nominal_standard.data(), compiled.num_standard);
+  p.sigma2 = d.dropped.empty() ? lsp->residual_sum_of_squares() / std::max(1.0, static_cast<double>(lsp->rows() - P))
+                               : d.sigma2;
+  p.start = phi;
+  p.prior_relative_std = opt_.prior_std;
+  p.nonnegative = nonnegative_terms(model_.names, model_.num_base);
+  ConsistentSolution sol;
+  if (m == "pcls") {
+    // The data weigh against the prior as white noise of the WLS residual's variance. Weighed
+    // by their effective information instead (sigma2 times S / n_eff, 200 on the TX40 log),
+    // the prior pulled the TX40's links 1 and 2 to robot.json and joint 1's validation RMS rose
+    // 1.74 -> 2.64 Nm (WLS 1.70): the autocorrelation there is model error, not noise.
+    sol = consistent_least_squares(p);
+    stdev = sol.params_std;
+  } else {
+    // The optimisers: the model is linear, so the parameters' spread is least squares' (the
+    // Fisher information does not depend on where the search ends). The particle filter's
+    // likelihood takes the residual's autocorrelation into account (S / n_eff).
+    p.sigma2 *= streamed_autocorrelation_inflation(data, train, phi);
+    sol = search_consistent(p, search_method(m), search_settings(opt_));
+    stdev = data_std;
+    if (details && !d.dropped.empty()) {
+      // The search moves the parameters the log does not determine within its range, and those
+      // the log determines only together with them move along: their spread is the posterior's
+      // with robot.json's inertials as prior (the search's centre), not the data's with the
+      // undetermined ones held at 0 (which understated it 4-fold on a coupled motor's Ia).
+      search_prior = parameter_prior(robot_, model_, opt_.prior_std > 0 ? opt_.prior_std : kPriorRelativeStd);
+      if (search_prior.usable()) {
+        std::vector<int> unsupported;
+        for (const int i : d.dropped)
+          if (!search_prior.has[static_cast<size_t>(i)]) unsupported.push_back(i);
+        map_data = {p.R, d.sigma2, unsupported, d.dropped};
+      }
+    }
+  }
+  phi = sol.params;
+  if (details) {
+    details->consistent = std::move(sol);
+    details->data_stdev = data_std;
+    details->decision = std::move(d);
+  }
+}
+
+void IdentifyPipeline::final_statistics(const StackedData& data, const std::vector<char>& train,
+                                        const Eigen::VectorXd& phi, Eigen::VectorXd& stdev, FitDetails& details,
+                                        const MapData& map_data, const ParameterPrior& search_prior,
+                                        double data_weight) const {
+  details.inflation = streamed_autocorrelation_inflation(data, train, phi);
   if (map_data.R.size() > 0) {
     // The MAP estimate weighs the data as white noise (as pcls: the autocorrelation of a real log is
     // mostly model error; weighed by their effective information, TX40's joint 1 validated 2.63 Nm
     // instead of 1.73); its std are that estimate's spread with the data's noise S / n_eff times
     // the white variance (parameter_prior.hpp).
     const PriorFitStatistics st = prior_fit_statistics(search_prior.usable() ? search_prior : prior_, map_data.R,
-                                                       map_data.sigma2, details->inflation, data_weight, map_data.held);
+                                                       map_data.sigma2, details.inflation, data_weight, map_data.held);
     stdev = st.stdev;
     for (const int i : map_data.unsupported) stdev[i] = std::numeric_limits<double>::quiet_NaN();
-    details->data_share = st.data_share;
-    details->data_stdev *= std::sqrt(details->inflation);
+    details.data_share = st.data_share;
+    details.data_stdev *= std::sqrt(details.inflation);
     return;
   }
-  if (details->consistent.information_data.size() > 0) {  // pcls: the prior's part is not inflated
-    consistent_covariance(details->consistent, details->inflation);
-    stdev = details->consistent.params_std;
+  if (details.consistent.information_data.size() > 0) {  // pcls: the prior's part is not inflated
+    consistent_covariance(details.consistent, details.inflation);
+    stdev = details.consistent.params_std;
   } else {
-    stdev *= std::sqrt(details->inflation);
+    stdev *= std::sqrt(details.inflation);
   }
-  if (details->data_stdev.size() > 0) details->data_stdev *= std::sqrt(details->inflation);
+  if (details.data_stdev.size() > 0) details.data_stdev *= std::sqrt(details.inflation);
 }
 
 /// The least-squares estimate of `ls`'s data with the parameters the data do not determine held at
@@ -722,6 +790,73 @@ namespace {
 /// The declared model's fit, or [W E] with effect columns appended (set_effect_columns): the final
 /// fit on all samples, then its blocked cross-validation (`fold`, `folds`), the prior's weight chosen
 /// by it (ols/wls with a prior), and the parameters, their verdicts and notes, into res.
+/// A final fit with the data's rows weighed `data_weight` times against the prior, its folds' fits
+/// and their pooled out-of-fold metrics (each sample predicted by the fit without its fold, made
+/// sample by sample: no stored prediction).
+struct Validated {
+  Eigen::VectorXd phi, stdev;
+  IdentifyPipeline::FitDetails details;
+  std::vector<JointMetrics> joints;
+  double seconds = 0;
+};
+
+Validated validated_fit(const IdentifyPipeline& pipe, const StackedData& data, const std::vector<int>& fold, int folds,
+                        const Eigen::VectorXd& tau_max, double data_weight, Progress& progress) {
+  const int N = static_cast<int>(data.q.cols());
+  const Eigen::Index S = data.t.size();
+  const std::vector<char> all(static_cast<size_t>(S), 1);
+  Validated v;
+  const auto t0 = std::chrono::steady_clock::now();
+  v.details.data_weight = data_weight;
+  pipe.fit(data, all, v.phi, v.stdev, &v.details);
+  progress.advance();
+  v.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::vector<Eigen::VectorXd> fold_phi(static_cast<size_t>(folds));
+  for (int f = 0; f < folds; ++f) {
+    std::vector<char> train(static_cast<size_t>(S));
+    for (Eigen::Index s = 0; s < S; ++s) train[static_cast<size_t>(s)] = fold[static_cast<size_t>(s)] != f;
+    Eigen::VectorXd fold_std;
+    pipe.fit(data, train, fold_phi[static_cast<size_t>(f)], fold_std, nullptr, &v.details);
+    progress.advance();
+  }
+  Eigen::MatrixXd K;
+  Eigen::VectorXd tau_hat(N);
+  v.joints = torque_metrics(
+      data.y, N, tau_max,
+      // Rows --min-speed leaves out of the fit are left out of the scores too.
+      [&](Eigen::Index s, int j) {
+        return fold[static_cast<size_t>(s)] >= 0 && data.fit_row[static_cast<size_t>(s * N + j)];
+      },
+      [&](Eigen::Index s) {
+        data.regressor(s, K);
+        tau_hat = K * fold_phi[static_cast<size_t>(fold[static_cast<size_t>(s)])];
+        return tau_hat.data();
+      });
+  return v;
+}
+
+/// The note on what the parameters' std are (the posterior's, the MAP estimate's, or the white-noise
+/// figures inflated by the residual's autocorrelation).
+std::string std_note(const std::string& method, const IdentifyPipeline::FitDetails& final_fit) {
+  char line[320];
+  if (is_search_method(method) && final_fit.data_share.size() > 0)
+    std::snprintf(line, sizeof line,
+                  "parameter std: the posterior's spread with robot.json's inertials as prior (the search moves "
+                  "what the log does not determine within its range), the data's noise %.3g times its white "
+                  "variance (S / n_eff)",
+                  final_fit.inflation);
+  else if (final_fit.data_share.size() > 0 || final_fit.consistent.information_data.size() > 0)
+    std::snprintf(line, sizeof line,
+                  "parameter std: the MAP estimate's spread with the data's noise %.3g times its white "
+                  "variance (the residual's autocorrelation, S / n_eff) and the prior's own",
+                  final_fit.inflation);
+  else
+    std::snprintf(line, sizeof line,
+                  "parameter std: the white-noise figures times %.3g for the residual's autocorrelation (S / n_eff)",
+                  std::sqrt(final_fit.inflation));
+  return line;
+}
+
 void fit_validated(const IdentifyPipeline& pipe, const StackedData& data, const TermSetModel& model,
                    const std::vector<int>& fold, int folds, const RobotDescription& robot, const IdentifyOptions& opt,
                    IdentifyResult& res) {
@@ -734,44 +869,8 @@ void fit_validated(const IdentifyPipeline& pipe, const StackedData& data, const 
   const bool map = pipe.prior().usable();
   Progress progress("identify: " + opt.method + " fit and " + std::to_string(folds) + " folds",
                     static_cast<double>((map ? 2 : 1) * (folds + 1)), "fits");
-  // The final fit with the data's rows weighed `data_weight` times against the prior, its folds'
-  // fits and their pooled out-of-fold metrics (each sample predicted by the fit without its fold,
-  // made sample by sample: no stored prediction).
-  struct Validated {
-    Eigen::VectorXd phi, stdev;
-    IdentifyPipeline::FitDetails details;
-    std::vector<JointMetrics> joints;
-    double seconds = 0;
-  };
   const auto fit_and_validate = [&](double data_weight) {
-    Validated v;
-    const auto t0 = std::chrono::steady_clock::now();
-    v.details.data_weight = data_weight;
-    pipe.fit(data, all, v.phi, v.stdev, &v.details);
-    progress.advance();
-    v.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    std::vector<Eigen::VectorXd> fold_phi(static_cast<size_t>(folds));
-    for (int f = 0; f < folds; ++f) {
-      std::vector<char> train(static_cast<size_t>(S));
-      for (Eigen::Index s = 0; s < S; ++s) train[static_cast<size_t>(s)] = fold[static_cast<size_t>(s)] != f;
-      Eigen::VectorXd fold_std;
-      pipe.fit(data, train, fold_phi[static_cast<size_t>(f)], fold_std, nullptr, &v.details);
-      progress.advance();
-    }
-    Eigen::MatrixXd K;
-    Eigen::VectorXd tau_hat(N);
-    v.joints = torque_metrics(
-        data.y, N, robot.tau_max,
-        // Rows --min-speed leaves out of the fit are left out of the scores too.
-        [&](Eigen::Index s, int j) {
-          return fold[static_cast<size_t>(s)] >= 0 && data.fit_row[static_cast<size_t>(s * N + j)];
-        },
-        [&](Eigen::Index s) {
-          data.regressor(s, K);
-          tau_hat = K * fold_phi[static_cast<size_t>(fold[static_cast<size_t>(s)])];
-          return tau_hat.data();
-        });
-    return v;
+    return validated_fit(pipe, data, fold, folds, robot.tau_max, data_weight, progress);
   };
   Validated chosen = fit_and_validate(1.0);
   if (map) {
@@ -801,31 +900,103 @@ void fit_validated(const IdentifyPipeline& pipe, const StackedData& data, const 
   res.joints = chosen.joints;
   for (int i = 0; i < P; ++i) res.params.push_back({model.names[static_cast<size_t>(i)], phi[i], stdev[i]});
   judge_parameters(pipe.scales(), final_fit, opt, pipe.prior(), model.names, res);
-  {
-    char line[320];
-    if (is_search_method(opt.method) && final_fit.data_share.size() > 0)
-      std::snprintf(line, sizeof line,
-                    "parameter std: the posterior's spread with robot.json's inertials as prior (the search moves "
-                    "what the log does not determine within its range), the data's noise %.3g times its white "
-                    "variance (S / n_eff)",
-                    final_fit.inflation);
-    else if (final_fit.data_share.size() > 0 || final_fit.consistent.information_data.size() > 0)
-      std::snprintf(line, sizeof line,
-                    "parameter std: the MAP estimate's spread with the data's noise %.3g times its white "
-                    "variance (the residual's autocorrelation, S / n_eff) and the prior's own",
-                    final_fit.inflation);
-    else
-      std::snprintf(line, sizeof line,
-                    "parameter std: the white-noise figures times %.3g for the residual's autocorrelation (S / n_eff)",
-                    std::sqrt(final_fit.inflation));
-    res.notes.push_back(line);
-  }
+  res.notes.push_back(std_note(opt.method, final_fit));
   report_consistent(final_fit.consistent, opt, res);
   if (!final_fit.held.empty()) {
     std::string names;
     for (int i : final_fit.held) names += (names.empty() ? "" : ", ") + model.names[static_cast<size_t>(i)];
     res.notes.push_back("sign constraints: " + names +
                         " held at 0 (negative without the constraint: friction and rotor inertia cannot be)");
+  }
+}
+
+}  // namespace
+
+namespace {
+
+/// The validation's fold of each of the S samples (-1: training only): a time split (--validate-last)
+/// or blocked k-fold cross-validation; res.validation says which. Returns the number of folds.
+/// Throws InputError (folds < 2, too few samples for them, validate_last outside (0, 1)).
+int assign_folds(const IdentifyOptions& opt, Eigen::Index S, double rate_hz, std::vector<int>& fold,
+                 IdentifyResult& res) {
+  int folds = opt.folds;
+  if (opt.validate_last > 0.0) {
+    if (!(opt.validate_last < 1.0)) throw InputError("--validate-last must lie in (0, 1)");
+    const Eigen::Index first =
+        static_cast<Eigen::Index>(std::floor((1.0 - opt.validate_last) * static_cast<double>(S)));
+    for (Eigen::Index s = 0; s < S; ++s) fold[static_cast<size_t>(s)] = s >= first ? 0 : -1;
+    folds = 1;
+    res.validation =
+        "time split: last " + std::to_string(static_cast<int>(std::lround(opt.validate_last * 100))) + "% validates";
+  } else {
+    if (folds < 2) throw InputError("--folds must be >= 2");
+    const Eigen::Index block = std::max<Eigen::Index>(1, std::lround(opt.block_seconds * rate_hz));
+    if (S < block * folds)
+      throw InputError("too few samples for " + std::to_string(folds) + " folds of " +
+                       std::to_string(opt.block_seconds) + " s blocks");
+    for (Eigen::Index s = 0; s < S; ++s) fold[static_cast<size_t>(s)] = static_cast<int>((s / block) % folds);
+    res.validation = "blocked " + std::to_string(folds) + "-fold cross-validation, " +
+                     std::to_string(opt.block_seconds).substr(0, 4) + " s blocks";
+  }
+  return folds;
+}
+
+/// Effect terms (model_effects.hpp): their columns appended to the regressor and fitted by this
+/// same pipeline (the prior, the decision of what the log determines, the validation). Load
+/// friction's columns need the rigid-body torque: from a first fit without them on all samples.
+void fit_with_effects(const RobotDescription& robot, const TermSetModel& model, const IdentifyOptions& opt,
+                      StackedData& data, const std::vector<int>& fold, int folds, IdentifyResult& res) {
+  const Eigen::Index S = data.t.size();
+  const Eigen::Index declared = data.W.cols();
+  std::vector<bool> use = effect_columns_without_load_friction(opt.effects);
+  Eigen::VectorXd tau_rb = Eigen::VectorXd::Zero(data.y.size());
+  if (std::find(use.begin(), use.end(), false) != use.end()) {
+    set_effect_columns(data, declared, opt.effects, use, tau_rb);
+    const TermSetModel first_model = with_effect_parameters(model, opt.effects, use);
+    const IdentifyPipeline first(robot, opt, first_model);
+    IdentifyPipeline::FitDetails details;
+    Eigen::VectorXd phi, stdev;
+    first.fit(data, std::vector<char>(static_cast<size_t>(S), 1), phi, stdev, &details);
+    tau_rb = rigid_body_torque(data, phi);
+    res.notes.push_back(
+        "load friction: its rigid-body torque from a first fit without the load terms (the transmitted torque, as "
+        "a drive's feed-forward computes it)");
+  }
+  use.assign(use.size(), true);
+  set_effect_columns(data, declared, opt.effects, use, tau_rb);
+  const TermSetModel with_effects = with_effect_parameters(model, opt.effects, use);
+  const IdentifyPipeline effects_pipe(robot, opt, with_effects,
+                                      effect_parameter_scales(data, declared, with_effects, robot));
+  fit_validated(effects_pipe, data, with_effects, fold, folds, robot, opt, res);
+}
+
+/// The notes of the model's rotor inertia (not modelled, or included in a base parameter) and of
+/// joints validated with R^2 < 0.
+void add_model_notes(const TermSetModel& model, IdentifyResult& res) {
+  const int N = model.num_joints;
+  for (int j = 0; j < N; ++j) {
+    if (!(model.terms & term::rotor_inertia) || model.rotor_inertia_separate[static_cast<size_t>(j)]) continue;
+    const int into = model.rotor_inertia_absorbed_into[static_cast<size_t>(j)];
+    if (into < 0) {  // robot.json: "rotor_inertia": false
+      res.notes.push_back("Ia" + std::to_string(j + 1) +
+                          ": the robot file declares no rotor inertia, so none is modelled (set \"rotor_inertia\": "
+                          "true in robot.json and build again to add it)");
+    } else {
+      res.notes.push_back("Ia" + std::to_string(j + 1) + " is not separable from the rigid body: it is included in " +
+                          model.names[static_cast<size_t>(into)]);
+    }
+  }
+  // R^2 < 0 on data a fit never saw: the model predicts worse than the joint's mean torque. Its
+  // parameters fit noise or a too short log, and are not to be used as they are.
+  for (const JointMetrics& m : res.joints) {
+    if (!(m.r2 < 0)) continue;
+    char line[300];
+    std::snprintf(line, sizeof line,
+                  "joint %d: validation R^2 %.3g < 0 (RMS %.3g Nm against a measured RMS of %.3g Nm): the model "
+                  "predicts unseen data worse than a constant; the log cannot carry this model (too short, too "
+                  "little motion, or too many parameters for it): do not use these parameters",
+                  m.joint, m.r2, m.rms, m.rms_tau);
+    res.notes.push_back(line);
   }
 }
 
@@ -861,25 +1032,7 @@ IdentifyResult run_identify(const RobotDescription& robot, const TermSetModel& m
 
   // Validation assignment: fold index per sample (-1: training only).
   std::vector<int> fold(static_cast<size_t>(S));
-  int folds = opt.folds;
-  if (opt.validate_last > 0.0) {
-    if (!(opt.validate_last < 1.0)) throw InputError("--validate-last must lie in (0, 1)");
-    const Eigen::Index first =
-        static_cast<Eigen::Index>(std::floor((1.0 - opt.validate_last) * static_cast<double>(S)));
-    for (Eigen::Index s = 0; s < S; ++s) fold[static_cast<size_t>(s)] = s >= first ? 0 : -1;
-    folds = 1;
-    res.validation =
-        "time split: last " + std::to_string(static_cast<int>(std::lround(opt.validate_last * 100))) + "% validates";
-  } else {
-    if (folds < 2) throw InputError("--folds must be >= 2");
-    const Eigen::Index block = std::max<Eigen::Index>(1, std::lround(opt.block_seconds * data.rate_hz));
-    if (S < block * folds)
-      throw InputError("too few samples for " + std::to_string(folds) + " folds of " +
-                       std::to_string(opt.block_seconds) + " s blocks");
-    for (Eigen::Index s = 0; s < S; ++s) fold[static_cast<size_t>(s)] = static_cast<int>((s / block) % folds);
-    res.validation = "blocked " + std::to_string(folds) + "-fold cross-validation, " +
-                     std::to_string(opt.block_seconds).substr(0, 4) + " s blocks";
-  }
+  const int folds = assign_folds(opt, S, data.rate_hz, fold, res);
   if (iv) {
     const PrepareLog prepare = [&pipe, &data](JointLog&& l) {
       return pipe.prepare(std::move(l), true, &data.standstill_band);
@@ -894,57 +1047,11 @@ IdentifyResult run_identify(const RobotDescription& robot, const TermSetModel& m
     fit_instrumental(data, grid, fold, folds, robot, opt, prepare, details.decision.dropped, held_at, res);
     judge_parameters(pipe.scales(), details, opt, pipe.prior(), model.names, res);
   } else if (!opt.effects.empty()) {
-    // Effect terms (model_effects.hpp): their columns appended to the regressor and fitted by this
-    // same pipeline (the prior, the decision of what the log determines, the validation). Load
-    // friction's columns need the rigid-body torque: from a first fit without them on all samples.
-    const Eigen::Index declared = data.W.cols();
-    std::vector<bool> use = effect_columns_without_load_friction(opt.effects);
-    Eigen::VectorXd tau_rb = Eigen::VectorXd::Zero(data.y.size());
-    if (std::find(use.begin(), use.end(), false) != use.end()) {
-      set_effect_columns(data, declared, opt.effects, use, tau_rb);
-      const TermSetModel first_model = with_effect_parameters(model, opt.effects, use);
-      const IdentifyPipeline first(robot, opt, first_model);
-      IdentifyPipeline::FitDetails details;
-      Eigen::VectorXd phi, stdev;
-      first.fit(data, std::vector<char>(static_cast<size_t>(S), 1), phi, stdev, &details);
-      tau_rb = rigid_body_torque(data, phi);
-      res.notes.push_back(
-          "load friction: its rigid-body torque from a first fit without the load terms (the transmitted torque, as "
-          "a drive's feed-forward computes it)");
-    }
-    use.assign(use.size(), true);
-    set_effect_columns(data, declared, opt.effects, use, tau_rb);
-    const TermSetModel with_effects = with_effect_parameters(model, opt.effects, use);
-    const IdentifyPipeline effects_pipe(robot, opt, with_effects,
-                                        effect_parameter_scales(data, declared, with_effects, robot));
-    fit_validated(effects_pipe, data, with_effects, fold, folds, robot, opt, res);
+    fit_with_effects(robot, model, opt, data, fold, folds, res);
   } else {
     fit_validated(pipe, data, model, fold, folds, robot, opt, res);
   }
-  for (int j = 0; j < N; ++j) {
-    if (!(model.terms & term::rotor_inertia) || model.rotor_inertia_separate[static_cast<size_t>(j)]) continue;
-    const int into = model.rotor_inertia_absorbed_into[static_cast<size_t>(j)];
-    if (into < 0) {  // robot.json: "rotor_inertia": false
-      res.notes.push_back("Ia" + std::to_string(j + 1) +
-                          ": the robot file declares no rotor inertia, so none is modelled (set \"rotor_inertia\": "
-                          "true in robot.json and build again to add it)");
-    } else {
-      res.notes.push_back("Ia" + std::to_string(j + 1) + " is not separable from the rigid body: it is included in " +
-                          model.names[static_cast<size_t>(into)]);
-    }
-  }
-  // R^2 < 0 on data a fit never saw: the model predicts worse than the joint's mean torque. Its
-  // parameters fit noise or a too short log, and are not to be used as they are.
-  for (const JointMetrics& m : res.joints) {
-    if (!(m.r2 < 0)) continue;
-    char line[300];
-    std::snprintf(line, sizeof line,
-                  "joint %d: validation R^2 %.3g < 0 (RMS %.3g Nm against a measured RMS of %.3g Nm): the model "
-                  "predicts unseen data worse than a constant; the log cannot carry this model (too short, too "
-                  "little motion, or too many parameters for it): do not use these parameters",
-                  m.joint, m.r2, m.rms, m.rms_tau);
-    res.notes.push_back(line);
-  }
+  add_model_notes(model, res);
   return res;
 }
 

@@ -7,7 +7,7 @@
 
 #include "dyncal_host/common/robot_description.hpp"
 #include "dyncal_host/identification/methods/consistent_least_squares.hpp"
-#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
+#include "dyncal_host/model/compiled_robot.hpp"
 
 namespace dyncal::host {
 

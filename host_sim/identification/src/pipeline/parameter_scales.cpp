@@ -6,7 +6,7 @@
 #include "dyncal/friction.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/identification/methods/consistent_least_squares.hpp"
-#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
+#include "dyncal_host/model/compiled_robot.hpp"
 
 namespace dyncal::host {
 

@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <limits>
 
-#include "dyncal_host/identification/pipeline/signal.hpp"
+#include "dyncal_host/identification/methods/signal.hpp"
 
 namespace dyncal::host {
 

@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
-#include "dyncal_host/identification/pipeline/compiled_robot.hpp"
-#include "dyncal_host/identification/reports/prediction.hpp"
+#include "dyncal_host/identification/pipeline/prediction.hpp"
+#include "dyncal_host/model/compiled_robot.hpp"
 
 namespace dyncal::host {
 namespace {

@@ -7,7 +7,7 @@
 
 #include "dyncal/generated/er20/robot.hpp"
 #include "dyncal_host/common/input_error.hpp"
-#include "dyncal_host/identification/pipeline/signal.hpp"
+#include "dyncal_host/identification/methods/signal.hpp"
 #include "dyncal_host/survey/methods/standard_parameters.hpp"
 
 namespace dyncal::host {

@@ -190,17 +190,26 @@ std::array<double, 6> pseudo_inertia_min_eigenvalues(const Eigen::VectorXd& phi)
   return out;
 }
 
-Estimate physically_consistent_ls(const RunData& d, FrictionModel model, const MethodSettings& settings,
-                                  const ConsistentSettings& options) {
-  const auto t0 = std::chrono::steady_clock::now();
+namespace {
+
+/// The study's weighted standard regressor with the linear friction columns of `linear`: rows
+/// 6 s + j weighted by 1 / sigma_j, with the rows' velocity, load torque and weight.
+struct WeightedDesign {
+  Eigen::MatrixXd A;
+  Eigen::VectorXd b, qd, load, w;
+};
+
+WeightedDesign weighted_design(const RunData& d, FrictionModel linear, const MethodSettings& settings) {
   const Eigen::Index S = d.q.rows();
-  const int kf = friction_count(model);
-  // Weighted standard regressor with the linear friction columns: the model's own (Eq. 7, 8, 9),
-  // or Eq. 7's (Fc, beta per joint) as the first stage of a nonlinear model.
-  const FrictionModel linear = is_linear(model) ? model : FrictionModel::eq7;
   const int kl = friction_count(linear);
-  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(6 * S, kStandard + 6 * kl);
-  Eigen::VectorXd b(6 * S), qd(6 * S), load(6 * S), w(6 * S);
+  WeightedDesign out;
+  Eigen::MatrixXd& A = out.A;
+  Eigen::VectorXd &b = out.b, &qd = out.qd, &load = out.load, &w = out.w;
+  A = Eigen::MatrixXd::Zero(6 * S, kStandard + 6 * kl);
+  b.resize(6 * S);
+  qd.resize(6 * S);
+  load.resize(6 * S);
+  w.resize(6 * S);
   Eigen::Matrix<double, 6, kStandard> Ys;
   for (Eigen::Index s = 0; s < S; ++s) {
     Robot::standard_regressor(Vec6(d.q.row(s).transpose()), Vec6(d.qd.row(s).transpose()),
@@ -215,6 +224,85 @@ Estimate physically_consistent_ls(const RunData& d, FrictionModel model, const M
       b[i] = w[i] * d.tau(s, j);
     }
   }
+  return out;
+}
+
+/// Stage 2 of physically_consistent_ls: nonlinear friction from stage 1's inertial parameters (x's
+/// head) and each joint's friction start (friction_start: no set value used), every sample's row;
+/// x becomes the solution in nl's variables. Returns the solver's iterations.
+int nonlinear_stage(const RunData& d, FrictionModel model, const MethodSettings& settings,
+                    const ConsistentSettings& options, const WeightedDesign& design, Eigen::VectorXd& x,
+                    Residuals& nl) {
+  const int kf = friction_count(model);
+  int iterations = 0;
+  nl.model = model;
+  nl.kf = kf;
+  nl.A = design.A.leftCols(kStandard);
+  nl.b = design.b;
+  nl.qd = design.qd;
+  nl.load = design.load;
+  nl.w = design.w;
+  nl.prior = settings.prior.mean;
+  nl.W = settings.prior.whitening;
+  Eigen::VectorXd x4(kInertial + 6 * kf);
+  x4.head(kInertial) = x.head(kInertial);
+  const std::vector<double> f = friction_start(d, model, nl.standard(x4));
+  const SearchRanges ranges = search_ranges(d, model, settings.prior.mean, 0.0);
+  nl.log_lo = ranges.lo.tail(6 * kf).array().max(1e-300).log();
+  nl.log_hi = ranges.hi.tail(6 * kf).array().max(1e-300).log();
+  const auto set_friction_of_joint = [&](Eigen::VectorXd& at, const std::vector<double>& from, int j) {
+    for (Eigen::Index i = kf * j; i < kf * (j + 1); ++i) {
+      const double v = from[static_cast<size_t>(i)];
+      at[kInertial + i] = is_scale_parameter(model, static_cast<int>(i % kf)) ? nl.scale_variable(i, v) : v;
+    }
+  };
+  for (int j = 0; j < 6; ++j) set_friction_of_joint(x4, f, j);
+  iterations += solve_structured(nl, x4, options);
+  // Restarts: Levenberg-Marquardt moves the rigid body and every joint's friction together and can
+  // end with a joint's scale parameter in a wrong decade (quick Eq. 4 run with noise: joint 5's
+  // qds 2.7 for the set 0.1, outside the 95 % interval [0.05, 1.0] of the scan at its own final
+  // rigid body). Given the rigid body the data term is a sum over joints, each depending on its
+  // own friction alone: the scan at the solution replaces a joint's friction wherever it lowers
+  // that joint's squared residual, and the solver runs again from there (at most twice).
+  for (int restart = 0; restart < 2; ++restart) {
+    const std::vector<double> g = friction_start(d, model, nl.standard(x4));
+    Eigen::VectorXd r(nl.values()), r_scan(nl.values()), y = x4;
+    nl(x4, r);
+    for (int j = 0; j < 6; ++j) set_friction_of_joint(y, g, j);
+    nl(y, r_scan);
+    bool improved = false;
+    for (int j = 0; j < 6; ++j) {
+      double now = 0, scan = 0;
+      for (Eigen::Index i = j; i < nl.b.size(); i += 6) {
+        now += r[i] * r[i];
+        scan += r_scan[i] * r_scan[i];
+      }
+      if (scan < now) {
+        set_friction_of_joint(x4, g, j);
+        improved = true;
+      }
+    }
+    if (!improved) break;
+    iterations += solve_structured(nl, x4, options);
+  }
+  x = x4;
+  return iterations;
+}
+
+}  // namespace
+
+Estimate physically_consistent_ls(const RunData& d, FrictionModel model, const MethodSettings& settings,
+                                  const ConsistentSettings& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const Eigen::Index S = d.q.rows();
+  const int kf = friction_count(model);
+  // Weighted standard regressor with the linear friction columns: the model's own (Eq. 7, 8, 9),
+  // or Eq. 7's (Fc, beta per joint) as the first stage of a nonlinear model.
+  const FrictionModel linear = is_linear(model) ? model : FrictionModel::eq7;
+  const int kl = friction_count(linear);
+  const WeightedDesign design = weighted_design(d, linear, settings);
+  const Eigen::MatrixXd& A = design.A;
+  const Eigen::VectorXd& b = design.b;
   // Stage 1, linear friction: identification's consistent_least_squares (the same as identify
   // --method pcls) on the data compressed to its QR factor (60 + 6 kl rows, not 6 S), in the
   // standard parameters themselves (K = identity), with the study's CAD prior; friction free.
@@ -235,59 +323,8 @@ Estimate physically_consistent_ls(const RunData& d, FrictionModel model, const M
   int iterations = linear_solution.iterations;
   Residuals nl(kInertial + 6 * kf, static_cast<int>(6 * S + kStandard));
   if (!is_linear(model)) {
-    // Stage 2, nonlinear friction from stage 1's inertial parameters and each joint's friction
-    // start (friction_start: no set value used), every sample's row.
-    nl.model = model;
-    nl.kf = kf;
-    nl.A = A.leftCols(kStandard);
-    nl.b = b;
-    nl.qd = qd;
-    nl.load = load;
-    nl.w = w;
-    nl.prior = settings.prior.mean;
-    nl.W = settings.prior.whitening;
-    Eigen::VectorXd x4(kInertial + 6 * kf);
-    x4.head(kInertial) = x.head(kInertial);
-    const std::vector<double> f = friction_start(d, model, nl.standard(x4));
-    const SearchRanges ranges = search_ranges(d, model, settings.prior.mean, 0.0);
-    nl.log_lo = ranges.lo.tail(6 * kf).array().max(1e-300).log();
-    nl.log_hi = ranges.hi.tail(6 * kf).array().max(1e-300).log();
-    const auto set_friction_of_joint = [&](Eigen::VectorXd& at, const std::vector<double>& from, int j) {
-      for (Eigen::Index i = kf * j; i < kf * (j + 1); ++i) {
-        const double v = from[static_cast<size_t>(i)];
-        at[kInertial + i] = is_scale_parameter(model, static_cast<int>(i % kf)) ? nl.scale_variable(i, v) : v;
-      }
-    };
-    for (int j = 0; j < 6; ++j) set_friction_of_joint(x4, f, j);
-    iterations += solve_structured(nl, x4, options);
-    // Restarts: Levenberg-Marquardt moves the rigid body and every joint's friction together and can
-    // end with a joint's scale parameter in a wrong decade (quick Eq. 4 run with noise: joint 5's
-    // qds 2.7 for the set 0.1, outside the 95 % interval [0.05, 1.0] of the scan at its own final
-    // rigid body). Given the rigid body the data term is a sum over joints, each depending on its
-    // own friction alone: the scan at the solution replaces a joint's friction wherever it lowers
-    // that joint's squared residual, and the solver runs again from there (at most twice).
-    for (int restart = 0; restart < 2; ++restart) {
-      const std::vector<double> g = friction_start(d, model, nl.standard(x4));
-      Eigen::VectorXd r(nl.values()), r_scan(nl.values()), y = x4;
-      nl(x4, r);
-      for (int j = 0; j < 6; ++j) set_friction_of_joint(y, g, j);
-      nl(y, r_scan);
-      bool improved = false;
-      for (int j = 0; j < 6; ++j) {
-        double now = 0, scan = 0;
-        for (Eigen::Index i = j; i < nl.b.size(); i += 6) {
-          now += r[i] * r[i];
-          scan += r_scan[i] * r_scan[i];
-        }
-        if (scan < now) {
-          set_friction_of_joint(x4, g, j);
-          improved = true;
-        }
-      }
-      if (!improved) break;
-      iterations += solve_structured(nl, x4, options);
-    }
-    x = x4;
+    // Stage 2, nonlinear friction from stage 1's inertial parameters.
+    iterations += nonlinear_stage(d, model, settings, options, design, x, nl);
   }
   Estimate e;
   e.method = "physically consistent LS";

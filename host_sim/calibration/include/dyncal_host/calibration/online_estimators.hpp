@@ -10,8 +10,9 @@
 
 #include "dyncal/effect_terms.hpp"
 #include "dyncal/port.hpp"
-#include "dyncal_host/calibration/calibrate.hpp"
-#include "dyncal_host/identification/pipeline/term_set_model.hpp"
+#include "dyncal_host/calibration/calibrate_options.hpp"
+#include "dyncal_host/calibration/calibrate_result.hpp"
+#include "dyncal_host/model/term_set_model.hpp"
 
 namespace dyncal::host {
 

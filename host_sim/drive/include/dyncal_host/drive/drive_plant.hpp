@@ -24,7 +24,6 @@
 #include "dyncal/port.hpp"
 #include "dyncal_host/common/excitation_trajectory.hpp"
 #include "dyncal_host/common/robot_description.hpp"
-#include "dyncal_host/drive/ground_truth.hpp"
 #include "dyncal_host/drive/scenario.hpp"
 
 namespace dyncal::host {

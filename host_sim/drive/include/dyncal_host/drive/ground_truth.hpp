@@ -9,11 +9,6 @@
 
 namespace dyncal::host {
 
-struct TrueParameter {
-  std::string name;
-  double value = 0;
-};
-
 /// True base parameters (nominal standard parameters mapped to the base set, rotor inertia of
 /// joints whose Ia is not separable added to the base parameter that absorbs it) followed by the
 /// true term values (Fc, beta, Ia, offset ...) of `scenario`, for the model of scenario.robot

@@ -134,4 +134,10 @@ Scenario load_scenario(const std::string& path, const RobotDescription& robot);
 /// in either shows instead of cancelling.
 double friction_torque(const JointFriction& f, double qd, double tau_load);
 
+/// One of a scenario's true parameters, in the order of an identification model (ground_truth.hpp).
+struct TrueParameter {
+  std::string name;
+  double value = 0;
+};
+
 }  // namespace dyncal::host

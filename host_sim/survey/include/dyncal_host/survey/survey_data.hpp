@@ -11,7 +11,7 @@
 #include "dyncal_host/common/robot_description.hpp"
 #include "dyncal_host/drive/scenario.hpp"
 #include "dyncal_host/drive/simulated_drive.hpp"
-#include "dyncal_host/identification/excitation/excitation.hpp"
+#include "dyncal_host/excitation/excitation.hpp"
 #include "dyncal_host/survey/methods/idim_iv.hpp"
 #include "dyncal_host/survey/methods/run_data.hpp"
 

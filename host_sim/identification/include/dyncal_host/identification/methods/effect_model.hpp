@@ -7,8 +7,8 @@
 #include <vector>
 
 #include "dyncal_host/common/model_effects.hpp"
-#include "dyncal_host/identification/pipeline/stacked_data.hpp"
-#include "dyncal_host/identification/pipeline/term_set_model.hpp"
+#include "dyncal_host/model/stacked_data.hpp"
+#include "dyncal_host/model/term_set_model.hpp"
 
 namespace dyncal::host {
 

@@ -9,7 +9,7 @@
 
 #include "dyncal_host/common/friction_model.hpp"
 #include "dyncal_host/identification/methods/friction_fit.hpp"
-#include "dyncal_host/identification/pipeline/stacked_data.hpp"
+#include "dyncal_host/model/stacked_data.hpp"
 
 namespace dyncal::host {
 

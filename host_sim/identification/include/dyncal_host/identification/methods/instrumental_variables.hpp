@@ -9,8 +9,9 @@
 #include <vector>
 
 #include "dyncal_host/common/robot_description.hpp"
-#include "dyncal_host/identification/pipeline/identify.hpp"
-#include "dyncal_host/identification/pipeline/stacked_data.hpp"
+#include "dyncal_host/model/identify_options.hpp"
+#include "dyncal_host/model/identify_result.hpp"
+#include "dyncal_host/model/stacked_data.hpp"
 
 namespace dyncal::host {
 

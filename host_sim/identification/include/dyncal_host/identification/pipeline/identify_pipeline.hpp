@@ -14,8 +14,8 @@
 #include "dyncal_host/identification/pipeline/identify.hpp"
 #include "dyncal_host/identification/pipeline/kept_samples.hpp"
 #include "dyncal_host/identification/pipeline/parameter_prior.hpp"
-#include "dyncal_host/identification/pipeline/stacked_data.hpp"
-#include "dyncal_host/identification/pipeline/term_set_model.hpp"
+#include "dyncal_host/model/stacked_data.hpp"
+#include "dyncal_host/model/term_set_model.hpp"
 
 namespace dyncal::host {
 
@@ -108,6 +108,29 @@ class IdentifyPipeline {
   };
 
  private:
+  /// ols, wls: the MAP estimate's inputs (the data's triangular factor without the prior's rows,
+  /// empty: no MAP fit), for the final fit's statistics.
+  struct MapData {
+    Eigen::MatrixXd R;             // the data's triangular factor (without the prior's rows); empty: no MAP fit
+    double sigma2 = 1;             // the data rows' residual variance
+    std::vector<int> held;         // parameters held at 0 (no prior and undetermined, or sign constraints)
+    std::vector<int> unsupported;  // of them, those without a prior the data do not determine (std NaN)
+  };
+  /// ols, wls, iv: least squares of the parameters the data determine, then (with a usable prior,
+  /// not iv) the MAP estimate with the prior's pseudo-rows weighed by data_weight.
+  void fit_least_squares_with_prior(LeastSquaresFit& ls, const std::vector<int>* dropped, double decision_inflation,
+                                    double data_weight, Eigen::VectorXd& phi, Eigen::VectorXd& stdev,
+                                    FitDetails* details, MapData& map_data) const;
+  /// pcls, gd, ga, pf: the consistent fit (or search) started from the weighted least squares of `ls`.
+  void fit_consistent(LeastSquaresFit& ls, const StackedData& data, const std::vector<char>& train,
+                      const std::vector<int>* dropped, double decision_inflation, Eigen::VectorXd& phi,
+                      Eigen::VectorXd& stdev, FitDetails* details, MapData& map_data,
+                      ParameterPrior& search_prior) const;
+  /// The final fit's std: the MAP estimate's spread, pcls's covariance, or the white-noise figures,
+  /// with the residual's autocorrelation (details.inflation).
+  void final_statistics(const StackedData& data, const std::vector<char>& train, const Eigen::VectorXd& phi,
+                        Eigen::VectorXd& stdev, FitDetails& details, const MapData& map_data,
+                        const ParameterPrior& search_prior, double data_weight) const;
   void process_segment(JointLog& log, Eigen::Index a, Eigen::Index b, const ButterworthLowPass& filter,
                        const Eigen::VectorXd& band, const KeptSamples& kept, Eigen::Index k0, StackedData& out) const;
   Eigen::VectorXd standstill_band(const JointLog& log,

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "dyncal_host/identification/pipeline/term_set_model.hpp"
+#include "dyncal_host/model/term_set_model.hpp"
 
 namespace dyncal::host {
 

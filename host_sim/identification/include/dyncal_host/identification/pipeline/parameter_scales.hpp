@@ -5,7 +5,7 @@
 #include <Eigen/Core>
 
 #include "dyncal_host/common/robot_description.hpp"
-#include "dyncal_host/identification/pipeline/term_set_model.hpp"
+#include "dyncal_host/model/term_set_model.hpp"
 
 namespace dyncal::host {
 

@@ -7,8 +7,8 @@
 #include <vector>
 
 #include "dyncal_host/common/robot_description.hpp"
-#include "dyncal_host/identification/logs/joint_log.hpp"
 #include "dyncal_host/identification/pipeline/identify.hpp"
+#include "dyncal_host/logs/joint_log.hpp"
 
 namespace dyncal::host {
 

@@ -7,7 +7,7 @@
 #include <memory>
 
 #include "dyncal/status.hpp"
-#include "dyncal_host/identification/pipeline/term_set_model.hpp"
+#include "dyncal_host/model/term_set_model.hpp"
 
 namespace dyncal::host {
 

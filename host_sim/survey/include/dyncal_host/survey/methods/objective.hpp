@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "dyncal_host/identification/methods/friction_fit.hpp"
-#include "dyncal_host/identification/methods/inertial_parameters.hpp"
+#include "dyncal_host/model/inertial_parameters.hpp"
 #include "dyncal_host/survey/methods/run_data.hpp"
 
 namespace dyncal::host {

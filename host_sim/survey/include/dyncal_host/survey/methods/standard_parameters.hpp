@@ -8,7 +8,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "dyncal_host/identification/methods/inertial_parameters.hpp"
+#include "dyncal_host/model/inertial_parameters.hpp"
 
 namespace dyncal::host {
 
