@@ -317,19 +317,10 @@ py::dict metrics_of(const std::vector<dyncal::host::JointMetrics>& joints) {
 
 }  // namespace
 
-PYBIND11_MODULE(dyncal, m) {
-  m.doc() = "dyncal: dynamic calibration of serial robot arms (docs/python.md)";
-  static py::exception<InputError> input_error(m, "InputError", PyExc_ValueError);
-  py::register_exception_translator([](std::exception_ptr p) {
-    try {
-      if (p) std::rethrow_exception(p);
-    } catch (const dyncal::host::Interrupted& e) {  // the drive was stopped first (stream_run)
-      PyErr_SetString(PyExc_KeyboardInterrupt, e.what());
-    } catch (const InputError& e) {
-      PyErr_SetString(input_error.ptr(), e.what());
-    }
-  });
+namespace {
 
+/// dyncal.Robot: a robot folder, its generated regressor and dynamics as numpy.
+void bind_robot(py::module_& m) {
   py::class_<Robot>(m, "Robot",
                     "A robot folder (robots/<name>/robot.json) and its compiled model. Robot(name, robots_dir='') "
                     "raises InputError for an unknown or malformed robot, or one this build did not compile.")
@@ -377,7 +368,10 @@ PYBIND11_MODULE(dyncal, m) {
       .def("__repr__", [](const Robot& r) {
         return "<dyncal.Robot " + r.description.name + ", " + std::to_string(r.description.num_joints) + " joints>";
       });
+}
 
+/// set_progress and the CLI's commands run in-process (identify, predict, diagnose, payload).
+void bind_commands(py::module_& m) {
   m.def(
       "set_progress",
       [](py::object callback) {
@@ -409,11 +403,11 @@ PYBIND11_MODULE(dyncal, m) {
          "its 'gate' saying which items failed.")
             .c_str());
   }
+}
 
-  // The library's functions and types, bound directly (no command line in between).
-  using dyncal::host::IdentifyResult;
+/// dyncal.Log and dyncal.read_log: logs from arrays or files as the CLI reads them.
+void bind_logs(py::module_& m) {
   using dyncal::host::JointLog;
-  using dyncal::host::ParameterSet;
   py::class_<JointLog>(m, "Log",
                        "A joint log: t (S) [s], q, qd, tau (S, N) [rad, rad/s, Nm; m, m/s, N on a prismatic joint]. "
                        "Log(robot, t, q, tau, qd=None) from arrays; dyncal.read_log reads files as the CLI does.")
@@ -448,7 +442,11 @@ PYBIND11_MODULE(dyncal, m) {
       "The log at `data` (a path, or a list of paths stacked as segments) as `dyncal identify --data` reads it "
       "(--format csv|ur-rtde|tx40|ros2-bag, --columns, --torque-from, --merge-on-time, --drop-outliers, the bag "
       "options), checked against the robot's limits. Raises InputError with the CLI's message.");
+}
 
+/// dyncal.ParameterSet: a parameter file, read and written.
+void bind_parameter_sets(py::module_& m) {
+  using dyncal::host::ParameterSet;
   py::class_<ParameterSet>(m, "ParameterSet",
                            "Identified parameters of one robot and model (a `dyncal identify --params` file).")
       .def_static("read", &dyncal::host::read_parameter_file, py::arg("path"),
@@ -469,7 +467,14 @@ PYBIND11_MODULE(dyncal, m) {
         return "<dyncal.ParameterSet " + p.robot + ", " + p.model + ", " + std::to_string(p.values.size()) +
                " parameters>";
       });
+}
 
+/// dyncal.Fit, dyncal.fit and dyncal.predict_log: the library's identification and
+/// prediction, bound directly (no command line in between).
+void bind_fits(py::module_& m) {
+  using dyncal::host::IdentifyResult;
+  using dyncal::host::JointLog;
+  using dyncal::host::ParameterSet;
   py::class_<IdentifyResult>(m, "Fit", "What dyncal.fit identified (the identify report's content).")
       .def_readonly("robot", &IdentifyResult::robot)
       .def_readonly("method", &IdentifyResult::method)
@@ -552,4 +557,26 @@ PYBIND11_MODULE(dyncal, m) {
       py::arg("decimate") = 0,
       "The torque of `log` predicted by `params`, filtered as identify filters (prediction.hpp): per-joint "
       "metrics as numpy arrays (rms, rms_tau, relative_rms, r2, e_T_abs, e_T_abs_std), samples, notes.");
+}
+
+}  // namespace
+
+PYBIND11_MODULE(dyncal, m) {
+  m.doc() = "dyncal: dynamic calibration of serial robot arms (docs/python.md)";
+  static py::exception<InputError> input_error(m, "InputError", PyExc_ValueError);
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const dyncal::host::Interrupted& e) {  // the drive was stopped first (stream_run)
+      PyErr_SetString(PyExc_KeyboardInterrupt, e.what());
+    } catch (const InputError& e) {
+      PyErr_SetString(input_error.ptr(), e.what());
+    }
+  });
+
+  bind_robot(m);
+  bind_commands(m);
+  bind_logs(m);
+  bind_parameter_sets(m);
+  bind_fits(m);
 }
