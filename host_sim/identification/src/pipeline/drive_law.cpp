@@ -8,7 +8,7 @@
 
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/json_file.hpp"
-#include "dyncal_host/excitation/excitation.hpp"
+#include "dyncal_host/common/trajectory_file.hpp"
 #include "dyncal_host/identification/pipeline/prediction.hpp"
 #include "dyncal_host/model/compiled_robot.hpp"
 #include "dyncal_host/model/drive_table.hpp"

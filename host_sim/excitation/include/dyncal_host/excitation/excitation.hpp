@@ -3,7 +3,7 @@
 // (Eq. 27) whose coefficients minimise cond(K) (Eq. 26) or maximise log det(K^T K) of the
 // identification regressor over one period, every joint kept inside a margin of its position,
 // velocity and acceleration limits (robots/<name>/robot.json); NLopt's Subplex does the search.
-// Trajectory files are JSON, read back with every limit checked.
+// Trajectory files are JSON, read back with every limit checked (common's trajectory_file.hpp).
 
 #include <array>
 #include <cstdint>
@@ -13,13 +13,11 @@
 #include "dyncal_host/common/excitation_trajectory.hpp"
 #include "dyncal_host/common/friction_model.hpp"
 #include "dyncal_host/common/robot_description.hpp"
+#include "dyncal_host/common/trajectory_file.hpp"
 
 namespace dyncal::host {
 
 enum class ExcitationCriterion { cond, logdet };
-
-/// Per joint (joint 1 first; entries past the robot's joints are 0): a fraction of a limit.
-using JointFractions = std::array<double, modbus_map::kMaxJoints>;
 
 struct ExciteOptions {
   double f_f = 0.1;   ///< fundamental frequency [Hz] (survey: 0.1 Hz)
@@ -56,16 +54,6 @@ void excitation_quality(const RobotDescription& robot, const ExcitationTrajector
 
 /// Designs the excitation. Throws InputError on bad options.
 ExciteResult design_excitation(const RobotDescription& robot, const ExciteOptions& options);
-
-/// Fraction of each joint's limits `t` uses, checked on a grid 10 times finer than the design's.
-void limit_use(const RobotDescription& robot, const ExcitationTrajectory& t, JointFractions& position,
-               JointFractions& velocity, JointFractions& acceleration);
-
-/// {"f_f", "harmonics", "q0" [N], "a" [N][L], "b" [N][L], "robot"} plus `extra` fields.
-nlohmann::json trajectory_to_json(const RobotDescription& robot, const ExcitationTrajectory& t);
-/// Reads a trajectory file; throws InputError naming the problem (missing field, wrong size, other
-/// robot, or a limit exceeded: the joint, the quantity and by how much).
-ExcitationTrajectory trajectory_from_json(const RobotDescription& robot, const nlohmann::json& j);
 
 /// A Fourier excitation (Eq. 27) inside the robot's position, velocity and acceleration limits
 /// (80 % of each), the best of `candidates` seeded random ones by cond(K) of the base-parameter
