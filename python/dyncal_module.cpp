@@ -483,26 +483,10 @@ void bind_fits(py::module_& m) {
       .def_readonly("notes", &IdentifyResult::notes)
       .def_readonly("condition_number", &IdentifyResult::condition_number)
       .def_readonly("samples_used", &IdentifyResult::samples_used)
-      .def_property_readonly("names",
-                             [](const IdentifyResult& r) {
-                               std::vector<std::string> v;
-                               for (const auto& p : r.params) v.push_back(p.name);
-                               return v;
-                             })
-      .def_property_readonly("values",
-                             [](const IdentifyResult& r) {
-                               Eigen::VectorXd v(static_cast<Eigen::Index>(r.params.size()));
-                               for (size_t i = 0; i < r.params.size(); ++i)
-                                 v[static_cast<Eigen::Index>(i)] = r.params[i].value;
-                               return v;
-                             })
-      .def_property_readonly("std",
-                             [](const IdentifyResult& r) {
-                               Eigen::VectorXd v(static_cast<Eigen::Index>(r.params.size()));
-                               for (size_t i = 0; i < r.params.size(); ++i)
-                                 v[static_cast<Eigen::Index>(i)] = r.params[i].std;
-                               return v;
-                             })
+      // The parameters as identify's parameter set holds them (parameter_set, what --params writes).
+      .def_property_readonly("names", [](const IdentifyResult& r) { return dyncal::host::parameter_set(r).names; })
+      .def_property_readonly("values", [](const IdentifyResult& r) { return dyncal::host::parameter_set(r).values; })
+      .def_property_readonly("std", [](const IdentifyResult& r) { return dyncal::host::parameter_set(r).stdev; })
       .def_property_readonly("verdicts",
                              [](const IdentifyResult& r) {
                                std::vector<std::string> v;

@@ -24,7 +24,7 @@ void add_excite_command(CLI::App& app, Action& run);
 /// The survey study itself, run in-process: the `survey` subcommand of the program dyncal-survey.
 void add_survey_command(CLI::App& app, Action& run);
 /// dyncal's `survey`: hands its arguments to the program dyncal-survey beside the running program
-/// (execv; the study and its er20-typed methods are compiled into that program alone, so that
+/// (execv; the study and its methods typed on the study's arm are compiled into that program alone, so that
 /// building `dyncal` does not compile them). Throws InputError (one line) when that program is not
 /// there or cannot be run.
 void add_survey_launcher(CLI::App& app, Action& run);

@@ -463,16 +463,13 @@ void IdentifyPipeline::fit(const StackedData& data, const std::vector<char>& tra
   MapData map_data;
   const double data_weight = details ? details->data_weight : decided ? decided->data_weight : 1.0;
   ParameterPrior search_prior;  // gd, ga, pf: the spread of what the log determines only with the prior
-  auto fit_least_squares = [&]() {
-    fit_least_squares_with_prior(*ls, dropped, decision_inflation, data_weight, phi, stdev, details, map_data);
-  };
   if (m == "ols") {
-    fit_least_squares();
+    fit_least_squares_with_prior(*ls, dropped, decision_inflation, data_weight, phi, stdev, details, map_data);
   } else if (m == "wls" || m == "iv" || m == "pcls" || is_search_method(m)) {
     ls->reset();
     add_rows([&](int j) { return 1.0 / sigma[j]; });
     if (m == "wls" || m == "iv") {
-      fit_least_squares();
+      fit_least_squares_with_prior(*ls, dropped, decision_inflation, data_weight, phi, stdev, details, map_data);
     } else {  // the WLS solution starts the consistent fit of the same weighted data
       fit_consistent(*ls, data, train, dropped, decision_inflation, phi, stdev, details, map_data, search_prior);
     }
