@@ -487,6 +487,15 @@ void bind_fits(py::module_& m) {
       .def_property_readonly("names", [](const IdentifyResult& r) { return dyncal::host::parameter_set(r).names; })
       .def_property_readonly("values", [](const IdentifyResult& r) { return dyncal::host::parameter_set(r).values; })
       .def_property_readonly("std", [](const IdentifyResult& r) { return dyncal::host::parameter_set(r).stdev; })
+      .def_property_readonly(
+          "bases",
+          [](const IdentifyResult& r) {
+            std::vector<std::string> v;
+            for (const auto& p : r.params) v.push_back(p.basis);
+            return v;
+          },
+          "what each value rests on where the log does not determine it: 'prior', 'held at 0', 'least squares', "
+          "'search', 'start', 'sign constraint'; empty where the data determine it (identify.hpp's ParamEstimate)")
       .def_property_readonly("verdicts",
                              [](const IdentifyResult& r) {
                                std::vector<std::string> v;

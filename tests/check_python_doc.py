@@ -99,6 +99,9 @@ def main():
         std = None if std != std else float(std)  # the report's null: not determined
         if float(value) != b["value"] or std != b["std"]:
             failures.append(f"fit {name}: python {value!r} +- {std!r}, CLI {b['value']!r} +- {b['std']!r}")
+    cli_bases = [p.get("basis", "") for p in cli["params"]]
+    if list(fit.bases) != cli_bases:
+        failures.append(f"fit: bases {list(fit.bases)!r}, the CLI's {cli_bases!r}")
     for j, b in enumerate(cli["joints"]):
         if float(fit.joints["r2"][j]) != b["r2_validation"]:
             failures.append(f"fit joint {j + 1} r2: python {fit.joints['r2'][j]!r}, CLI {b['r2_validation']!r}")
