@@ -8,11 +8,13 @@
 #include <cmath>
 #include <filesystem>
 #include <functional>
+#include <random>
 
 #include "dyncal_host/calibration/calibrate.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/diagnosis/diagnose.hpp"
 #include "dyncal_host/drive/simulated_drive.hpp"
+#include "spline_basis.hpp"  // private to host_sim/diagnosis (the include path: tests/CMakeLists.txt)
 #include "support/test_paths.hpp"
 
 namespace {
@@ -279,3 +281,32 @@ TEST(Diagnose, BadInputGetsAClearMessage) {
 }
 
 }  // namespace
+
+// The diagnosis's regression splines (host_sim/diagnosis/src/spline_basis.hpp, issue 71): the cubic
+// B-spline basis sums to 1 at every point and reproduces every cubic polynomial exactly (Marsden's
+// identity), whatever the knots; a variable resting at one value gets no repeated interior knot.
+TEST(DiagnoseSplines, BasisIsAPartitionOfUnityAndReproducesCubics) {
+  std::mt19937 rng(71);
+  std::normal_distribution<double> normal;
+  Eigen::VectorXd x(2000);
+  for (Eigen::Index k = 0; k < x.size(); ++k) x[k] = k < 600 ? 0.3 : std::tanh(normal(rng));  // rests at 0.3
+  std::vector<double> bump_error;
+  for (int interior : {4, 8, 16}) {
+    const std::vector<double> knots = dyncal::host::detail::spline_knots(x, interior);
+    ASSERT_GE(knots.size(), 8u);
+    for (size_t k = 5; k + 4 < knots.size(); ++k) EXPECT_GT(knots[k], knots[k - 1]) << "interior knots repeat";
+    const Eigen::MatrixXd B = dyncal::host::detail::spline_basis(x, knots);
+    ASSERT_EQ(B.cols(), static_cast<Eigen::Index>(knots.size()) - 4);
+    EXPECT_LT((B.rowwise().sum().array() - 1.0).abs().maxCoeff(), 1e-12);
+    const Eigen::VectorXd cubic = (x.array().cube() - 2 * x.array().square() + 0.5 * x.array() - 1).matrix();
+    const Eigen::VectorXd fit = B * B.colPivHouseholderQr().solve(cubic);
+    EXPECT_LT((fit - cubic).cwiseAbs().maxCoeff(), 1e-10) << interior << " interior knots";
+    // A smooth function that is not a cubic is not reproduced exactly, but closer with more knots.
+    const Eigen::VectorXd bump = (-(x.array() / 0.2).square()).exp().matrix();
+    bump_error.push_back((B * B.colPivHouseholderQr().solve(bump) - bump).norm() / bump.norm());
+  }
+  EXPECT_GT(bump_error[2], 1e-8);
+  EXPECT_LT(bump_error[1], bump_error[0]);
+  EXPECT_LT(bump_error[2], bump_error[1]);
+  EXPECT_TRUE(dyncal::host::detail::spline_knots(Eigen::VectorXd::Constant(50, 1.0), 8).empty());
+}

@@ -92,7 +92,7 @@ int run_identify(IdentifySettings& s) {
       else
         spec.motors.push_back(m);
     }
-    for (const auto& k : skipped) dropped.push_back(s.effects + ": " + k + " has no model term (a change over time)");
+    for (const auto& k : skipped) dropped.push_back(s.effects + ": " + k + " has no model term yet (not fitted)");
   }
   s.options.terms = spec.terms;
   s.options.effects = spec.effects;

@@ -293,8 +293,10 @@ ModelSpec read_diagnosed_effects(const std::string& path, int num_joints, std::v
         throw InputError(where + ": joints must be 1.." + std::to_string(num_joints));
       joints.push_back(v.get<int>() - 1);
     }
-    if (name == "drift") {
-      if (skipped) skipped->push_back("drift on joint " + std::to_string(joints.front() + 1));
+    // Not model terms: drift (a change over the log), and what diagnose finds beyond its catalogue
+    // (a torque channel's delay, a shape): skipped, each named.
+    if (name == "drift" || name == "torque_delay" || name == "shape") {
+      if (skipped) skipped->push_back(name + " on joint " + std::to_string(joints.front() + 1));
       continue;
     }
     if (name == "coupled_motor") {
@@ -308,7 +310,7 @@ ModelSpec read_diagnosed_effects(const std::string& path, int num_joints, std::v
     const KindInfo* k = find_kind(name);
     if (!k)
       throw InputError(where + ": unknown kind '" + name + "' (expected one of " + kind_list() +
-                       ", coupled_motor, drift)");
+                       ", coupled_motor, drift, torque_delay, shape)");
     ModelEffect e;
     e.kind = k->kind;
     e.joint = joints.front();

@@ -6,6 +6,7 @@
 #include <iomanip>
 #include <sstream>
 
+#include "beyond_catalogue.hpp"
 #include "dyncal/friction.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/parallel_tasks.hpp"
@@ -519,6 +520,19 @@ std::string explain_drift(const Candidate&, const std::vector<double>& p) {
   return text(s);
 }
 
+std::string explain_delay(const Candidate&, const std::vector<double>& p) {
+  std::ostringstream s;
+  s << std::setprecision(3) << "the torque channel lags the position channel by " << 1e3 * p[0]
+    << " ms - timing between channels (a current loop's filter, a bus sampling the drives in turn): "
+       "outside the catalogue";
+  return text(s);
+}
+
+std::string explain_shape(const Candidate& c, const std::vector<double>&) {
+  return "structured residual left, explained by " + c.variable + " (" + c.detail +
+         ") - a shape outside the catalogue: no kind of the table explains as much";
+}
+
 std::string joint_list(const std::vector<int>& joints) {
   std::string s;
   for (size_t i = 0; i < joints.size(); ++i)
@@ -546,6 +560,8 @@ const std::vector<EffectSpec>& effect_specs() {
       {Effect::coupled_motor, "coupled_motor", EffectKind::coupling, true, coupled_motor, friction_non_negative,
        explain_coupled_motor},
       {Effect::drift, "drift", std::nullopt, false, drift, any_sign, explain_drift},
+      {Effect::torque_delay, "torque_delay", std::nullopt, false, torque_delay, any_sign, explain_delay, false},
+      {Effect::shape, "shape", std::nullopt, false, shape, any_sign, explain_shape, false},
   };
   return table;
 }
@@ -564,21 +580,25 @@ void filter_in_time(const CandidateContext& c, MatrixXd& series, EffectKind kind
   }
 }
 
-std::vector<Candidate> candidate_library(const CandidateContext& c, const std::string& progress_task) {
+std::vector<Candidate> candidate_library(const CandidateContext& c, bool catalogue, const std::string& progress_task,
+                                         const std::vector<int>& joints) {
+  auto wanted = [&](int j) { return joints.empty() || std::find(joints.begin(), joints.end(), j) != joints.end(); };
   const int N = static_cast<int>(c.data.q.cols());
   // One task per joint and per pair, each writing its own slot: the library is the sequential
   // one, in the same order, on any number of threads (parallel_tasks.hpp).
   std::vector<std::pair<int, int>> units;
-  for (int i = 0; i < N; ++i) units.emplace_back(i, i);
   for (int i = 0; i < N; ++i)
-    for (int j = i + 1; j < N; ++j) units.emplace_back(i, j);
+    if (wanted(i)) units.emplace_back(i, i);
+  for (int i = 0; i < N; ++i)
+    for (int j = i + 1; j < N; ++j)
+      if (wanted(i) && wanted(j)) units.emplace_back(i, j);
   std::vector<std::vector<Candidate>> found(units.size());
   std::vector<ParallelTask> tasks;
   for (size_t u = 0; u < units.size(); ++u)
-    tasks.push_back({units[u].first == units[u].second ? 1.0 : 2.0, [&c, &units, &found, u] {
+    tasks.push_back({units[u].first == units[u].second ? 1.0 : 2.0, [&c, &units, &found, u, catalogue] {
                        const auto [i, j] = units[u];
                        for (const EffectSpec& s : effect_specs())
-                         if (s.per_pair == (i != j)) s.generate(c, i, j, found[u]);
+                         if (s.per_pair == (i != j) && s.catalogue == catalogue) s.generate(c, i, j, found[u]);
                      }});
   run_parallel(std::move(tasks), default_jobs(), progress_task, "joints and pairs");
   std::vector<Candidate> out;

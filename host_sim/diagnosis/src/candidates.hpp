@@ -39,6 +39,12 @@ struct Candidate {
   /// inertia_held set (drop_inertia). The ratio search fits it freely.
   int inertia = -1;
   bool inertia_held = false;
+  std::string variable;       ///< shape: the variable its spline is of ("q3", "sgn(qd2) t", ...)
+  std::vector<double> knots;  ///< shape: the spline's full knot vector (spline_basis.hpp)
+  /// Beyond the catalogue: the effective samples of its joint's residual after its own local fit
+  /// (0: not computed). BIC weighs its joint with at least this many: the noise's correlation, not
+  /// that of the structured residual it explains (beyond_catalogue.hpp).
+  double n_eff_after = 0;
 
   /// Parameters it adds to the model: its columns less those it replaces.
   Eigen::Index added_parameters() const { return columns.cols() - static_cast<Eigen::Index>(replaces.size()); }
@@ -56,6 +62,9 @@ struct EffectSpec {
   bool (*physical)(const Eigen::VectorXd& added);
   /// What a found effect means, with its fitted parameters.
   std::string (*explain)(const Candidate& c, const std::vector<double>& params);
+  /// A kind of the catalogue (weighed first at every step), or one beyond it (torque_delay, shape:
+  /// weighed only when no catalogue kind qualifies; beyond_catalogue.hpp).
+  bool catalogue = true;
 };
 
 /// The candidate with its rotor-inertia column (c.inertia) dropped: the motor's inertia held at 0,
@@ -67,10 +76,12 @@ Candidate drop_inertia(Candidate c);
 const std::vector<EffectSpec>& effect_specs();
 const EffectSpec& effect_spec(Effect e);
 
-/// Every candidate of the current step: per joint the per-joint kinds in table order, then every
-/// joint pair's per-pair kinds.
+/// Every candidate of the current step among the catalogue's kinds (`catalogue`) or those beyond it:
+/// per joint the per-joint kinds in table order, then every joint pair's per-pair kinds; only on
+/// `joints` (0-based; empty: every joint).
 /// Reported as progress of `progress_task` (progress.hpp), per joint and joint pair.
-std::vector<Candidate> candidate_library(const CandidateContext& c, const std::string& progress_task);
+std::vector<Candidate> candidate_library(const CandidateContext& c, bool catalogue, const std::string& progress_task,
+                                         const std::vector<int>& joints = {});
 
 /// "joint 3: " or "joints 5 and 6: " followed by the kind's explanation.
 std::string explain(const Candidate& c, const std::vector<double>& params);

@@ -70,6 +70,15 @@ class CrossValidator {
     return pred;
   }
 
+  /// The base design's coefficients fitted without each fold in turn (folds entries of X.cols()):
+  /// the replicates of a delete-a-group jackknife (the folds are interleaved blocks).
+  std::vector<VectorXd> fold_coefficients() const {
+    std::vector<VectorXd> beta;
+    fold_fits(Gxx_fit_, gx_fit_, beta);
+    for (auto& b : beta) b = b.cwiseProduct(sx_);
+    return beta;
+  }
+
   /// Validation and training RSS per joint of [X C] (C may have no columns); phi_out: the
   /// coefficients of the fit on all rows, X's first.
   /// *novelty: the smallest fraction of a (unit-scaled) candidate column not explained by X (1 if C

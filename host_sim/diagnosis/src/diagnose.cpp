@@ -1,7 +1,8 @@
 // dyncal diagnose: the greedy search. Each step evaluates every candidate of the library
-// (candidates.hpp) against the model so far by blocked cross-validation (cross_validator.hpp) and
-// BIC, adds the one with the largest validation gain among those with very strong evidence and
-// physical parameters, and stops when none qualifies.
+// (candidates.hpp) and those beyond it (beyond_catalogue.hpp) against the model so far by blocked
+// cross-validation (cross_validator.hpp) and BIC, adds the one with the largest validation gain
+// among those with very strong evidence and physical parameters (the catalogue's where it explains
+// as much), and stops when none qualifies.
 #include "dyncal_host/diagnosis/diagnose.hpp"
 
 #include <Eigen/QR>
@@ -12,6 +13,7 @@
 #include <sstream>
 #include <utility>
 
+#include "beyond_catalogue.hpp"
 #include "candidates.hpp"
 #include "cross_validator.hpp"
 #include "dyncal_host/common/input_error.hpp"
@@ -21,6 +23,7 @@
 #include "dyncal_host/identification/pipeline/butterworth.hpp"
 #include "dyncal_host/model/stacked_data.hpp"
 #include "harmonic_fit.hpp"
+#include "noise_floor.hpp"
 #include "shape_search.hpp"
 
 namespace dyncal::host {
@@ -94,7 +97,7 @@ bool same_joints(const Candidate& a, const Candidate& b) {
 /// The candidate's evidence against the model so far. A motor's rotor inertia (coupling, coupled
 /// motor) is held >= 0: where the free fit makes it negative the candidate loses that column
 /// (drop_inertia: held at 0, the bounded least-squares optimum) and is weighed without it.
-Evidence weigh(const CrossValidator& cv, Candidate& c, const Model& m, const VectorXd& n_eff,
+Evidence weigh(const CrossValidator& cv, Candidate& c, const Model& m, const VectorXd& n_eff_residual,
                const VectorXd& val_before) {
   VectorXd val, train, phi_c;
   double novelty = 1;
@@ -108,6 +111,8 @@ Evidence weigh(const CrossValidator& cv, Candidate& c, const Model& m, const Vec
   // BIC over every joint: the joints share the rigid-body parameters, so a candidate that helps its
   // own joints and harms others pays for it (each joint's log-RSS ratio, weighted by its n_eff).
   double v0 = 0, v1 = 0, n_all = 0, harm = 0;
+  VectorXd n_eff = n_eff_residual;  // a candidate beyond the catalogue: its joint's noise, not its structure
+  for (int j : c.joints) n_eff[j] = std::max(n_eff[j], c.n_eff_after);
   std::vector<char> own(static_cast<size_t>(n_eff.size()), 0);
   for (int j : c.joints) own[static_cast<size_t>(j)] = 1;
   for (Index j = 0; j < n_eff.size(); ++j) {
@@ -440,6 +445,8 @@ DiagnosedEffect diagnosed_effect(const Candidate& c, const Model& m, const Evide
   e.validation_gain = ev.gain;
   e.explanation = detail::explain(c, e.params);
   e.alternatives = std::move(alternatives);
+  e.variable = c.variable;
+  e.knots = c.knots;
   return e;
 }
 
@@ -450,6 +457,118 @@ void note_worse_joints(DiagnoseResult& res) {
     std::ostringstream note;
     note << std::setprecision(4) << "joint " << j.joint << ": validation RMS rises " << j.rms_validation_before
          << " -> " << j.rms_validation_after << " Nm with the effects added";
+    res.notes.push_back(note.str());
+  }
+}
+
+/// One stage of a greedy step: the candidates of the catalogue (or those beyond it), their evidence
+/// and the one chosen (-1: none qualifies).
+struct Stage {
+  std::vector<Candidate> cands;
+  std::vector<Evidence> ev;
+  int best = -1;
+};
+
+Stage weigh_stage(const detail::CandidateContext& library, bool catalogue, const CrossValidator& cv, const Model& m,
+                  const VectorXd& n_eff, const VectorXd& declared_val, int step, const DiagnoseOptions& o,
+                  std::set<std::string>& unbounded_noted, std::vector<std::string>& notes,
+                  const std::vector<int>& joints = {}) {
+  Stage st;
+  const std::string what = catalogue ? "" : " beyond the catalogue";
+  st.cands = detail::candidate_library(
+      library, catalogue, "diagnose: step " + std::to_string(step + 1) + ", building candidates" + what, joints);
+  // Selection on validation error only: the largest relative validation gain among candidates
+  // whose BIC evidence is very strong and whose parameters are physical.
+  st.ev = weigh_all(cv, st.cands, m, n_eff, declared_val, step);
+  double best_score = 0;
+  for (size_t c = 0; c < st.cands.size(); ++c) {
+    if (qualifies(st.ev[c], o) && st.ev[c].gain > best_score) {
+      best_score = st.ev[c].gain;
+      st.best = static_cast<int>(c);
+    }
+  }
+  note_unbounded(st.cands, st.ev, best_score, o, unbounded_noted, notes);
+  if (st.best >= 0) st.best = most_parsimonious(st.cands, st.ev, st.best, o);
+  return st;
+}
+
+/// Whether the best candidate beyond the catalogue is taken instead of the catalogue's: when no
+/// kind of the table qualifies, or when it acts on a joint of the table's choice and its BIC change
+/// is lower by more than the evidence threshold, taken with the same n_eff as the table's (the
+/// residual's; the parsimony rule's yardstick). Where a kind of the table explains as much, the
+/// table's kind wins: it is smaller and has physics.
+bool beyond_wins(const CrossValidator& cv, const Stage& table, const Stage& beyond, const Model& m,
+                 const VectorXd& n_eff, const VectorXd& declared_val, const DiagnoseOptions& o) {
+  if (beyond.best < 0) return false;
+  if (table.best < 0) return true;
+  const Candidate& t = table.cands[static_cast<size_t>(table.best)];
+  Candidate b = beyond.cands[static_cast<size_t>(beyond.best)];
+  if (std::find(t.joints.begin(), t.joints.end(), b.joints.front()) == t.joints.end()) return false;
+  b.n_eff_after = 0;
+  const Evidence e = weigh(cv, b, m, n_eff, declared_val);
+  return e.delta_bic < table.ev[static_cast<size_t>(table.best)].delta_bic - o.bic_threshold;
+}
+
+/// Refines a delay just added (the last column of m.X, on joint j's rows): the column rebuilt as the
+/// secant at the current estimate (delay_column) and refitted with the whole model, until the
+/// estimate moves by less than 1e-3 of a sample (at most 8 times).
+void refine_delay(const StackedData& d, const std::vector<std::pair<Index, Index>>& segments, int j, CrossValidator& cv,
+                  Model& m) {
+  const int N = static_cast<int>(d.q.cols());
+  const Index S = d.t.size(), last = m.X.cols() - 1;
+  const MatrixXd none(S * N, 0);
+  for (int it = 0; it < 8; ++it) {
+    const double delta = m.phi[last];
+    VectorXd p(S);  // the prediction without the delay
+    for (Index s = 0; s < S; ++s) p[s] = m.X.row(s * N + j).head(last).dot(m.phi.head(last));
+    const VectorXd column = detail::delay_column(d.t, segments, p, delta);
+    for (Index s = 0; s < S; ++s) m.X(s * N + j, last) = column[s];
+    cv.set_base(m.X);
+    cv.evaluate(none, m.val, m.train, &m.phi);
+    if (std::abs(m.phi[last] - delta) < 1e-3 / d.rate_hz) break;
+  }
+}
+
+/// Per joint, the validation RSS a model lacking nothing would leave: the residual's broadband
+/// noise (noise_floor.hpp, from the declared model's residual) times the joint's fitted rows.
+VectorXd noise_floor_rss(const StackedData& d, const VectorXd& residual,
+                         const std::vector<std::pair<Index, Index>>& segments, const IdentifyOptions& io,
+                         double raw_rate_hz) {
+  const int N = static_cast<int>(d.q.cols());
+  VectorXd n = VectorXd::Zero(N);
+  for (Index r = 0; r < d.y.size(); ++r)
+    if (d.fit_row[r]) n[r % N] += 1;
+  return detail::noise_floor_per_row(d, residual, segments, io, raw_rate_hz).cwiseProduct(n);
+}
+
+/// The share of the excess validation RSS (above floor) on `joints` (0-based) that went from
+/// `before` to `after`: the drop over the excess before, in [0, 1].
+double excess_share(const std::vector<int>& joints, const VectorXd& before, const VectorXd& after,
+                    const VectorXd& floor) {
+  double drop = 0, excess = 0;
+  for (int j : joints) {
+    drop += before[j] - after[j];
+    excess += std::max(0.0, before[j] - floor[j]);
+  }
+  return excess > 0 ? std::clamp(drop / excess, 0.0, 1.0) : 0.0;
+}
+
+/// A note for each joint where the last search beyond the catalogue found structure it did not
+/// add: a shape lowers the validation RSS by the diagnosis's min_gain and its BIC change is below -2
+/// (Kass and Raftery's "positive" evidence), yet it was not added (short of the evidence threshold,
+/// or no better than a kind of the table), with the variable, its validation gain and what the
+/// joint has left above its noise floor. None where no shape helps.
+void note_structured_residual(DiagnoseResult& res, const Stage& beyond, double min_gain) {
+  for (size_t c = 0; c < beyond.cands.size(); ++c) {
+    const Candidate& k = beyond.cands[c];
+    const Evidence& e = beyond.ev[c];
+    if (k.effect != Effect::shape || !(e.delta_bic < -2 && e.gain >= min_gain)) continue;
+    const DiagnoseJoint& jm = res.joints[static_cast<size_t>(k.joints.front())];
+    std::ostringstream note;
+    note << std::setprecision(3) << "joint " << jm.joint << ": structured residual left, explained by " << k.variable
+         << " to " << 100 * e.gain << " % of its validation RSS (BIC change " << e.delta_bic
+         << ": evidence short of what the diagnosis adds at; not added); validation RMS " << jm.rms_validation_after
+         << " Nm against a noise floor of " << jm.rms_noise_floor << " Nm";
     res.notes.push_back(note.str());
   }
 }
@@ -511,7 +630,11 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
   if (io.cutoff_hz < 0.5 * d.rate_hz) library.filter = &filter;
   library.segments = time_segments(d);
 
+  const VectorXd floor =
+      noise_floor_rss(d, d.y - declared.X * declared.phi, library.segments, io, 1.0 / log.sample_period());
   std::set<std::string> unbounded_noted;  // one note per unbounded candidate (kind and joints)
+  Stage beyond;                           // the last stage beyond the catalogue weighed
+  VectorXd n_eff = VectorXd::Zero(N);
   for (int step = 0; step < o.max_effects; ++step) {
     library.model_names = m.names;
     library.residual = d.y - m.X * m.phi;
@@ -519,33 +642,41 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
     library.model_X = &m.X;
     library.model_phi = &m.phi;
     library.column_joints = detail::column_joint_masks(m.X, N);
-    std::vector<Candidate> cands =
-        detail::candidate_library(library, "diagnose: step " + std::to_string(step + 1) + ", building candidates");
-    const VectorXd n_eff = effective_samples_per_joint(library.residual, N);
+    n_eff = effective_samples_per_joint(library.residual, N);
     if (step == 0) res.effective_samples_per_joint = n_eff.mean();
-    // Selection on validation error only: the largest relative validation gain among candidates
-    // whose BIC evidence is very strong and whose parameters are physical.
-    const std::vector<Evidence> ev = weigh_all(cv, cands, m, n_eff, declared.val, step);
-    double best_score = 0;
-    int best = -1;
-    for (size_t c = 0; c < cands.size(); ++c) {
-      if (qualifies(ev[c], o) && ev[c].gain > best_score) {
-        best_score = ev[c].gain;
-        best = static_cast<int>(c);
+    // The catalogue's best, unless a candidate beyond it (a channel's delay, a shape) wins (beyond_wins).
+    Stage st = weigh_stage(library, true, cv, m, n_eff, declared.val, step, o, unbounded_noted, res.notes);
+    // Beyond the catalogue: on every joint when no kind qualifies, else on the chosen kind's joints
+    // only (the only place it could take the kind's place: beyond_wins).
+    const std::vector<int> on = st.best >= 0 ? st.cands[static_cast<size_t>(st.best)].joints : std::vector<int>{};
+    beyond = weigh_stage(library, false, cv, m, n_eff, declared.val, step, o, unbounded_noted, res.notes, on);
+    if (beyond_wins(cv, st, beyond, m, n_eff, declared.val, o)) {
+      st = beyond;
+    } else if (st.best < 0) {
+      for (size_t c = 0; c < beyond.cands.size(); ++c) {
+        st.cands.push_back(beyond.cands[c]);
+        st.ev.push_back(beyond.ev[c]);
       }
-    }
-    note_unbounded(cands, ev, best_score, o, unbounded_noted, res.notes);
-    if (best < 0) {
-      res.rejected = strongest_rejected(cands, ev, o.bic_threshold);
+      res.rejected = strongest_rejected(st.cands, st.ev, o.bic_threshold);
       break;
     }
-    best = most_parsimonious(cands, ev, best, o);
-    const Candidate& c = cands[static_cast<size_t>(best)];
-    std::vector<std::string> alternatives = indistinguishable(cands, ev, best, m.X, n_eff);
+    const Candidate& c = st.cands[static_cast<size_t>(st.best)];
+    std::vector<std::string> alternatives = indistinguishable(st.cands, st.ev, st.best, m.X, n_eff);
+    const VectorXd val_before = m.val;
     add_columns(c, m);
     cv.set_base(m.X);
     cv.evaluate(none, m.val, m.train, &m.phi);
-    res.effects.push_back(diagnosed_effect(c, m, ev[static_cast<size_t>(best)], std::move(alternatives)));
+    if (c.effect == Effect::torque_delay) refine_delay(d, library.segments, c.joints.front(), cv, m);
+    res.effects.push_back(diagnosed_effect(c, m, st.ev[static_cast<size_t>(st.best)], std::move(alternatives)));
+    res.effects.back().excess_share = excess_share(c.joints, val_before, m.val, floor);
+    if (c.effect == Effect::torque_delay) {
+      DiagnosedEffect& e = res.effects.back();
+      e.shape = m.phi[m.phi.size() - 1];
+      std::vector<double> fold_delays;
+      for (const VectorXd& b : cv.fold_coefficients()) fold_delays.push_back(b[b.size() - 1]);
+      e.shape_interval =
+          detail::delay_interval(d, m.X, m.phi, weights, c.joints.front(), n_eff[c.joints.front()], fold_delays);
+    }
     reweigh();
   }
 
@@ -553,6 +684,13 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
   res.declared_params = declared_params(declared, m);
   res.traces = traces(d, declared.X * declared.phi, m.X * m.phi, o.max_cycles);
   res.joints = joint_metrics(d, robot, declared, m, oof_before, cv.predict_out_of_fold());
+  for (int j = 0; j < N; ++j) {
+    DiagnoseJoint& jm = res.joints[static_cast<size_t>(j)];
+    jm.rms_noise_floor = std::sqrt(floor[j] / static_cast<double>(S));
+    const double excess = declared.val[j] - floor[j];
+    jm.excess_left = excess > 0 ? std::clamp((m.val[j] - floor[j]) / excess, 0.0, 1.0) : 0.0;
+  }
+  note_structured_residual(res, beyond, o.min_gain);
   note_worse_joints(res);
   return res;
 }

@@ -16,11 +16,15 @@ void print_diagnose_report(std::ostream& out, const DiagnoseResult& r) {
   for (const auto& n : r.notes) out << "note: " << n << "\n";
   out << "\n";
   out << "effects added (greedy, by validation gain, each with BIC evidence):\n";
-  if (r.effects.empty()) out << "  none: nothing significant is left in the residual\n";
+  if (r.effects.empty()) out << "  none: no candidate, in the catalogue or beyond it, is significant\n";
   for (const auto& e : r.effects) {
     out << "  " << std::left << std::setw(20) << effect_name(e.kind) << std::right << " dBIC " << std::setw(8)
         << std::setprecision(4) << e.delta_bic << ", validation RSS -" << std::setprecision(3)
-        << 100 * e.validation_gain << " %\n    " << e.explanation << "\n";
+        << 100 * e.validation_gain << " %, " << 100 * e.excess_share
+        << " % of the excess over the noise floor left before it\n    " << e.explanation << "\n";
+    if (e.kind == Effect::torque_delay)
+      out << "    delay " << 1e3 * e.shape << " ms, 95 % " << 1e3 * e.shape_interval.first << " .. "
+          << 1e3 * e.shape_interval.second << " ms\n";
     if (!e.alternatives.empty()) {
       out << "    indistinguishable on this log from:";
       for (size_t k = 0; k < e.alternatives.size(); ++k) out << (k ? ", " : " ") << e.alternatives[k];
@@ -48,6 +52,10 @@ void print_diagnose_report(std::ostream& out, const DiagnoseResult& r) {
         << j.rms_train_after << std::setw(24) << j.rms_train_before / j.rms_tau << std::setw(8)
         << j.rms_train_after / j.rms_tau << "\n";
   }
+  out << "\njoint   noise floor [Nm]   excess left (share of the declared model's validation RSS above the floor)\n";
+  for (const auto& j : r.joints)
+    out << std::setw(5) << j.joint << std::setprecision(4) << std::setw(19) << j.rms_noise_floor << std::setw(12)
+        << std::setprecision(1) << 100 * j.excess_left << " %\n";
   out << std::defaultfloat;
 }
 
@@ -121,6 +129,9 @@ nlohmann::json diagnose_report_json(const DiagnoseResult& r) {
                             {"parameters", p},
                             {"evidence", {{"delta_bic", e.delta_bic}, {"validation_gain", e.validation_gain}}},
                             {"inertia_held_at_zero", e.inertia_held},
+                            {"variable", e.variable},
+                            {"knots", e.knots},
+                            {"excess_share", e.excess_share},
                             {"explanation", e.explanation},
                             {"indistinguishable_from", e.alternatives}});
   }
@@ -142,7 +153,9 @@ nlohmann::json diagnose_report_json(const DiagnoseResult& r) {
                            {"e_T_abs_before", m.e_T_abs_before},
                            {"e_T_abs_after", m.e_T_abs_after},
                            {"e_T_abs_std_before", m.e_T_abs_std_before},
-                           {"e_T_abs_std_after", m.e_T_abs_std_after}});
+                           {"e_T_abs_std_after", m.e_T_abs_std_after},
+                           {"rms_noise_floor", m.rms_noise_floor},
+                           {"excess_left", m.excess_left}});
   }
   return j;
 }

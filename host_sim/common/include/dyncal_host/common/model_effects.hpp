@@ -88,8 +88,8 @@ void add_effect(ModelSpec& spec, const ModelEffect& e, const std::string& where)
 std::string model_spec_name(const ModelSpec& spec);
 
 /// The effects and coupled motors of a `dyncal diagnose --report` file for an N-joint robot (its
-/// "effects" list: kind, joints, shape, sign; no terms). Drift has no model term: it is skipped and
-/// named in *skipped. Throws InputError naming the file and entry: unreadable, not JSON, not a
+/// "effects" list: kind, joints, shape, sign; no terms). Drift, a torque delay and a shape have no
+/// model term: they are skipped and named in *skipped. Throws InputError naming the file and entry: unreadable, not JSON, not a
 /// diagnosis report, an unknown kind, joints out of range.
 ModelSpec read_diagnosed_effects(const std::string& path, int num_joints, std::vector<std::string>* skipped);
 

@@ -19,9 +19,10 @@ struct DiagnoseOptions {
   double min_gain = 0.05;     ///< and the affected joints' validation RSS falls by at least this fraction
 };
 
-/// The effects the diagnosis tests. All but drift have a parameter-table term (lib/ EffectKind, whose
-/// columns they use), so a drive's feed-forward includes them; drift is a change over the log (a
-/// temperature rise), not a model term.
+/// The effects the diagnosis tests. The catalogue's, all but drift, have a parameter-table term (lib/
+/// EffectKind, whose columns they use), so a drive's feed-forward includes them; drift is a change
+/// over the log (a temperature rise), not a model term; neither are the two beyond the catalogue (a
+/// channel's delay, a shape: docs/diagnose.md "Beyond the catalogue").
 enum class Effect {
   stribeck,             ///< extra torque at low speed: (Fs - Fc) sgn(qd) exp(-(qd / qds)^2)
   asymmetric_friction,  ///< friction that differs with the direction of motion
@@ -33,6 +34,9 @@ enum class Effect {
   coupling,             ///< a motor turning with qd_i + r qd_j added to both joints (coupled transmission)
   coupled_motor,        ///< joint i's own motor turning with qd_i + r qd_j instead of qd_i (a coupled wrist)
   drift,                ///< viscous friction and offset changing linearly over the log
+  // Beyond the catalogue (weighed when no kind above qualifies; no parameter-table term):
+  torque_delay,  ///< the torque channel lagging the position channel by a delay (timing between channels)
+  shape,         ///< a smooth function of one variable (cubic spline) no kind above explains as well
 };
 
 /// Stable lower-case name: "stribeck", "asymmetric_friction", ... (reports and JSON).
@@ -54,6 +58,11 @@ struct DiagnosedEffect {
   /// coupling, coupled_motor: the motor's rotor inertia is held at 0 (its free fit is negative; not
   /// among param_names, 0 in the drive table's coupling term)
   bool inertia_held = false;
+  std::string variable;       ///< shape: the variable its spline is of
+  std::vector<double> knots;  ///< shape: the spline's full knot vector (boundaries repeated 4 times)
+  /// The share of the affected joints' excess validation RSS this effect removed: the drop it made
+  /// over what was left above the noise floor before it (DiagnoseJoint::rms_noise_floor).
+  double excess_share = 0;
 };
 
 struct RejectedCandidate {
@@ -71,6 +80,11 @@ struct DiagnoseJoint {
   double r2_validation_before = 0, r2_validation_after = 0;
   /// mean and std of |tau - tau_hat| / tau_max (not the survey's e_T, the |mean| of the signed error)
   double e_T_abs_before = 0, e_T_abs_after = 0, e_T_abs_std_before = 0, e_T_abs_std_after = 0;
+  /// The validation RMS a perfect model would leave [Nm]: the log's white torque noise through the
+  /// identification's low-pass (noise_floor.hpp), on the same rows
+  double rms_noise_floor = 0;
+  /// The share of the declared model's excess validation RSS (above the floor) still left after the effects
+  double excess_left = 1;
 };
 
 /// What the plots show, per joint (kept samples, decimated rate).

@@ -1,0 +1,243 @@
+#include "beyond_catalogue.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/QR>
+#include <algorithm>
+#include <cmath>
+
+#include "dyncal_host/common/normal_quantile.hpp"
+#include "dyncal_host/identification/methods/signal.hpp"
+#include "spline_basis.hpp"
+
+namespace dyncal::host::detail {
+namespace {
+
+using Eigen::Index;
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+
+/// The model's prediction of joint i at the kept samples (S).
+VectorXd model_torque(const CandidateContext& c, int i) {
+  const int N = static_cast<int>(c.data.q.cols());
+  const Index S = c.data.t.size();
+  VectorXd p(S);
+  for (Index s = 0; s < S; ++s) p[s] = c.model_X->row(s * N + i).dot(*c.model_phi);
+  return p;
+}
+
+/// d/dt of x (S) by central differences inside each segment, one-sided at its ends.
+VectorXd time_derivative(const CandidateContext& c, const VectorXd& x) {
+  const VectorXd& t = c.data.t;
+  VectorXd out = VectorXd::Zero(x.size());
+  for (const auto& [a, b] : c.segments) {
+    if (b - a < 2) continue;
+    for (Index s = a; s < b; ++s) {
+      const Index lo = std::max(a, s - 1), hi = std::min(b - 1, s + 1);
+      out[s] = (x[hi] - x[lo]) / (t[hi] - t[lo]);
+    }
+  }
+  return out;
+}
+
+constexpr int kKnotCounts[] = {4, 8, 16};
+/// Interior knots of the screening's splines (the middle of kKnotCounts).
+constexpr int kScreenKnots = 8;
+
+/// Student's t two-sided 95 % quantile for `dof` degrees of freedom: tabulated to 10, above by the
+/// Cornish-Fisher expansion around the normal's (error below 1e-3 there).
+double student_t975(int dof) {
+  static const double table[] = {12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228};
+  if (dof >= 1 && dof <= 10) return table[dof - 1];
+  const double z = kZ95, n = std::max(1, dof);
+  return z + (z * z * z + z) / (4 * n) + (5 * std::pow(z, 5) + 16 * z * z * z + 3 * z) / (96 * n * n);
+}
+
+/// The local fit of joint i's residual r (S) on columns C (S x m) alone: its BIC change against r,
+/// n_eff log(RSS after / RSS before) + m log(n_eff), with n_eff the effective samples of the
+/// residual after the fit (*n_eff_after): the noise's, not the structured residual's, whose long
+/// correlation would make any evidence impossible on the joint where the effect is largest.
+double local_bic(const MatrixXd& C, const VectorXd& r, double* n_eff_after) {
+  const MatrixXd G = C.transpose() * C;
+  const Eigen::LDLT<MatrixXd> f(G + 1e-12 * G.diagonal().maxCoeff() * MatrixXd::Identity(G.rows(), G.cols()));
+  const VectorXd left = r - C * f.solve(C.transpose() * r);
+  const double before = r.squaredNorm(), after = std::max(1e-300 * before, left.squaredNorm());
+  const double n_eff = std::max(2.0, effective_samples(left));
+  *n_eff_after = n_eff;
+  return n_eff * std::log(after / before) + static_cast<double>(C.cols()) * std::log(n_eff);
+}
+
+}  // namespace
+
+void torque_delay(const CandidateContext& c, int i, int, std::vector<Candidate>& out) {
+  const std::string name = "delay" + std::to_string(i + 1);
+  if (std::find(c.model_names.begin(), c.model_names.end(), name) != c.model_names.end()) return;
+  const int N = static_cast<int>(c.data.q.cols());
+  const Index S = c.data.t.size();
+  const VectorXd rate = time_derivative(c, model_torque(c, i));
+  Candidate k;
+  k.effect = Effect::torque_delay;
+  k.joints = {i};
+  k.names = {name};
+  k.columns = MatrixXd::Zero(S * N, 1);
+  for (Index s = 0; s < S; ++s) k.columns(s * N + i, 0) = -rate[s];
+  VectorXd r(S);
+  MatrixXd column(S, 1);
+  for (Index s = 0; s < S; ++s) {
+    const bool fit = c.data.fit_row[s * N + i];
+    r[s] = fit ? c.residual[s * N + i] : 0.0;
+    column(s, 0) = fit ? -rate[s] : 0.0;
+  }
+  local_bic(column, r, &k.n_eff_after);
+  out.push_back(std::move(k));
+}
+
+VectorXd delay_column(const VectorXd& t, const std::vector<std::pair<Index, Index>>& segments, const VectorXd& p,
+                      double delta0) {
+  VectorXd out = VectorXd::Zero(p.size());
+  for (const auto& segment : segments) {
+    const Index a = segment.first, b = segment.second;
+    if (b - a < 4) continue;
+    const double h = (t[b - 1] - t[a]) / static_cast<double>(b - a - 1);
+    auto at = [&](Index k) { return p[std::clamp(k, a, b - 1)]; };
+    for (Index s = a; s < b; ++s) {
+      if (delta0 == 0.0) {
+        out[s] = -(at(s + 1) - at(s - 1)) / (static_cast<double>(std::min(s + 1, b - 1) - std::max(s - 1, a)) * h);
+        continue;
+      }
+      const double x = static_cast<double>(s - a) - delta0 / h;  // the instant t - delta0 in samples
+      const Index k = static_cast<Index>(std::floor(x));
+      const double u = x - static_cast<double>(k);
+      const double p0 = at(a + k - 1), p1 = at(a + k), p2 = at(a + k + 1), p3 = at(a + k + 2);
+      const double v = p1 + 0.5 * u * (p2 - p0 + u * (2 * p0 - 5 * p1 + 4 * p2 - p3 + u * (3 * (p1 - p2) + p3 - p0)));
+      out[s] = (v - p[s]) / delta0;
+    }
+  }
+  return out;
+}
+
+std::vector<ShapeVariable> shape_variables(const CandidateContext& c, int i) {
+  const StackedData& d = c.data;
+  const int N = static_cast<int>(d.q.cols());
+  const std::string J = std::to_string(i + 1);
+  const VectorXd t = d.t.array() - d.t[0];
+  const VectorXd tau = model_torque(c, i);
+  std::vector<ShapeVariable> v = {{"t", t, false},
+                                  {"q" + J, d.q.col(i), false},
+                                  {"qd" + J, d.qd.col(i), false},
+                                  {"qdd" + J, d.qdd.col(i), false},
+                                  {"tau_model" + J, tau, false}};
+  for (int k : {i - 1, i + 1}) {
+    if (k < 0 || k >= N) continue;
+    v.push_back({"q" + std::to_string(k + 1), d.q.col(k), false});
+    v.push_back({"qd" + std::to_string(k + 1), d.qd.col(k), false});
+  }
+  v.push_back({"sgn(qd" + J + ") t", t, true});
+  v.push_back({"sgn(qd" + J + ") q" + J, d.q.col(i), true});
+  v.push_back({"sgn(qd" + J + ") tau_model" + J, tau, true});
+  return v;
+}
+
+namespace {
+
+/// The spline columns (S x m) of `var` with `interior` interior knots on joint i's rows (knots:
+/// spline_knots' vector; empty columns when the variable gives fewer than 3), sgn(qd_i) times them
+/// filtered in time where the variable carries the sign, 0 on rows outside the fit.
+MatrixXd shape_columns(const CandidateContext& c, int i, const ShapeVariable& var, int interior, const VectorXd& sign,
+                       std::vector<double>& knots) {
+  const StackedData& d = c.data;
+  const int N = static_cast<int>(d.q.cols());
+  knots = spline_knots(var.values, interior);
+  if (knots.size() < 8) return MatrixXd();  // fewer than 3 columns: no shape to speak of
+  MatrixXd series = spline_basis(var.values, knots).rightCols(static_cast<Index>(knots.size()) - 5);
+  if (var.times_sign) {
+    series = sign.asDiagonal() * series;
+    if (c.filter)
+      for (Index k = 0; k < series.cols(); ++k)
+        for (const auto& [a, b] : c.segments) c.filter->filtfilt(series.col(k).segment(a, b - a));
+  }
+  for (Index s = 0; s < series.rows(); ++s)
+    if (!d.fit_row[s * N + i]) series.row(s).setZero();
+  return series;
+}
+
+}  // namespace
+
+void shape(const CandidateContext& c, int i, int, std::vector<Candidate>& out) {
+  const StackedData& d = c.data;
+  const int N = static_cast<int>(d.q.cols());
+  const Index S = d.t.size();
+  const std::vector<ShapeVariable> vars = shape_variables(c, i);
+  VectorXd sign(S), r(S);
+  for (Index s = 0; s < S; ++s) {
+    const double v = d.qd_raw(s, i);
+    sign[s] = std::abs(v) <= d.standstill_band[i] ? 0.0 : (v > 0 ? 1.0 : -1.0);
+    r[s] = d.fit_row[s * N + i] ? c.residual[s * N + i] : 0.0;
+  }
+  // Screening: every variable scored by the local BIC of its spline with kScreenKnots interior
+  // knots on the joint's residual; the best goes to the cross-validated weighing with every knot
+  // count (the weighing chooses it), each candidate counted as a search over the whole family.
+  size_t best = vars.size();
+  double best_bic = INFINITY, unused = 0;
+  for (size_t v = 0; v < vars.size(); ++v) {
+    std::vector<double> knots;
+    const MatrixXd series = shape_columns(c, i, vars[v], kScreenKnots, sign, knots);
+    if (series.cols() == 0) continue;
+    const double bic = local_bic(series, r, &unused);
+    if (bic < best_bic) best_bic = bic, best = v;
+  }
+  if (best == vars.size()) return;
+  const int searched = static_cast<int>(vars.size() * std::size(kKnotCounts));
+  for (int interior : kKnotCounts) {
+    Candidate k;
+    const MatrixXd series = shape_columns(c, i, vars[best], interior, sign, k.knots);
+    if (series.cols() == 0) continue;
+    local_bic(series, r, &k.n_eff_after);
+    k.effect = Effect::shape;
+    k.joints = {i};
+    k.variable = vars[best].name;
+    k.searched = searched;
+    k.detail = "a cubic spline of " + k.variable + " with " + std::to_string(k.knots.size() - 8) + " interior knots";
+    k.columns = MatrixXd::Zero(S * N, series.cols());
+    for (Index b = 0; b < series.cols(); ++b) {
+      k.names.push_back("shape" + std::to_string(i + 1) + "_" + std::to_string(b + 2));
+      for (Index s = 0; s < S; ++s) k.columns(s * N + i, b) = series(s, b);
+    }
+    out.push_back(std::move(k));
+  }
+}
+
+std::pair<double, double> delay_interval(const StackedData& d, const MatrixXd& X, const VectorXd& phi,
+                                         const VectorXd& weights, int j, double n_eff_j,
+                                         const std::vector<double>& fold_delays) {
+  const int N = static_cast<int>(d.q.cols());
+  const Index rows = X.rows(), p = X.cols();
+  MatrixXd A(rows, p - 1);
+  VectorXd c(rows), r(rows);
+  double rss_j = 0, n_j = 0;
+  for (Index k = 0; k < rows; ++k) {
+    const double w = d.fit_row[k] ? weights[k % N] : 0.0;
+    A.row(k) = w * X.row(k).head(p - 1);
+    c[k] = w * X(k, p - 1);
+    r[k] = w * (d.y[k] - X.row(k).dot(phi));
+    if (k % N == j && d.fit_row[k]) {
+      rss_j += r[k] * r[k];
+      n_j += 1;
+    }
+  }
+  const VectorXd c_perp = c - A * A.colPivHouseholderQr().solve(c);
+  const double s2 = rss_j / std::max(1.0, n_j - 1);
+  const double se = std::sqrt(s2 / std::max(1e-300, c_perp.squaredNorm()) * n_j / std::max(1.0, n_eff_j));
+  const double delta = phi[p - 1];
+  double half = kZ95 * se;
+  const size_t K = fold_delays.size();
+  if (K >= 2) {
+    double mean = 0, ss = 0;
+    for (double v : fold_delays) mean += v / static_cast<double>(K);
+    for (double v : fold_delays) ss += (v - mean) * (v - mean);
+    const double se_jackknife = std::sqrt(static_cast<double>(K - 1) / static_cast<double>(K) * ss);
+    half = std::max(half, student_t975(static_cast<int>(K) - 1) * se_jackknife);
+  }
+  return {delta - half, delta + half};
+}
+
+}  // namespace dyncal::host::detail
