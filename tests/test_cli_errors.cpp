@@ -238,6 +238,13 @@ TEST(CliErrors, IdentifyOptionsOutsideTheirRangeAreRefused) {
   expect_error(tx40 + "--model eq7,offset:2 --sign-constraints", "--sign-constraints: a model of compiled terms only");
   expect_error(tx40 + "--method iv --model eq7", "--method iv needs --law FILE");
   expect_error(tx40 + "--method wls --law law.json", "--law is the control law of --method iv");
+  expect_error(tx40 + "--torque-delay 3", "--torque-delay: '3' is not JOINT:SECONDS");
+  expect_error(tx40 + "--torque-delay 3:4ms", "--torque-delay: '3:4ms' is not JOINT:SECONDS");
+  expect_error(tx40 + "--torque-delay 7:0.004", "--torque-delay: joint 7 is not 1..6");
+  expect_error(tx40 + "--torque-delay 2:0.004,2:0.001", "--torque-delay: joint 2 given twice");
+  expect_error(tx40 + "--torque-delay 2:nan", "--torque-delay: the delay of joint 2 is not finite");
+  const std::string diagnose = std::string("diagnose --format tx40 --data ") + dyncal::test::tx40_data() + " ";
+  expect_error(diagnose + "--torque-delay 0:0.001", "--torque-delay: joint 0 is not 1..6");
 }
 
 // A log whose time step is absurdly small cannot overflow the filter's edge computation: the

@@ -14,6 +14,7 @@ struct DiagnoseSettings {
   LogOption log;
   host::DiagnoseOptions options;
   std::string model = "eq7,rotor_inertia,offset", plots;  // identify's default model
+  std::string torque_delay;
   ReportOutputs out;
 };
 
@@ -24,6 +25,7 @@ int run_diagnose(DiagnoseSettings& s) {
   s.options.identify.terms = spec.terms;
   s.options.identify.effects = spec.effects;
   s.options.identify.motors = spec.motors;
+  s.options.identify.torque_delays = host::parse_torque_delays(s.torque_delay, robot.num_joints);
   std::vector<std::string> dropped;
   const auto log = s.log.load_log(robot, &dropped);
   auto result = host::diagnose(robot, log, s.options);
@@ -48,6 +50,9 @@ void add_diagnose_command(CLI::App& app, Action& run) {
   auto s = std::make_shared<DiagnoseSettings>();
   auto* cmd = app.add_subcommand("diagnose", "find what the declared model lacks in a measured log, add it, report");
   s->log.add_to(cmd);
+  cmd->add_option("--torque-delay", s->torque_delay,
+                  "a torque channel lagging its position channel, undone on the log before the fit: JOINT:SECONDS, "
+                  "comma-separated (diagnose reports torque_delay)");
   cmd->add_option("--model", s->model,
                   "declared model, identify's vocabulary: eq7 or eq8, optionally rotor_inertia and offset, and effect "
                   "items KIND:JOINT[:SHAPE] (docs/cli.md)")

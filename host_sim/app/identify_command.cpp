@@ -25,7 +25,7 @@ namespace {
 struct IdentifySettings {
   LogOption log;
   host::IdentifyOptions options;
-  std::string model = "eq7,rotor_inertia,offset", params, effects, law;
+  std::string model = "eq7,rotor_inertia,offset", params, effects, law, torque_delay;
   ReportOutputs out;
   std::vector<std::string> validate_on;
   bool compare_friction = false;
@@ -70,30 +70,45 @@ host::RobotDescription torque_constants_from_load(const IdentifySettings& s, con
   return out;
 }
 
+/// --effects: a diagnosis report's effects join the model `spec`; one the model already has is not
+/// added twice. Its torque delays are undone on the log, unless --torque-delay gives that joint's.
+/// What is left out is named in `dropped`.
+void merge_diagnosed_effects(IdentifySettings& s, int num_joints, host::ModelSpec& spec,
+                             std::vector<std::string>& dropped) {
+  std::vector<std::string> skipped;
+  std::vector<host::TorqueDelay> delays;
+  const host::ModelSpec found = host::read_diagnosed_effects(s.effects, num_joints, &skipped, &delays);
+  for (const host::TorqueDelay& d : delays) {
+    if (std::any_of(s.options.torque_delays.begin(), s.options.torque_delays.end(),
+                    [&](const host::TorqueDelay& o) { return o.joint == d.joint; }))
+      dropped.push_back(s.effects + ": torque_delay on joint " + std::to_string(d.joint + 1) +
+                        ": --torque-delay gives that joint's");
+    else
+      s.options.torque_delays.push_back(d);
+  }
+  for (const auto& e : found.effects) {
+    if (host::model_contains(spec, e))
+      dropped.push_back(s.effects + ": " + host::effect_item(e) + " is already in the model");
+    else
+      host::add_effect(spec, e, s.effects);
+  }
+  for (const auto& m : found.motors) {
+    if (std::any_of(spec.motors.begin(), spec.motors.end(), [&](const auto& o) { return o.motor == m.motor; }))
+      dropped.push_back(s.effects + ": " + host::coupled_motor_item(m) + ": the model couples that motor already");
+    else
+      spec.motors.push_back(m);
+  }
+  for (const auto& k : skipped) dropped.push_back(s.effects + ": " + k + " has no model term yet (not fitted)");
+}
+
 int run_identify(IdentifySettings& s) {
   prepare_report_outputs(s.out);
   check_outputs({{s.params, "parameters"}});
   auto robot = s.log.load_robot();
   std::vector<std::string> dropped;
   host::ModelSpec spec = host::parse_model_spec(s.model, robot.num_joints);
-  if (!s.effects.empty()) {
-    // A diagnosis report's effects join the model; one the model already has is not added twice.
-    std::vector<std::string> skipped;
-    const host::ModelSpec found = host::read_diagnosed_effects(s.effects, robot.num_joints, &skipped);
-    for (const auto& e : found.effects) {
-      if (host::model_contains(spec, e))
-        dropped.push_back(s.effects + ": " + host::effect_item(e) + " is already in the model");
-      else
-        host::add_effect(spec, e, s.effects);
-    }
-    for (const auto& m : found.motors) {
-      if (std::any_of(spec.motors.begin(), spec.motors.end(), [&](const auto& o) { return o.motor == m.motor; }))
-        dropped.push_back(s.effects + ": " + host::coupled_motor_item(m) + ": the model couples that motor already");
-      else
-        spec.motors.push_back(m);
-    }
-    for (const auto& k : skipped) dropped.push_back(s.effects + ": " + k + " has no model term yet (not fitted)");
-  }
+  s.options.torque_delays = host::parse_torque_delays(s.torque_delay, robot.num_joints);
+  if (!s.effects.empty()) merge_diagnosed_effects(s, robot.num_joints, spec, dropped);
   s.options.terms = spec.terms;
   s.options.effects = spec.effects;
   s.options.motors = spec.motors;
@@ -185,7 +200,11 @@ void add_identify_command(CLI::App& app, Action& run) {
          "coupling:I+J or coupling:I-J (docs/cli.md)")
       ->capture_default_str();
   cmd->add_option("--effects", s->effects,
-                  "add the effects of a dyncal diagnose --report file to the model (any method but kf and rls)");
+                  "add the effects of a dyncal diagnose --report file to the model (any method but kf and rls); "
+                  "its torque delays are undone on the log");
+  cmd->add_option("--torque-delay", s->torque_delay,
+                  "a torque channel lagging its position channel, undone on the log before the fit: JOINT:SECONDS, "
+                  "comma-separated (diagnose reports torque_delay)");
   cmd->add_option(
          "--method", opt.method,
          "wls: weighted least squares, each joint's rows weighted by 1 / its residual noise (Gautier); ols: "

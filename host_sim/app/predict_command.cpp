@@ -15,7 +15,7 @@ namespace {
 struct PredictSettings {
   LogOption log;
   host::IdentifyOptions options;
-  std::string params;
+  std::string params, torque_delay;
   ReportOutputs out;
 };
 
@@ -26,6 +26,7 @@ int run_predict(PredictSettings& s) {
   if (s.log.robot.name != p.robot)
     throw host::InputError(s.params + ": parameters are for robot '" + p.robot + "', not '" + s.log.robot.name + "'");
   const auto robot = s.log.load_robot();
+  s.options.torque_delays = host::parse_torque_delays(s.torque_delay, robot.num_joints);
   std::vector<std::string> dropped;
   const auto log = s.log.load_log(robot, &dropped);
   host::LogPrediction result = host::predict(robot, log, s.options, p);
@@ -53,6 +54,9 @@ void add_predict_command(CLI::App& app, Action& run) {
   auto* cmd = app.add_subcommand("predict", "predict a log's torque with a parameter file and report the error");
   s->log.add_to(cmd);
   cmd->add_option("--params", s->params, "parameter JSON from dyncal identify --params")->required();
+  cmd->add_option("--torque-delay", s->torque_delay,
+                  "a torque channel lagging its position channel, undone on the log before the fit: JOINT:SECONDS, "
+                  "comma-separated (diagnose reports torque_delay)");
   cmd->add_option("--cutoff", s->options.cutoff_hz, "zero-phase Butterworth cut-off [Hz] (as identify's)")
       ->capture_default_str();
   cmd->add_option("--filter-order", s->options.filter_order, "Butterworth order (even)")->capture_default_str();

@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <stdexcept>
 #include <utility>
 
 #include "dyncal_host/common/input_error.hpp"
@@ -274,7 +275,37 @@ std::string model_spec_name(const ModelSpec& spec) {
   return out;
 }
 
-ModelSpec read_diagnosed_effects(const std::string& path, int num_joints, std::vector<std::string>* skipped) {
+std::vector<TorqueDelay> parse_torque_delays(const std::string& text, int num_joints) {
+  std::vector<TorqueDelay> out;
+  std::stringstream items(text);
+  std::string item;
+  while (std::getline(items, item, ',')) {
+    const size_t colon = item.find(':');
+    int joint = 0;
+    double seconds = 0;
+    try {
+      size_t used = 0;
+      if (colon == std::string::npos) throw std::invalid_argument(item);
+      joint = std::stoi(item.substr(0, colon), &used);
+      if (used != colon) throw std::invalid_argument(item);
+      seconds = std::stod(item.substr(colon + 1), &used);
+      if (used != item.size() - colon - 1) throw std::invalid_argument(item);
+    } catch (const std::exception&) {
+      throw InputError("--torque-delay: '" + item + "' is not JOINT:SECONDS (e.g. 3:0.004)");
+    }
+    if (joint < 1 || joint > num_joints)
+      throw InputError("--torque-delay: joint " + std::to_string(joint) + " is not 1.." + std::to_string(num_joints));
+    if (!std::isfinite(seconds))
+      throw InputError("--torque-delay: the delay of joint " + std::to_string(joint) + " is not finite");
+    for (const TorqueDelay& d : out)
+      if (d.joint == joint - 1) throw InputError("--torque-delay: joint " + std::to_string(joint) + " given twice");
+    out.push_back({joint - 1, seconds});
+  }
+  return out;
+}
+
+ModelSpec read_diagnosed_effects(const std::string& path, int num_joints, std::vector<std::string>* skipped,
+                                 std::vector<TorqueDelay>* delays) {
   const nlohmann::json j = read_json_file(path);
   if (!j.is_object() || !j.contains("declared_model") || !j.contains("effects") || !j["effects"].is_array())
     throw InputError(path + ": not a dyncal diagnose report (\"declared_model\" and \"effects\")");
@@ -293,8 +324,15 @@ ModelSpec read_diagnosed_effects(const std::string& path, int num_joints, std::v
         throw InputError(where + ": joints must be 1.." + std::to_string(num_joints));
       joints.push_back(v.get<int>() - 1);
     }
-    // Not model terms: drift (a change over the log), and what diagnose finds beyond its catalogue
-    // (a torque channel's delay, a shape): skipped, each named.
+    // A torque channel's delay: undone on the log (logs/torque_delay.hpp), not a model term.
+    if (name == "torque_delay" && delays) {
+      if (!x.contains("shape") || !x["shape"].is_number() || !std::isfinite(x["shape"].get<double>()))
+        throw InputError(where + ": a torque delay needs a finite 'shape' (its delay [s])");
+      delays->push_back({joints.front(), x["shape"].get<double>()});
+      continue;
+    }
+    // Not model terms: drift (a change over the log), a shape beyond diagnose's catalogue: skipped,
+    // each named.
     if (name == "drift" || name == "torque_delay" || name == "shape") {
       if (skipped) skipped->push_back(name + " on joint " + std::to_string(joints.front() + 1));
       continue;

@@ -70,7 +70,9 @@ double local_bic(const MatrixXd& C, const VectorXd& r, double* n_eff_after) {
 
 void torque_delay(const CandidateContext& c, int i, int, std::vector<Candidate>& out) {
   const std::string name = "delay" + std::to_string(i + 1);
-  if (std::find(c.model_names.begin(), c.model_names.end(), name) != c.model_names.end()) return;
+  if (std::find(c.model_names.begin(), c.model_names.end(), name) != c.model_names.end() ||
+      std::find(c.refused.begin(), c.refused.end(), name) != c.refused.end())
+    return;
   const int N = static_cast<int>(c.data.q.cols());
   const Index S = c.data.t.size();
   const VectorXd rate = time_derivative(c, model_torque(c, i));

@@ -9,15 +9,16 @@
 #include <utility>
 #include <vector>
 
+#include "candidate.hpp"
 #include "candidate_context.hpp"
-#include "candidates.hpp"
 
 namespace dyncal::host::detail {
 
 /// The delay of joint i's torque channel: tau_meas(t) = tau(t - delta) ~ tau(t) - delta dtau/dt, one
 /// column -d/dt of the model's prediction of joint i (c.model_X c.model_phi, central differences in
 /// each segment), coefficient delta [s] (positive: the torque lags the position). None on a joint
-/// that has one ("delay<i>" among the model's names). The chosen one is refined by delay_column.
+/// that has one ("delay<i>" among the model's names) or whose delay was refused (c.refused). The
+/// chosen one is refined by delay_column.
 void torque_delay(const CandidateContext& c, int i, int, std::vector<Candidate>& out);
 
 /// The secant column of a delay delta0 [s] for a prediction p (S, at the kept samples t):

@@ -32,6 +32,9 @@ struct CandidateContext {
   /// torque as the model's own columns do. No filter: columns as computed.
   const ButterworthLowPass* filter = nullptr;
   std::vector<std::pair<Eigen::Index, Eigen::Index>> segments;
+  /// Parameters the search refused after choosing them (a torque delay whose interval holds 0): their
+  /// candidates are not proposed again.
+  std::vector<std::string> refused;
 };
 
 /// A motor turning with qd_i + r qd_j: its velocity with the filtered magnitude and the unfiltered

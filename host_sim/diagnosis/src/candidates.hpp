@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "candidate.hpp"
 #include "candidate_context.hpp"
 #include "dyncal/effect_terms.hpp"
 #include "dyncal_host/diagnosis/diagnose_result.hpp"
@@ -17,38 +18,6 @@
 #include "dyncal_host/model/stacked_data.hpp"
 
 namespace dyncal::host::detail {
-
-/// A candidate effect: extra columns over the stacked rows (row s * N + j).
-struct Candidate {
-  Effect effect = Effect::offset;
-  std::vector<int> joints;  ///< 0-based
-  std::vector<std::string> names;
-  Eigen::MatrixXd columns;  ///< (S N) x m
-  std::string detail;       ///< e.g. "36 cycles per revolution"
-  int searched = 1;         ///< alternatives the search chose among (frequencies, velocity scales, signs)
-  double shape = 0;  ///< velocity scale (stribeck), cycles per revolution (position_periodic), ratio |r| (coupling)
-  double sign = 1;   ///< coupling: the motor turns with q_i + sign shape q_j
-  std::pair<double, double> shape_interval{0, 0};  ///< 95 % interval of shape where searched (coupling ratio)
-  std::vector<std::string> replaces;  ///< the model's parameters (columns) it takes the place of (coupled_motor)
-  /// A ratio the data do not bound (coupling, coupled_motor): its 95 % interval reaches the end of
-  /// the searched range, or the estimate is an end of its own interval (the physical signs cut the
-  /// profile there: the likelihood's maximum lies beyond). Never selected; reported as unbounded.
-  bool unbounded = false;
-  /// The column of a motor's rotor inertia (coupling, coupled_motor; -1: none). Held >= 0 in the
-  /// selection: where the whole model's fit makes it negative the column is dropped (held at 0) and
-  /// inertia_held set (drop_inertia). The ratio search fits it freely.
-  int inertia = -1;
-  bool inertia_held = false;
-  std::string variable;       ///< shape: the variable its spline is of ("q3", "sgn(qd2) t", ...)
-  std::vector<double> knots;  ///< shape: the spline's full knot vector (spline_basis.hpp)
-  /// Beyond the catalogue: the effective samples of its joint's residual after its own local fit
-  /// (0: not computed). BIC weighs its joint with at least this many: the noise's correlation, not
-  /// that of the structured residual it explains (beyond_catalogue.hpp).
-  double n_eff_after = 0;
-
-  /// Parameters it adds to the model: its columns less those it replaces.
-  Eigen::Index added_parameters() const { return columns.cols() - static_cast<Eigen::Index>(replaces.size()); }
-};
 
 /// One effect kind.
 struct EffectSpec {

@@ -461,6 +461,22 @@ void note_worse_joints(DiagnoseResult& res) {
   }
 }
 
+/// The declared model's fit (unweighted): the compiled regressor W, then the declared effect terms
+/// (identify's --model vocabulary) as [W E], load friction's rigid-body torque from the fit of W alone.
+Model declared_fit(const StackedData& d, const std::vector<ModelEffect>& effects, CrossValidator& cv) {
+  const MatrixXd none(d.W.rows(), 0);
+  Model m{d.W, d.names, {}, {}, {}};
+  cv.set_base(m.X);
+  cv.evaluate(none, m.val, m.train, &m.phi);
+  if (effects.empty()) return m;
+  m.X = model_design(d, effects, m.phi);
+  for (const ModelEffect& e : effects)
+    for (const std::string& n : effect_param_names(e)) m.names.push_back(n);
+  cv.set_base(m.X);
+  cv.evaluate(none, m.val, m.train, &m.phi);
+  return m;
+}
+
 /// One stage of a greedy step: the candidates of the catalogue (or those beyond it), their evidence
 /// and the one chosen (-1: none qualifies).
 struct Stage {
@@ -509,6 +525,37 @@ bool beyond_wins(const CrossValidator& cv, const Stage& table, const Stage& beyo
   return e.delta_bic < table.ev[static_cast<size_t>(table.best)].delta_bic - o.bic_threshold;
 }
 
+/// The note for a delay the search chose whose 95 % interval holds 0 (delay_interval).
+std::string undetermined_delay_note(const Candidate& c, double delay, std::pair<double, double> interval) {
+  std::ostringstream note;
+  note << std::setprecision(3) << "joint " << c.joints.front() + 1 << ": a torque delay of " << 1e3 * delay
+       << " ms would pass the evidence threshold, but its 95 % interval " << 1e3 * interval.first << " .. "
+       << 1e3 * interval.second << " ms holds 0 (the folds disagree on its sign): it stands in for something "
+       << "else and is not added";
+  return note.str();
+}
+
+/// One greedy step's choice: the catalogue's best, unless a candidate beyond it (a channel's delay,
+/// a shape) wins (beyond_wins). The search beyond runs on every joint when no kind qualifies, else
+/// on the chosen kind's joints only (the only place it could take the kind's place); *beyond keeps
+/// it. best < 0: nothing qualifies, and res.rejected names the strongest of both.
+Stage choose(const detail::CandidateContext& library, const CrossValidator& cv, const Model& m, const VectorXd& n_eff,
+             const VectorXd& declared_val, int step, const DiagnoseOptions& o, std::set<std::string>& unbounded_noted,
+             Stage& beyond, DiagnoseResult& res) {
+  Stage st = weigh_stage(library, true, cv, m, n_eff, declared_val, step, o, unbounded_noted, res.notes);
+  const std::vector<int> on = st.best >= 0 ? st.cands[static_cast<size_t>(st.best)].joints : std::vector<int>{};
+  beyond = weigh_stage(library, false, cv, m, n_eff, declared_val, step, o, unbounded_noted, res.notes, on);
+  if (beyond_wins(cv, st, beyond, m, n_eff, declared_val, o)) return beyond;
+  if (st.best < 0) {
+    for (size_t c = 0; c < beyond.cands.size(); ++c) {
+      st.cands.push_back(beyond.cands[c]);
+      st.ev.push_back(beyond.ev[c]);
+    }
+    res.rejected = strongest_rejected(st.cands, st.ev, o.bic_threshold);
+  }
+  return st;
+}
+
 /// Refines a delay just added (the last column of m.X, on joint j's rows): the column rebuilt as the
 /// secant at the current estimate (delay_column) and refitted with the whole model, until the
 /// estimate moves by less than 1e-3 of a sample (at most 8 times).
@@ -529,6 +576,27 @@ void refine_delay(const StackedData& d, const std::vector<std::pair<Index, Index
   }
 }
 
+/// A delay just added (m: the model with its column, before: without it), refined (refine_delay)
+/// with its 95 % interval (*interval). When the interval holds 0 its sign is not determined: it
+/// stands in for something else; it is named in a note, refused (not proposed again) and m goes
+/// back to `before`. Returns whether it stays.
+bool delay_determined(const StackedData& d, const Candidate& c, const Model& before, double n_eff_j,
+                      const VectorXd& weights, CrossValidator& cv, Model& m, detail::CandidateContext& library,
+                      std::pair<double, double>& interval, std::vector<std::string>& notes) {
+  const int j = c.joints.front();
+  refine_delay(d, library.segments, j, cv, m);
+  std::vector<double> fold_delays;
+  for (const VectorXd& b : cv.fold_coefficients()) fold_delays.push_back(b[b.size() - 1]);
+  interval = detail::delay_interval(d, m.X, m.phi, weights, j, n_eff_j, fold_delays);
+  if (interval.first > 0 || interval.second < 0) return true;
+  notes.push_back(undetermined_delay_note(c, m.phi[m.phi.size() - 1], interval));
+  library.refused.push_back(c.names.front());
+  m = before;
+  cv.set_base(m.X);
+  cv.evaluate(MatrixXd(d.W.rows(), 0), m.val, m.train, &m.phi);
+  return false;
+}
+
 /// Per joint, the validation RSS a model lacking nothing would leave: the residual's broadband
 /// noise (noise_floor.hpp, from the declared model's residual) times the joint's fitted rows.
 VectorXd noise_floor_rss(const StackedData& d, const VectorXd& residual,
@@ -539,6 +607,19 @@ VectorXd noise_floor_rss(const StackedData& d, const VectorXd& residual,
   for (Index r = 0; r < d.y.size(); ++r)
     if (d.fit_row[r]) n[r % N] += 1;
   return detail::noise_floor_per_row(d, residual, segments, io, raw_rate_hz).cwiseProduct(n);
+}
+
+/// Each joint's noise floor as an RMS (floor: RSS, over S samples as the joint metrics) and the share
+/// of the declared model's excess validation RSS above it that is left (0 where there was none).
+void set_noise_floors(DiagnoseResult& res, const VectorXd& floor, const VectorXd& declared_val, const VectorXd& val,
+                      Index S) {
+  for (size_t j = 0; j < res.joints.size(); ++j) {
+    DiagnoseJoint& jm = res.joints[j];
+    const Index k = static_cast<Index>(j);
+    jm.rms_noise_floor = std::sqrt(floor[k] / static_cast<double>(S));
+    const double excess = declared_val[k] - floor[k];
+    jm.excess_left = excess > 0 ? std::clamp((val[k] - floor[k]) / excess, 0.0, 1.0) : 0.0;
+  }
 }
 
 /// The share of the excess validation RSS (above floor) on `joints` (0-based) that went from
@@ -596,18 +677,7 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
 
   CrossValidator cv(d, N, fold, io.folds);
   const MatrixXd none(S * N, 0);
-  Model m{d.W, d.names, {}, {}, {}};
-  cv.set_base(m.X);
-  cv.evaluate(none, m.val, m.train, &m.phi);
-  if (!io.effects.empty()) {
-    // Declared effect terms (identify's --model vocabulary): [W E], load friction's rigid-body
-    // torque from the fit of W alone.
-    m.X = model_design(d, io.effects, m.phi);
-    for (const ModelEffect& e : io.effects)
-      for (const std::string& n : effect_param_names(e)) m.names.push_back(n);
-    cv.set_base(m.X);
-    cv.evaluate(none, m.val, m.train, &m.phi);
-  }
+  Model m = declared_fit(d, io.effects, cv);
   // Gautier's weights (wls), as identify: 1 / sigma_j from the residual of the model so far,
   // re-estimated after every effect added (a joint whose error an effect removes weighs more).
   VectorXd weights = VectorXd::Ones(N);
@@ -622,8 +692,8 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
   if (io.method == "wls") res.notes.push_back(wls_note(weights));
   const Model declared = m;
   const VectorXd oof_before = cv.predict_out_of_fold();
-  detail::CandidateContext library{d, o.max_cycles, load_torques(d, m.phi), {}, {}, weights, &m.X, &m.phi, {}, nullptr,
-                                   {}};
+  detail::CandidateContext library{
+      d, o.max_cycles, load_torques(d, m.phi), {}, {}, weights, &m.X, &m.phi, {}, nullptr, {}, {}};
   // Candidate columns are filtered in time as the regressor was (the same zero-phase low-pass, at
   // the decimated rate, within each segment: a step longer than 1.5 periods starts a new one).
   const ButterworthLowPass filter(io.filter_order, io.cutoff_hz, d.rate_hz);
@@ -644,38 +714,23 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
     library.column_joints = detail::column_joint_masks(m.X, N);
     n_eff = effective_samples_per_joint(library.residual, N);
     if (step == 0) res.effective_samples_per_joint = n_eff.mean();
-    // The catalogue's best, unless a candidate beyond it (a channel's delay, a shape) wins (beyond_wins).
-    Stage st = weigh_stage(library, true, cv, m, n_eff, declared.val, step, o, unbounded_noted, res.notes);
-    // Beyond the catalogue: on every joint when no kind qualifies, else on the chosen kind's joints
-    // only (the only place it could take the kind's place: beyond_wins).
-    const std::vector<int> on = st.best >= 0 ? st.cands[static_cast<size_t>(st.best)].joints : std::vector<int>{};
-    beyond = weigh_stage(library, false, cv, m, n_eff, declared.val, step, o, unbounded_noted, res.notes, on);
-    if (beyond_wins(cv, st, beyond, m, n_eff, declared.val, o)) {
-      st = beyond;
-    } else if (st.best < 0) {
-      for (size_t c = 0; c < beyond.cands.size(); ++c) {
-        st.cands.push_back(beyond.cands[c]);
-        st.ev.push_back(beyond.ev[c]);
-      }
-      res.rejected = strongest_rejected(st.cands, st.ev, o.bic_threshold);
-      break;
-    }
+    Stage st = choose(library, cv, m, n_eff, declared.val, step, o, unbounded_noted, beyond, res);
+    if (st.best < 0) break;
     const Candidate& c = st.cands[static_cast<size_t>(st.best)];
     std::vector<std::string> alternatives = indistinguishable(st.cands, st.ev, st.best, m.X, n_eff);
-    const VectorXd val_before = m.val;
+    const Model before = m;
     add_columns(c, m);
     cv.set_base(m.X);
     cv.evaluate(none, m.val, m.train, &m.phi);
-    if (c.effect == Effect::torque_delay) refine_delay(d, library.segments, c.joints.front(), cv, m);
+    std::pair<double, double> delay_95{0, 0};
+    if (c.effect == Effect::torque_delay &&
+        !delay_determined(d, c, before, n_eff[c.joints.front()], weights, cv, m, library, delay_95, res.notes))
+      continue;
     res.effects.push_back(diagnosed_effect(c, m, st.ev[static_cast<size_t>(st.best)], std::move(alternatives)));
-    res.effects.back().excess_share = excess_share(c.joints, val_before, m.val, floor);
+    res.effects.back().excess_share = excess_share(c.joints, before.val, m.val, floor);
     if (c.effect == Effect::torque_delay) {
-      DiagnosedEffect& e = res.effects.back();
-      e.shape = m.phi[m.phi.size() - 1];
-      std::vector<double> fold_delays;
-      for (const VectorXd& b : cv.fold_coefficients()) fold_delays.push_back(b[b.size() - 1]);
-      e.shape_interval =
-          detail::delay_interval(d, m.X, m.phi, weights, c.joints.front(), n_eff[c.joints.front()], fold_delays);
+      res.effects.back().shape = m.phi[m.phi.size() - 1];
+      res.effects.back().shape_interval = delay_95;
     }
     reweigh();
   }
@@ -684,12 +739,7 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
   res.declared_params = declared_params(declared, m);
   res.traces = traces(d, declared.X * declared.phi, m.X * m.phi, o.max_cycles);
   res.joints = joint_metrics(d, robot, declared, m, oof_before, cv.predict_out_of_fold());
-  for (int j = 0; j < N; ++j) {
-    DiagnoseJoint& jm = res.joints[static_cast<size_t>(j)];
-    jm.rms_noise_floor = std::sqrt(floor[j] / static_cast<double>(S));
-    const double excess = declared.val[j] - floor[j];
-    jm.excess_left = excess > 0 ? std::clamp((m.val[j] - floor[j]) / excess, 0.0, 1.0) : 0.0;
-  }
+  set_noise_floors(res, floor, declared.val, m.val, S);
   note_structured_residual(res, beyond, o.min_gain);
   note_worse_joints(res);
   return res;

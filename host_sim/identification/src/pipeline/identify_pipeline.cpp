@@ -19,6 +19,7 @@
 #include "dyncal_host/identification/pipeline/parameter_scales.hpp"
 #include "dyncal_host/identification/pipeline/prediction.hpp"
 #include "dyncal_host/identification/pipeline/recursive_fit.hpp"
+#include "dyncal_host/logs/torque_delay.hpp"
 #include "dyncal_host/model/compiled_robot.hpp"
 
 namespace dyncal::host {
@@ -331,6 +332,7 @@ void add_motor_notes(const std::vector<int>& coupled, const Eigen::MatrixXd& mot
 }  // namespace
 
 StackedData IdentifyPipeline::prepare(JointLog&& log, bool dense, const Eigen::VectorXd* band_override) const {
+  for (const TorqueDelay& delay : opt_.torque_delays) undo_torque_delay(log, delay);
   const double fs = 1.0 / log.sample_period();
   const ButterworthLowPass filter(opt_.filter_order, opt_.cutoff_hz, fs);
   int d = opt_.decimate > 0 ? opt_.decimate : static_cast<int>(std::floor(fs / (25.0 * opt_.cutoff_hz)));
@@ -354,6 +356,12 @@ StackedData IdentifyPipeline::prepare(JointLog&& log, bool dense, const Eigen::V
                                 (log.has_qdd ? "its measured qdd" : "qdd differentiated from it") + "; q filtered"
                           : "states: qd and qdd differentiated from the filtered q (no measured velocity in "
                             "the log)");
+  for (const TorqueDelay& delay : opt_.torque_delays) {
+    char text[160];
+    std::snprintf(text, sizeof text, "torque delay undone: joint %d's torque read %.4g ms later than its position",
+                  delay.joint + 1, 1e3 * delay.seconds);
+    out.notes.push_back(text);
+  }
   if (short_segments > 0)
     out.notes.push_back(std::to_string(short_segments) + " segment(s) not longer than two cut-off periods (" +
                         std::to_string(2 * keep.edge) + " samples) left out: filtering would only see their ends");

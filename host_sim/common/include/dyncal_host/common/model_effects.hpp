@@ -40,6 +40,19 @@ struct ModelSpec {
   std::vector<CoupledMotor> motors;
 };
 
+/// A joint's torque channel lagging its position channel (dyncal diagnose's torque_delay): the log's
+/// tau_j(t) is the joint's torque at t - seconds. Undone on the log before identification
+/// (logs/torque_delay.hpp), not a model term.
+struct TorqueDelay {
+  int joint = 0;       ///< 0-based
+  double seconds = 0;  ///< positive: the torque lags
+};
+
+/// "J:SECONDS[,J:SECONDS...]" (1-based joints, each at most once) as TorqueDelay entries. Throws
+/// InputError naming the item: not J:SECONDS, a joint outside 1..num_joints or repeated, a delay
+/// that is not finite.
+std::vector<TorqueDelay> parse_torque_delays(const std::string& text, int num_joints);
+
 /// The coupled motor as a `--model` item (1-based joints): `coupled_motor:6+5` (ratio 1),
 /// `coupled_motor:6-5:0.5` (ratio -0.5); the ratio's magnitude written with 17 significant digits.
 std::string coupled_motor_item(const CoupledMotor& m);
@@ -88,9 +101,12 @@ void add_effect(ModelSpec& spec, const ModelEffect& e, const std::string& where)
 std::string model_spec_name(const ModelSpec& spec);
 
 /// The effects and coupled motors of a `dyncal diagnose --report` file for an N-joint robot (its
-/// "effects" list: kind, joints, shape, sign; no terms). Drift, a torque delay and a shape have no
-/// model term: they are skipped and named in *skipped. Throws InputError naming the file and entry: unreadable, not JSON, not a
-/// diagnosis report, an unknown kind, joints out of range.
-ModelSpec read_diagnosed_effects(const std::string& path, int num_joints, std::vector<std::string>* skipped);
+/// "effects" list: kind, joints, shape, sign; no terms). Drift and a shape have no model term: they
+/// are skipped and named in *skipped. A torque delay (its delay in "shape", seconds) goes to *delays
+/// (skipped and named when delays is null). Throws InputError naming the file and entry:
+/// unreadable, not JSON, not a diagnosis report, an unknown kind, joints out of range, a delay that
+/// is not finite.
+ModelSpec read_diagnosed_effects(const std::string& path, int num_joints, std::vector<std::string>* skipped,
+                                 std::vector<TorqueDelay>* delays = nullptr);
 
 }  // namespace dyncal::host

@@ -28,16 +28,18 @@ struct IdentifyOptions {
   unsigned terms = 0;                ///< dyncal::term bits (rigid body always included)
   std::vector<ModelEffect> effects;  ///< effect terms after the compiled ones (model_effects.hpp): not kf, rls
   std::vector<CoupledMotor> motors;  ///< coupled motors (model_effects.hpp): rows of the motor-velocity map
-  int filter_order = 4;              ///< Butterworth order (zero-phase: twice the attenuation)
-  double cutoff_hz = 20.0;           ///< low-pass cut-off for q, tau and the regressor columns
-  int decimate = 0;                  ///< decimation factor; 0: floor(fs / (25 * cutoff)), at least 1
-  int folds = 5;                     ///< blocked k-fold cross-validation
-  double block_seconds = 0.5;        ///< length of the contiguous blocks dealt to the folds in turn
-  double validate_last = 0.0;        ///< > 0: plain time split, this fraction at the end validates
-  double rls_mu = 0.9999;            ///< forgetting factor of RLS (survey Eq. 23)
-  double p0 = 1e6;                   ///< initial covariance diag of KF and RLS (prior ignorance)
-  double min_speed_fraction = 0.0;   ///< fit only rows with |qd_j| >= this fraction of joint j's top speed
-  bool load_regressor = false;       ///< also stack Y(q, qd, 0) (StackedData::W_load): the load torque's regressor
+  /// Torque channels' delays undone on the log before anything else (logs/torque_delay.hpp)
+  std::vector<TorqueDelay> torque_delays;
+  int filter_order = 4;             ///< Butterworth order (zero-phase: twice the attenuation)
+  double cutoff_hz = 20.0;          ///< low-pass cut-off for q, tau and the regressor columns
+  int decimate = 0;                 ///< decimation factor; 0: floor(fs / (25 * cutoff)), at least 1
+  int folds = 5;                    ///< blocked k-fold cross-validation
+  double block_seconds = 0.5;       ///< length of the contiguous blocks dealt to the folds in turn
+  double validate_last = 0.0;       ///< > 0: plain time split, this fraction at the end validates
+  double rls_mu = 0.9999;           ///< forgetting factor of RLS (survey Eq. 23)
+  double p0 = 1e6;                  ///< initial covariance diag of KF and RLS (prior ignorance)
+  double min_speed_fraction = 0.0;  ///< fit only rows with |qd_j| >= this fraction of joint j's top speed
+  bool load_regressor = false;      ///< also stack Y(q, qd, 0) (StackedData::W_load): the load torque's regressor
   double prior_std = 0.5;      ///< pcls: the prior's relative std (kPriorRelativeStd); 0: no prior, consistency alone
   double range_width = 3.0;    ///< gd, ga, pf: standard parameters within nominal +- this x their scale
   std::uint64_t seed = 1;      ///< ga, pf: random seed
