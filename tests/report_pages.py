@@ -210,6 +210,15 @@ def main():
          o("diagnose.html")], 0)
     check_page("diagnose", o("diagnose.html"), o("diagnose.json"),
                ["diagnose_before_after"] + [f"torque_joint{j}" for j in range(1, 7)], out)
+    # diagnose on the TX40 log: beyond its catalogue it finds shapes in t (effects 3 and 4, joints 6
+    # and 2), each drawn from the report's curve.
+    run([dyncal, "diagnose", "--format", "tx40", "--data", tx40, "--friction-per-joint", "--report",
+         o("diagnose_tx40.json"), "--html", o("diagnose_tx40.html")], 0)
+    with open(o("diagnose_tx40.json")) as f:
+        shapes = [f"shape_effect{i + 1}" for i, e in enumerate(json.load(f)["effects"]) if e["kind"] == "shape"]
+    check(len(shapes) >= 1, f"diagnose_tx40: no shape found (effects: {shapes})")
+    check_page("diagnose_tx40", o("diagnose_tx40.html"), o("diagnose_tx40.json"), ["diagnose_before_after"] + shapes,
+               out)
 
     # calibrate on the simulated er20 drive, and payload on a second drive whose arm carries 2 kg.
     load = o("load_scenario.json")

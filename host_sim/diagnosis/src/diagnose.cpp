@@ -25,6 +25,7 @@
 #include "harmonic_fit.hpp"
 #include "noise_floor.hpp"
 #include "shape_search.hpp"
+#include "spline_basis.hpp"
 
 namespace dyncal::host {
 namespace {
@@ -447,6 +448,17 @@ DiagnosedEffect diagnosed_effect(const Candidate& c, const Model& m, const Evide
   e.alternatives = std::move(alternatives);
   e.variable = c.variable;
   e.knots = c.knots;
+  if (c.effect == Effect::shape && c.knots.size() >= 8) {
+    // The spline's first basis function is left out of its columns (beyond_catalogue.hpp).
+    VectorXd x(kShapeCurvePoints);
+    for (Index k = 0; k < x.size(); ++k)
+      x[k] = c.knots.front() +
+             (c.knots.back() - c.knots.front()) * static_cast<double>(k) / static_cast<double>(x.size() - 1);
+    const MatrixXd B = detail::spline_basis(x, c.knots).rightCols(static_cast<Index>(e.params.size()));
+    const VectorXd y = B * Eigen::Map<const VectorXd>(e.params.data(), static_cast<Index>(e.params.size()));
+    e.curve_x.assign(x.data(), x.data() + x.size());
+    e.curve_y.assign(y.data(), y.data() + y.size());
+  }
   return e;
 }
 

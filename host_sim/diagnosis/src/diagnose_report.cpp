@@ -119,21 +119,23 @@ nlohmann::json diagnose_report_json(const DiagnoseResult& r) {
                                  : (me ? effect_item(*me) : "");
     nlohmann::json p = nlohmann::json::object();
     for (size_t i = 0; i < e.params.size(); ++i) p[e.param_names[i]] = e.params[i];
-    j["effects"].push_back({{"kind", effect_name(e.kind)},
-                            {"joint", e.joints.front()},
-                            {"joints", e.joints},
-                            {"shape", e.shape},
-                            {"shape_interval", {e.shape_interval.first, e.shape_interval.second}},
-                            {"sign", e.sign},
-                            {"item", item},
-                            {"parameters", p},
-                            {"evidence", {{"delta_bic", e.delta_bic}, {"validation_gain", e.validation_gain}}},
-                            {"inertia_held_at_zero", e.inertia_held},
-                            {"variable", e.variable},
-                            {"knots", e.knots},
-                            {"excess_share", e.excess_share},
-                            {"explanation", e.explanation},
-                            {"indistinguishable_from", e.alternatives}});
+    nlohmann::json effect = {{"kind", effect_name(e.kind)},
+                             {"joint", e.joints.front()},
+                             {"joints", e.joints},
+                             {"shape", e.shape},
+                             {"shape_interval", {e.shape_interval.first, e.shape_interval.second}},
+                             {"sign", e.sign},
+                             {"item", item},
+                             {"parameters", p},
+                             {"evidence", {{"delta_bic", e.delta_bic}, {"validation_gain", e.validation_gain}}},
+                             {"inertia_held_at_zero", e.inertia_held},
+                             {"variable", e.variable},
+                             {"knots", e.knots},
+                             {"excess_share", e.excess_share},
+                             {"explanation", e.explanation},
+                             {"indistinguishable_from", e.alternatives}};
+    if (!e.curve_x.empty()) effect["curve"] = {{"x", e.curve_x}, {"y", e.curve_y}};
+    j["effects"].push_back(std::move(effect));
   }
   j["rejected"] = nlohmann::json::array();
   for (const auto& c : r.rejected)

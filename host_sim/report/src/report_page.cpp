@@ -37,6 +37,13 @@ std::string escape(const std::string& s) {
   return out;
 }
 
+/// A label inside a gnuplot single-quoted string: a quote doubled.
+std::string gnuplot_text(const std::string& s) {
+  std::string out;
+  for (const char c : s) out += c == '\'' ? std::string("''") : std::string(1, c);
+  return out;
+}
+
 /// %.6g, or every digit of an integer below 1e15 (sample counts, byte counts).
 std::string g6(double v) {
   char text[32];
@@ -241,6 +248,32 @@ std::string diagnose_plot(const Json& joints, Plots& plots) {
       "y\nset style data lines");
 }
 
+/// Each shape diagnose found beyond its catalogue: its torque against its variable (the report's
+/// "curve"), one plot per effect, named by the effect's 1-based place in the report.
+std::string shape_plots(const Json& effects, Plots& plots) {
+  std::string out;
+  for (size_t i = 0; i < effects.size(); ++i) {
+    const Json& e = effects[i];
+    if (!e.is_object() || !e.contains("curve") || !e["curve"].is_object() || !e["curve"].contains("x") ||
+        !e["curve"].contains("y") || !e["curve"]["x"].is_array() || !e["curve"]["y"].is_array() ||
+        !any_number(e["curve"]["y"]))
+      continue;
+    const std::string k = std::to_string(i + 1);
+    const std::string variable =
+        e.contains("variable") && e["variable"].is_string() ? e["variable"].get<std::string>() : "x";
+    std::ofstream d(plots.work() + "/shape" + k + ".dat");
+    const Json &x = e["curve"]["x"], &y = e["curve"]["y"];
+    for (size_t p = 0; p < x.size() && p < y.size(); ++p)
+      if (x[p].is_number() && y[p].is_number()) d << x[p].get<double>() << " " << y[p].get<double>() << "\n";
+    const double joint = num(e, "joint");
+    out += plots.add("shape_effect" + k,
+                     "effect " + k + ", joint " + g6(joint) + ": the shape found, torque against " + variable,
+                     "set xlabel '" + gnuplot_text(variable) + "'\nset ylabel 'torque [Nm]'\nplot 'shape" + k +
+                         ".dat' u 1:2 w l lc rgb '#1f77b4' t 'shape'");
+  }
+  return out;
+}
+
 /// Per joint: |r - mean| (its max per bucket) against the bound it is compared with, contacts shaded.
 std::string monitor_plots(const Json& series, const Json& contacts, Plots& plots) {
   std::string out =
@@ -372,11 +405,11 @@ std::string gate_section(const Json& g) {
 std::string diagnose_sections(const Json& report, Plots& plots) {
   std::string body;
   if (report.contains("effects")) {
-    body +=
-        "<section id=\"effects\"><h2>Effects found</h2>" +
-        (report["effects"].empty() ? std::string("<p>None beyond the declared model.</p>")
-                                   : table_html(report["effects"], "/effects", {"kind", "joints", "item"}, {"joint"})) +
-        "</section>";
+    body += "<section id=\"effects\"><h2>Effects found</h2>" +
+            (report["effects"].empty()
+                 ? std::string("<p>None beyond the declared model.</p>")
+                 : table_html(report["effects"], "/effects", {"kind", "joints", "item"}, {"joint", "knots", "curve"})) +
+            shape_plots(report["effects"], plots) + "</section>";
   }
   if (report.contains("joints")) {
     body += "<section id=\"joints\"><h2>Before and after, per joint</h2>" +
