@@ -128,22 +128,32 @@ def summary(rows, clean_rows):
     return "\n".join(lines), ok
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+def runner_arguments(description, seed):
+    """The options every runner of generated cases takes: --dyncal, --source-dir, --out, --jobs, --seed."""
+    ap = argparse.ArgumentParser(description=description)
     ap.add_argument("--dyncal", required=True)
     ap.add_argument("--source-dir", required=True)
     ap.add_argument("--out", required=True)
     ap.add_argument("--jobs", type=int, default=2)
-    ap.add_argument("--seed", type=int, default=22)
+    ap.add_argument("--seed", type=int, default=seed)
+    return ap
+
+
+def diagnose_all(dyncal, robots_dir, out, manifest, jobs):
+    """Every case's (report, seconds) by name, `jobs` diagnoses at a time."""
+    with concurrent.futures.ThreadPoolExecutor(jobs) as pool:
+        futures = {c["name"]: pool.submit(diagnose, dyncal, robots_dir, out, c) for c in manifest}
+        return {name: f.result() for name, f in futures.items()}
+
+
+def main():
+    ap = runner_arguments(__doc__.split("\n")[0], 22)
     ap.add_argument("--kappa", type=float, nargs=2, default=(3.0, 8.0),
                     help="range of the effects' unexplained RMS [noise standard deviations]")
     a = ap.parse_args()
     manifest = generate_logs.generate(generate_logs.default_robots(a.source_dir), a.out, seed=a.seed,
                                       kappa=tuple(a.kappa))
-    robots_dir = os.path.join(a.source_dir, "tests", "robots")
-    with concurrent.futures.ThreadPoolExecutor(a.jobs) as pool:
-        futures = {c["name"]: pool.submit(diagnose, a.dyncal, robots_dir, a.out, c) for c in manifest}
-        reports = {name: f.result() for name, f in futures.items()}
+    reports = diagnose_all(a.dyncal, os.path.join(a.source_dir, "tests", "robots"), a.out, manifest, a.jobs)
     text, ok = summary(*score(manifest, reports))
     with open(os.path.join(a.out, "SUMMARY.md"), "w") as f:
         f.write(text + "\n")

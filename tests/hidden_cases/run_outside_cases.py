@@ -16,7 +16,6 @@ Targets: excess cut with no harm on >= 80 % of the cases, every delay found with
 the truth and undone by identify, nothing added on every clean log. Exit 1 when a target is missed; the table goes to stdout
 and OUTSIDE.md in the output folder.
 """
-import argparse
 import concurrent.futures
 import json
 import os
@@ -26,7 +25,7 @@ import sys
 sys.dont_write_bytecode = True  # nothing written into the source tree
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import outside_effects  # noqa: E402
-from run_cases import diagnose, rms  # noqa: E402
+from run_cases import diagnose_all, rms, runner_arguments  # noqa: E402
 
 CUT_TARGET = 0.8
 
@@ -130,18 +129,10 @@ def summary(rows, clean_rows):
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--dyncal", required=True)
-    ap.add_argument("--source-dir", required=True)
-    ap.add_argument("--out", required=True)
-    ap.add_argument("--jobs", type=int, default=2)
-    ap.add_argument("--seed", type=int, default=71)
-    a = ap.parse_args()
+    a = runner_arguments(__doc__.split("\n")[0], 71).parse_args()
     manifest = outside_effects.generate(outside_effects.default_robots(a.source_dir), a.out, seed=a.seed)
     robots_dir = os.path.join(a.source_dir, "tests", "robots")
-    with concurrent.futures.ThreadPoolExecutor(a.jobs) as pool:
-        futures = {c["name"]: pool.submit(diagnose, a.dyncal, robots_dir, a.out, c) for c in manifest}
-        reports = {name: f.result() for name, f in futures.items()}
+    reports = diagnose_all(a.dyncal, robots_dir, a.out, manifest, a.jobs)
     by_name = {c["name"]: c for c in manifest}
     delayed = [c for c in manifest if c["truth"] and c["truth"]["kind"] == "torque_delay"]
     with concurrent.futures.ThreadPoolExecutor(a.jobs) as pool:

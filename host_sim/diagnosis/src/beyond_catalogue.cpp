@@ -25,11 +25,11 @@ VectorXd model_torque(const CandidateContext& c, int i) {
   return p;
 }
 
-/// d/dt of x (S) by central differences inside each segment, one-sided at its ends.
-VectorXd time_derivative(const CandidateContext& c, const VectorXd& x) {
-  const VectorXd& t = c.data.t;
+/// d/dt of x (S, at the kept samples t) by central differences inside each segment, one-sided at
+/// its ends.
+VectorXd time_derivative(const VectorXd& t, const std::vector<std::pair<Index, Index>>& segments, const VectorXd& x) {
   VectorXd out = VectorXd::Zero(x.size());
-  for (const auto& [a, b] : c.segments) {
+  for (const auto& [a, b] : segments) {
     if (b - a < 2) continue;
     for (Index s = a; s < b; ++s) {
       const Index lo = std::max(a, s - 1), hi = std::min(b - 1, s + 1);
@@ -75,19 +75,19 @@ void torque_delay(const CandidateContext& c, int i, int, std::vector<Candidate>&
     return;
   const int N = static_cast<int>(c.data.q.cols());
   const Index S = c.data.t.size();
-  const VectorXd rate = time_derivative(c, model_torque(c, i));
+  const VectorXd column_i = delay_column(c.data.t, c.segments, model_torque(c, i), 0.0);  // -d tau_model_i / dt
   Candidate k;
   k.effect = Effect::torque_delay;
   k.joints = {i};
   k.names = {name};
   k.columns = MatrixXd::Zero(S * N, 1);
-  for (Index s = 0; s < S; ++s) k.columns(s * N + i, 0) = -rate[s];
+  for (Index s = 0; s < S; ++s) k.columns(s * N + i, 0) = column_i[s];
   VectorXd r(S);
   MatrixXd column(S, 1);
   for (Index s = 0; s < S; ++s) {
     const bool fit = c.data.fit_row[s * N + i];
     r[s] = fit ? c.residual[s * N + i] : 0.0;
-    column(s, 0) = fit ? -rate[s] : 0.0;
+    column(s, 0) = fit ? column_i[s] : 0.0;
   }
   local_bic(column, r, &k.n_eff_after);
   out.push_back(std::move(k));
@@ -95,6 +95,7 @@ void torque_delay(const CandidateContext& c, int i, int, std::vector<Candidate>&
 
 VectorXd delay_column(const VectorXd& t, const std::vector<std::pair<Index, Index>>& segments, const VectorXd& p,
                       double delta0) {
+  if (delta0 == 0.0) return -time_derivative(t, segments, p);
   VectorXd out = VectorXd::Zero(p.size());
   for (const auto& segment : segments) {
     const Index a = segment.first, b = segment.second;
@@ -102,10 +103,6 @@ VectorXd delay_column(const VectorXd& t, const std::vector<std::pair<Index, Inde
     const double h = (t[b - 1] - t[a]) / static_cast<double>(b - a - 1);
     auto at = [&](Index k) { return p[std::clamp(k, a, b - 1)]; };
     for (Index s = a; s < b; ++s) {
-      if (delta0 == 0.0) {
-        out[s] = -(at(s + 1) - at(s - 1)) / (static_cast<double>(std::min(s + 1, b - 1) - std::max(s - 1, a)) * h);
-        continue;
-      }
       const double x = static_cast<double>(s - a) - delta0 / h;  // the instant t - delta0 in samples
       const Index k = static_cast<Index>(std::floor(x));
       const double u = x - static_cast<double>(k);
