@@ -219,6 +219,13 @@ def main():
     check(len(shapes) >= 1, f"diagnose_tx40: no shape found (effects: {shapes})")
     check_page("diagnose_tx40", o("diagnose_tx40.html"), o("diagnose_tx40.json"), ["diagnose_before_after"] + shapes,
                out)
+    # identify with that diagnosis's effects: the shapes are model terms, each drawn from its fit.
+    run([dyncal, "identify", "--format", "tx40", "--data", tx40, "--friction-per-joint", "--effects",
+         o("diagnose_tx40.json"), "--report", o("identify_shapes.json"), "--html", o("identify_shapes.html")], 0)
+    with open(o("identify_shapes.json")) as f:
+        fitted = [f"shape_effect{i + 1}" for i, _ in enumerate(json.load(f).get("shapes", []))]
+    check(len(fitted) == len(shapes), f"identify --effects: {len(fitted)} shapes fitted, the diagnosis found {len(shapes)}")
+    check_page("identify_shapes", o("identify_shapes.html"), o("identify_shapes.json"), fitted, out)
 
     # calibrate on the simulated er20 drive, and payload on a second drive whose arm carries 2 kg.
     load = o("load_scenario.json")

@@ -12,9 +12,9 @@
 
 #include "dyncal_host/calibration/calibrate.hpp"
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/common/spline_basis.hpp"
 #include "dyncal_host/diagnosis/diagnose.hpp"
 #include "dyncal_host/drive/simulated_drive.hpp"
-#include "spline_basis.hpp"  // private to host_sim/diagnosis (the include path: tests/CMakeLists.txt)
 #include "support/test_paths.hpp"
 
 namespace {
@@ -282,7 +282,7 @@ TEST(Diagnose, BadInputGetsAClearMessage) {
 
 }  // namespace
 
-// The diagnosis's regression splines (host_sim/diagnosis/src/spline_basis.hpp, issue 71): the cubic
+// The diagnosis's regression splines (host_sim/common spline_basis.hpp, issue 71): the cubic
 // B-spline basis sums to 1 at every point and reproduces every cubic polynomial exactly (Marsden's
 // identity), whatever the knots; a variable resting at one value gets no repeated interior knot.
 TEST(DiagnoseSplines, BasisIsAPartitionOfUnityAndReproducesCubics) {
@@ -292,10 +292,10 @@ TEST(DiagnoseSplines, BasisIsAPartitionOfUnityAndReproducesCubics) {
   for (Eigen::Index k = 0; k < x.size(); ++k) x[k] = k < 600 ? 0.3 : std::tanh(normal(rng));  // rests at 0.3
   std::vector<double> bump_error;
   for (int interior : {4, 8, 16}) {
-    const std::vector<double> knots = dyncal::host::detail::spline_knots(x, interior);
+    const std::vector<double> knots = dyncal::host::spline_knots(x, interior);
     ASSERT_GE(knots.size(), 8u);
     for (size_t k = 5; k + 4 < knots.size(); ++k) EXPECT_GT(knots[k], knots[k - 1]) << "interior knots repeat";
-    const Eigen::MatrixXd B = dyncal::host::detail::spline_basis(x, knots);
+    const Eigen::MatrixXd B = dyncal::host::spline_basis(x, knots);
     ASSERT_EQ(B.cols(), static_cast<Eigen::Index>(knots.size()) - 4);
     EXPECT_LT((B.rowwise().sum().array() - 1.0).abs().maxCoeff(), 1e-12);
     const Eigen::VectorXd cubic = (x.array().cube() - 2 * x.array().square() + 0.5 * x.array() - 1).matrix();
@@ -308,5 +308,24 @@ TEST(DiagnoseSplines, BasisIsAPartitionOfUnityAndReproducesCubics) {
   EXPECT_GT(bump_error[2], 1e-8);
   EXPECT_LT(bump_error[1], bump_error[0]);
   EXPECT_LT(bump_error[2], bump_error[1]);
-  EXPECT_TRUE(dyncal::host::detail::spline_knots(Eigen::VectorXd::Constant(50, 1.0), 8).empty());
+  EXPECT_TRUE(dyncal::host::spline_knots(Eigen::VectorXd::Constant(50, 1.0), 8).empty());
+}
+
+// A shape of the model's own torque leaves out its variable's constant and linear part (a linear
+// part would scale every parameter): with 1 and x beside them its columns are of full rank, where
+// the plain shape's columns (the first B-spline left out) and 1 already span x.
+TEST(DiagnoseSplines, ShapeWithoutLinearPartSpansNoLine) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> uniform(-2.0, 5.0);
+  Eigen::VectorXd x(500);
+  for (Eigen::Index k = 0; k < x.size(); ++k) x[k] = uniform(rng);
+  const std::vector<double> knots = dyncal::host::spline_knots(x, 6);
+  for (const bool without_linear : {false, true}) {
+    const Eigen::MatrixXd B = dyncal::host::shape_basis(x, knots, without_linear);
+    ASSERT_EQ(B.cols(), dyncal::host::shape_basis_columns(knots, without_linear));
+    Eigen::MatrixXd A(x.size(), B.cols() + 2);
+    A << Eigen::VectorXd::Ones(x.size()), x, B;
+    const Eigen::Index rank = A.colPivHouseholderQr().rank();
+    EXPECT_EQ(rank, without_linear ? A.cols() : A.cols() - 1) << (without_linear ? "without" : "with") << " linear";
+  }
 }

@@ -83,6 +83,31 @@ TEST(StreamingLeastSquares, MergeEqualsSingleAccumulator) {
   EXPECT_NEAR(a->residual_sum_of_squares(), all->residual_sum_of_squares(), 1e-9 * all->residual_sum_of_squares());
 }
 
+// A column whose first rows hold only a low-pass's tail (about 1e-170, before its signal starts)
+// squares to 0 against an empty R: the rotation must not become 0 / 0 (identify's shapes of time
+// times the friction sign met it). The solution equals the dense QR's.
+TEST(StreamingLeastSquares, TinyEntriesAheadOfAColumnLeaveNoNaN) {
+  constexpr int M = 3;
+  dyncal::StreamingLeastSquares<double, M> ls;
+  std::mt19937 rng(5);
+  std::normal_distribution<double> gauss;
+  const int rows = 400;
+  Eigen::MatrixXd W(rows, M);
+  Eigen::VectorXd y(rows);
+  for (int i = 0; i < rows; ++i) {
+    W(i, 0) = gauss(rng);
+    W(i, 1) = i < rows / 2 ? 1e-170 * std::exp(-0.1 * (rows / 2 - i)) : gauss(rng);
+    W(i, 2) = i < rows / 4 ? 0.0 : gauss(rng);
+    y[i] = W.row(i).dot(Eigen::Vector3d(1.0, -2.0, 0.5)) + 0.01 * gauss(rng);
+    ASSERT_EQ(ls.add_row(Eigen::Vector3d(W.row(i).transpose()), y[i]), UpdateStatus::ok);
+  }
+  Eigen::Matrix<double, M, 1> phi;
+  ASSERT_EQ(ls.solve(phi), UpdateStatus::ok);
+  ASSERT_TRUE(phi.allFinite());
+  const Eigen::VectorXd dense = W.colPivHouseholderQr().solve(y);
+  EXPECT_LE((phi - dense).norm(), 1e-9 * dense.norm());
+}
+
 TEST(StreamingLeastSquares, RejectsNonFiniteAndReportsRankDeficiency) {
   auto ls = std::make_unique<dyncal::StreamingLeastSquares<double, P>>();
   ParamVec phi = ParamVec::Constant(7.0);

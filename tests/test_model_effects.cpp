@@ -30,6 +30,8 @@ namespace {
 using namespace dyncal::host;
 using namespace dyncal::test;
 
+std::filesystem::path temp_dir(const std::string& name);  // below
+
 TEST(ModelSpec, ItemsRoundTripAndNameTheirParameters) {
   const ModelSpec spec =
       parse_model_spec("eq7,rotor_inertia,stribeck:3:0.05,coupling:2-3,position_periodic:1:12,load_friction:2", 3);
@@ -47,6 +49,40 @@ TEST(ModelSpec, ItemsRoundTripAndNameTheirParameters) {
   ASSERT_EQ(again.effects.size(), spec.effects.size());
   for (size_t i = 0; i < spec.effects.size(); ++i)
     EXPECT_EQ(effect_item(again.effects[i]), effect_item(spec.effects[i]));
+}
+
+// A shape item carries its variable and distinct knots and reads back exactly; its parameters are
+// its basis functions 2.. (a shape of tau_model: one fewer, no constant or linear part).
+TEST(ModelSpec, ShapeItemsRoundTrip) {
+  const ModelSpec spec = parse_model_spec("eq7,shape:2:sgn(qd2)*q1:-1.5/0.25/2,shape:3:tau_model3:-10/0/10/20", 3);
+  ASSERT_EQ(spec.effects.size(), 2u);
+  EXPECT_EQ(spec.effects[0].knots, (std::vector<double>{-1.5, -1.5, -1.5, -1.5, 0.25, 2, 2, 2, 2}));
+  EXPECT_EQ(effect_param_names(spec.effects[0]),
+            (std::vector<std::string>{"shape2_sgn_q1_2", "shape2_sgn_q1_3", "shape2_sgn_q1_4", "shape2_sgn_q1_5"}));
+  EXPECT_EQ(effect_param_names(spec.effects[1]).size(), 4u);  // 6 B-splines less constant and line
+  EXPECT_EQ(parse_model_spec(model_spec_name(spec), 3).effects[1].knots, spec.effects[1].knots);
+  EXPECT_EQ(effect_item(parse_model_spec(model_spec_name(spec), 3).effects[0]), effect_item(spec.effects[0]));
+}
+
+// A diagnosis that refined the same shape twice (the same variable on the same joint, other knots)
+// gives identify one shape on the union of their knots, and says so.
+TEST(ModelSpec, ShapeFoundTwiceIsOneOnTheUnionOfKnots) {
+  const auto dir = temp_dir("dyncal_shape_twice");
+  nlohmann::json report = {{"declared_model", "eq7"}, {"effects", nlohmann::json::array()}};
+  report["effects"].push_back(
+      {{"kind", "shape"}, {"joints", {2}}, {"variable", "q1"}, {"knots", {-1, -1, -1, -1, 0, 1, 1, 1, 1}}});
+  report["effects"].push_back({{"kind", "shape"},
+                               {"joints", {2}},
+                               {"variable", "q1"},
+                               {"knots", {-1.2, -1.2, -1.2, -1.2, -0.5, 0.5, 1, 1, 1, 1}}});
+  std::ofstream(dir / "r.json") << report.dump();
+  std::vector<std::string> notes;
+  const ModelSpec spec = read_diagnosed_effects((dir / "r.json").string(), 3, &notes);
+  ASSERT_EQ(spec.effects.size(), 1u);
+  EXPECT_EQ(spec.effects[0].knots, (std::vector<double>{-1.2, -1.2, -1.2, -1.2, -0.5, 0, 0.5, 1, 1, 1, 1}));
+  ASSERT_EQ(notes.size(), 1u);
+  EXPECT_NE(notes[0].find("found twice"), std::string::npos) << notes[0];
+  std::filesystem::remove_all(dir);
 }
 
 // A coupled motor is a row of the motor-velocity map, not columns: it parses, prints back exactly
@@ -92,6 +128,13 @@ TEST(ModelSpec, BadItemsNameWhatIsWrong) {
       {"eq7,coupled_motor:3+1:-2", "positive number"},
       {"eq7,coupled_motor:3+1,coupled_motor:3-2", "coupled twice"},
       {"rigid_body,coupled_motor:3+1", "has none"},
+      {"eq7,shape:2", "expected shape:J:VARIABLE"},
+      {"eq7,shape:2:q9:0/1", "shape variable 'q9'"},
+      {"eq7,shape:2:tau_model1:0/1", "reads tau_model2 only"},
+      {"eq7,shape:2:sgn(qd1)*t:0/1", "sgn(qd2)*X"},
+      {"eq7,shape:2:q1:1/0", "knots must be finite, increasing"},
+      {"eq7,shape:2:q1:0/x", "knot 'x' is not a number"},
+      {"eq7,shape:2:q1:0/1,shape:2:q1:0/2", "the same effect twice"},
   };
   for (const auto& [model, needle] : cases) {
     SCOPED_TRACE(model);
@@ -362,6 +405,51 @@ TEST(EffectModelCli, ParameterFileWithEffectsPredictsAnotherLog) {
   std::filesystem::remove_all(dir);
 }
 
+// A shape as a model term (issue 71): identify fits a spline of the neighbour's position that the
+// arm has (cable drag: a tanh of q1 on joint 2) and reaches the noise on another log, where the
+// declared model alone does not; predict applies it to that log exactly as identify's validation
+// did. A shape of tau_model reads the reference model the parameter file keeps: predict equals
+// identify's validation with it, and refuses a file without it.
+TEST(EffectModelCli, ShapeIsFittedByIdentifyAndAppliedByPredict) {
+  const RobotDescription robot = test_robot("arm3");
+  const double a = 0.04 * robot.tau_max[1];
+  const ExtraTorque drag = [a](const Eigen::VectorXd& q, const Eigen::VectorXd&, const Eigen::VectorXd&,
+                               Eigen::VectorXd& tau) { tau[1] += a * std::tanh(q[0] / 0.3); };
+  const auto dir = temp_dir("dyncal_shape");
+  write_csv_log((dir / "a.csv").string(), simulate(robot, uniform_times(500.0, 40.0), MotionClock{}, 31, 3, drag).log);
+  const SimulatedLog b = simulate(robot, uniform_times(500.0, 40.0), MotionClock{}, 32, 4, drag);
+  write_csv_log((dir / "b.csv").string(), b.log);
+  const std::string robots = std::string(" --robot arm3 --robots-dir ") + dyncal::test::source_dir() + "/tests/robots";
+  const auto identify_and_predict = [&](const std::string& model, const std::string& tag) {
+    EXPECT_EQ(run_dyncal("identify" + robots + " --model " + model + " --data " + (dir / "a.csv").string() +
+                         " --validate-on " + (dir / "b.csv").string() + " --report " +
+                         (dir / (tag + ".rep.json")).string() + " --params " + (dir / (tag + ".p.json")).string()),
+              0);
+    EXPECT_EQ(run_dyncal("predict" + robots + " --data " + (dir / "b.csv").string() + " --params " +
+                         (dir / (tag + ".p.json")).string() + " --report " + (dir / (tag + ".pred.json")).string()),
+              0);
+    const nlohmann::json rep = read_json(dir / (tag + ".rep.json")), pred = read_json(dir / (tag + ".pred.json"));
+    for (int j = 0; j < robot.num_joints; ++j)
+      EXPECT_DOUBLE_EQ(rep["other_logs"][0]["joints"][j]["rms_validation"].get<double>(),
+                       pred["joints"][j]["rms_validation"].get<double>())
+          << tag << " joint " << j + 1;
+    return pred["joints"][1]["rms_validation"].get<double>();
+  };
+  const double declared = identify_and_predict("eq7", "declared");
+  const double shaped = identify_and_predict("eq7,shape:2:q1:-3/-1.5/-0.6/-0.2/0.2/0.6/1.5/3", "shape");
+  EXPECT_GT(declared, 2.0 * b.sigma[1]);
+  EXPECT_LT(shaped, 1.2 * b.sigma[1]);
+  identify_and_predict("eq7,shape:2:tau_model2:-40/-10/0/10/40", "tau_model");
+  nlohmann::json bare = read_json(dir / "tau_model.p.json");
+  ASSERT_TRUE(bare.contains("tau_model_reference"));
+  bare.erase("tau_model_reference");
+  std::ofstream(dir / "bare.json") << bare.dump();
+  EXPECT_EQ(run_dyncal("predict" + robots + " --data " + (dir / "b.csv").string() + " --params " +
+                       (dir / "bare.json").string()),
+            2);
+  std::filesystem::remove_all(dir);
+}
+
 // Closing the loop on the real TX40 log: diagnose (the coupling robot.json declares left out, Eq. 7)
 // writes its report; identify --effects with that report fits the same model and reaches, on
 // cross-validation, what the diagnosis reported after its effects: joints 5 and 6 at R^2 >= 0.9
@@ -421,7 +509,7 @@ void expect_table_gives_identifys_torque(const IdentifyOptions& o, double ratio)
     IdentifyOptions per_joint = o;
     per_joint.friction_per_joint = true;
     per_joint.motors.clear();
-    per_joint.effects = {ModelEffect{term.kind, term.joint, term.joint2, sign, term.shape}};
+    per_joint.effects = {ModelEffect{term.kind, term.joint, term.joint2, sign, term.shape, {}, {}}};
     const StackedData d = prepare_stacked(robot, log, per_joint);
     const Eigen::Vector3d c(term.c[0], term.c[1], term.c[2]);
     return Eigen::VectorXd(d.W * values + d.E * c);

@@ -98,7 +98,7 @@ void merge_diagnosed_effects(IdentifySettings& s, int num_joints, host::ModelSpe
     else
       spec.motors.push_back(m);
   }
-  for (const auto& k : skipped) dropped.push_back(s.effects + ": " + k + " has no model term yet (not fitted)");
+  for (const auto& k : skipped) dropped.push_back(s.effects + ": " + k);
 }
 
 int run_identify(IdentifySettings& s) {
@@ -154,7 +154,12 @@ int run_identify(IdentifySettings& s) {
     fitted.torque_constants_source =
         kt_std.size() > 0 ? "fitted from a known load (--loaded-data, --load-mass)" : "robot.json (nominal, no std)";
   }
-  for (const auto& other : others) result.other_logs.push_back(host::predict(robot, other, s.options, fitted));
+  for (const auto& other : others) {
+    std::vector<std::string> time_shapes;
+    result.other_logs.push_back(
+        host::predict(robot, other, s.options, host::without_time_shapes(fitted, &time_shapes)));
+    result.other_logs.back().notes.insert(result.other_logs.back().notes.end(), time_shapes.begin(), time_shapes.end());
+  }
   host::print_identify_report(std::cout, result);
   nlohmann::json report;
   if (s.out.wanted()) {

@@ -97,12 +97,13 @@ int run_payload(PayloadSettings& s) {
   }
   if (s.log.data.empty() || s.params.empty())
     throw host::InputError("payload needs --data and --params (or --drive URI)");
-  const host::ParameterSet arm = host::read_parameter_file(s.params);
+  std::vector<std::string> time_shapes;  // a change over the identification log: not this log's
+  const host::ParameterSet arm = host::without_time_shapes(host::read_parameter_file(s.params), &time_shapes);
   if (s.log.robot.name.empty()) s.log.robot.name = arm.robot;
   if (s.log.robot.name != arm.robot)
     throw host::InputError(s.params + ": parameters are for robot '" + arm.robot + "', not '" + s.log.robot.name + "'");
   auto robot = s.log.load_robot();
-  std::vector<std::string> dropped;
+  std::vector<std::string> dropped = time_shapes;
   const bool currents = s.log.torque_from == "current";
   // Currents are converted with the constants the arm's set was identified with (a Kt error then
   // scales the load's torque only, and its std enters the payload's), robot.json's otherwise.

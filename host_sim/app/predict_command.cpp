@@ -21,7 +21,8 @@ struct PredictSettings {
 
 int run_predict(PredictSettings& s) {
   prepare_report_outputs(s.out);
-  const host::ParameterSet p = host::read_parameter_file(s.params);
+  std::vector<std::string> time_shapes;
+  const host::ParameterSet p = host::without_time_shapes(host::read_parameter_file(s.params), &time_shapes);
   if (s.log.robot.name.empty()) s.log.robot.name = p.robot;  // the robot the parameters were identified for
   if (s.log.robot.name != p.robot)
     throw host::InputError(s.params + ": parameters are for robot '" + p.robot + "', not '" + s.log.robot.name + "'");
@@ -30,6 +31,7 @@ int run_predict(PredictSettings& s) {
   std::vector<std::string> dropped;
   const auto log = s.log.load_log(robot, &dropped);
   host::LogPrediction result = host::predict(robot, log, s.options, p);
+  result.notes.insert(result.notes.begin(), time_shapes.begin(), time_shapes.end());
   result.notes.insert(result.notes.begin(), dropped.begin(), dropped.end());
   std::cout << "dyncal predict: robot " << robot.name << ", model " << p.model << ", parameters " << p.source << "\n";
   host::print_log_prediction(std::cout, result);

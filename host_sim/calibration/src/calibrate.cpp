@@ -561,7 +561,7 @@ void print_calibrate_report(std::ostream& out, const CalibrateResult& r) {
   if (!r.effects.empty()) {
     out << "effects diagnosed and flashed with the table:\n";
     for (const auto& e : r.effects) out << "  " << e << "\n";
-    for (const auto& e : r.effects_not_flashed) out << "  (not flashed: " << e << " - drift has no table term)\n";
+    for (const auto& e : r.effects_not_flashed) out << "  (not flashed: " << e << " - no table term holds it)\n";
   }
   for (const auto& n : r.table_notes) out << "table: " << n << "\n";
   out << "flash: " << r.flash_message << "\n";

@@ -1,5 +1,6 @@
 #include "dyncal_host/common/model_effects.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -11,6 +12,7 @@
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/json_file.hpp"
 #include "dyncal_host/common/model_terms.hpp"
+#include "dyncal_host/common/spline_basis.hpp"
 
 namespace dyncal::host {
 namespace {
@@ -30,6 +32,7 @@ constexpr KindInfo kKinds[] = {
     {EffectKind::offset, "offset", false},
     {EffectKind::position_periodic, "position_periodic", true},
     {EffectKind::coupling, "coupling", false},
+    {EffectKind::shape, "shape", false},
 };
 
 const KindInfo* find_kind(const std::string& name) {
@@ -68,6 +71,7 @@ double ratio(const ModelEffect& e) {
 
 bool same_effect(const ModelEffect& a, const ModelEffect& b) {
   if (a.kind != b.kind || a.joint != b.joint) return false;
+  if (a.kind == EffectKind::shape) return a.variable == b.variable;
   if (a.kind == EffectKind::coupling) return a.joint2 == b.joint2 && a.sign == b.sign && ratio(a) == ratio(b);
   return a.shape == b.shape;
 }
@@ -92,7 +96,99 @@ CoupledMotor parse_coupled_motor(const std::string& rest, const std::string& rat
   return {a - 1, b - 1, rest[op] == '+' ? r : -r};
 }
 
+/// A shape's full knot vector checked: finite, the boundaries four times each, the rest strictly
+/// increasing inside them, at least 3 columns (8 knots). Throws InputError naming `where`.
+void check_shape_knots(const std::vector<double>& k, const std::string& where) {
+  bool ok = k.size() >= 8;
+  for (size_t i = 0; ok && i < k.size(); ++i) ok = std::isfinite(k[i]);
+  for (size_t i = 1; ok && i < 4; ++i) ok = k[i] == k[0] && k[k.size() - 1 - i] == k.back();
+  for (size_t i = 4; ok && i + 3 < k.size(); ++i) ok = k[i] > k[i - 1];
+  if (!ok)
+    throw InputError(where + ": a shape's knots must be finite, increasing, at least 8 with each boundary 4 times");
+}
+
+/// "shape:J:VARIABLE:K0/K1/.../Kn" after "shape:" into a shape effect; throws InputError naming `where`.
+ModelEffect parse_shape_item(const std::string& rest, int num_joints, const std::string& where) {
+  const size_t a = rest.find(':'), b = a == std::string::npos ? a : rest.find(':', a + 1);
+  if (b == std::string::npos) throw InputError(where + ": expected shape:J:VARIABLE:K0/K1/.../Kn");
+  ModelEffect e;
+  e.kind = EffectKind::shape;
+  const int j = joint_number(rest.substr(0, a), num_joints);
+  if (j < 0) throw InputError(where + ": joint '" + rest.substr(0, a) + "' is not 1.." + std::to_string(num_joints));
+  e.joint = j - 1;
+  e.variable = rest.substr(a + 1, b - a - 1);
+  parse_shape_variable(e.variable, e.joint, num_joints);
+  std::stringstream list(rest.substr(b + 1));
+  std::string number;
+  std::vector<double> distinct;
+  while (std::getline(list, number, '/')) {
+    char* end = nullptr;
+    distinct.push_back(std::strtod(number.c_str(), &end));
+    if (number.empty() || *end != '\0') throw InputError(where + ": knot '" + number + "' is not a number");
+  }
+  if (distinct.size() < 2) throw InputError(where + ": a shape needs at least its two boundary knots");
+  e.knots.assign(3, distinct.front());
+  e.knots.insert(e.knots.end(), distinct.begin(), distinct.end());
+  e.knots.insert(e.knots.end(), 3, distinct.back());
+  check_shape_knots(e.knots, where);
+  return e;
+}
+
+/// The full knot vector of the union of two shapes' knots: boundaries the wider of the two (four
+/// times each), interior knots both shapes' strictly inside them.
+std::vector<double> union_of_knots(const std::vector<double>& a, const std::vector<double>& b) {
+  const double lo = std::min(a.front(), b.front()), hi = std::max(a.back(), b.back());
+  std::vector<double> inner;
+  for (const std::vector<double>* k : {&a, &b})
+    for (size_t i = 4; i + 4 < k->size(); ++i)
+      if ((*k)[i] > lo && (*k)[i] < hi) inner.push_back((*k)[i]);
+  std::sort(inner.begin(), inner.end());
+  inner.erase(std::unique(inner.begin(), inner.end()), inner.end());
+  std::vector<double> out(4, lo);
+  out.insert(out.end(), inner.begin(), inner.end());
+  out.insert(out.end(), 4, hi);
+  return out;
+}
+
+/// A shape's variable as a parameter-name tag: sgn(qdJ)*X becomes sgn_X.
+std::string shape_tag(const ModelEffect& e) {
+  const size_t star = e.variable.find('*');
+  return star == std::string::npos ? e.variable : "sgn_" + e.variable.substr(star + 1);
+}
+
 }  // namespace
+
+ShapeVariable parse_shape_variable(const std::string& name, int joint, int num_joints) {
+  const std::string where = "shape variable '" + name + "'", own = J(joint);
+  ShapeVariable v;
+  v.joint = joint;
+  std::string rest = name;
+  if (rest.rfind("sgn(", 0) == 0) {
+    const std::string prefix = "sgn(qd" + own + ")*";
+    if (rest.rfind(prefix, 0) != 0)
+      throw InputError(where + ": a sign product on joint " + own + " is " + prefix + "X");
+    v.times_sign = true;
+    rest = rest.substr(prefix.size());
+  }
+  if (rest == "t") return v;
+  const std::pair<const char*, ShapeVariable::Of> forms[] = {{"tau_model", ShapeVariable::Of::tau_model},
+                                                             {"qdd", ShapeVariable::Of::qdd},
+                                                             {"qd", ShapeVariable::Of::qd},
+                                                             {"q", ShapeVariable::Of::q}};
+  for (const auto& [prefix, of] : forms) {
+    const std::string p = prefix;
+    if (rest.rfind(p, 0) != 0) continue;
+    const int k = joint_number(rest.substr(p.size()), num_joints);
+    if (k < 0) break;
+    if (of == ShapeVariable::Of::tau_model && k - 1 != joint)
+      throw InputError(where + ": a shape on joint " + own + " reads tau_model" + own + " only");
+    v.of = of;
+    v.joint = k - 1;
+    return v;
+  }
+  throw InputError(where + ": expected t, qK, qdK, qddK (K 1.." + std::to_string(num_joints) + "), tau_model" + own +
+                   " or sgn(qd" + own + ")* one of them");
+}
 
 std::string coupled_motor_item(const CoupledMotor& m) {
   std::string out = "coupled_motor:" + J(m.motor) + (m.ratio > 0 ? "+" : "-") + J(m.with);
@@ -127,6 +223,15 @@ const char* effect_kind_name(EffectKind k) {
 std::string effect_item(const ModelEffect& e) {
   std::string out = std::string(effect_kind_name(e.kind)) + ":" + J(e.joint);
   if (e.kind == EffectKind::coupling) out += (e.sign > 0 ? "+" : "-") + J(e.joint2);
+  if (e.kind == EffectKind::shape) {
+    out += ":" + e.variable + ":";
+    for (size_t k = 3; k + 3 < e.knots.size(); ++k) {
+      char number[32];
+      std::snprintf(number, sizeof number, "%s%.17g", k == 3 ? "" : "/", e.knots[k]);
+      out += number;
+    }
+    return out;
+  }
   if (info(e.kind).needs_shape || (e.kind == EffectKind::coupling && ratio(e) != 1.0)) {
     char number[32];
     std::snprintf(number, sizeof number, ":%.17g", e.shape);
@@ -155,6 +260,14 @@ std::vector<std::string> effect_param_names(const ModelEffect& e) {
     case EffectKind::coupling: {
       const std::string tag = j + (e.sign > 0 ? "+" : "-") + J(e.joint2);
       return {"Fc" + tag, "Fv" + tag, "Ia" + tag};
+    }
+    case EffectKind::shape: {
+      std::vector<std::string> names;
+      const bool plain = !shape_without_linear(e.variable);
+      const int m = shape_basis_columns(e.knots, !plain);
+      for (int b = 0; b < m; ++b)
+        names.push_back("shape" + j + "_" + shape_tag(e) + "_" + std::to_string(b + (plain ? 2 : 1)));
+      return names;
     }
   }
   return {};
@@ -196,6 +309,10 @@ ModelSpec parse_model_spec(const std::string& model, int num_joints) {
       for (const CoupledMotor& o : spec.motors)
         if (o.motor == m.motor) throw InputError(where + ": motor " + J(m.motor) + " coupled twice");
       spec.motors.push_back(m);
+      continue;
+    }
+    if (item.substr(0, colon) == "shape") {
+      effects.emplace_back(parse_shape_item(item.substr(colon + 1), num_joints, where), where);
       continue;
     }
     const KindInfo* k = find_kind(item.substr(0, colon));
@@ -331,10 +448,44 @@ ModelSpec read_diagnosed_effects(const std::string& path, int num_joints, std::v
       delays->push_back({joints.front(), x["shape"].get<double>()});
       continue;
     }
-    // Not model terms: drift (a change over the log), a shape beyond diagnose's catalogue: skipped,
-    // each named.
-    if (name == "drift" || name == "torque_delay" || name == "shape") {
-      if (skipped) skipped->push_back(name + " on joint " + std::to_string(joints.front() + 1));
+    if (name == "shape") {
+      ModelEffect e;
+      e.kind = EffectKind::shape;
+      e.joint = joints.front();
+      if (!x.contains("variable") || !x["variable"].is_string())
+        throw InputError(where + ": a shape needs its 'variable'");
+      e.variable = x["variable"].get<std::string>();
+      try {
+        parse_shape_variable(e.variable, e.joint, num_joints);
+      } catch (const InputError& error) {
+        throw InputError(where + ": " + error.what());
+      }
+      if (!x.contains("knots") || !x["knots"].is_array()) throw InputError(where + ": a shape needs its 'knots'");
+      for (const auto& k : x["knots"]) {
+        if (!k.is_number()) throw InputError(where + ": a shape's knots must be numbers");
+        e.knots.push_back(k.get<double>());
+      }
+      check_shape_knots(e.knots, where);
+      // The same variable on the same joint again (the diagnosis refining it with other knots): the
+      // sum of two cubic splines is one on the union of their knots, so one shape takes both.
+      auto same = std::find_if(out.effects.begin(), out.effects.end(), [&e](const ModelEffect& o) {
+        return o.kind == EffectKind::shape && o.joint == e.joint && o.variable == e.variable;
+      });
+      if (same == out.effects.end()) {
+        out.effects.push_back(e);
+      } else {
+        same->knots = union_of_knots(same->knots, e.knots);
+        if (skipped)
+          skipped->push_back("shape of " + e.variable + " on joint " + std::to_string(e.joint + 1) +
+                             " found twice: one shape on the union of their knots");
+      }
+      continue;
+    }
+    // Not a model term: drift (a change over the log): skipped and named.
+    if (name == "drift" || name == "torque_delay") {
+      if (skipped)
+        skipped->push_back(name + " on joint " + std::to_string(joints.front() + 1) +
+                           " has no model term (not fitted)");
       continue;
     }
     if (name == "coupled_motor") {
@@ -348,7 +499,7 @@ ModelSpec read_diagnosed_effects(const std::string& path, int num_joints, std::v
     const KindInfo* k = find_kind(name);
     if (!k)
       throw InputError(where + ": unknown kind '" + name + "' (expected one of " + kind_list() +
-                       ", coupled_motor, drift, torque_delay, shape)");
+                       ", coupled_motor, drift, torque_delay)");
     ModelEffect e;
     e.kind = k->kind;
     e.joint = joints.front();

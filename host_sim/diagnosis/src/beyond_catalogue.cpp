@@ -6,8 +6,9 @@
 #include <cmath>
 
 #include "dyncal_host/common/normal_quantile.hpp"
+#include "dyncal_host/common/spline_basis.hpp"
+#include "dyncal_host/identification/methods/effect_model.hpp"
 #include "dyncal_host/identification/methods/signal.hpp"
-#include "spline_basis.hpp"
 
 namespace dyncal::host::detail {
 namespace {
@@ -114,46 +115,33 @@ VectorXd delay_column(const VectorXd& t, const std::vector<std::pair<Index, Inde
   return out;
 }
 
-std::vector<ShapeVariable> shape_variables(const CandidateContext& c, int i) {
-  const StackedData& d = c.data;
-  const int N = static_cast<int>(d.q.cols());
+std::vector<std::string> shape_variables(int i, int num_joints) {
   const std::string J = std::to_string(i + 1);
-  const VectorXd t = d.t.array() - d.t[0];
-  const VectorXd tau = model_torque(c, i);
-  std::vector<ShapeVariable> v = {{"t", t, false},
-                                  {"q" + J, d.q.col(i), false},
-                                  {"qd" + J, d.qd.col(i), false},
-                                  {"qdd" + J, d.qdd.col(i), false},
-                                  {"tau_model" + J, tau, false}};
+  std::vector<std::string> v = {"t", "q" + J, "qd" + J, "qdd" + J, "tau_model" + J};
   for (int k : {i - 1, i + 1}) {
-    if (k < 0 || k >= N) continue;
-    v.push_back({"q" + std::to_string(k + 1), d.q.col(k), false});
-    v.push_back({"qd" + std::to_string(k + 1), d.qd.col(k), false});
+    if (k < 0 || k >= num_joints) continue;
+    v.push_back("q" + std::to_string(k + 1));
+    v.push_back("qd" + std::to_string(k + 1));
   }
-  v.push_back({"sgn(qd" + J + ") t", t, true});
-  v.push_back({"sgn(qd" + J + ") q" + J, d.q.col(i), true});
-  v.push_back({"sgn(qd" + J + ") tau_model" + J, tau, true});
+  for (const std::string& x : {std::string("t"), "q" + J, "tau_model" + J}) v.push_back("sgn(qd" + J + ")*" + x);
   return v;
 }
 
 namespace {
 
-/// The spline columns (S x m) of `var` with `interior` interior knots on joint i's rows (knots:
-/// spline_knots' vector; empty columns when the variable gives fewer than 3), sgn(qd_i) times them
-/// filtered in time where the variable carries the sign, 0 on rows outside the fit.
-MatrixXd shape_columns(const CandidateContext& c, int i, const ShapeVariable& var, int interior, const VectorXd& sign,
+/// The spline columns (S x m) of the variable `name` with `interior` interior knots on joint i's
+/// rows (knots: spline_knots' vector; empty columns when the variable gives fewer than 3):
+/// effect_model.hpp's shape_series, 0 on rows outside the fit.
+MatrixXd shape_columns(const CandidateContext& c, int i, const std::string& name, int interior,
                        std::vector<double>& knots) {
   const StackedData& d = c.data;
   const int N = static_cast<int>(d.q.cols());
-  knots = spline_knots(var.values, interior);
+  const ShapeVariable v = parse_shape_variable(name, i, N);
+  const VectorXd x =
+      shape_variable_values(d, v, v.of == ShapeVariable::Of::tau_model ? model_torque(c, i) : VectorXd());
+  knots = spline_knots(x, interior);
   if (knots.size() < 8) return MatrixXd();  // fewer than 3 columns: no shape to speak of
-  MatrixXd series = spline_basis(var.values, knots).rightCols(static_cast<Index>(knots.size()) - 5);
-  if (var.times_sign) {
-    series = sign.asDiagonal() * series;
-    if (c.filter)
-      for (Index k = 0; k < series.cols(); ++k)
-        for (const auto& [a, b] : c.segments) c.filter->filtfilt(series.col(k).segment(a, b - a));
-  }
+  MatrixXd series = shape_series(d, i, v, x, knots);
   for (Index s = 0; s < series.rows(); ++s)
     if (!d.fit_row[s * N + i]) series.row(s).setZero();
   return series;
@@ -165,13 +153,9 @@ void shape(const CandidateContext& c, int i, int, std::vector<Candidate>& out) {
   const StackedData& d = c.data;
   const int N = static_cast<int>(d.q.cols());
   const Index S = d.t.size();
-  const std::vector<ShapeVariable> vars = shape_variables(c, i);
-  VectorXd sign(S), r(S);
-  for (Index s = 0; s < S; ++s) {
-    const double v = d.qd_raw(s, i);
-    sign[s] = std::abs(v) <= d.standstill_band[i] ? 0.0 : (v > 0 ? 1.0 : -1.0);
-    r[s] = d.fit_row[s * N + i] ? c.residual[s * N + i] : 0.0;
-  }
+  const std::vector<std::string> vars = shape_variables(i, N);
+  VectorXd r(S);
+  for (Index s = 0; s < S; ++s) r[s] = d.fit_row[s * N + i] ? c.residual[s * N + i] : 0.0;
   // Screening: every variable scored by the local BIC of its spline with kScreenKnots interior
   // knots on the joint's residual; the best goes to the cross-validated weighing with every knot
   // count (the weighing chooses it), each candidate counted as a search over the whole family.
@@ -179,7 +163,7 @@ void shape(const CandidateContext& c, int i, int, std::vector<Candidate>& out) {
   double best_bic = INFINITY, unused = 0;
   for (size_t v = 0; v < vars.size(); ++v) {
     std::vector<double> knots;
-    const MatrixXd series = shape_columns(c, i, vars[v], kScreenKnots, sign, knots);
+    const MatrixXd series = shape_columns(c, i, vars[v], kScreenKnots, knots);
     if (series.cols() == 0) continue;
     const double bic = local_bic(series, r, &unused);
     if (bic < best_bic) best_bic = bic, best = v;
@@ -188,19 +172,23 @@ void shape(const CandidateContext& c, int i, int, std::vector<Candidate>& out) {
   const int searched = static_cast<int>(vars.size() * std::size(kKnotCounts));
   for (int interior : kKnotCounts) {
     Candidate k;
-    const MatrixXd series = shape_columns(c, i, vars[best], interior, sign, k.knots);
+    const MatrixXd series = shape_columns(c, i, vars[best], interior, k.knots);
     if (series.cols() == 0) continue;
     local_bic(series, r, &k.n_eff_after);
     k.effect = Effect::shape;
     k.joints = {i};
-    k.variable = vars[best].name;
+    k.variable = vars[best];
     k.searched = searched;
     k.detail = "a cubic spline of " + k.variable + " with " + std::to_string(k.knots.size() - 8) + " interior knots";
     k.columns = MatrixXd::Zero(S * N, series.cols());
-    for (Index b = 0; b < series.cols(); ++b) {
-      k.names.push_back("shape" + std::to_string(i + 1) + "_" + std::to_string(b + 2));
+    ModelEffect effect;
+    effect.kind = EffectKind::shape;
+    effect.joint = i;
+    effect.variable = k.variable;
+    effect.knots = k.knots;
+    k.names = effect_param_names(effect);
+    for (Index b = 0; b < series.cols(); ++b)
       for (Index s = 0; s < S; ++s) k.columns(s * N + i, b) = series(s, b);
-    }
     out.push_back(std::move(k));
   }
 }

@@ -39,15 +39,10 @@ Eigen::VectorXd delay_column(const Eigen::VectorXd& t,
 /// family (variables x knot counts) as searched (the BIC's look-elsewhere term).
 void shape(const CandidateContext& c, int i, int, std::vector<Candidate>& out);
 
-/// A shape's variables on joint i: name and values at the kept samples, and whether it multiplies
-/// the friction sign: t, q_i, qd_i, qdd_i, the model's torque tau_model_i, q and qd of the neighbour
-/// joints i - 1 and i + 1, and sgn(qd_i) times t, q_i and tau_model_i.
-struct ShapeVariable {
-  std::string name;
-  Eigen::VectorXd values;
-  bool times_sign = false;
-};
-std::vector<ShapeVariable> shape_variables(const CandidateContext& c, int i);
+/// The names of a shape's variables on joint i of an N-joint arm (model_effects.hpp's ShapeVariable):
+/// t, q_i, qd_i, qdd_i, the model's torque tau_model_i, q and qd of the neighbour joints i - 1 and
+/// i + 1, and sgn(qd_i) times t, q_i and tau_model_i.
+std::vector<std::string> shape_variables(int i, int num_joints);
 
 /// The 95 % interval of a delay (the last column of X, coefficient phi's last entry) on joint j,
 /// the wider of two: (1) its standard error from the weighted fit (rows times `weights` per joint,

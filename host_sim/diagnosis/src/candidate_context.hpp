@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "dyncal/effect_terms.hpp"
-#include "dyncal_host/identification/pipeline/butterworth.hpp"
+#include "dyncal_host/identification/methods/butterworth.hpp"
 #include "dyncal_host/model/stacked_data.hpp"
 
 namespace dyncal::host::detail {

@@ -561,7 +561,7 @@ const std::vector<EffectSpec>& effect_specs() {
        explain_coupled_motor},
       {Effect::drift, "drift", std::nullopt, false, drift, any_sign, explain_drift},
       {Effect::torque_delay, "torque_delay", std::nullopt, false, torque_delay, any_sign, explain_delay, false},
-      {Effect::shape, "shape", std::nullopt, false, shape, any_sign, explain_shape, false},
+      {Effect::shape, "shape", EffectKind::shape, false, shape, any_sign, explain_shape, false},
   };
   return table;
 }

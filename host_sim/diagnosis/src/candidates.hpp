@@ -23,7 +23,7 @@ namespace dyncal::host::detail {
 struct EffectSpec {
   Effect effect;
   const char* name;
-  std::optional<EffectKind> table_kind;  ///< its parameter-table term (lib/), if it has one
+  std::optional<EffectKind> table_kind;  ///< its model term (lib/ EffectKind; a shape: host only), if it has one
   bool per_pair;                         ///< candidates per joint pair i < j (else per joint i)
   /// Appends this kind's candidates for joint i (per_pair: joints i < j) to `out`.
   void (*generate)(const CandidateContext& c, int i, int j, std::vector<Candidate>& out);

@@ -18,14 +18,14 @@
 #include "cross_validator.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/parallel_tasks.hpp"
+#include "dyncal_host/common/spline_basis.hpp"
+#include "dyncal_host/identification/methods/butterworth.hpp"
 #include "dyncal_host/identification/methods/effect_model.hpp"
 #include "dyncal_host/identification/methods/signal.hpp"
-#include "dyncal_host/identification/pipeline/butterworth.hpp"
 #include "dyncal_host/model/stacked_data.hpp"
 #include "harmonic_fit.hpp"
 #include "noise_floor.hpp"
 #include "shape_search.hpp"
-#include "spline_basis.hpp"
 
 namespace dyncal::host {
 namespace {
@@ -344,18 +344,6 @@ std::vector<int> blocked_folds(Index S, double rate_hz, const IdentifyOptions& i
   return fold;
 }
 
-/// The log's segments [begin, end) of samples: a step longer than 1.5 periods starts a new one.
-std::vector<std::pair<Index, Index>> time_segments(const StackedData& d) {
-  std::vector<std::pair<Index, Index>> segments;
-  const Index S = d.t.size();
-  for (Index s = 0, a = 0; s < S; ++s)
-    if (s + 1 == S || d.t[s + 1] - d.t[s] > 1.5 / d.rate_hz) {
-      segments.emplace_back(a, s + 1);
-      a = s + 1;
-    }
-  return segments;
-}
-
 /// A candidate that would be chosen (gain above best_score) but for a ratio the data do not bound
 /// is named in a note, once per kind and joints (`noted`), not added.
 void note_unbounded(const std::vector<Candidate>& cands, const std::vector<Evidence>& ev, double best_score,
@@ -448,17 +436,8 @@ DiagnosedEffect diagnosed_effect(const Candidate& c, const Model& m, const Evide
   e.alternatives = std::move(alternatives);
   e.variable = c.variable;
   e.knots = c.knots;
-  if (c.effect == Effect::shape && c.knots.size() >= 8) {
-    // The spline's first basis function is left out of its columns (beyond_catalogue.hpp).
-    VectorXd x(kShapeCurvePoints);
-    for (Index k = 0; k < x.size(); ++k)
-      x[k] = c.knots.front() +
-             (c.knots.back() - c.knots.front()) * static_cast<double>(k) / static_cast<double>(x.size() - 1);
-    const MatrixXd B = detail::spline_basis(x, c.knots).rightCols(static_cast<Index>(e.params.size()));
-    const VectorXd y = B * Eigen::Map<const VectorXd>(e.params.data(), static_cast<Index>(e.params.size()));
-    e.curve_x.assign(x.data(), x.data() + x.size());
-    e.curve_y.assign(y.data(), y.data() + y.size());
-  }
+  if (c.effect == Effect::shape)
+    shape_curve(c.knots, e.params, shape_without_linear(c.variable), kShapeCurvePoints, e.curve_x, e.curve_y);
   return e;
 }
 

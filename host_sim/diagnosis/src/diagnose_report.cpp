@@ -66,6 +66,9 @@ std::optional<ModelEffect> model_effect(const DiagnosedEffect& e) {
   m.kind = *kind;
   m.joint = e.joints.front() - 1;
   m.shape = e.shape;
+  m.variable = e.variable;
+  m.knots = e.knots;
+  if (m.kind == EffectKind::shape) m.shape = 0;
   if (m.kind == EffectKind::coupling) {
     m.joint2 = e.joints.back() - 1;
     m.sign = e.sign > 0 ? 1 : -1;
@@ -82,7 +85,7 @@ ParameterSet diagnosed_parameter_set(const ParameterSet& declared, const Diagnos
   std::vector<double> values = r.declared_params;
   for (const auto& e : r.effects) {
     const std::optional<ModelEffect> m = model_effect(e);
-    if (!m) {
+    if (!m || m->kind == EffectKind::shape) {
       if (skipped)
         skipped->push_back(std::string(effect_name(e.kind)) + " on joint " + std::to_string(e.joints.front()));
       continue;

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "dyncal_host/identification/pipeline/butterworth.hpp"
+#include "dyncal_host/identification/methods/butterworth.hpp"
 
 namespace dyncal::host::detail {
 namespace {

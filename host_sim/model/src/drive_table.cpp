@@ -102,7 +102,12 @@ DriveTableContent drive_table_content(const ParameterSet& p, const RobotDescript
   }
   size_t k = count;
   for (const ModelEffect& e : p.effects) {
-    out.effects.push_back(effect_term(e, p.values.data() + k));
+    if (e.kind == EffectKind::shape)  // a spline: no 20-byte table term holds it
+      out.notes.push_back("shape of " + e.variable + " on joint " + std::to_string(e.joint + 1) +
+                          ": not in the table (a table term holds no spline); the drive's feed-forward goes without "
+                          "it");
+    else
+      out.effects.push_back(effect_term(e, p.values.data() + k));
     k += effect_param_names(e).size();
   }
   if (out.effects.size() > static_cast<size_t>(kTableMaxEffects))

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <limits>
 #include <nlohmann/json.hpp>
+#include <numeric>
 
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/json_file.hpp"
@@ -133,6 +134,20 @@ ParameterSet read_parameter_file(const std::string& path) {
         v["std"].get<double>() >= 0)
       p.stdev[static_cast<Eigen::Index>(i)] = v["std"].get<double>();
   }
+  if (j.contains("tau_model_reference")) {
+    const auto& ref = j["tau_model_reference"];
+    if (!ref.is_array() || ref.size() != list.size())
+      throw InputError(path + ": 'tau_model_reference' must hold " + std::to_string(list.size()) + " numbers");
+    p.tau_model_reference.resize(p.values.size());
+    for (size_t i = 0; i < ref.size(); ++i) {
+      if (!ref[i].is_number() || !std::isfinite(ref[i].get<double>()))
+        throw InputError(path + ": tau_model_reference[" + std::to_string(i + 1) + "] is not a finite number");
+      p.tau_model_reference[static_cast<Eigen::Index>(i)] = ref[i].get<double>();
+    }
+  }
+  for (const ModelEffect& e : p.effects)
+    if (shape_of_tau_model(e) && p.tau_model_reference.size() == 0)
+      throw InputError(path + ": the shape of " + e.variable + " needs 'tau_model_reference' (the model it reads)");
   if (j.contains("links")) p.links = read_links(j["links"], path, compiled.num_joints);
   if (j.contains("torque_constants")) read_torque_constants(j["torque_constants"], path, compiled.num_joints, p);
   return p;
@@ -156,6 +171,9 @@ nlohmann::json parameter_file_json(const ParameterSet& p, const std::string& met
     if (with_std) e["std"] = p.stdev[i];
     j["params"].push_back(e);
   }
+  if (p.tau_model_reference.size() > 0)
+    j["tau_model_reference"] =
+        std::vector<double>(p.tau_model_reference.data(), p.tau_model_reference.data() + p.tau_model_reference.size());
   if (!p.links.empty()) j["links"] = link_inertials_json(p.links);
   if (p.torque_constants.size() > 0) j["torque_constants"] = torque_constants_json(p);
   return j;
@@ -212,6 +230,27 @@ ParameterSet parameter_set(const IdentifyResult& r) {
     p.stdev[static_cast<Eigen::Index>(i)] = r.params[i].std;
   }
   p.links = r.links;
+  p.tau_model_reference = Eigen::Map<const Eigen::VectorXd>(r.tau_model_reference.data(),
+                                                            static_cast<Eigen::Index>(r.tau_model_reference.size()));
+  return p;
+}
+
+ParameterSet without_time_shapes(ParameterSet p, std::vector<std::string>* notes) {
+  const Eigen::Index first_effect =
+      p.values.size() - static_cast<Eigen::Index>(std::accumulate(
+                            p.effects.begin(), p.effects.end(), size_t{0},
+                            [](size_t n, const ModelEffect& e) { return n + effect_param_names(e).size(); }));
+  Eigen::Index k = first_effect;
+  for (const ModelEffect& e : p.effects) {
+    const Eigen::Index m = static_cast<Eigen::Index>(effect_param_names(e).size());
+    if (shape_of_time(e)) {
+      p.values.segment(k, m).setZero();
+      if (notes)
+        notes->push_back("shape of " + e.variable + " on joint " + std::to_string(e.joint + 1) +
+                         ": a change over the identification log, not applied to this log");
+    }
+    k += m;
+  }
   return p;
 }
 

@@ -167,7 +167,7 @@ void add_arm_error(const StackedData& d, const ParameterSet& arm, const MatrixXd
     const MatrixXd* X = &d.W;
     MatrixXd with_effects;
     if (!arm.effects.empty()) {
-      with_effects = model_design(d, arm.effects, arm.values);
+      with_effects = model_design(d, arm.effects, arm.values, arm.tau_model_reference);
       X = &with_effects;
     }
     long n_use = 0;

@@ -248,8 +248,8 @@ std::string diagnose_plot(const Json& joints, Plots& plots) {
       "y\nset style data lines");
 }
 
-/// Each shape diagnose found beyond its catalogue: its torque against its variable (the report's
-/// "curve"), one plot per effect, named by the effect's 1-based place in the report.
+/// Each shape diagnose found beyond its catalogue (or identify fitted): its torque against its
+/// variable (the report's "curve"), one plot per entry, named by its 1-based place in the list.
 std::string shape_plots(const Json& effects, Plots& plots) {
   std::string out;
   for (size_t i = 0; i < effects.size(); ++i) {
@@ -267,7 +267,7 @@ std::string shape_plots(const Json& effects, Plots& plots) {
       if (x[p].is_number() && y[p].is_number()) d << x[p].get<double>() << " " << y[p].get<double>() << "\n";
     const double joint = num(e, "joint");
     out += plots.add("shape_effect" + k,
-                     "effect " + k + ", joint " + g6(joint) + ": the shape found, torque against " + variable,
+                     "effect " + k + ", joint " + g6(joint) + ": the shape, torque against " + variable,
                      "set xlabel '" + gnuplot_text(variable) + "'\nset ylabel 'torque [Nm]'\nplot 'shape" + k +
                          ".dat' u 1:2 w l lc rgb '#1f77b4' t 'shape'");
   }
@@ -326,6 +326,11 @@ std::string fit_sections(const Json& r, const std::string& path, Plots& plots) {
            "</section>";
   }
   if (r.contains("series")) out += series_plots(r["series"], plots);
+  if (r.contains("shapes") && r["shapes"].is_array())
+    out +=
+        "<section id=\"shapes\"><h2>Shapes</h2><p>Each shape the model holds (docs/diagnose.md \"A shape as a "
+        "model term\"): its torque against its variable.</p>" +
+        shape_plots(r["shapes"], plots) + "</section>";
   if (r.contains("params") && r["params"].is_array()) {
     Json rows = r["params"];
     out +=

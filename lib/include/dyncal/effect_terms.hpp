@@ -22,6 +22,9 @@ enum class EffectKind : std::uint8_t {
   coupling = 8,             ///< motor turning with v = qd_i + r qd_j: f = c0 sgn(v) + c1 v + c2 a,
                             ///< a = qdd_i + r qdd_j; f on joint i, r f on joint j (the transmission's
                             ///< transpose), r = sign * shape (shape: the ratio |r|; 0 means 1)
+  shape = 9,                ///< host only: a cubic spline of one variable (dyncal diagnose's shape beyond its
+                            ///< table, fitted by identify); no table term (effect_term_valid refuses it) and
+                            ///< no columns here (effect_columns returns 0)
 };
 
 /// One effect term: 20 bytes in the table (kind, joint, joint2, sign, shape, c0, c1, c2).
@@ -97,6 +100,8 @@ int effect_columns(EffectKind kind, Scalar shape, Scalar sign, Scalar q, Scalar 
       columns[2] = a;
       return 3;
     }
+    case EffectKind::shape:
+      return 0;
   }
   return 0;
 }

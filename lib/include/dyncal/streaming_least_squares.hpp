@@ -188,6 +188,10 @@ class StreamingLeastSquares {
       if (h == Scalar(0)) continue;
       const Scalar rii = R_(i, i);
       const Scalar r = sqrt(multiply_add(rii, rii, h * h));
+      // Both below sqrt(the smallest normal): their squares underflow to r = 0. Such an entry is
+      // below the accumulator's resolution (a low-pass's tail ahead of a column's first motion):
+      // left out rather than rotated by 0 / 0.
+      if (!(r > Scalar(0))) continue;
       const Scalar c = rii / r;
       const Scalar s = h / r;
       R_(i, i) = r;

@@ -6,6 +6,8 @@
 #include "dyncal/effect_terms.hpp"
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/robot_description.hpp"
+#include "dyncal_host/common/spline_basis.hpp"
+#include "dyncal_host/identification/methods/butterworth.hpp"
 
 namespace dyncal::host {
 
@@ -78,7 +80,39 @@ MatrixXd effect_columns_over_time(const std::vector<ModelEffect>& effects, const
   return out;
 }
 
-MatrixXd effect_design(const StackedData& d, const std::vector<ModelEffect>& effects, const VectorXd& tau_rb) {
+VectorXd shape_variable_values(const StackedData& d, const ShapeVariable& v, const VectorXd& tau_model_joint) {
+  switch (v.of) {
+    case ShapeVariable::Of::time:
+      return d.t.array() - (d.t.size() > 0 ? d.t[0] : 0.0);
+    case ShapeVariable::Of::q:
+      return d.q.col(v.joint);
+    case ShapeVariable::Of::qd:
+      return d.qd.col(v.joint);
+    case ShapeVariable::Of::qdd:
+      return d.qdd.col(v.joint);
+    case ShapeVariable::Of::tau_model:
+      return tau_model_joint;
+  }
+  return VectorXd();
+}
+
+MatrixXd shape_series(const StackedData& d, int joint, const ShapeVariable& v, const VectorXd& x,
+                      const std::vector<double>& knots) {
+  MatrixXd series = shape_basis(x, knots, shape_without_linear(v));
+  if (!v.times_sign) return series;
+  if (d.qd_raw.rows() != series.rows()) throw InputError("internal: a shape times the friction sign needs qd_raw");
+  for (Index s = 0; s < series.rows(); ++s)
+    series.row(s) *= friction_sign(d.qd_raw(s, joint), d.standstill_band[joint]);
+  if (d.filter_order > 0 && d.cutoff_hz < 0.5 * d.rate_hz) {
+    const ButterworthLowPass filter(d.filter_order, d.cutoff_hz, d.rate_hz);
+    for (const auto& [a, b] : time_segments(d))
+      for (Index k = 0; k < series.cols(); ++k) filter.filtfilt(series.col(k).segment(a, b - a));
+  }
+  return series;
+}
+
+MatrixXd effect_design(const StackedData& d, const std::vector<ModelEffect>& effects, const VectorXd& tau_rb,
+                       const VectorXd& tau_model) {
   const int N = static_cast<int>(d.q.cols());
   const Index S = d.t.size();
   if (d.E.cols() != effect_column_count(effects) || d.E.rows() != S * N)
@@ -86,6 +120,16 @@ MatrixXd effect_design(const StackedData& d, const std::vector<ModelEffect>& eff
   MatrixXd E = d.E;
   Index col = 0;
   for (const ModelEffect& e : effects) {
+    if (e.kind == EffectKind::shape && (!shape_of_tau_model(e) || tau_model.size() == S * N)) {
+      const ShapeVariable v = parse_shape_variable(e.variable, e.joint, N);
+      VectorXd own;
+      if (shape_of_tau_model(e))
+        own =
+            Eigen::Map<const VectorXd, 0, Eigen::InnerStride<>>(tau_model.data() + e.joint, S, Eigen::InnerStride<>(N));
+      const MatrixXd series = shape_series(d, e.joint, v, shape_variable_values(d, v, own), e.knots);
+      for (Index b = 0; b < series.cols(); ++b)
+        for (Index s = 0; s < S; ++s) E(s * N + e.joint, col + b) = series(s, b);
+    }
     if (e.kind == EffectKind::load_friction) {
       const int i = e.joint;
       for (Index s = 0; s < S; ++s) {
@@ -99,8 +143,8 @@ MatrixXd effect_design(const StackedData& d, const std::vector<ModelEffect>& eff
 }
 
 void set_effect_columns(StackedData& d, Index declared, const std::vector<ModelEffect>& effects,
-                        const std::vector<bool>& use, const VectorXd& tau_rb) {
-  const MatrixXd E = effect_design(d, effects, tau_rb);
+                        const std::vector<bool>& use, const VectorXd& tau_rb, const VectorXd& tau_model) {
+  const MatrixXd E = effect_design(d, effects, tau_rb, tau_model);
   const int N = static_cast<int>(d.q.cols());
   Index used = 0;
   for (const bool u : use) used += u ? 1 : 0;
@@ -154,10 +198,11 @@ VectorXd effect_parameter_scales(const StackedData& d, Index declared, const Ter
   return out;
 }
 
-std::vector<bool> effect_columns_without_load_friction(const std::vector<ModelEffect>& effects) {
+std::vector<bool> effect_columns_without_model_torque(const std::vector<ModelEffect>& effects) {
   std::vector<bool> out;
   for (const ModelEffect& e : effects)
-    for (size_t c = 0; c < effect_param_names(e).size(); ++c) out.push_back(e.kind != EffectKind::load_friction);
+    for (size_t c = 0; c < effect_param_names(e).size(); ++c)
+      out.push_back(e.kind != EffectKind::load_friction && !shape_of_tau_model(e));
   return out;
 }
 
@@ -165,8 +210,20 @@ VectorXd rigid_body_torque(const StackedData& d, const VectorXd& phi) {
   return d.W.leftCols(d.num_base) * phi.head(d.num_base);
 }
 
-MatrixXd model_design(const StackedData& d, const std::vector<ModelEffect>& effects, const VectorXd& phi) {
-  const MatrixXd E = effect_design(d, effects, rigid_body_torque(d, phi));
+MatrixXd model_design(const StackedData& d, const std::vector<ModelEffect>& effects, const VectorXd& phi,
+                      const VectorXd& reference) {
+  const VectorXd tau_rb = rigid_body_torque(d, phi);
+  VectorXd tau_model;
+  if (std::any_of(effects.begin(), effects.end(), shape_of_tau_model)) {
+    if (reference.size() != phi.size())
+      throw InputError("a shape of tau_model needs its reference parameters (tau_model_reference)");
+    // The reference model's torque: its entries at the shapes of tau_model are 0, so their columns
+    // (0 here: no tau_model yet) do not enter.
+    const Index P = d.W.cols();
+    tau_model = d.W * reference.head(P) +
+                effect_design(d, effects, rigid_body_torque(d, reference)) * reference.tail(reference.size() - P);
+  }
+  const MatrixXd E = effect_design(d, effects, tau_rb, tau_model);
   MatrixXd X(d.W.rows(), d.W.cols() + E.cols());
   X << d.W, E;
   return X;

@@ -342,6 +342,7 @@ StackedData IdentifyPipeline::prepare(JointLog&& log, bool dense, const Eigen::V
   StackedData out;
   out.rate_hz = fs / d;
   out.cutoff_hz = opt_.cutoff_hz;
+  out.filter_order = opt_.filter_order;
   out.num_base = model_.num_base;
   out.names = model_.names;
   const Eigen::Index kept = keep.count();
@@ -948,27 +949,43 @@ int assign_folds(const IdentifyOptions& opt, Eigen::Index S, double rate_hz, std
 
 /// Effect terms (model_effects.hpp): their columns appended to the regressor and fitted by this
 /// same pipeline (the prior, the decision of what the log determines, the validation). Load
-/// friction's columns need the rigid-body torque: from a first fit without them on all samples.
+/// friction's columns need the rigid-body torque, a shape of tau_model the model's torque: both from
+/// a first fit without those columns on all samples (as a drive's feed-forward computes them from
+/// the model it has). That fit is the reference model a shape of tau_model reads, kept with the
+/// parameters (res.tau_model_reference) for predict: refitting the variable with the parameters
+/// instead would let the shape trade with the model (tried: oscillating fixed points).
 void fit_with_effects(const RobotDescription& robot, const TermSetModel& model, const IdentifyOptions& opt,
                       StackedData& data, const std::vector<int>& fold, int folds, IdentifyResult& res) {
   const Eigen::Index S = data.t.size();
   const Eigen::Index declared = data.W.cols();
-  std::vector<bool> use = effect_columns_without_load_friction(opt.effects);
-  Eigen::VectorXd tau_rb = Eigen::VectorXd::Zero(data.y.size());
+  std::vector<bool> use = effect_columns_without_model_torque(opt.effects);
+  Eigen::VectorXd tau_rb = Eigen::VectorXd::Zero(data.y.size()), tau_model;
   if (std::find(use.begin(), use.end(), false) != use.end()) {
     set_effect_columns(data, declared, opt.effects, use, tau_rb);
-    const TermSetModel first_model = with_effect_parameters(model, opt.effects, use);
+    const TermSetModel first_model = with_effect_parameters(model, opt.effects, use);  // first holds a reference
     const IdentifyPipeline first(robot, opt, first_model);
     IdentifyPipeline::FitDetails details;
     Eigen::VectorXd phi, stdev;
     first.fit(data, std::vector<char>(static_cast<size_t>(S), 1), phi, stdev, &details);
     tau_rb = rigid_body_torque(data, phi);
-    res.notes.push_back(
-        "load friction: its rigid-body torque from a first fit without the load terms (the transmitted torque, as "
-        "a drive's feed-forward computes it)");
+    tau_model = data.W * phi;
+    if (std::any_of(opt.effects.begin(), opt.effects.end(),
+                    [](const ModelEffect& e) { return e.kind == EffectKind::load_friction; }))
+      res.notes.push_back(
+          "load friction: its rigid-body torque from a first fit without the load terms (the transmitted torque, "
+          "as a drive's feed-forward computes it)");
+    if (std::any_of(opt.effects.begin(), opt.effects.end(), shape_of_tau_model)) {
+      // The reference in the parameters' layout: the first fit's values, 0 where it had no column.
+      res.tau_model_reference.assign(phi.data(), phi.data() + declared);
+      Eigen::Index k = declared;
+      for (const bool u : use) res.tau_model_reference.push_back(u ? phi[k++] : 0.0);
+      res.notes.push_back(
+          "shapes of tau_model: their variable is the torque of a first fit without them and without load friction "
+          "(the reference model, kept with the parameters as tau_model_reference)");
+    }
   }
   use.assign(use.size(), true);
-  set_effect_columns(data, declared, opt.effects, use, tau_rb);
+  set_effect_columns(data, declared, opt.effects, use, tau_rb, tau_model);
   const TermSetModel with_effects = with_effect_parameters(model, opt.effects, use);
   const IdentifyPipeline effects_pipe(robot, opt, with_effects,
                                       effect_parameter_scales(data, declared, with_effects, robot));

@@ -31,8 +31,10 @@ Eigen::VectorXd predicted_torque(const StackedData& d, const ParameterSet& param
   if (names != params.names)
     throw InputError(params.source + ": parameter names differ from robot '" + params.robot + "' with model '" +
                      params.model + "'");
-  return params.effects.empty() ? Eigen::VectorXd(d.W * params.values)
-                                : Eigen::VectorXd(model_design(d, params.effects, params.values) * params.values);
+  return params.effects.empty()
+             ? Eigen::VectorXd(d.W * params.values)
+             : Eigen::VectorXd(model_design(d, params.effects, params.values, params.tau_model_reference) *
+                               params.values);
 }
 
 LogPrediction predict(const RobotDescription& robot, const JointLog& log, IdentifyOptions options,

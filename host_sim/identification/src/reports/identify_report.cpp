@@ -5,6 +5,9 @@
 #include <string>
 #include <vector>
 
+#include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/common/model_effects.hpp"
+#include "dyncal_host/common/spline_basis.hpp"
 #include "dyncal_host/identification/pipeline/prediction.hpp"
 #include "dyncal_host/model/compiled_robot.hpp"
 
@@ -137,6 +140,34 @@ nlohmann::json log_prediction_json(const LogPrediction& p) {
   return {{"data", p.source}, {"samples", p.samples}, {"joints", joint_metrics_json(p.joints)}, {"notes", p.notes}};
 }
 
+namespace {
+
+/// Each shape of the model fitted (model_effects.hpp): its joint, variable, item and curve (torque
+/// [Nm] against the variable at kShapeCurvePoints points over its knots' span, as diagnose reports
+/// a shape found).
+nlohmann::json fitted_shapes_json(const IdentifyResult& r) {
+  nlohmann::json out = nlohmann::json::array();
+  ModelSpec spec;
+  try {
+    spec = parse_model_spec(r.model, static_cast<int>(r.joints.size()));
+  } catch (const InputError&) {
+    return out;  // a model identify itself wrote: always parses
+  }
+  for (const ModelEffect& e : spec.effects) {
+    if (e.kind != EffectKind::shape) continue;
+    std::vector<double> coefficients, x, y;
+    for (const std::string& name : effect_param_names(e))
+      for (const ParamEstimate& p : r.params)
+        if (p.name == name) coefficients.push_back(p.value);
+    shape_curve(e.knots, coefficients, shape_without_linear(e.variable), kShapeCurvePoints, x, y);
+    out.push_back(
+        {{"joint", e.joint + 1}, {"variable", e.variable}, {"item", effect_item(e)}, {"curve", {{"x", x}, {"y", y}}}});
+  }
+  return out;
+}
+
+}  // namespace
+
 nlohmann::json identify_report_json(const IdentifyResult& r) {
   nlohmann::json j;
   j["robot"] = r.robot;
@@ -166,6 +197,8 @@ nlohmann::json identify_report_json(const IdentifyResult& r) {
     if (p.contradicts_physics) e["physics"] = "contradicted: below 0 beyond its 95 % interval";
     j["params"].push_back(e);
   }
+  const nlohmann::json shapes = fitted_shapes_json(r);
+  if (!shapes.empty()) j["shapes"] = shapes;  // a model with shapes only
   j["notes"] = r.notes;
   j["links"] = link_inertials_json(r.links);
   j["other_logs"] = nlohmann::json::array();

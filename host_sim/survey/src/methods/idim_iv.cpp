@@ -7,9 +7,9 @@
 #include "dyncal/generated/er20/robot.hpp"
 #include "dyncal/identification_model.hpp"
 #include "dyncal_host/common/input_error.hpp"
+#include "dyncal_host/identification/methods/butterworth.hpp"
 #include "dyncal_host/identification/methods/instrumental_iteration.hpp"
 #include "dyncal_host/identification/methods/signal.hpp"
-#include "dyncal_host/identification/pipeline/butterworth.hpp"
 #include "dyncal_host/survey/methods/standard_parameters.hpp"
 
 namespace dyncal::host {

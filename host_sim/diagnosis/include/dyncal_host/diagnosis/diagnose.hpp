@@ -26,13 +26,14 @@ void print_diagnose_report(std::ostream& out, const DiagnoseResult& r);
 /// Returns the files written. Throws InputError when gnuplot is missing or fails.
 std::vector<std::string> write_diagnose_plots(const DiagnoseResult& r, const std::string& dir);
 
-/// The effect as a model term (identify's --model vocabulary); none for drift.
+/// The effect as a model term (identify's --model vocabulary); none for drift and a torque delay.
 std::optional<ModelEffect> model_effect(const DiagnosedEffect& e);
 
 /// The declared model's parameter set (`declared`: the identify fit the diagnosis started from, its
 /// names the diagnosis's declared_names) with the diagnosis's re-estimated declared parameters and
-/// its effects appended as effect terms (model_effect; drift, which has none, skipped and named in
-/// *skipped): what a drive table of the diagnosed model holds (parameter_table). Throws
+/// its effects appended as effect terms (model_effect; drift, a torque delay and a shape, which no
+/// table term holds, skipped and named in *skipped): what a drive table of the diagnosed model
+/// holds (parameter_table). Throws
 /// InputError when the counts differ.
 ParameterSet diagnosed_parameter_set(const ParameterSet& declared, const DiagnoseResult& r,
                                      std::vector<std::string>* skipped);

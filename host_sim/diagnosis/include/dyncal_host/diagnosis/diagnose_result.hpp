@@ -60,7 +60,7 @@ struct DiagnosedEffect {
   bool inertia_held = false;
   std::string variable;       ///< shape: the variable its spline is of
   std::vector<double> knots;  ///< shape: the spline's full knot vector (boundaries repeated 4 times)
-  /// shape: the function found at kShapeCurvePoints points evenly over the knots' span (curve_x, in
+  /// shape: the function found at kShapeCurvePoints (spline_basis.hpp) points evenly over the knots' span (curve_x, in
   /// the variable's unit) and its torque there (curve_y [Nm]; times sgn(qd) where the variable
   /// carries the sign), for the reports' plots
   std::vector<double> curve_x, curve_y;
@@ -68,9 +68,6 @@ struct DiagnosedEffect {
   /// over what was left above the noise floor before it (DiagnoseJoint::rms_noise_floor).
   double excess_share = 0;
 };
-
-/// Points of a shape's curve (DiagnosedEffect::curve_x).
-inline constexpr int kShapeCurvePoints = 101;
 
 struct RejectedCandidate {
   Effect kind = Effect::offset;

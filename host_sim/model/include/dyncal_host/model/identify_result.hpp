@@ -90,9 +90,10 @@ struct IdentifyResult {
   double condition_number = 0;  ///< cond(W) of the full stacked (weighted) regressor
   double fit_seconds = 0;       ///< wall time of the estimator over the full data
   std::vector<std::string> notes;
-  std::vector<LogPrediction> other_logs;  ///< --validate-on: the final fit's prediction of each other log
-  std::vector<LinkInertial> links;        ///< pcls: the final fit's consistent inertials per link
-  bool friction_per_motor = false;        ///< a coupled motor's terms act on several joints (robot.json's coupling)
+  std::vector<LogPrediction> other_logs;    ///< --validate-on: the final fit's prediction of each other log
+  std::vector<LinkInertial> links;          ///< pcls: the final fit's consistent inertials per link
+  std::vector<double> tau_model_reference;  ///< shapes of tau_model: the reference parameters (ParameterSet's)
+  bool friction_per_motor = false;          ///< a coupled motor's terms act on several joints (robot.json's coupling)
   /// 1-based joints that are prismatic: their torques are forces [N], their Fc [N], Fv [N s/m], Ia [kg].
   std::vector<int> prismatic_joints;
 };

@@ -33,6 +33,11 @@ struct ParameterSet {
   /// Logs of currents the set is applied to are converted with the same constants (payload).
   Eigen::VectorXd torque_constants, torque_constants_std;
   std::string torque_constants_source;
+  /// The reference model a shape of tau_model reads (file key "tau_model_reference"; model_effects.hpp
+  /// ShapeVariable): parameters in `values`' order whose torque [W E] reference is the shape's
+  /// variable, 0 at the shapes of tau_model (identify's first fit without them). Empty when the
+  /// model has no such shape.
+  Eigen::VectorXd tau_model_reference;
 };
 
 /// Reads a `dyncal identify --params` file (docs/cli.md). Throws InputError with the file and what
@@ -57,5 +62,10 @@ nlohmann::json link_inertials_json(const std::vector<LinkInertial>& links);
 
 /// The parameters identify reports (IdentifyResult::params) as a set.
 ParameterSet parameter_set(const IdentifyResult& r);
+
+/// p for a log other than the one it was identified on: a shape of time (variable t or sgn(qdJ)*t,
+/// model_effects.hpp) is a change over the identification log, not a property of the arm, so its
+/// coefficients become 0; a note for each into *notes.
+ParameterSet without_time_shapes(ParameterSet p, std::vector<std::string>* notes);
 
 }  // namespace dyncal::host

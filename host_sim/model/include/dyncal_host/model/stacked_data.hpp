@@ -6,6 +6,7 @@
 #include <cmath>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace dyncal::host {
@@ -44,6 +45,7 @@ struct StackedData {
   std::vector<std::string> names;   ///< P parameter names
   int num_base = 0;                 ///< the first num_base columns are the base parameters (rigid body)
   double cutoff_hz = 0;
+  int filter_order = 0;  ///< the zero-phase low-pass q, tau and the columns had (Butterworth order, cutoff_hz)
   std::vector<std::string> notes;  ///< what preparation did that the user should know (standstill band, segments)
 
   /// Sample s's regressor rows (N x P, rows s N .. s N + N - 1 of W) into K; load: W_load's.
@@ -61,6 +63,19 @@ inline double friction_sign(double raw, double band) {
 /// stop), 0 inside the standstill band [rad/s].
 inline double signed_velocity(double filtered, double raw, double band) {
   return friction_sign(raw, band) * std::abs(filtered);
+}
+
+/// The data's segments [begin, end) of kept samples: a step in t longer than 1.5 periods (1 /
+/// rate_hz) starts a new one (a gap or a rest cut out of the log).
+inline std::vector<std::pair<Eigen::Index, Eigen::Index>> time_segments(const StackedData& d) {
+  std::vector<std::pair<Eigen::Index, Eigen::Index>> segments;
+  const Eigen::Index S = d.t.size();
+  for (Eigen::Index s = 0, a = 0; s < S; ++s)
+    if (s + 1 == S || d.t[s + 1] - d.t[s] > 1.5 / d.rate_hz) {
+      segments.emplace_back(a, s + 1);
+      a = s + 1;
+    }
+  return segments;
 }
 
 /// Gautier's per-joint residual standard deviation [Nm], the WLS weight's inverse: sigma_j^2 =

@@ -36,30 +36,53 @@ Eigen::MatrixXd effect_columns_over_time(const std::vector<ModelEffect>& effects
                                          const Eigen::MatrixXd& qd, const Eigen::MatrixXd& qdd,
                                          const Eigen::MatrixXd& v_raw, const Eigen::VectorXd& band);
 
+/// The values (S) at d's kept samples of a shape's variable v (model_effects.hpp): t - t[0] [s],
+/// the filtered q, qd or qdd of v.joint, or tau_model_joint (S, the model's torque of the shape's
+/// joint [Nm]) for tau_model (the diagnosis's; no model term reads it); the friction sign is not
+/// applied (shape_series does).
+Eigen::VectorXd shape_variable_values(const StackedData& d, const ShapeVariable& v,
+                                      const Eigen::VectorXd& tau_model_joint);
+
+/// A shape's columns (S x (knots.size() - 5), spline_basis.hpp's shape_basis) on joint `joint` at
+/// the values x of its variable v (shape_variable_values); for a sign product, times the friction
+/// sign of the joint's unfiltered velocity (d.qd_raw, 0 inside d.standstill_band) and then
+/// low-passed in time as the friction columns were (d.filter_order, d.cutoff_hz at d.rate_hz, zero
+/// phase, inside each of time_segments(d)). One implementation for diagnose's shape candidates,
+/// identify's shape effects and predict. Throws InputError when a sign product meets data without
+/// d.qd_raw.
+Eigen::MatrixXd shape_series(const StackedData& d, int joint, const ShapeVariable& v, const Eigen::VectorXd& x,
+                             const std::vector<double>& knots);
+
 /// The effects' columns over stacked data ((S N) x m, row s * N + j, in the effects' order): d.E
 /// (prepared with these effects; InputError otherwise), with load friction's columns |tau_rb|
 /// sgn(qd) at the decimated samples (filtered qd, 0 at rest; tau_rb (S N) the transmitted
-/// rigid-body torque [Nm], rigid_body_torque). A coupling's columns are on both of its joints (sign
-/// times on the second: the motor's torque reflected by the transmission).
+/// rigid-body torque [Nm], rigid_body_torque) and each shape's shape_series (a shape of tau_model
+/// reads tau_model (S N) [Nm], the model's torque without the shapes of it; its columns stay 0 when
+/// tau_model is empty). A coupling's columns are on both of its joints (sign times on the second:
+/// the motor's torque reflected by the transmission).
 Eigen::MatrixXd effect_design(const StackedData& d, const std::vector<ModelEffect>& effects,
-                              const Eigen::VectorXd& tau_rb);
+                              const Eigen::VectorXd& tau_rb, const Eigen::VectorXd& tau_model = Eigen::VectorXd());
 
 /// The rigid-body torque (S N) [Nm] of parameters phi: the first num_base columns of W times the
 /// first num_base entries of phi (what a drive's feed-forward gives load friction, drive_plant_of.hpp).
 Eigen::VectorXd rigid_body_torque(const StackedData& d, const Eigen::VectorXd& phi);
 
 /// [W E] for the parameters phi (W's P entries, then the effects'): load friction's rigid-body
-/// torque taken from phi.
-Eigen::MatrixXd model_design(const StackedData& d, const std::vector<ModelEffect>& effects, const Eigen::VectorXd& phi);
+/// torque taken from phi; a shape of tau_model's variable the torque of `reference` (ParameterSet's
+/// tau_model_reference, phi's layout, 0 at those shapes). Throws InputError when a shape of tau_model
+/// has no reference of phi's size.
+Eigen::MatrixXd model_design(const StackedData& d, const std::vector<ModelEffect>& effects, const Eigen::VectorXd& phi,
+                             const Eigen::VectorXd& reference = Eigen::VectorXd());
 
 /// Appends the effects' columns to d's regressor, for the identification pipeline to fit them as it
 /// fits the declared terms (one least-squares implementation: identify_pipeline.hpp): W becomes
 /// [W(:, 0..declared) E(:, use)] and names gains effect_param_names of the used columns; the
 /// regressor's rows are then read from the dense W (W_load is cleared: none with effects). E is
-/// effect_design(d, effects, tau_rb); use: per effect column (effect_column_count entries), whether
-/// it is appended. Throws InputError as effect_design.
+/// effect_design(d, effects, tau_rb, tau_model); use: per effect column (effect_column_count
+/// entries), whether it is appended. Throws InputError as effect_design.
 void set_effect_columns(StackedData& d, Eigen::Index declared, const std::vector<ModelEffect>& effects,
-                        const std::vector<bool>& use, const Eigen::VectorXd& tau_rb);
+                        const std::vector<bool>& use, const Eigen::VectorXd& tau_rb,
+                        const Eigen::VectorXd& tau_model = Eigen::VectorXd());
 
 /// `model` with the used effect columns' parameters appended (set_effect_columns' order): names,
 /// and ParamInfo of a term of the effect's first joint (parameter_scales judges it on that joint's
@@ -73,8 +96,8 @@ TermSetModel with_effect_parameters(const TermSetModel& model, const std::vector
 Eigen::VectorXd effect_parameter_scales(const StackedData& d, Eigen::Index declared, const TermSetModel& model,
                                         const RobotDescription& robot);
 
-/// Per effect column: false for load friction's (it needs a first fit's rigid-body torque), true
-/// for every other.
-std::vector<bool> effect_columns_without_load_friction(const std::vector<ModelEffect>& effects);
+/// Per effect column: false where it reads the model's own torque (load friction's rigid-body
+/// torque, a shape of tau_model: they need a first fit), true for every other.
+std::vector<bool> effect_columns_without_model_torque(const std::vector<ModelEffect>& effects);
 
 }  // namespace dyncal::host

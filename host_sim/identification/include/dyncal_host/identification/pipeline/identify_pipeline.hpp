@@ -8,9 +8,9 @@
 #include <utility>
 #include <vector>
 
+#include "dyncal_host/identification/methods/butterworth.hpp"
 #include "dyncal_host/identification/methods/consistent_least_squares.hpp"
 #include "dyncal_host/identification/methods/identifiability.hpp"
-#include "dyncal_host/identification/pipeline/butterworth.hpp"
 #include "dyncal_host/identification/pipeline/identify.hpp"
 #include "dyncal_host/identification/pipeline/kept_samples.hpp"
 #include "dyncal_host/identification/pipeline/parameter_prior.hpp"

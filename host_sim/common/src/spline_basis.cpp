@@ -1,9 +1,10 @@
-#include "spline_basis.hpp"
+#include "dyncal_host/common/spline_basis.hpp"
 
+#include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
 
-namespace dyncal::host::detail {
+namespace dyncal::host {
 
 std::vector<double> spline_knots(const Eigen::Ref<const Eigen::VectorXd>& x, int interior) {
   if (x.size() < 2) return {};
@@ -55,4 +56,36 @@ Eigen::MatrixXd spline_basis(const Eigen::Ref<const Eigen::VectorXd>& x, const s
   return B;
 }
 
-}  // namespace dyncal::host::detail
+Eigen::MatrixXd shape_basis(const Eigen::Ref<const Eigen::VectorXd>& x, const std::vector<double>& knots,
+                            bool without_linear) {
+  const Eigen::Index m = static_cast<Eigen::Index>(knots.size()) - 4;
+  if (shape_basis_columns(knots, without_linear) == 0) return Eigen::MatrixXd(x.size(), 0);
+  const Eigen::MatrixXd B = spline_basis(x, knots);
+  if (!without_linear) return B.rightCols(m - 1);
+  Eigen::MatrixXd M(m, 2);
+  for (Eigen::Index k = 0; k < m; ++k) {
+    M(k, 0) = 1.0;
+    M(k, 1) =
+        (knots[static_cast<size_t>(k + 1)] + knots[static_cast<size_t>(k + 2)] + knots[static_cast<size_t>(k + 3)]) /
+        3.0;  // Greville abscissa: x = sum_k of it B_k
+  }
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(M);
+  const Eigen::MatrixXd Q = qr.householderQ() * Eigen::MatrixXd::Identity(m, m);
+  return B * Q.rightCols(m - 2);
+}
+
+void shape_curve(const std::vector<double>& knots, const std::vector<double>& coefficients, bool without_linear,
+                 int points, std::vector<double>& x, std::vector<double>& y) {
+  x.clear(), y.clear();
+  const int m = shape_basis_columns(knots, without_linear);
+  if (m == 0 || static_cast<int>(coefficients.size()) != m || points < 2) return;
+  Eigen::VectorXd at(points);
+  for (Eigen::Index k = 0; k < at.size(); ++k)
+    at[k] = knots.front() + (knots.back() - knots.front()) * static_cast<double>(k) / static_cast<double>(points - 1);
+  const Eigen::VectorXd torque =
+      shape_basis(at, knots, without_linear) * Eigen::Map<const Eigen::VectorXd>(coefficients.data(), m);
+  x.assign(at.data(), at.data() + at.size());
+  y.assign(torque.data(), torque.data() + torque.size());
+}
+
+}  // namespace dyncal::host

@@ -1,4 +1,4 @@
-#include "dyncal_host/identification/pipeline/butterworth.hpp"
+#include "dyncal_host/identification/methods/butterworth.hpp"
 
 #include <algorithm>
 #include <cmath>
