@@ -156,6 +156,45 @@ std::string shape_tag(const ModelEffect& e) {
   return star == std::string::npos ? e.variable : "sgn_" + e.variable.substr(star + 1);
 }
 
+/// A diagnosis report's shape entry on joint `joint` (0-based): its "variable" and "knots", checked.
+/// Throws InputError naming `where`.
+ModelEffect read_shape_entry(const nlohmann::json& x, int joint, int num_joints, const std::string& where) {
+  ModelEffect e;
+  e.kind = EffectKind::shape;
+  e.joint = joint;
+  if (!x.contains("variable") || !x["variable"].is_string()) throw InputError(where + ": a shape needs its 'variable'");
+  e.variable = x["variable"].get<std::string>();
+  try {
+    parse_shape_variable(e.variable, e.joint, num_joints);
+  } catch (const InputError& error) {
+    throw InputError(where + ": " + error.what());
+  }
+  if (!x.contains("knots") || !x["knots"].is_array()) throw InputError(where + ": a shape needs its 'knots'");
+  for (const auto& k : x["knots"]) {
+    if (!k.is_number()) throw InputError(where + ": a shape's knots must be numbers");
+    e.knots.push_back(k.get<double>());
+  }
+  check_shape_knots(e.knots, where);
+  return e;
+}
+
+/// Appends shape e to out.effects, or, when out has a shape of the same variable on the same joint
+/// (the diagnosis refining it with other knots), widens that one to the union of their knots (the
+/// sum of two cubic splines is one on the union) and says so in *skipped.
+void add_diagnosed_shape(const ModelEffect& e, ModelSpec& out, std::vector<std::string>* skipped) {
+  auto same = std::find_if(out.effects.begin(), out.effects.end(), [&e](const ModelEffect& o) {
+    return o.kind == EffectKind::shape && o.joint == e.joint && o.variable == e.variable;
+  });
+  if (same == out.effects.end()) {
+    out.effects.push_back(e);
+    return;
+  }
+  same->knots = union_of_knots(same->knots, e.knots);
+  if (skipped)
+    skipped->push_back("shape of " + e.variable + " on joint " + std::to_string(e.joint + 1) +
+                       " found twice: one shape on the union of their knots");
+}
+
 }  // namespace
 
 ShapeVariable parse_shape_variable(const std::string& name, int joint, int num_joints) {
@@ -449,36 +488,7 @@ ModelSpec read_diagnosed_effects(const std::string& path, int num_joints, std::v
       continue;
     }
     if (name == "shape") {
-      ModelEffect e;
-      e.kind = EffectKind::shape;
-      e.joint = joints.front();
-      if (!x.contains("variable") || !x["variable"].is_string())
-        throw InputError(where + ": a shape needs its 'variable'");
-      e.variable = x["variable"].get<std::string>();
-      try {
-        parse_shape_variable(e.variable, e.joint, num_joints);
-      } catch (const InputError& error) {
-        throw InputError(where + ": " + error.what());
-      }
-      if (!x.contains("knots") || !x["knots"].is_array()) throw InputError(where + ": a shape needs its 'knots'");
-      for (const auto& k : x["knots"]) {
-        if (!k.is_number()) throw InputError(where + ": a shape's knots must be numbers");
-        e.knots.push_back(k.get<double>());
-      }
-      check_shape_knots(e.knots, where);
-      // The same variable on the same joint again (the diagnosis refining it with other knots): the
-      // sum of two cubic splines is one on the union of their knots, so one shape takes both.
-      auto same = std::find_if(out.effects.begin(), out.effects.end(), [&e](const ModelEffect& o) {
-        return o.kind == EffectKind::shape && o.joint == e.joint && o.variable == e.variable;
-      });
-      if (same == out.effects.end()) {
-        out.effects.push_back(e);
-      } else {
-        same->knots = union_of_knots(same->knots, e.knots);
-        if (skipped)
-          skipped->push_back("shape of " + e.variable + " on joint " + std::to_string(e.joint + 1) +
-                             " found twice: one shape on the union of their knots");
-      }
+      add_diagnosed_shape(read_shape_entry(x, joints.front(), num_joints, where), out, skipped);
       continue;
     }
     // Not a model term: drift (a change over the log): skipped and named.
