@@ -302,10 +302,12 @@ std::vector<std::string> effect_param_names(const ModelEffect& e) {
     }
     case EffectKind::shape: {
       std::vector<std::string> names;
-      const bool plain = !shape_without_linear(e.variable);
-      const int m = shape_basis_columns(e.knots, !plain);
+      // Numbered as the basis functions they come from: after the first (left out) from 2; a shape
+      // without its linear part mixes them all (spline_basis.hpp), from 1.
+      const bool without_linear = shape_without_linear(e.variable);
+      const int m = shape_basis_columns(e.knots, without_linear);
       for (int b = 0; b < m; ++b)
-        names.push_back("shape" + j + "_" + shape_tag(e) + "_" + std::to_string(b + (plain ? 2 : 1)));
+        names.push_back("shape" + j + "_" + shape_tag(e) + "_" + std::to_string(b + (without_linear ? 1 : 2)));
       return names;
     }
   }

@@ -131,14 +131,14 @@ namespace {
 
 /// The spline columns (S x m) of the variable `name` with `interior` interior knots on joint i's
 /// rows (knots: spline_knots' vector; empty columns when the variable gives fewer than 3):
-/// effect_model.hpp's shape_series, 0 on rows outside the fit.
-MatrixXd shape_columns(const CandidateContext& c, int i, const std::string& name, int interior,
+/// effect_model.hpp's shape_series, 0 on rows outside the fit. tau: the model's torque of joint i
+/// (model_torque), read by a variable of tau_model.
+MatrixXd shape_columns(const CandidateContext& c, int i, const std::string& name, int interior, const VectorXd& tau,
                        std::vector<double>& knots) {
   const StackedData& d = c.data;
   const int N = static_cast<int>(d.q.cols());
   const ShapeVariable v = parse_shape_variable(name, i, N);
-  const VectorXd x =
-      shape_variable_values(d, v, v.of == ShapeVariable::Of::tau_model ? model_torque(c, i) : VectorXd());
+  const VectorXd x = shape_variable_values(d, v, tau);
   knots = spline_knots(x, interior);
   if (knots.size() < 8) return MatrixXd();  // fewer than 3 columns: no shape to speak of
   MatrixXd series = shape_series(d, i, v, x, knots);
@@ -154,6 +154,7 @@ void shape(const CandidateContext& c, int i, int, std::vector<Candidate>& out) {
   const int N = static_cast<int>(d.q.cols());
   const Index S = d.t.size();
   const std::vector<std::string> vars = shape_variables(i, N);
+  const VectorXd tau = model_torque(c, i);
   VectorXd r(S);
   for (Index s = 0; s < S; ++s) r[s] = d.fit_row[s * N + i] ? c.residual[s * N + i] : 0.0;
   // Screening: every variable scored by the local BIC of its spline with kScreenKnots interior
@@ -163,7 +164,7 @@ void shape(const CandidateContext& c, int i, int, std::vector<Candidate>& out) {
   double best_bic = INFINITY, unused = 0;
   for (size_t v = 0; v < vars.size(); ++v) {
     std::vector<double> knots;
-    const MatrixXd series = shape_columns(c, i, vars[v], kScreenKnots, knots);
+    const MatrixXd series = shape_columns(c, i, vars[v], kScreenKnots, tau, knots);
     if (series.cols() == 0) continue;
     const double bic = local_bic(series, r, &unused);
     if (bic < best_bic) best_bic = bic, best = v;
@@ -172,7 +173,7 @@ void shape(const CandidateContext& c, int i, int, std::vector<Candidate>& out) {
   const int searched = static_cast<int>(vars.size() * std::size(kKnotCounts));
   for (int interior : kKnotCounts) {
     Candidate k;
-    const MatrixXd series = shape_columns(c, i, vars[best], interior, k.knots);
+    const MatrixXd series = shape_columns(c, i, vars[best], interior, tau, k.knots);
     if (series.cols() == 0) continue;
     local_bic(series, r, &k.n_eff_after);
     k.effect = Effect::shape;

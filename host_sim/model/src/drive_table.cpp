@@ -17,13 +17,6 @@ namespace {
 /// what a drive refuses below 0).
 constexpr const char* kMotorTerms[3] = {"Fc", "Fv", "Ia"};
 
-/// How many of `p`'s parameters are compiled ones (the rest are its effects' coefficients).
-size_t compiled_count(const ParameterSet& p) {
-  size_t count = p.names.size();
-  for (const ModelEffect& e : p.effects) count -= effect_param_names(e).size();
-  return count;
-}
-
 bool is_motor_term(const std::string& name) {
   return std::any_of(std::begin(kMotorTerms), std::end(kMotorTerms),
                      [&name](const char* prefix) { return name.rfind(prefix, 0) == 0; });
@@ -49,7 +42,7 @@ int index_of(const ParameterSet& p, const std::string& name, size_t count) {
 DriveTableContent drive_table_content(const ParameterSet& p, const RobotDescription& robot) {
   if (p.robot != robot.name)
     throw InputError(p.source + ": parameters are for robot '" + p.robot + "', not '" + robot.name + "'");
-  const size_t count = compiled_count(p);
+  const size_t count = compiled_parameter_count(p);
   DriveTableContent out;
   out.values.assign(p.values.data(), p.values.data() + count);
   // A negative Coulomb, viscous or rotor-inertia term that its own 95 % interval does not set apart
@@ -118,7 +111,7 @@ DriveTableContent drive_table_content(const ParameterSet& p, const RobotDescript
 
 ParameterTable parameter_table(const ParameterSet& p, const RobotDescription& robot, std::vector<std::string>* notes) {
   const DriveTableContent content = drive_table_content(p, robot);
-  const size_t count = compiled_count(p);
+  const size_t count = compiled_parameter_count(p);
   // What a drive refuses (lib/ table_check.hpp: friction opposes motion, inertia is positive),
   // named here, before any drive is contacted; a coupled motor's terms too, which the table holds as
   // a coupling term's coefficients.

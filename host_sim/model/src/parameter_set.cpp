@@ -3,7 +3,6 @@
 #include <cmath>
 #include <limits>
 #include <nlohmann/json.hpp>
-#include <numeric>
 
 #include "dyncal_host/common/input_error.hpp"
 #include "dyncal_host/common/json_file.hpp"
@@ -235,12 +234,14 @@ ParameterSet parameter_set(const IdentifyResult& r) {
   return p;
 }
 
+size_t compiled_parameter_count(const ParameterSet& p) {
+  size_t count = p.names.size();
+  for (const ModelEffect& e : p.effects) count -= effect_param_names(e).size();
+  return count;
+}
+
 ParameterSet without_time_shapes(ParameterSet p, std::vector<std::string>* notes) {
-  const Eigen::Index first_effect =
-      p.values.size() - static_cast<Eigen::Index>(std::accumulate(
-                            p.effects.begin(), p.effects.end(), size_t{0},
-                            [](size_t n, const ModelEffect& e) { return n + effect_param_names(e).size(); }));
-  Eigen::Index k = first_effect;
+  Eigen::Index k = static_cast<Eigen::Index>(compiled_parameter_count(p));
   for (const ModelEffect& e : p.effects) {
     const Eigen::Index m = static_cast<Eigen::Index>(effect_param_names(e).size());
     if (shape_of_time(e)) {

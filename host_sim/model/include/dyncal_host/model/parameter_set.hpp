@@ -63,6 +63,9 @@ nlohmann::json link_inertials_json(const std::vector<LinkInertial>& links);
 /// The parameters identify reports (IdentifyResult::params) as a set.
 ParameterSet parameter_set(const IdentifyResult& r);
 
+/// How many of p's parameters are compiled ones (the rest, after them, are its effects' coefficients).
+size_t compiled_parameter_count(const ParameterSet& p);
+
 /// p for a log other than the one it was identified on: a shape of time (variable t or sgn(qdJ)*t,
 /// model_effects.hpp) is a change over the identification log, not a property of the arm, so its
 /// coefficients become 0; a note for each into *notes.
