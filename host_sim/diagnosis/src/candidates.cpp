@@ -107,6 +107,26 @@ bool has(const CandidateContext& c, const std::string& name) {
 constexpr double kRefineEvidence = 10;
 constexpr int kRefineGrid = 17;
 
+/// A ratio's two searches over log |r| in [-span, span], side by side (profile_searches): search 0
+/// for r > 0, search 1 for r < 0.
+std::vector<SearchRange> both_signs(double span, int points) {
+  return {SearchRange{-span, span, points}, SearchRange{-span, span, points}};
+}
+
+/// The ratio r of a query of both_signs' searches.
+double signed_ratio(const ShapeQuery& q) {
+  return (q.search == 0 ? 1.0 : -1.0) * std::exp(q.x);
+}
+
+/// Of both_signs' fits, the one of larger gain (r > 0 on a tie; none above -1: an empty fit), its
+/// sign into *sign (unchanged without one).
+ShapeFit better_sign(const std::vector<ShapeFit>& fits, double* sign) {
+  ShapeFit best;
+  for (size_t k = 0; k < fits.size(); ++k)
+    if (fits[k].gain > best.gain) best = fits[k], *sign = k == 0 ? 1.0 : -1.0;
+  return best;
+}
+
 /// The best ratio r in [1/5, 5] (both signs) of a motor turning with q_i + r q_j whose columns
 /// columns(r)(s, x) act on joint i and r times on joint j, searched on the whole model's weighted fit
 /// (every column refitted, the rigid body included) with the model's columns `removed` giving way;
@@ -122,16 +142,12 @@ ShapeFit whole_model_ratio(const CandidateContext& c, int i, int j, const std::v
   double rss_all = 0, n_eff_all = 0;
   residual_scale(c, all, rss_all, n_eff_all);
   n_eff_all *= static_cast<double>(all.size());
-  ShapeFit refined;
-  for (double sign : {1.0, -1.0}) {
-    auto gain = [&](double lr) {
-      const double r = sign * std::exp(lr);
-      return full_replacement_gain<3>(c, full, EffectKind::coupling, {i, j}, use, {1.0, r}, columns(r), physical);
-    };
-    const ShapeFit f = profile_search(gain, -span, span, kRefineGrid, full.rss_now, n_eff_all);
-    if (f.gain > refined.gain) refined = f, *sign_out = sign;
-  }
-  return refined;
+  auto gains = batch_gains<3>(
+      c, EffectKind::coupling, nullptr, [&](const ShapeQuery& q) { return columns(signed_ratio(q)); },
+      [&](const ShapeQuery& q, const BatchItem& item) {
+        return full_replacement_gain(c, full, {i, j}, use, {1.0, signed_ratio(q)}, item, physical);
+      });
+  return better_sign(profile_searches(gains, both_signs(span, kRefineGrid), full.rss_now, n_eff_all), sign_out);
 }
 
 void stribeck(const CandidateContext& c, int i, int, std::vector<Candidate>& out) {
@@ -152,20 +168,23 @@ void stribeck(const CandidateContext& c, int i, int, std::vector<Candidate>& out
   const std::vector<Index> none;
   double rss = 0, n_eff = 0;
   residual_scale(c, joint, rss, n_eff);
-  auto gain_with = [&](const LocalSystem& with, double lq) {
-    const double qds = std::exp(lq);
-    return local_gain<1>(
-        c, with, EffectKind::stribeck, {1.0},
-        [&](Index s, Eigen::Matrix<double, 1, 1>& x) {
-          const double v = signed_velocity(d.qd(s, i), d.qd_raw(s, i), d.standstill_band[i]), z = v / qds;
-          x[0] = (v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0)) * std::exp(-z * z);
+  auto gains_with = [&](const LocalSystem& with) {
+    return batch_gains<1>(
+        c, EffectKind::stribeck, &with.rows,
+        [&](const ShapeQuery& q) {
+          return [&d, i, qds = std::exp(q.x)](Index s, Eigen::Matrix<double, 1, 1>& x) {
+            const double v = signed_velocity(d.qd(s, i), d.qd_raw(s, i), d.standstill_band[i]), z = v / qds;
+            x[0] = (v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0)) * std::exp(-z * z);
+          };
         },
-        [](const Eigen::Matrix<double, 1, 1>& beta) { return beta[0] > 0; });  // Fs > Fc
+        [&](const ShapeQuery&, const BatchItem& item) {
+          return local_gain<1>(c, with, {1.0}, item,
+                               [](const Eigen::Matrix<double, 1, 1>& beta) { return beta[0] > 0; });  // Fs > Fc
+        });
   };
   const double lo = std::log(0.01 * vmax), hi = std::log(0.2 * vmax);
   const LocalSystem alone = local_system(c, joint, none);
-  const ShapeFit first =
-      profile_search([&](double lq) { return gain_with(alone, lq); }, lo, hi, kScaleGrid, rss, n_eff);
+  const ShapeFit first = profile_search(gains_with(alone), lo, hi, kScaleGrid, rss, n_eff);
   // A scale the data cannot tell from the narrowest searched is no Stribeck curve: what it fits
   // lives at a few samples around the stops and reversals (a transient, a timing error of the
   // log), not on a friction curve over the speed.
@@ -176,7 +195,7 @@ void stribeck(const CandidateContext& c, int i, int, std::vector<Candidate>& out
   // polynomial in the speed it becomes at broad scales.
   const double a = std::max(lo, first.log_value - std::log(2.0)), b = std::min(hi, first.log_value + std::log(2.0));
   const LocalSystem local = local_system(c, joint, local_columns(c, joint));
-  ShapeFit f = profile_search([&](double lq) { return gain_with(local, lq); }, a, b, 9, rss, n_eff);
+  ShapeFit f = profile_search(gains_with(local), a, b, 9, rss, n_eff);
   // A refined scale whose interval reaches the bracket has no maximum of its own there: the gain
   // still grows towards the broad curve's polynomial in the speed (seen on a simulated six-joint drive's log:
   // 0.22 against a true 0.1 rad/s), so the first estimate stands.
@@ -256,23 +275,23 @@ void coupling(const CandidateContext& c, int i, int j, std::vector<Candidate>& o
   const LocalSystem local = local_system(c, pair, local_columns(c, pair));
   double rss = 0, n_eff = 0;
   residual_scale(c, pair, rss, n_eff);
-  ShapeFit best;
+  auto gains = batch_gains<3>(
+      c, EffectKind::coupling, &local.rows,
+      [&](const ShapeQuery& q) {
+        const double r = signed_ratio(q);
+        const double band = std::hypot(d.standstill_band[i], r * d.standstill_band[j]);  // motor_velocity's
+        return [&d, i, j, r, band](Index s, Eigen::Vector3d& x) {
+          const double v = signed_velocity(d.qd(s, i) + r * d.qd(s, j), d.qd_raw(s, i) + r * d.qd_raw(s, j), band);
+          x << (v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0)), v, d.qdd(s, i) + r * d.qdd(s, j);
+        };
+      },
+      [&](const ShapeQuery& q, const BatchItem& item) {
+        return local_gain<3>(c, local, {1.0, signed_ratio(q)}, item, [](const Eigen::Vector3d& beta) {
+          return beta[0] >= 0 && beta[1] >= 0;  // friction opposes motion
+        });
+      });
   double best_sign = 1;
-  for (double sign : {1.0, -1.0}) {
-    auto gain = [&](double lr) {
-      const double r = sign * std::exp(lr);
-      const double band = std::hypot(d.standstill_band[i], r * d.standstill_band[j]);  // motor_velocity's
-      return local_gain<3>(
-          c, local, EffectKind::coupling, {1.0, r},
-          [&](Index s, Eigen::Vector3d& x) {
-            const double v = signed_velocity(d.qd(s, i) + r * d.qd(s, j), d.qd_raw(s, i) + r * d.qd_raw(s, j), band);
-            x << (v > 0 ? 1.0 : (v < 0 ? -1.0 : 0.0)), v, d.qdd(s, i) + r * d.qdd(s, j);
-          },
-          [](const Eigen::Vector3d& beta) { return beta[0] >= 0 && beta[1] >= 0; });  // friction opposes motion
-    };
-    const ShapeFit f = profile_search(gain, -span, span, kRatioGrid, rss, n_eff);
-    if (f.gain > best.gain) best = f, best_sign = sign;
-  }
+  ShapeFit best = better_sign(profile_searches(gains, both_signs(span, kRatioGrid), rss, n_eff), &best_sign);
   // A local profile cut at its own estimate (the sign rule ends it there) with evidence the
   // selection could take is searched again on the whole model's fit, as a coupled motor's is: on
   // the pair's rows alone the rigid body stays where the model without the coupling put it, and the
@@ -358,16 +377,13 @@ void coupled_motor_of(const CandidateContext& c, int k, int l, std::vector<Candi
     };
   };
   const ReplacementSystem sys = replacement_system(c, pair, local, removed);
-  ShapeFit best;
+  auto gains = batch_gains<3>(
+      c, EffectKind::coupling, &sys.rows, [&](const ShapeQuery& q) { return motor_columns(signed_ratio(q)); },
+      [&](const ShapeQuery& q, const BatchItem& item) {
+        return replacement_gain(c, sys, use, {1.0, signed_ratio(q)}, item, physical);
+      });
   double best_sign = 1;
-  for (double sign : {1.0, -1.0}) {
-    auto gain = [&](double lr) {
-      const double r = sign * std::exp(lr);
-      return replacement_gain<3>(c, sys, EffectKind::coupling, use, {1.0, r}, motor_columns(r), physical);
-    };
-    const ShapeFit f = profile_search(gain, -span, span, kRatioGrid, rss, n_eff);
-    if (f.gain > best.gain) best = f, best_sign = sign;
-  }
+  ShapeFit best = better_sign(profile_searches(gains, both_signs(span, kRatioGrid), rss, n_eff), &best_sign);
   // No gain, or a ratio the data cannot tell from the smallest searched: joint k's motor is its own.
   if (best.gain <= 0 || best.lo_log <= -span) return;
   // A replacement the evidence could select is searched again on the whole model's fit, both signs
@@ -574,9 +590,15 @@ const EffectSpec& effect_spec(Effect e) {
 
 void filter_in_time(const CandidateContext& c, MatrixXd& series, EffectKind kind, int width) {
   if (!c.filter) return;
-  for (Index k = 0; k < series.cols(); ++k) {
-    if (!effect_column_steps(kind, static_cast<int>(k % width))) continue;
-    for (const auto& [a, b] : c.segments) c.filter->filtfilt(series.col(k).segment(a, b - a));
+  std::vector<Index> steps;
+  for (Index k = 0; k < series.cols(); ++k)
+    if (effect_column_steps(kind, static_cast<int>(k % width))) steps.push_back(k);
+  if (steps.empty()) return;
+  // Together, segment by segment: the filter runs columns side by side (butterworth.hpp).
+  for (const auto& [a, b] : c.segments) {
+    MatrixXd block = series(Eigen::seqN(a, b - a), steps);
+    c.filter->filtfilt(block);
+    series(Eigen::seqN(a, b - a), steps) = block;
   }
 }
 

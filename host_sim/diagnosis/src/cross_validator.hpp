@@ -107,17 +107,19 @@ class CrossValidator {
       }
     }
     if (m > 0) {
+      VectorXd c(m), x(p);  // one row's, allocated once
+      MatrixXd xc(p, m), cc(m, m);
       for (Index s = 0; s < S; ++s) {
         const int f = fold_[s];
         for (int j = 0; j < N_; ++j) {
           const Index r = s * N_ + j;
           if (!d_.fit_row[r]) continue;
-          const VectorXd c = C.row(r).transpose().cwiseProduct(sc);
+          c = C.row(r).transpose().cwiseProduct(sc);
           if (c.isZero(0.0)) continue;
-          const VectorXd x = X.row(r).transpose().cwiseProduct(sx_);
+          x = X.row(r).transpose().cwiseProduct(sx_);
           const double y = d_.y[r];
-          const MatrixXd xc = x * c.transpose();
-          const MatrixXd cc = c * c.transpose();
+          xc.noalias() = x * c.transpose();
+          cc.noalias() = c * c.transpose();
           auto add = [&](MatrixXd& G, VectorXd& g, double w2) {
             G.topRightCorner(p, m) += w2 * xc;
             G.bottomLeftCorner(m, p) += w2 * xc.transpose();

@@ -36,72 +36,164 @@ inline std::vector<Eigen::Index> local_columns(const CandidateContext& c, const 
   return out;
 }
 
-/// A motor's M columns over time (S x M), columns(s, x) sample by sample, filtered in time as
-/// `kind`'s (filter_in_time).
-template <int M, class Columns>
-Eigen::MatrixXd filtered_series(const CandidateContext& c, EffectKind kind, Columns columns) {
+/// The grid values profile searches ask for together (profile_searches): the filter runs their
+/// stepping columns interleaved, four at a time (butterworth.hpp).
+constexpr size_t kShapeBatch = 4;
+
+/// One value a profile search asks the gain of: search `search`'s log value x.
+struct ShapeQuery {
+  size_t search = 0;
+  double x = 0;
+};
+
+/// The log range a profile search scans: `points` log-spaced values in [lo_log, hi_log].
+struct SearchRange {
+  double lo_log = 0, hi_log = 0;
+  int points = 2;
+};
+
+/// The columns of a shape at each query over time, side by side (S x (M queries.size()):
+/// columns_at(query)(s, v) writes the M columns at sample s into v), filtered in time as `kind`'s
+/// (filter_in_time) in one call, so the filter takes them together.
+template <int M, class ColumnsAt>
+Eigen::MatrixXd filtered_series_at(const CandidateContext& c, EffectKind kind, const std::vector<ShapeQuery>& queries,
+                                   ColumnsAt columns_at) {
   const Eigen::Index S = c.data.t.size();
-  Eigen::MatrixXd series(S, M);
-  Eigen::Matrix<double, M, 1> x;
-  for (Eigen::Index s = 0; s < S; ++s) {
-    columns(s, x);
-    series.row(s) = x.transpose();
+  Eigen::MatrixXd series(S, M * static_cast<Eigen::Index>(queries.size()));
+  Eigen::Matrix<double, M, 1> v;
+  for (size_t b = 0; b < queries.size(); ++b) {
+    const auto columns = columns_at(queries[b]);
+    const Eigen::Index first = M * static_cast<Eigen::Index>(b);
+    for (Eigen::Index s = 0; s < S; ++s) {
+      columns(s, v);
+      series.block<1, M>(s, first) = v.transpose();
+    }
   }
   filter_in_time(c, series, kind, M);
   return series;
 }
 
-/// A motor's filtered columns (filtered_series: filtering is linear, once for every joint it acts
-/// on) as rows of `joints`: on joint p the columns `use`
-/// times its weight and factor[p] (1 on a motor's own joint, r on the other it turns with). Rows
-/// s P + p (P joints).
-template <int M, class Columns>
-Eigen::MatrixXd motor_rows(const CandidateContext& c, const std::vector<int>& joints, EffectKind kind,
-                           const std::vector<int>& use, const std::vector<double>& factor, Columns columns) {
-  const Eigen::Index S = c.data.t.size(), P = static_cast<Eigen::Index>(joints.size());
-  const Eigen::Index u = static_cast<Eigen::Index>(use.size());
-  const Eigen::MatrixXd series = filtered_series<M>(c, kind, columns);
-  Eigen::MatrixXd C(S * P, u);
-  for (Eigen::Index s = 0; s < S; ++s)
-    for (Eigen::Index p = 0; p < P; ++p) {
-      const double w = c.joint_weights[joints[static_cast<size_t>(p)]] * factor[static_cast<size_t>(p)];
-      for (Eigen::Index q = 0; q < u; ++q) C(s * P + p, q) = w * series(s, use[static_cast<size_t>(q)]);
+/// A search's fixed rows, joint by joint (the shape's columns act on each joint times its weight and
+/// a factor): for joint p of `joints` its weighted model columns A[p] (S x k, the same k for all) and
+/// weighted residual b[p] (S).
+struct JointRows {
+  std::vector<int> joints;
+  std::vector<Eigen::MatrixXd> A;
+  std::vector<Eigen::VectorXd> b;
+};
+
+/// One evaluation of a batch (batch_gains): its filtered columns over time (series, S x M) and, per
+/// joint p of the search's rows, A[p]^T series (k x M) and series^T b[p] (M).
+struct BatchItem {
+  Eigen::Ref<const Eigen::MatrixXd> series;
+  std::vector<Eigen::MatrixXd> A_series;
+  std::vector<Eigen::VectorXd> series_b;
+};
+
+/// The gains of profile_searches: at each query of a batch, gain(query, item) with the shape's
+/// filtered columns there (columns_at(query), filtered_series_at: one batch filtered together) and
+/// their products with `rows` (one matrix product per joint for the whole batch; none without rows).
+template <int M, class ColumnsAt, class Gain>
+auto batch_gains(const CandidateContext& c, EffectKind kind, const JointRows* rows, ColumnsAt columns_at, Gain gain) {
+  return [&c, kind, rows, columns_at, gain](const std::vector<ShapeQuery>& queries) {
+    const Eigen::MatrixXd series = filtered_series_at<M>(c, kind, queries, columns_at);
+    const size_t P = rows ? rows->joints.size() : 0;
+    std::vector<Eigen::MatrixXd> A_series(P);
+    std::vector<Eigen::VectorXd> series_b(P);
+    for (size_t p = 0; p < P; ++p) {
+      A_series[p].noalias() = rows->A[p].transpose() * series;
+      series_b[p].noalias() = series.transpose() * rows->b[p];
     }
-  return C;
+    std::vector<double> out(queries.size());
+    for (size_t b = 0; b < queries.size(); ++b) {
+      const Eigen::Index first = M * static_cast<Eigen::Index>(b);
+      BatchItem item{series.middleCols(first, M), {}, {}};
+      for (size_t p = 0; p < P; ++p) {
+        item.A_series.push_back(A_series[p].middleCols(first, M));
+        item.series_b.push_back(series_b[p].segment(first, M));
+      }
+      out[b] = gain(queries[b], item);
+    }
+    return out;
+  };
+}
+
+/// A batch item's columns `use` (u of its M) acting on the rows' joint p times its weight and
+/// factor[p] (1 on a motor's own joint, r on the other it turns with), C (rows joint by joint) not
+/// formed: C^T C (u x u), A^T C (k x u) and C^T b (u) summed over the joints.
+struct MotorProducts {
+  Eigen::MatrixXd CC, AC;
+  Eigen::VectorXd Cb;
+};
+
+inline MotorProducts motor_products(const CandidateContext& c, const JointRows& rows, const BatchItem& item,
+                                    const std::vector<int>& use, const std::vector<double>& factor) {
+  const Eigen::Index u = static_cast<Eigen::Index>(use.size()), k = rows.A.empty() ? 0 : rows.A[0].cols();
+  MotorProducts m;
+  m.AC = Eigen::MatrixXd::Zero(k, u);
+  m.Cb = Eigen::VectorXd::Zero(u);
+  double w2 = 0;
+  for (size_t p = 0; p < rows.joints.size(); ++p) {
+    const double w = c.joint_weights[rows.joints[p]] * factor[p];
+    w2 += w * w;
+    for (Eigen::Index q = 0; q < u; ++q) {
+      const Eigen::Index col = use[static_cast<size_t>(q)];
+      m.AC.col(q) += w * item.A_series[p].col(col);
+      m.Cb[q] += w * item.series_b[p][col];
+    }
+  }
+  m.CC.resize(u, u);
+  for (Eigen::Index a = 0; a < u; ++a)
+    for (Eigen::Index b = 0; b <= a; ++b)
+      m.CC(a, b) = m.CC(b, a) =
+          w2 * item.series.col(use[static_cast<size_t>(a)]).dot(item.series.col(use[static_cast<size_t>(b)]));
+  return m;
+}
+
+/// `joints`' rows of X's columns `columns` and of `vector` (S N), weighted (JointRows).
+inline JointRows joint_rows(const CandidateContext& c, const std::vector<int>& joints,
+                            const std::vector<Eigen::Index>& columns, const Eigen::VectorXd& vector) {
+  const Eigen::MatrixXd& X = *c.model_X;
+  const int N = static_cast<int>(c.data.q.cols());
+  const Eigen::Index S = c.data.t.size(), k = static_cast<Eigen::Index>(columns.size());
+  JointRows rows;
+  rows.joints = joints;
+  for (int j : joints) {
+    const double w = c.joint_weights[j];
+    Eigen::MatrixXd A(S, k);
+    Eigen::VectorXd b(S);
+    for (Eigen::Index s = 0; s < S; ++s) {
+      for (Eigen::Index q = 0; q < k; ++q) A(s, q) = w * X(s * N + j, columns[static_cast<size_t>(q)]);
+      b[s] = w * vector[s * N + j];
+    }
+    rows.A.push_back(std::move(A));
+    rows.b.push_back(std::move(b));
+  }
+  return rows;
+}
+
+/// The Gram A^T A of the rows' columns over all their joints.
+inline Eigen::MatrixXd joint_gram(const JointRows& rows) {
+  const Eigen::Index k = rows.A.empty() ? 0 : rows.A[0].cols();
+  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(k, k);
+  for (const Eigen::MatrixXd& A : rows.A) G.noalias() += A.transpose() * A;
+  return G;
 }
 
 /// The part of local_gain that does not depend on the candidate's shape, built once per search: the
-/// weighted rows of `joints` with the model's local columns L and the residual r, and the
-/// factorised Gram of L (regularised by 1e-12 of its largest diagonal entry).
+/// weighted rows of `joints` with the model's local columns and the residual, and the factorised
+/// Gram of those columns (regularised by 1e-12 of its largest diagonal entry).
 struct LocalSystem {
-  std::vector<int> joints;
-  Eigen::MatrixXd L;
-  Eigen::VectorXd r;
+  JointRows rows;
   Eigen::LDLT<Eigen::MatrixXd> LL;
 };
 
 inline LocalSystem local_system(const CandidateContext& c, const std::vector<int>& joints,
                                 const std::vector<Eigen::Index>& local) {
-  const StackedData& d = c.data;
-  const Eigen::MatrixXd& X = *c.model_X;
-  const int N = static_cast<int>(d.q.cols());
-  const Eigen::Index S = d.t.size(), P = static_cast<Eigen::Index>(joints.size());
-  const Eigen::Index k = static_cast<Eigen::Index>(local.size()), R = S * P;
   LocalSystem sys;
-  sys.joints = joints;
-  sys.L.resize(R, k);
-  sys.r.resize(R);
-  for (Eigen::Index s = 0; s < S; ++s)
-    for (Eigen::Index p = 0; p < P; ++p) {
-      const int j = joints[static_cast<size_t>(p)];
-      const Eigen::Index row = s * N + j, out = s * P + p;
-      const double w = c.joint_weights[j];
-      for (Eigen::Index q = 0; q < k; ++q) sys.L(out, q) = w * X(row, local[static_cast<size_t>(q)]);
-      sys.r[out] = w * c.residual[row];
-    }
-  if (k > 0) {
-    Eigen::MatrixXd LL(k, k);
-    LL.noalias() = sys.L.transpose() * sys.L;
+  sys.rows = joint_rows(c, joints, local, c.residual);
+  if (!local.empty()) {
+    Eigen::MatrixXd LL = joint_gram(sys.rows);
     LL.diagonal().array() += 1e-12 * std::max(1.0, LL.diagonal().maxCoeff());
     sys.LL.compute(LL);
   }
@@ -109,30 +201,23 @@ inline LocalSystem local_system(const CandidateContext& c, const std::vector<int
 }
 
 /// The weighted RSS that M columns remove from the residual of the system's joints when fitted
-/// with its local columns (the residual is already orthogonal to those, so the gain is
-/// g^T S^-1 g, S the Schur complement of their Gram). columns(s, x) writes the M columns at sample
-/// s into x, called sample by sample; they act on the system's joint p times factor[p] (a
-/// coupling's motor: 1 on joint i, r on joint j), filtered in time as `kind`'s (linear: once for
-/// every joint). A fit whose coefficients (S^-1 g, those of the joint fit) are not
-/// physical(coefficients) removes nothing: the search looks only among physical shapes.
-template <int M, class Columns, class Physical>
-double local_gain(const CandidateContext& c, const LocalSystem& sys, EffectKind kind, const std::vector<double>& factor,
-                  Columns columns, Physical physical) {
+/// with its local columns L (the residual is already orthogonal to those, so the gain is
+/// g^T S^-1 g, S the Schur complement of their Gram). `item` holds the M columns over time,
+/// filtered, and their products with the system's rows (batch_gains); they act on the system's
+/// joint p times factor[p] (a coupling's motor: 1 on joint i, r on joint j). A fit whose
+/// coefficients (S^-1 g, those of the joint fit) are not physical(coefficients) removes nothing:
+/// the search looks only among physical shapes.
+template <int M, class Physical>
+double local_gain(const CandidateContext& c, const LocalSystem& sys, const std::vector<double>& factor,
+                  const BatchItem& item, Physical physical) {
   using Vec = Eigen::Matrix<double, M, 1>;
-  const Eigen::Index k = sys.L.cols();
   std::vector<int> all(M);
   for (int q = 0; q < M; ++q) all[static_cast<size_t>(q)] = q;
-  const Eigen::MatrixXd C = motor_rows<M>(c, sys.joints, kind, all, factor, columns);
-  // Coefficient-wise products (lazyProduct): a few columns against long ones, where the blocked
-  // product's packing of the long operand costs as much as the product.
-  const Eigen::Matrix<double, M, M> CC = C.transpose().lazyProduct(C);
-  const Vec g = C.transpose().lazyProduct(sys.r);
+  const MotorProducts m = motor_products(c, sys.rows, item, all, factor);
+  const Eigen::Matrix<double, M, M> CC = m.CC;
+  const Vec g = m.Cb;
   Eigen::Matrix<double, M, M> schur = CC;
-  if (k > 0) {
-    Eigen::MatrixXd LC(k, M);
-    LC.noalias() = sys.L.transpose().lazyProduct(C);
-    schur -= LC.transpose() * sys.LL.solve(LC);
-  }
+  if (m.AC.rows() > 0) schur -= m.AC.transpose() * sys.LL.solve(m.AC);
   schur.diagonal().array() += 1e-12 * std::max(1.0, CC.diagonal().maxCoeff());
   const Vec beta = schur.ldlt().solve(g);
   if (!physical(beta)) return 0.0;
@@ -140,68 +225,58 @@ double local_gain(const CandidateContext& c, const LocalSystem& sys, EffectKind 
 }
 
 /// A replacement's fixed part during its shape search (replacement_gain): the weighted rows of
-/// `joints` with the model's local columns less the `removed` ones (L), the residual r0 and the
-/// residual with the removed columns' share of the fit given back (r1), and their products.
+/// `joints` with the model's local columns less the `removed` ones (L) and the residual with the
+/// removed columns' share of the fit given back (r1), their products, and the residual's r0^T r0.
 struct ReplacementSystem {
-  std::vector<int> joints;
-  Eigen::MatrixXd L, LL;
-  Eigen::VectorXd r1, Lr1;
+  JointRows rows;  ///< A: L, b: r1
+  Eigen::MatrixXd LL;
+  Eigen::VectorXd Lr1;
   double r0_sq = 0, r1_sq = 0;
 };
 
 inline ReplacementSystem replacement_system(const CandidateContext& c, const std::vector<int>& joints,
                                             const std::vector<Eigen::Index>& local,
                                             const std::vector<Eigen::Index>& removed) {
-  const StackedData& d = c.data;
   const Eigen::MatrixXd& X = *c.model_X;
   const Eigen::VectorXd& phi = *c.model_phi;
-  const int N = static_cast<int>(d.q.cols());
   std::vector<Eigen::Index> kept;
   for (Eigen::Index q : local)
     if (std::find(removed.begin(), removed.end(), q) == removed.end()) kept.push_back(q);
-  const Eigen::Index S = d.t.size(), P = static_cast<Eigen::Index>(joints.size());
-  const Eigen::Index k = static_cast<Eigen::Index>(kept.size()), R = S * P;
+  Eigen::VectorXd given_back = c.residual;
+  for (Eigen::Index q : removed) given_back += X.col(q) * phi[q];
   ReplacementSystem sys;
-  sys.joints = joints;
-  sys.L.resize(R, k);
-  sys.r1.resize(R);
-  for (Eigen::Index s = 0; s < S; ++s)
-    for (Eigen::Index p = 0; p < P; ++p) {
-      const int j = joints[static_cast<size_t>(p)];
-      const Eigen::Index row = s * N + j, out = s * P + p;
-      const double w = c.joint_weights[j];
-      for (Eigen::Index q = 0; q < k; ++q) sys.L(out, q) = w * X(row, kept[static_cast<size_t>(q)]);
-      double back = 0;
-      for (Eigen::Index q : removed) back += X(row, q) * phi[q];
-      sys.r0_sq += std::pow(w * c.residual[row], 2);
-      sys.r1[out] = w * (c.residual[row] + back);
-    }
-  sys.LL = sys.L.transpose() * sys.L;
-  sys.Lr1 = sys.L.transpose() * sys.r1;
-  sys.r1_sq = sys.r1.squaredNorm();
+  sys.rows = joint_rows(c, joints, kept, given_back);
+  sys.LL = joint_gram(sys.rows);
+  sys.Lr1 = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(kept.size()));
+  const int N = static_cast<int>(c.data.q.cols());
+  for (size_t p = 0; p < joints.size(); ++p) {
+    sys.Lr1.noalias() += sys.rows.A[p].transpose() * sys.rows.b[p];
+    sys.r1_sq += sys.rows.b[p].squaredNorm();
+    const double w = c.joint_weights[joints[p]];
+    for (Eigen::Index s = 0; s < c.data.t.size(); ++s) sys.r0_sq += std::pow(w * c.residual[s * N + joints[p]], 2);
+  }
   return sys;
 }
 
 /// The weighted RSS of the system's joints removed when its removed columns give way to the columns
-/// `use` (indices into M) of a motor's M columns over time, columns(s, x), acting on the system's
-/// joint p times factor[p] (a coupled motor: 1 on its own joint, r on the other), filtered in time
-/// as `kind`'s, and fitted with the other local columns: r0^T r0 - (r1^T r1 - b^T beta) for
-/// [L C] beta = r1 in least squares. Negative when the replacement fits worse; 0 when the new
-/// coefficients are not physical(coefficients) (no replacement).
-template <int M, class Columns, class Physical>
-double replacement_gain(const CandidateContext& c, const ReplacementSystem& sys, EffectKind kind,
-                        const std::vector<int>& use, const std::vector<double>& factor, Columns columns,
-                        Physical physical) {
-  const Eigen::Index k = sys.L.cols(), u = static_cast<Eigen::Index>(use.size());
-  const Eigen::MatrixXd C = motor_rows<M>(c, sys.joints, kind, use, factor, columns);
+/// `use` (indices into M) of a motor's M filtered columns over time (item, batch_gains), acting on
+/// the system's joint p times factor[p] (a coupled motor: 1 on its own joint, r on the other), and
+/// fitted with the other local columns: r0^T r0 - (r1^T r1 - b^T beta) for [L C] beta = r1 in least
+/// squares. Negative when the replacement fits worse; 0 when the new coefficients are not
+/// physical(coefficients) (no replacement).
+template <class Physical>
+double replacement_gain(const CandidateContext& c, const ReplacementSystem& sys, const std::vector<int>& use,
+                        const std::vector<double>& factor, const BatchItem& item, Physical physical) {
+  const Eigen::Index k = sys.LL.rows(), u = static_cast<Eigen::Index>(use.size());
+  const MotorProducts m = motor_products(c, sys.rows, item, use, factor);
   Eigen::MatrixXd G(k + u, k + u);
   G.topLeftCorner(k, k) = sys.LL;
-  G.topRightCorner(k, u).noalias() = sys.L.transpose().lazyProduct(C);
-  G.bottomLeftCorner(u, k) = G.topRightCorner(k, u).transpose();
-  G.bottomRightCorner(u, u).noalias() = C.transpose().lazyProduct(C);
+  G.topRightCorner(k, u) = m.AC;
+  G.bottomLeftCorner(u, k) = m.AC.transpose();
+  G.bottomRightCorner(u, u) = m.CC;
   G.diagonal().array() += 1e-12 * std::max(1.0, G.diagonal().maxCoeff());
   Eigen::VectorXd b(k + u);
-  b << sys.Lr1, C.transpose().lazyProduct(sys.r1);
+  b << sys.Lr1, m.Cb;
   const Eigen::VectorXd beta = G.ldlt().solve(b);
   if (!physical(Eigen::VectorXd(beta.tail(u)))) return 0.0;
   return sys.r0_sq - (sys.r1_sq - b.dot(beta));
@@ -236,20 +311,20 @@ inline FullReplacement full_replacement(const CandidateContext& c, const std::ve
 }
 
 /// The weighted RSS of the whole model removed when its replaced columns give way to the columns
-/// `use` of a motor's M columns over time on `joints` (times factor[p]; columns(s, x) as for
+/// `use` of a motor's filtered columns over time (series) on `joints` (times factor[p]; as for
 /// replacement_gain), every other column refitted: rss_now - (y^T W^2 y - b^T beta). The exact
 /// criterion that replacement_gain approximates on the pair's rows (there the rigid body stays at its
 /// current fit); 0 when the new coefficients are not physical.
-template <int M, class Columns, class Physical>
-double full_replacement_gain(const CandidateContext& c, const FullReplacement& f, EffectKind kind,
-                             const std::vector<int>& joints, const std::vector<int>& use,
-                             const std::vector<double>& factor, Columns columns, Physical physical) {
+template <class Physical>
+double full_replacement_gain(const CandidateContext& c, const FullReplacement& f, const std::vector<int>& joints,
+                             const std::vector<int>& use, const std::vector<double>& factor, const BatchItem& item,
+                             Physical physical) {
+  const Eigen::Ref<const Eigen::MatrixXd>& series = item.series;
   const StackedData& d = c.data;
   const Eigen::MatrixXd& X = *c.model_X;
   const int N = static_cast<int>(d.q.cols());
   const Eigen::Index S = d.t.size(), P = static_cast<Eigen::Index>(joints.size());
   const Eigen::Index k = static_cast<Eigen::Index>(f.kept.size()), u = static_cast<Eigen::Index>(use.size());
-  const Eigen::MatrixXd series = filtered_series<M>(c, kind, columns);
   Eigen::MatrixXd Gxc = Eigen::MatrixXd::Zero(k, u), Gcc = Eigen::MatrixXd::Zero(u, u);
   Eigen::VectorXd gc = Eigen::VectorXd::Zero(u), cr(u);
   for (Eigen::Index s = 0; s < S; ++s)
@@ -297,53 +372,142 @@ inline void residual_scale(const CandidateContext& c, const std::vector<int>& jo
   }
 }
 
-/// Maximises gain(log x) over `points` log-spaced values in [lo_log, hi_log], refines by golden
-/// section between the best point's neighbours, and gives the 95 % profile interval: the values
-/// whose RSS a likelihood-ratio test (chi^2_1 3.84 with n_eff samples) cannot tell from the best's,
-/// stepping out from the best (doubling from an eighth of the grid step) to the first value outside
-/// and bisecting; clipped to the searched range (an open bound).
-template <class Gain>
-ShapeFit profile_search(Gain gain, double lo_log, double hi_log, int points, double rss, double n_eff) {
-  const double step = (hi_log - lo_log) / (points - 1);
-  ShapeFit f;
-  for (int k = 0; k < points; ++k) {
-    const double g = gain(lo_log + k * step);
-    if (g > f.gain) f.gain = g, f.log_value = lo_log + k * step;
+namespace profile {
+
+/// A 95 % bound's search: from the estimate out by doubling widths (from an eighth of the grid
+/// step) to the first value outside, then 10 bisections; `query` is its next value.
+struct Bound {
+  double dir = 1, in = 0, width = 0, outside = 0, query = 0;
+  int bisections = -1;  // -1 while stepping out
+  bool done = false;
+
+  Bound(double direction, double estimate, double first_width, const SearchRange& r)
+      : dir(direction), in(estimate), width(first_width) {
+    query = std::clamp(estimate + dir * width, r.lo_log, r.hi_log);
   }
-  const double phi = 0.5 * (std::sqrt(5.0) - 1.0);
-  double a = std::max(lo_log, f.log_value - step), b = std::min(hi_log, f.log_value + step);
-  double x1 = b - phi * (b - a), x2 = a + phi * (b - a), f1 = gain(x1), f2 = gain(x2);
-  for (int it = 0; it < 20; ++it) {
-    if (f1 > f2) {
-      b = x2, x2 = x1, f2 = f1, x1 = b - phi * (b - a), f1 = gain(x1);
-    } else {
-      a = x1, x1 = x2, f1 = f2, x2 = a + phi * (b - a), f2 = gain(x2);
-    }
-  }
-  if (std::max(f1, f2) > f.gain) f.log_value = f1 > f2 ? x1 : x2, f.gain = std::max(f1, f2);
-  const double rss_best = std::max(1e-300, rss - f.gain);
-  auto inside = [&](double lx) { return n_eff * std::log(std::max(1e-300, rss - gain(lx)) / rss_best) <= 3.84; };
-  auto bound = [&](int dir) {
-    double in = f.log_value, width = step / 8;
-    for (;;) {
-      const double next = std::clamp(f.log_value + dir * width, lo_log, hi_log);
-      if (!inside(next)) {
-        double outside = next;
-        for (int it = 0; it < 10; ++it) {
-          const double mid = 0.5 * (in + outside);
-          (inside(mid) ? in : outside) = mid;
-        }
-        return in;
-      }
-      in = next;
-      if (next == lo_log || next == hi_log) return next;
+
+  /// Takes whether `query` lies inside the interval and sets the next query (or done).
+  void answer(bool inside, double estimate, const SearchRange& r) {
+    if (bisections < 0 && inside) {  // still inside: step out further, unless at an end of the range
+      in = query;
+      done = query == r.lo_log || query == r.hi_log;
       width *= 2;
+      query = std::clamp(estimate + dir * width, r.lo_log, r.hi_log);
+      return;
     }
-  };
-  f.lo_log = bound(-1);
-  f.hi_log = bound(+1);
-  f.unbounded = f.lo_log <= lo_log || f.hi_log >= hi_log || f.lo_log == f.log_value || f.hi_log == f.log_value;
-  return f;
+    if (bisections < 0) {  // the first value outside
+      outside = query, bisections = 0;
+    } else {
+      (inside ? in : outside) = query;
+      done = ++bisections == 10;
+    }
+    query = 0.5 * (in + outside);
+  }
+};
+
+/// Golden-section refinement between a grid maximum's neighbours [a, b]: its first two values, then
+/// 20 steps, each one new value (`query`, which becomes x1 or x2).
+struct Golden {
+  double a = 0, b = 0, x1 = 0, x2 = 0, f1 = 0, f2 = 0, query = 0;
+  bool query_is_x1 = true;
+
+  /// The value to evaluate at step `step` (0 and 1: x1 and x2; then the section moves).
+  double next(int step) {
+    const double phi = 0.5 * (std::sqrt(5.0) - 1.0);
+    if (step == 0) {
+      x1 = b - phi * (b - a), x2 = a + phi * (b - a);
+      query_is_x1 = true;
+    } else if (step == 1) {
+      query_is_x1 = false;
+    } else if (f1 > f2) {
+      b = x2, x2 = x1, f2 = f1, x1 = b - phi * (b - a), query_is_x1 = true;
+    } else {
+      a = x1, x1 = x2, f1 = f2, x2 = a + phi * (b - a), query_is_x1 = false;
+    }
+    return query = query_is_x1 ? x1 : x2;
+  }
+  void answer(double g) { (query_is_x1 ? f1 : f2) = g; }
+};
+
+}  // namespace profile
+
+/// Profile searches run side by side (a coupling's two signs): each maximises the gain over its
+/// range's log-spaced values, refines by golden section between the best point's neighbours, and
+/// gives the 95 % profile interval: the values whose RSS a likelihood-ratio test (chi^2_1 3.84 with
+/// n_eff samples, against rss) cannot tell from the best's, stepping out from the best (doubling
+/// from an eighth of the grid step) to the first value outside and bisecting; clipped to the
+/// searched range (an open bound). gains(queries) gives the gain at each query (a batch_gains):
+/// the grids go in batches of kShapeBatch, every search's next golden step and both bounds' next
+/// values together. Each search takes the values it would take alone.
+template <class Gains>
+std::vector<ShapeFit> profile_searches(Gains gains, const std::vector<SearchRange>& ranges, double rss, double n_eff) {
+  const size_t K = ranges.size();
+  std::vector<ShapeFit> fits(K);
+  std::vector<double> steps(K);
+  std::vector<ShapeQuery> grid;
+  for (size_t k = 0; k < K; ++k) {
+    const SearchRange& r = ranges[k];
+    steps[k] = (r.hi_log - r.lo_log) / (r.points - 1);
+    for (int i = 0; i < r.points; ++i) grid.push_back({k, r.lo_log + i * steps[k]});
+  }
+  for (size_t from = 0; from < grid.size(); from += kShapeBatch) {
+    const std::vector<ShapeQuery> batch(
+        grid.begin() + static_cast<std::ptrdiff_t>(from),
+        grid.begin() + static_cast<std::ptrdiff_t>(std::min(grid.size(), from + kShapeBatch)));
+    const std::vector<double> g = gains(batch);
+    for (size_t i = 0; i < batch.size(); ++i) {
+      ShapeFit& f = fits[batch[i].search];
+      if (g[i] > f.gain) f.gain = g[i], f.log_value = batch[i].x;
+    }
+  }
+  std::vector<profile::Golden> golden(K);
+  for (size_t k = 0; k < K; ++k) {
+    golden[k].a = std::max(ranges[k].lo_log, fits[k].log_value - steps[k]);
+    golden[k].b = std::min(ranges[k].hi_log, fits[k].log_value + steps[k]);
+  }
+  for (int step = 0; step < 22; ++step) {
+    std::vector<ShapeQuery> batch;
+    for (size_t k = 0; k < K; ++k) batch.push_back({k, golden[k].next(step)});
+    const std::vector<double> g = gains(batch);
+    for (size_t k = 0; k < K; ++k) golden[k].answer(g[k]);
+  }
+  std::vector<double> rss_best(K);
+  std::vector<profile::Bound> bounds;
+  for (size_t k = 0; k < K; ++k) {
+    ShapeFit& f = fits[k];
+    const profile::Golden& q = golden[k];
+    if (std::max(q.f1, q.f2) > f.gain) f.log_value = q.f1 > q.f2 ? q.x1 : q.x2, f.gain = std::max(q.f1, q.f2);
+    rss_best[k] = std::max(1e-300, rss - f.gain);
+    bounds.emplace_back(-1.0, f.log_value, steps[k] / 8, ranges[k]);
+    bounds.emplace_back(1.0, f.log_value, steps[k] / 8, ranges[k]);
+  }
+  for (;;) {
+    std::vector<ShapeQuery> batch;
+    std::vector<size_t> asked;
+    for (size_t i = 0; i < bounds.size(); ++i)
+      if (!bounds[i].done) batch.push_back({i / 2, bounds[i].query}), asked.push_back(i);
+    if (batch.empty()) break;
+    const std::vector<double> g = gains(batch);
+    for (size_t n = 0; n < asked.size(); ++n) {
+      const size_t k = asked[n] / 2;
+      const bool inside = n_eff * std::log(std::max(1e-300, rss - g[n]) / rss_best[k]) <= 3.84;
+      bounds[asked[n]].answer(inside, fits[k].log_value, ranges[k]);
+    }
+  }
+  for (size_t k = 0; k < K; ++k) {
+    ShapeFit& f = fits[k];
+    const SearchRange& r = ranges[k];
+    f.lo_log = bounds[2 * k].in;
+    f.hi_log = bounds[2 * k + 1].in;
+    f.unbounded = f.lo_log <= r.lo_log || f.hi_log >= r.hi_log || f.lo_log == f.log_value || f.hi_log == f.log_value;
+  }
+  return fits;
+}
+
+/// One profile search (profile_searches) over `points` log-spaced values in [lo_log, hi_log].
+template <class Gains>
+ShapeFit profile_search(Gains gains, double lo_log, double hi_log, int points, double rss, double n_eff) {
+  return profile_searches(gains, {SearchRange{lo_log, hi_log, points}}, rss, n_eff)[0];
 }
 
 }  // namespace dyncal::host::detail

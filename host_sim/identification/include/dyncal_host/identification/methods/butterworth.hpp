@@ -14,20 +14,15 @@ class ButterworthLowPass {
   /// Zero-phase filtering of each column of x (rows = samples), in place. The signal is extended
   /// at both ends by odd reflection over about 3 time constants, and each pass starts from the
   /// steady state of its first sample, so that the ends carry no start-up transient.
-  /// The magnitude response is the square of the single pass: -6 dB at the cutoff.
+  /// The magnitude response is the square of the single pass: -6 dB at the cutoff. Columns are
+  /// filtered four at a time, interleaved (their recurrences overlap in the processor), each with the
+  /// same operations as alone: the result does not depend on how many columns come together.
   void filtfilt(Eigen::Ref<Eigen::MatrixXd> x) const;
 
   double cutoff_hz() const { return cutoff_hz_; }
 
  private:
-  struct Section {
-    double b0, b1, b2, a1, a2;
-  };
-  /// One causal pass over y in place, forward (step +1 from the first sample) or backward (step -1
-  /// from the last): the sections run fused in one loop over the samples, each from the steady
-  /// state of its own first input, so their recurrences overlap in the processor.
-  void pass(Eigen::VectorXd& y, bool forward) const;
-
+  /// Second-order sections, one per row: b0, b1, b2, a1, a2 (a0 = 1).
   Eigen::Matrix<double, Eigen::Dynamic, 5> sections_;
   double cutoff_hz_;
   int pad_;
