@@ -120,15 +120,19 @@ class CrossValidator {
           const double y = d_.y[r];
           xc.noalias() = x * c.transpose();
           cc.noalias() = c * c.transpose();
-          auto add = [&](MatrixXd& G, VectorXd& g, double w2) {
+          auto add = [&](MatrixXd& G, VectorXd& g, double w2) {  // the lower-left block: at the end
             G.topRightCorner(p, m) += w2 * xc;
-            G.bottomLeftCorner(m, p) += w2 * xc.transpose();
             G.bottomRightCorner(m, m) += w2 * cc;
             g.tail(m) += w2 * y * c;
           };
           add(G_all[f][j], g_all[f][j], 1.0);
           add(G_fit[f], g_fit[f], w2_[j]);
         }
+      }
+      auto mirror = [&](MatrixXd& G) { G.bottomLeftCorner(m, p) = G.topRightCorner(p, m).transpose(); };
+      for (int f = 0; f < folds_; ++f) {
+        mirror(G_fit[f]);
+        for (int j = 0; j < N_; ++j) mirror(G_all[f][j]);
       }
     }
     // A dropped column's rows and columns leave the Grams.

@@ -74,12 +74,15 @@ Eigen::MatrixXd filtered_series_at(const CandidateContext& c, EffectKind kind, c
 }
 
 /// A search's fixed rows, joint by joint (the shape's columns act on each joint times its weight and
-/// a factor): for joint p of `joints` its weighted model columns A[p] (S x k, the same k for all) and
-/// weighted residual b[p] (S).
+/// a factor): for joint p of `joints` its weighted model columns A(p) (S x k, the same k for all) and
+/// weighted residual b(p) (S), side by side in Ab[p] (one matrix product covers both).
 struct JointRows {
   std::vector<int> joints;
-  std::vector<Eigen::MatrixXd> A;
-  std::vector<Eigen::VectorXd> b;
+  std::vector<Eigen::MatrixXd> Ab;
+  Eigen::Index k = 0;
+
+  auto A(size_t p) const { return Ab[p].leftCols(k); }
+  auto b(size_t p) const { return Ab[p].col(k); }
 };
 
 /// One evaluation of a batch (batch_gains): its filtered columns over time (series, S x M) and, per
@@ -98,19 +101,15 @@ auto batch_gains(const CandidateContext& c, EffectKind kind, const JointRows* ro
   return [&c, kind, rows, columns_at, gain](const std::vector<ShapeQuery>& queries) {
     const Eigen::MatrixXd series = filtered_series_at<M>(c, kind, queries, columns_at);
     const size_t P = rows ? rows->joints.size() : 0;
-    std::vector<Eigen::MatrixXd> A_series(P);
-    std::vector<Eigen::VectorXd> series_b(P);
-    for (size_t p = 0; p < P; ++p) {
-      A_series[p].noalias() = rows->A[p].transpose() * series;
-      series_b[p].noalias() = series.transpose() * rows->b[p];
-    }
+    std::vector<Eigen::MatrixXd> Ab_series(P);  // [A b]^T series: A^T series over (series^T b)^T
+    for (size_t p = 0; p < P; ++p) Ab_series[p].noalias() = rows->Ab[p].transpose() * series;
     std::vector<double> out(queries.size());
     for (size_t b = 0; b < queries.size(); ++b) {
       const Eigen::Index first = M * static_cast<Eigen::Index>(b);
       BatchItem item{series.middleCols(first, M), {}, {}};
       for (size_t p = 0; p < P; ++p) {
-        item.A_series.push_back(A_series[p].middleCols(first, M));
-        item.series_b.push_back(series_b[p].segment(first, M));
+        item.A_series.push_back(Ab_series[p].block(0, first, rows->k, M));
+        item.series_b.push_back(Ab_series[p].block(rows->k, first, 1, M).transpose());
       }
       out[b] = gain(queries[b], item);
     }
@@ -128,7 +127,7 @@ struct MotorProducts {
 
 inline MotorProducts motor_products(const CandidateContext& c, const JointRows& rows, const BatchItem& item,
                                     const std::vector<int>& use, const std::vector<double>& factor) {
-  const Eigen::Index u = static_cast<Eigen::Index>(use.size()), k = rows.A.empty() ? 0 : rows.A[0].cols();
+  const Eigen::Index u = static_cast<Eigen::Index>(use.size()), k = rows.k;
   MotorProducts m;
   m.AC = Eigen::MatrixXd::Zero(k, u);
   m.Cb = Eigen::VectorXd::Zero(u);
@@ -158,25 +157,23 @@ inline JointRows joint_rows(const CandidateContext& c, const std::vector<int>& j
   const Eigen::Index S = c.data.t.size(), k = static_cast<Eigen::Index>(columns.size());
   JointRows rows;
   rows.joints = joints;
+  rows.k = k;
   for (int j : joints) {
     const double w = c.joint_weights[j];
-    Eigen::MatrixXd A(S, k);
-    Eigen::VectorXd b(S);
+    Eigen::MatrixXd Ab(S, k + 1);
     for (Eigen::Index s = 0; s < S; ++s) {
-      for (Eigen::Index q = 0; q < k; ++q) A(s, q) = w * X(s * N + j, columns[static_cast<size_t>(q)]);
-      b[s] = w * vector[s * N + j];
+      for (Eigen::Index q = 0; q < k; ++q) Ab(s, q) = w * X(s * N + j, columns[static_cast<size_t>(q)]);
+      Ab(s, k) = w * vector[s * N + j];
     }
-    rows.A.push_back(std::move(A));
-    rows.b.push_back(std::move(b));
+    rows.Ab.push_back(std::move(Ab));
   }
   return rows;
 }
 
 /// The Gram A^T A of the rows' columns over all their joints.
 inline Eigen::MatrixXd joint_gram(const JointRows& rows) {
-  const Eigen::Index k = rows.A.empty() ? 0 : rows.A[0].cols();
-  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(k, k);
-  for (const Eigen::MatrixXd& A : rows.A) G.noalias() += A.transpose() * A;
+  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(rows.k, rows.k);
+  for (size_t p = 0; p < rows.joints.size(); ++p) G.noalias() += rows.A(p).transpose() * rows.A(p);
   return G;
 }
 
@@ -250,8 +247,8 @@ inline ReplacementSystem replacement_system(const CandidateContext& c, const std
   sys.Lr1 = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(kept.size()));
   const int N = static_cast<int>(c.data.q.cols());
   for (size_t p = 0; p < joints.size(); ++p) {
-    sys.Lr1.noalias() += sys.rows.A[p].transpose() * sys.rows.b[p];
-    sys.r1_sq += sys.rows.b[p].squaredNorm();
+    sys.Lr1.noalias() += sys.rows.A(p).transpose() * sys.rows.b(p);
+    sys.r1_sq += sys.rows.b(p).squaredNorm();
     const double w = c.joint_weights[joints[p]];
     for (Eigen::Index s = 0; s < c.data.t.size(); ++s) sys.r0_sq += std::pow(w * c.residual[s * N + joints[p]], 2);
   }
