@@ -82,8 +82,9 @@ void shape_curve(const std::vector<double>& knots, const std::vector<double>& co
   Eigen::VectorXd at(points);
   for (Eigen::Index k = 0; k < at.size(); ++k)
     at[k] = knots.front() + (knots.back() - knots.front()) * static_cast<double>(k) / static_cast<double>(points - 1);
-  const Eigen::VectorXd torque =
+  Eigen::VectorXd torque =
       shape_basis(at, knots, without_linear) * Eigen::Map<const Eigen::VectorXd>(coefficients.data(), m);
+  torque.array() -= torque.mean();  // centred: its level trades with the model's other columns
   x.assign(at.data(), at.data() + at.size());
   y.assign(torque.data(), torque.data() + torque.size());
 }

@@ -228,4 +228,29 @@ std::pair<double, double> delay_interval(const StackedData& d, const MatrixXd& X
   return {delta - half, delta + half};
 }
 
+void shape_band(const std::vector<double>& knots, bool without_linear,
+                const std::vector<Eigen::VectorXd>& fold_coefficients, Index m, const std::vector<double>& y,
+                std::vector<double>& lo, std::vector<double>& hi) {
+  const size_t K = fold_coefficients.size(), P = y.size();
+  lo = hi = y;
+  if (K < 2) return;
+  std::vector<std::vector<double>> curves(K);
+  for (size_t k = 0; k < K; ++k) {
+    const VectorXd tail = fold_coefficients[k].tail(m);
+    std::vector<double> x;
+    shape_curve(knots, std::vector<double>(tail.data(), tail.data() + m), without_linear, static_cast<int>(P), x,
+                curves[k]);
+    if (curves[k].size() != P) return;
+  }
+  const double t = student_t975(static_cast<int>(K) - 1);
+  for (size_t p = 0; p < P; ++p) {
+    double mean = 0, ss = 0;
+    for (const auto& c : curves) mean += c[p] / static_cast<double>(K);
+    for (const auto& c : curves) ss += (c[p] - mean) * (c[p] - mean);
+    const double half = t * std::sqrt(static_cast<double>(K - 1) / static_cast<double>(K) * ss);
+    lo[p] = y[p] - half;
+    hi[p] = y[p] + half;
+  }
+}
+
 }  // namespace dyncal::host::detail

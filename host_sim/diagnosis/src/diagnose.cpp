@@ -723,6 +723,11 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
       res.effects.back().shape = m.phi[m.phi.size() - 1];
       res.effects.back().shape_interval = delay_95;
     }
+    if (c.effect == Effect::shape) {
+      DiagnosedEffect& e = res.effects.back();
+      detail::shape_band(c.knots, shape_without_linear(c.variable), cv.fold_coefficients(), c.columns.cols(), e.curve_y,
+                         e.curve_lo, e.curve_hi);
+    }
     reweigh();
   }
 

@@ -137,7 +137,8 @@ nlohmann::json diagnose_report_json(const DiagnoseResult& r) {
                              {"excess_share", e.excess_share},
                              {"explanation", e.explanation},
                              {"indistinguishable_from", e.alternatives}};
-    if (!e.curve_x.empty()) effect["curve"] = {{"x", e.curve_x}, {"y", e.curve_y}};
+    if (!e.curve_x.empty())
+      effect["curve"] = {{"x", e.curve_x}, {"y", e.curve_y}, {"y_lo", e.curve_lo}, {"y_hi", e.curve_hi}};
     j["effects"].push_back(std::move(effect));
   }
   j["rejected"] = nlohmann::json::array();

@@ -263,13 +263,27 @@ std::string shape_plots(const Json& effects, Plots& plots) {
         e.contains("variable") && e["variable"].is_string() ? e["variable"].get<std::string>() : "x";
     std::ofstream d(plots.work() + "/shape" + k + ".dat");
     const Json &x = e["curve"]["x"], &y = e["curve"]["y"];
-    for (size_t p = 0; p < x.size() && p < y.size(); ++p)
-      if (x[p].is_number() && y[p].is_number()) d << x[p].get<double>() << " " << y[p].get<double>() << "\n";
+    // The pointwise 95 % band, where the report has one of the curve's length (diagnose's).
+    const Json none = Json::array();
+    const Json& lo = e["curve"].contains("y_lo") && e["curve"]["y_lo"].is_array() ? e["curve"]["y_lo"] : none;
+    const Json& hi = e["curve"].contains("y_hi") && e["curve"]["y_hi"].is_array() ? e["curve"]["y_hi"] : none;
+    const bool band = lo.size() == y.size() && hi.size() == y.size() && any_number(lo);
+    for (size_t p = 0; p < x.size() && p < y.size(); ++p) {
+      if (!x[p].is_number() || !y[p].is_number()) continue;
+      d << x[p].get<double>() << " " << y[p].get<double>();
+      if (band)
+        d << " " << (lo[p].is_number() ? g6(lo[p].get<double>()) : "NaN") << " "
+          << (hi[p].is_number() ? g6(hi[p].get<double>()) : "NaN");
+      d << "\n";
+    }
     const double joint = num(e, "joint");
+    const std::string file = "'shape" + k + ".dat'";
     out += plots.add("shape_effect" + k,
-                     "effect " + k + ", joint " + g6(joint) + ": the shape, torque against " + variable,
-                     "set xlabel '" + gnuplot_text(variable) + "'\nset ylabel 'torque [Nm]'\nplot 'shape" + k +
-                         ".dat' u 1:2 w l lc rgb '#1f77b4' t 'shape'");
+                     "effect " + k + ", joint " + g6(joint) + ": the shape, torque against " + variable +
+                         (band ? " (shaded: its pointwise 95 % band)" : ""),
+                     "set xlabel '" + gnuplot_text(variable) + "'\nset ylabel 'torque [Nm]'\nplot " +
+                         (band ? file + " u 1:3:4 w filledcurves lc rgb '#9ecae1' t '95 %', " : std::string()) + file +
+                         " u 1:2 w l lc rgb '#1f77b4' t 'shape'");
   }
   return out;
 }

@@ -41,7 +41,9 @@ inline constexpr int kShapeCurvePoints = 101;
 
 /// A shape's curve for a plot or a report: `points` values x evenly over the knots' span and the
 /// shape's torque there, shape_basis(x, knots, without_linear) times `coefficients` (its column
-/// count of them; empty x and y otherwise).
+/// count of them; empty x and y otherwise), less its mean over those points. Centred as a generalised
+/// additive model's smooth terms are: the data determine a shape's variation, while its level trades
+/// with the model's other columns (a joint's gravity, a constant the basis nearly spans).
 void shape_curve(const std::vector<double>& knots, const std::vector<double>& coefficients, bool without_linear,
                  int points, std::vector<double>& x, std::vector<double>& y);
 

@@ -64,6 +64,9 @@ struct DiagnosedEffect {
   /// the variable's unit) and its torque there (curve_y [Nm]; times sgn(qd) where the variable
   /// carries the sign), for the reports' plots
   std::vector<double> curve_x, curve_y;
+  /// shape: curve_y's pointwise 95 % band [Nm] (the delete-a-group jackknife over the folds' fits,
+  /// Student's t; beyond_catalogue.hpp shape_band)
+  std::vector<double> curve_lo, curve_hi;
   /// The share of the affected joints' excess validation RSS this effect removed: the drop it made
   /// over what was left above the noise floor before it (DiagnoseJoint::rms_noise_floor).
   double excess_share = 0;
