@@ -1,12 +1,13 @@
 #!/usr/bin/env python3
 """A torque delay on a log with rests, the rests' acceleration steps at four sub-sample phases
-(docs/diagnose.md "Why a delay reads off on logs with rests"): the symptom's generator, not a test.
+(docs/diagnose.md "A delay read from sampled steps").
 
 arm6 with rests (generate_logs.simulate's motion clock, shifted by 0, 1/4, 1/2 and 3/4 of a sample),
 joint 1's torque channel 2.8 samples late (outside_effects.delayed_torque), diagnosed with
-`--model eq7`. Prints each log's delay and 95 % interval against the truth; a reading that follows
-the phase over about a sample, with intervals that do not hold the truth, is the symptom. Exit 0
-always (the mend is still to build).
+`--model eq7`. The reading follows the steps' phase over about a sample (each sampled step is placed
+only to within a sample, all at one phase); its 95 % interval must hold the truth at every phase.
+Prints each log's delay and interval against the truth; exit 1 when a delay is not found or its
+interval misses the truth.
 """
 import json
 import os
@@ -29,6 +30,7 @@ def main():
     arm = g.Arm(dict(o.default_robots(a.source_dir))["arm6"])
     clock = g.motion_clock
     delay = DELAY_SAMPLES / FS
+    failed = False
     for quarter in range(4):
         shift = quarter / 4 / FS
         g.motion_clock = lambda t, rests, s=shift, **kw: clock(t + s, rests, **kw)
@@ -46,7 +48,9 @@ def main():
         reading = (f"{found[0]['shape'] * 1e3:.2f} ms (95 % {found[0]['shape_interval'][0] * 1e3:.2f}.."
                    f"{found[0]['shape_interval'][1] * 1e3:.2f})" if found else "no delay found")
         print(f"steps shifted by {quarter}/4 sample: joint 1 delay {reading}, truth {delay * 1e3:.2f} ms")
-    return 0
+        held = found and found[0]["shape_interval"][0] <= delay <= found[0]["shape_interval"][1]
+        failed = failed or not held
+    return 1 if failed else 0
 
 
 if __name__ == "__main__":

@@ -94,6 +94,52 @@ void torque_delay(const CandidateContext& c, int i, int, std::vector<Candidate>&
   out.push_back(std::move(k));
 }
 
+std::vector<char> torque_step_samples(const StackedData& d, const std::vector<std::pair<Index, Index>>& segments, int j,
+                                      const VectorXd& p) {
+  const Index S = d.t.size();
+  std::vector<char> near(static_cast<size_t>(S), 0);
+  if (d.tau_raw.rows() != S || d.cutoff_hz <= 0) return near;
+  struct Pair {
+    Index s, a, b;  // samples s, s + 1 of segment [a, b)
+  };
+  std::vector<Pair> at;
+  std::vector<double> jump;
+  for (const auto& [a, b] : segments)
+    for (Index s = a; s + 1 < b; ++s) {
+      at.push_back({s, a, b});
+      jump.push_back((d.tau_raw(s + 1, j) - d.tau_raw(s, j)) - (p[s + 1] - p[s]));
+    }
+  if (jump.size() < 8) return near;
+  std::vector<double> dev(jump.size());
+  auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  const double centre = median(jump);
+  for (size_t k = 0; k < jump.size(); ++k) dev[k] = std::abs(jump[k] - centre);
+  const double scale = 1.4826 * median(dev);
+  if (!(scale > 0)) return near;
+  const Index span = static_cast<Index>(std::ceil(d.rate_hz / d.cutoff_hz));
+  // A reversal's friction step is left in: the velocity crosses zero at a phase of its own each time,
+  // so what each one's sampling misplaces averages out over them. A start or a stop (the sign to or
+  // from 0, at rest) is not: a planned motion's starts and stops keep the controller's clock.
+  auto reverses = [&](const Pair& k) {
+    if (d.qd_raw.rows() != S) return false;
+    bool up = false, down = false;
+    for (Index s = std::max(k.a, k.s - span); s < std::min(k.b, k.s + 1 + span); ++s) {
+      const double sign = friction_sign(d.qd_raw(s, j), d.standstill_band[j]);
+      up = up || sign > 0, down = down || sign < 0;
+    }
+    return up && down;
+  };
+  for (size_t k = 0; k < at.size(); ++k) {
+    if (dev[k] <= kStandstillQuantile * scale || reverses(at[k])) continue;
+    for (Index s = std::max(at[k].a, at[k].s - span); s < std::min(at[k].b, at[k].s + 1 + span); ++s)
+      near[static_cast<size_t>(s)] = 1;
+  }
+  return near;
+}
+
 VectorXd delay_column(const VectorXd& t, const std::vector<std::pair<Index, Index>>& segments, const VectorXd& p,
                       double delta0) {
   if (delta0 == 0.0) return -time_derivative(t, segments, p);
@@ -196,7 +242,8 @@ void shape(const CandidateContext& c, int i, int, std::vector<Candidate>& out) {
 
 std::pair<double, double> delay_interval(const StackedData& d, const MatrixXd& X, const VectorXd& phi,
                                          const VectorXd& weights, int j, double n_eff_j,
-                                         const std::vector<double>& fold_delays) {
+                                         const std::vector<double>& fold_delays, const std::vector<char>& steps,
+                                         double raw_period, double* step_share) {
   const int N = static_cast<int>(d.q.cols());
   const Index rows = X.rows(), p = X.cols();
   MatrixXd A(rows, p - 1);
@@ -225,6 +272,14 @@ std::pair<double, double> delay_interval(const StackedData& d, const MatrixXd& X
     const double se_jackknife = std::sqrt(static_cast<double>(K - 1) / static_cast<double>(K) * ss);
     half = std::max(half, student_t975(static_cast<int>(K) - 1) * se_jackknife);
   }
+  double from_steps = 0, all = 0;
+  for (Index k = j; k < rows; k += N) {
+    const double info = c_perp[k] * c_perp[k];
+    all += info;
+    if (steps[static_cast<size_t>(k / N)]) from_steps += info;
+  }
+  *step_share = all > 0 ? from_steps / all : 0.0;
+  half += *step_share * 0.5 * raw_period;
   return {delta - half, delta + half};
 }
 

@@ -30,6 +30,21 @@ Eigen::VectorXd delay_column(const Eigen::VectorXd& t,
                              const std::vector<std::pair<Eigen::Index, Eigen::Index>>& segments,
                              const Eigen::VectorXd& p, double delta0);
 
+/// The kept samples of joint j (S flags) around a step of its measured torque: where its unfiltered
+/// torque d.tau_raw jumps between two samples by more than the model's filtered prediction p (S)
+/// changes there, beyond kStandstillQuantile (0.1 % two-sided) times that difference's own scale
+/// (1.4826 MAD over the joint's sample pairs, inside each segment), and one cut-off period
+/// (rate / cutoff samples) either side of it, the filtered step's span; not where joint j's friction
+/// sign goes from + to - or back within that span (a reversal's step falls at a phase of its own
+/// each time: the sampling's misplacement averages out; a start or stop is kept). A sampled step
+/// shows where it happened only to within a sample, at one sub-sample phase for every step of a
+/// periodic motion's rests or a planned profile's corners on the controller's clock: a delay read
+/// from those samples follows that phase (docs/diagnose.md "A delay read from sampled steps").
+/// None without unfiltered torques (d.tau_raw empty).
+std::vector<char> torque_step_samples(const StackedData& d,
+                                      const std::vector<std::pair<Eigen::Index, Eigen::Index>>& segments, int j,
+                                      const Eigen::VectorXd& p);
+
 /// The shapes on joint i: for each variable of shape_variables, a cubic regression spline with
 /// interior knots at its quantiles, the first basis function left out (the rest with the model's
 /// columns stay identifiable); a variable times sgn(qd_i) filtered in time as the regressor's
@@ -50,10 +65,16 @@ std::vector<std::string> shape_variables(int i, int num_joints);
 /// the residual's correlation by sqrt(samples / n_eff_j), times 1.96; (2) the delete-a-group
 /// jackknife of the estimates without each fold (`fold_delays`, K of them: variance (K - 1) / K
 /// times their sum of squared deviations), times Student's t with K - 1 degrees of freedom, which
-/// also holds what the model still lacks and the residual's uneven spread.
+/// also holds what the model still lacks and the residual's uneven spread. Widened on both sides by
+/// the share of the delay's information (its column's part orthogonal to the others, squared, on
+/// joint j's rows) that comes from the samples around the torque's steps (`steps`:
+/// torque_step_samples) times half the log's sample period `raw_period` [s]: each sampled step is
+/// placed only to within a sample, and where the steps share one sub-sample phase that error does
+/// not average out, so it is a bound added, not a variance. *step_share: that share.
 std::pair<double, double> delay_interval(const StackedData& d, const Eigen::MatrixXd& X, const Eigen::VectorXd& phi,
                                          const Eigen::VectorXd& weights, int j, double n_eff_j,
-                                         const std::vector<double>& fold_delays);
+                                         const std::vector<double>& fold_delays, const std::vector<char>& steps,
+                                         double raw_period, double* step_share);
 
 /// A shape's pointwise 95 % band at its curve's points (shape_curve on `knots`, without_linear as
 /// its variable has it): the delete-a-group jackknife of the curve over the fits without each fold

@@ -572,13 +572,28 @@ void refine_delay(const StackedData& d, const std::vector<std::pair<Index, Index
 /// stands in for something else; it is named in a note, refused (not proposed again) and m goes
 /// back to `before`. Returns whether it stays.
 bool delay_determined(const StackedData& d, const Candidate& c, const Model& before, double n_eff_j,
-                      const VectorXd& weights, CrossValidator& cv, Model& m, detail::CandidateContext& library,
-                      std::pair<double, double>& interval, std::vector<std::string>& notes) {
+                      const VectorXd& weights, double raw_period, CrossValidator& cv, Model& m,
+                      detail::CandidateContext& library, std::pair<double, double>& interval,
+                      std::vector<std::string>& notes) {
   const int j = c.joints.front();
+  const int N = static_cast<int>(d.q.cols());
+  const Index S = d.t.size();
+  VectorXd p(S);  // the model's torque on joint j before the delay
+  for (Index s = 0; s < S; ++s) p[s] = before.X.row(s * N + j).dot(before.phi);
+  const std::vector<char> steps = detail::torque_step_samples(d, library.segments, j, p);
   refine_delay(d, library.segments, j, cv, m);
   std::vector<double> fold_delays;
   for (const VectorXd& b : cv.fold_coefficients()) fold_delays.push_back(b[b.size() - 1]);
-  interval = detail::delay_interval(d, m.X, m.phi, weights, j, n_eff_j, fold_delays);
+  double step_share = 0;
+  interval = detail::delay_interval(d, m.X, m.phi, weights, j, n_eff_j, fold_delays, steps, raw_period, &step_share);
+  if (step_share >= 0.01) {
+    std::ostringstream note;
+    note << std::setprecision(3) << "joint " << j + 1 << "'s delay: " << 100 * step_share
+         << " % of what determines it comes from the torque's steps, each placed by its samples only to within a "
+            "sample; its interval is widened by that share of half a sample ("
+         << 1e3 * step_share * 0.5 * raw_period << " ms)";
+    notes.push_back(note.str());
+  }
   if (interval.first > 0 || interval.second < 0) return true;
   notes.push_back(undetermined_delay_note(c, m.phi[m.phi.size() - 1], interval));
   library.refused.push_back(c.names.front());
@@ -714,8 +729,8 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
     cv.set_base(m.X);
     cv.evaluate(none, m.val, m.train, &m.phi);
     std::pair<double, double> delay_95{0, 0};
-    if (c.effect == Effect::torque_delay &&
-        !delay_determined(d, c, before, n_eff[c.joints.front()], weights, cv, m, library, delay_95, res.notes))
+    if (c.effect == Effect::torque_delay && !delay_determined(d, c, before, n_eff[c.joints.front()], weights,
+                                                              log.sample_period(), cv, m, library, delay_95, res.notes))
       continue;
     res.effects.push_back(diagnosed_effect(c, m, st.ev[static_cast<size_t>(st.best)], std::move(alternatives)));
     res.effects.back().excess_share = excess_share(c.joints, before.val, m.val, floor);

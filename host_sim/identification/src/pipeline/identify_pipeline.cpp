@@ -367,7 +367,10 @@ StackedData IdentifyPipeline::prepare(JointLog&& log, bool dense, const Eigen::V
     out.notes.push_back(std::to_string(short_segments) + " segment(s) not longer than two cut-off periods (" +
                         std::to_string(2 * keep.edge) + " samples) left out: filtering would only see their ends");
   // The torques first, filtered in place; then their memory goes back before the rest is built.
+  // Dense data keep them unfiltered too (the diagnosis finds the torque's steps in them).
   out.y.resize(kept * N);
+  out.tau_raw.resize(dense ? kept : 0, N);
+  if (dense) keep.for_each([&](Eigen::Index row, Eigen::Index k) { out.tau_raw.row(k) = log.tau.row(row); });
   for (const auto& [a, b] : keep.segments) {
     if (keep.count(a, b) == 0) continue;
     for (int j = 0; j < N; ++j) filter.filtfilt(log.tau.col(j).segment(a, b - a));

@@ -39,6 +39,8 @@ struct StackedData {
   Eigen::MatrixXd q, qd, qdd;       ///< S x N filtered joint signals at the kept samples (for extra columns)
   Eigen::MatrixXd qd_raw;           ///< S x N unfiltered velocity at the kept samples (friction signs); kept
                                     ///< with dense data, else 0 x N
+  Eigen::MatrixXd tau_raw;          ///< S x N unfiltered torque at the kept samples [Nm] (the diagnosis' torque
+                                    ///< steps); kept with dense data, else 0 x N
   Eigen::MatrixXd motor_qd_raw;     ///< S x C unfiltered velocity T.row(m) qd of each coupled motor m (in the
                                     ///< pipeline's order) at the kept samples: its friction sign [rad/s]
   Eigen::VectorXd standstill_band;  ///< N: |qd_raw| below it is rest [rad/s]
