@@ -53,6 +53,17 @@ double student_t975(int dof) {
   return z + (z * z * z + z) / (4 * n) + (5 * std::pow(z, 5) + 16 * z * z * z + 3 * z) / (96 * n * n);
 }
 
+/// The 95 % half-width of the delete-a-group jackknife over K >= 2 replicates (the fits without each
+/// fold): Student's t with K - 1 degrees of freedom times the square root of (K - 1) / K times
+/// their sum of squared deviations from their mean.
+template <class Replicate>
+double jackknife_half_width(size_t K, Replicate replicate) {
+  double mean = 0, ss = 0;
+  for (size_t k = 0; k < K; ++k) mean += replicate(k) / static_cast<double>(K);
+  for (size_t k = 0; k < K; ++k) ss += (replicate(k) - mean) * (replicate(k) - mean);
+  return student_t975(static_cast<int>(K) - 1) * std::sqrt(static_cast<double>(K - 1) / static_cast<double>(K) * ss);
+}
+
 /// The local fit of joint i's residual r (S) on columns C (S x m) alone: its BIC change against r,
 /// n_eff log(RSS after / RSS before) + m log(n_eff), with n_eff the effective samples of the
 /// residual after the fit (*n_eff_after): the noise's, not the structured residual's, whose long
@@ -265,13 +276,7 @@ std::pair<double, double> delay_interval(const StackedData& d, const MatrixXd& X
   const double delta = phi[p - 1];
   double half = kZ95 * se;
   const size_t K = fold_delays.size();
-  if (K >= 2) {
-    double mean = 0, ss = 0;
-    for (double v : fold_delays) mean += v / static_cast<double>(K);
-    for (double v : fold_delays) ss += (v - mean) * (v - mean);
-    const double se_jackknife = std::sqrt(static_cast<double>(K - 1) / static_cast<double>(K) * ss);
-    half = std::max(half, student_t975(static_cast<int>(K) - 1) * se_jackknife);
-  }
+  if (K >= 2) half = std::max(half, jackknife_half_width(K, [&](size_t k) { return fold_delays[k]; }));
   double from_steps = 0, all = 0;
   for (Index k = j; k < rows; k += N) {
     const double info = c_perp[k] * c_perp[k];
@@ -297,12 +302,8 @@ void shape_band(const std::vector<double>& knots, bool without_linear,
                 curves[k]);
     if (curves[k].size() != P) return;
   }
-  const double t = student_t975(static_cast<int>(K) - 1);
   for (size_t p = 0; p < P; ++p) {
-    double mean = 0, ss = 0;
-    for (const auto& c : curves) mean += c[p] / static_cast<double>(K);
-    for (const auto& c : curves) ss += (c[p] - mean) * (c[p] - mean);
-    const double half = t * std::sqrt(static_cast<double>(K - 1) / static_cast<double>(K) * ss);
+    const double half = jackknife_half_width(K, [&](size_t k) { return curves[k][p]; });
     lo[p] = y[p] - half;
     hi[p] = y[p] + half;
   }
