@@ -311,6 +311,46 @@ TEST(DiagnoseSplines, BasisIsAPartitionOfUnityAndReproducesCubics) {
   EXPECT_TRUE(dyncal::host::spline_knots(Eigen::VectorXd::Constant(50, 1.0), 8).empty());
 }
 
+// The roughness rows give the integral of f''(x)^2 exactly, against the second differences of the
+// shape's own basis on a fine grid (trapezoid rule, an independent route), for both bases and
+// uneven knots; a line in x (the penalty's null space) costs nothing.
+TEST(DiagnoseSplines, RoughnessRowsIntegrateTheSquaredSecondDerivative) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> uniform(-1.0, 3.0);
+  Eigen::VectorXd x(400);
+  for (Eigen::Index k = 0; k < x.size(); ++k) x[k] = uniform(rng) * std::abs(uniform(rng));  // uneven quantiles
+  const std::vector<double> knots = dyncal::host::spline_knots(x, 7);
+  const double lo = knots.front(), hi = knots.back();
+  const Eigen::Index points = 200001;
+  const double h = (hi - lo) / static_cast<double>(points - 1);
+  Eigen::VectorXd grid(points);
+  for (Eigen::Index k = 0; k < points; ++k) grid[k] = lo + h * static_cast<double>(k);
+  for (const bool without_linear : {false, true}) {
+    const Eigen::MatrixXd L = dyncal::host::shape_roughness_rows(knots, without_linear);
+    const Eigen::MatrixXd B = dyncal::host::shape_basis(grid, knots, without_linear);
+    ASSERT_EQ(L.cols(), B.cols());
+    for (int trial = 0; trial < 3; ++trial) {
+      Eigen::VectorXd c(B.cols());
+      for (Eigen::Index k = 0; k < c.size(); ++k) c[k] = uniform(rng);
+      const Eigen::VectorXd f = B * c;
+      double integral = 0;
+      for (Eigen::Index k = 1; k + 1 < points; ++k) {
+        const double f2 = (f[k + 1] - 2 * f[k] + f[k - 1]) / (h * h);
+        integral += f2 * f2 * h;
+      }
+      EXPECT_NEAR((L * c).squaredNorm(), integral, 2e-3 * integral)
+          << (without_linear ? "without" : "with") << " linear, trial " << trial;
+    }
+    if (!without_linear) {  // 1 - B_1(x) - ... is not a line; a + b x in the plain basis is: its cost is 0
+      Eigen::MatrixXd A(grid.size(), B.cols() + 1);
+      A << Eigen::VectorXd::Ones(grid.size()), B;
+      const Eigen::VectorXd line = (0.3 + 1.7 * grid.array()).matrix();
+      const Eigen::VectorXd coef = A.colPivHouseholderQr().solve(line);
+      EXPECT_LT((L * coef.tail(B.cols())).norm(), 1e-9);
+    }
+  }
+}
+
 // A shape of the model's own torque leaves out its variable's constant and linear part (a linear
 // part would scale every parameter): with 1 and x beside them its columns are of full rank, where
 // the plain shape's columns (the first B-spline left out) and 1 already span x.

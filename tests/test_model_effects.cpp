@@ -62,6 +62,14 @@ TEST(ModelSpec, ShapeItemsRoundTrip) {
   EXPECT_EQ(effect_param_names(spec.effects[1]).size(), 4u);  // 6 B-splines less constant and line
   EXPECT_EQ(parse_model_spec(model_spec_name(spec), 3).effects[1].knots, spec.effects[1].knots);
   EXPECT_EQ(effect_item(parse_model_spec(model_spec_name(spec), 3).effects[0]), effect_item(spec.effects[0]));
+  // A penalised shape: its penalty after the knots, read back exactly; refused when negative or not a number.
+  const ModelSpec penalised = parse_model_spec("eq7,shape:2:q1:-1.5/0.25/2:0.0021", 3);
+  EXPECT_EQ(penalised.effects[0].penalty, 0.0021);
+  EXPECT_EQ(penalised.effects[0].knots, spec.effects[0].knots);
+  EXPECT_EQ(parse_model_spec(model_spec_name(penalised), 3).effects[0].penalty, 0.0021);
+  EXPECT_EQ(spec.effects[0].penalty, 0.0);
+  EXPECT_THROW(parse_model_spec("eq7,shape:2:q1:-1.5/0.25/2:-1", 3), InputError);
+  EXPECT_THROW(parse_model_spec("eq7,shape:2:q1:-1.5/0.25/2:x", 3), InputError);
 }
 
 // A diagnosis that refined the same shape twice (the same variable on the same joint, other knots)
@@ -510,6 +518,60 @@ TEST(EffectModelCli, DiagnosedShapeCarriesABandThatHoldsTheTruth) {
     EXPECT_GE(inside, static_cast<int>(0.9 * static_cast<double>(x.size())));
     EXPECT_LT(median_half[level], 0.25 * span);
   }
+  std::filesystem::remove_all(dir);
+}
+
+// A penalised shape in identify (the roughness rows in its least squares, model_effects.hpp's
+// penalty): on arm3 with cable drag a tanh(q1 / 0.3) on joint 2, a 20-knot spline of q1 fitted with
+// penalties rising by decades has a curve whose roughness (the integral of f''^2, from its second
+// differences) falls at every step, and under the largest it is a line (its roughness under 1e-4 of
+// the unpenalised fit's). Without the rows every fit would be the same. The curve's band (identify's
+// folds) holds the true drag under the two lightest penalties.
+TEST(EffectModelCli, PenalisedShapeSmoothsAsItsPenaltyRises) {
+  const RobotDescription robot = test_robot("arm3");
+  const double a = 0.04 * robot.tau_max[1], width = 0.3;
+  const ExtraTorque drag = [a, width](const Eigen::VectorXd& q, const Eigen::VectorXd&, const Eigen::VectorXd&,
+                                      Eigen::VectorXd& tau) { tau[1] += a * std::tanh(q[0] / width); };
+  const auto dir = temp_dir("dyncal_shape_penalty");
+  const SimulatedLog s = simulate(robot, uniform_times(500.0, 30.0), MotionClock{}, 31, 6, drag);
+  const std::string log = (dir / "l.csv").string();
+  write_csv_log(log, s.log);
+  const double lo = s.log.q.col(0).minCoeff(), hi = s.log.q.col(0).maxCoeff();
+  std::string knots;
+  for (int k = 0; k <= 21; ++k) knots += (k ? "/" : "") + std::to_string(lo + (hi - lo) * k / 21.0);
+  const std::string run = std::string("identify --robot arm3 --robots-dir ") + dyncal::test::source_dir() +
+                          "/tests/robots --data " + log + " --model eq7,shape:2:q1:" + knots;
+  std::vector<double> roughness;
+  for (const char* penalty : {"", ":1e-7", ":1e-4", ":10"}) {
+    const std::string report = (dir / "i.json").string();
+    ASSERT_EQ(run_dyncal(run + penalty + " --report " + report), 0) << penalty;
+    const nlohmann::json r = read_json(report);
+    ASSERT_EQ(r["shapes"].size(), 1u);
+    const auto x = r["shapes"][0]["curve"]["x"].get<std::vector<double>>();
+    const auto y = r["shapes"][0]["curve"]["y"].get<std::vector<double>>();
+    ASSERT_GE(x.size(), 3u);
+    const double h = x[1] - x[0];
+    double integral = 0;
+    for (size_t k = 1; k + 1 < y.size(); ++k) integral += std::pow((y[k + 1] - 2 * y[k] + y[k - 1]) / (h * h), 2) * h;
+    // The band (the folds' fits' jackknife) holds the true drag, centred as the curve is, where the
+    // spline can follow it (the two lightest penalties).
+    const auto y_lo = r["shapes"][0]["curve"]["y_lo"].get<std::vector<double>>();
+    const auto y_hi = r["shapes"][0]["curve"]["y_hi"].get<std::vector<double>>();
+    ASSERT_EQ(y_lo.size(), y.size());
+    ASSERT_EQ(y_hi.size(), y.size());
+    std::vector<double> truth(x.size());
+    double mean = 0;
+    for (size_t k = 0; k < x.size(); ++k)
+      mean += (truth[k] = a * std::tanh(x[k] / width)) / static_cast<double>(x.size());
+    int inside = 0;
+    for (size_t k = 0; k < x.size(); ++k) inside += y_lo[k] <= truth[k] - mean && truth[k] - mean <= y_hi[k];
+    std::printf("penalty '%s': roughness %.6g, truth inside the band at %d of %zu points\n", penalty, integral, inside,
+                x.size());
+    if (roughness.size() < 2) EXPECT_GE(inside, static_cast<int>(0.9 * static_cast<double>(x.size()))) << penalty;
+    roughness.push_back(integral);
+  }
+  for (size_t k = 1; k < roughness.size(); ++k) EXPECT_LT(roughness[k], roughness[k - 1]) << k;
+  EXPECT_LT(roughness.back(), 1e-4 * roughness.front());
   std::filesystem::remove_all(dir);
 }
 

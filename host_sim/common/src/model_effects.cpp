@@ -107,10 +107,12 @@ void check_shape_knots(const std::vector<double>& k, const std::string& where) {
     throw InputError(where + ": a shape's knots must be finite, increasing, at least 8 with each boundary 4 times");
 }
 
-/// "shape:J:VARIABLE:K0/K1/.../Kn" after "shape:" into a shape effect; throws InputError naming `where`.
+/// "shape:J:VARIABLE:K0/K1/.../Kn[:LAMBDA]" after "shape:" into a shape effect; throws InputError
+/// naming `where`.
 ModelEffect parse_shape_item(const std::string& rest, int num_joints, const std::string& where) {
   const size_t a = rest.find(':'), b = a == std::string::npos ? a : rest.find(':', a + 1);
-  if (b == std::string::npos) throw InputError(where + ": expected shape:J:VARIABLE:K0/K1/.../Kn");
+  if (b == std::string::npos) throw InputError(where + ": expected shape:J:VARIABLE:K0/K1/.../Kn[:LAMBDA]");
+  const size_t c = rest.find(':', b + 1);
   ModelEffect e;
   e.kind = EffectKind::shape;
   const int j = joint_number(rest.substr(0, a), num_joints);
@@ -118,7 +120,14 @@ ModelEffect parse_shape_item(const std::string& rest, int num_joints, const std:
   e.joint = j - 1;
   e.variable = rest.substr(a + 1, b - a - 1);
   parse_shape_variable(e.variable, e.joint, num_joints);
-  std::stringstream list(rest.substr(b + 1));
+  if (c != std::string::npos) {
+    const std::string lambda = rest.substr(c + 1);
+    char* end = nullptr;
+    e.penalty = std::strtod(lambda.c_str(), &end);
+    if (lambda.empty() || *end != '\0' || !std::isfinite(e.penalty) || e.penalty < 0)
+      throw InputError(where + ": a shape's penalty '" + lambda + "' is not a finite number >= 0");
+  }
+  std::stringstream list(rest.substr(b + 1, c == std::string::npos ? c : c - b - 1));
   std::string number;
   std::vector<double> distinct;
   while (std::getline(list, number, '/')) {
@@ -175,6 +184,11 @@ ModelEffect read_shape_entry(const nlohmann::json& x, int joint, int num_joints,
     e.knots.push_back(k.get<double>());
   }
   check_shape_knots(e.knots, where);
+  if (x.contains("penalty")) {
+    if (!x["penalty"].is_number() || !std::isfinite(x["penalty"].get<double>()) || x["penalty"].get<double>() < 0)
+      throw InputError(where + ": a shape's 'penalty' must be a finite number >= 0");
+    e.penalty = x["penalty"].get<double>();
+  }
   return e;
 }
 
@@ -190,6 +204,7 @@ void add_diagnosed_shape(const ModelEffect& e, ModelSpec& out, std::vector<std::
     return;
   }
   same->knots = union_of_knots(same->knots, e.knots);
+  same->penalty = std::min(same->penalty, e.penalty);
   if (skipped)
     skipped->push_back("shape of " + e.variable + " on joint " + std::to_string(e.joint + 1) +
                        " found twice: one shape on the union of their knots");
@@ -267,6 +282,11 @@ std::string effect_item(const ModelEffect& e) {
     for (size_t k = 3; k + 3 < e.knots.size(); ++k) {
       char number[32];
       std::snprintf(number, sizeof number, "%s%.17g", k == 3 ? "" : "/", e.knots[k]);
+      out += number;
+    }
+    if (e.penalty > 0) {
+      char number[32];
+      std::snprintf(number, sizeof number, ":%.17g", e.penalty);
       out += number;
     }
     return out;

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "dyncal_host/common/jackknife.hpp"
 #include "dyncal_host/common/normal_quantile.hpp"
 #include "dyncal_host/common/spline_basis.hpp"
 #include "dyncal_host/identification/methods/effect_model.hpp"
@@ -43,26 +44,11 @@ VectorXd time_derivative(const VectorXd& t, const std::vector<std::pair<Index, I
 constexpr int kKnotCounts[] = {4, 8, 16};
 /// Interior knots of the screening's splines (the middle of kKnotCounts).
 constexpr int kScreenKnots = 8;
-
-/// Student's t two-sided 95 % quantile for `dof` degrees of freedom: tabulated to 10, above by the
-/// Cornish-Fisher expansion around the normal's (error below 1e-3 there).
-double student_t975(int dof) {
-  static const double table[] = {12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228};
-  if (dof >= 1 && dof <= 10) return table[dof - 1];
-  const double z = kZ95, n = std::max(1, dof);
-  return z + (z * z * z + z) / (4 * n) + (5 * std::pow(z, 5) + 16 * z * z * z + 3 * z) / (96 * n * n);
-}
-
-/// The 95 % half-width of the delete-a-group jackknife over K >= 2 replicates (the fits without each
-/// fold): Student's t with K - 1 degrees of freedom times the square root of (K - 1) / K times
-/// their sum of squared deviations from their mean.
-template <class Replicate>
-double jackknife_half_width(size_t K, Replicate replicate) {
-  double mean = 0, ss = 0;
-  for (size_t k = 0; k < K; ++k) mean += replicate(k) / static_cast<double>(K);
-  for (size_t k = 0; k < K; ++k) ss += (replicate(k) - mean) * (replicate(k) - mean);
-  return student_t975(static_cast<int>(K) - 1) * std::sqrt(static_cast<double>(K - 1) / static_cast<double>(K) * ss);
-}
+/// The penalised shapes: kPenalisedKnots interior knots, each penalty lambda set so that the
+/// penalty's trace is rho times the (unpenalised) Gram's trace of the shape's columns, per fitted row
+/// (scale-free: the variable's unit and the torque's cancel), for rho in kPenaltyRatios.
+constexpr int kPenalisedKnots = 24;
+constexpr double kPenaltyRatios[] = {1e-1, 1, 10, 100, 1000, 1e4};
 
 /// The local fit of joint i's residual r (S) on columns C (S x m) alone: its BIC change against r,
 /// n_eff log(RSS after / RSS before) + m log(n_eff), with n_eff the effective samples of the
@@ -204,6 +190,23 @@ MatrixXd shape_columns(const CandidateContext& c, int i, const std::string& name
   return series;
 }
 
+/// Whether the model (its parameter names) already has a shape of `variable` on joint i: its
+/// smoothness was chosen by cross-validation then, and a second spline of it would refit the same
+/// function on other knots.
+bool has_shape_of(const std::vector<std::string>& model_names, int i, const std::string& variable) {
+  ModelEffect e;
+  e.kind = EffectKind::shape;
+  e.joint = i;
+  e.variable = variable;
+  e.knots = {0, 0, 0, 0, 1, 1, 1, 1};
+  std::string prefix = effect_param_names(e).front();
+  prefix.erase(prefix.find_last_of('_') + 1);  // "shape3_q3_2" -> "shape3_q3_"
+  return std::any_of(model_names.begin(), model_names.end(), [&](const std::string& n) {
+    return n.compare(0, prefix.size(), prefix) == 0 && n.size() > prefix.size() &&
+           n.find_first_not_of("0123456789", prefix.size()) == std::string::npos;
+  });
+}
+
 }  // namespace
 
 void shape(const CandidateContext& c, int i, int, std::vector<Candidate>& out) {
@@ -220,6 +223,7 @@ void shape(const CandidateContext& c, int i, int, std::vector<Candidate>& out) {
   size_t best = vars.size();
   double best_bic = INFINITY, unused = 0;
   for (size_t v = 0; v < vars.size(); ++v) {
+    if (has_shape_of(c.model_names, i, vars[v])) continue;
     std::vector<double> knots;
     const MatrixXd series = shape_columns(c, i, vars[v], kScreenKnots, tau, knots);
     if (series.cols() == 0) continue;
@@ -227,8 +231,15 @@ void shape(const CandidateContext& c, int i, int, std::vector<Candidate>& out) {
     if (bic < best_bic) best_bic = bic, best = v;
   }
   if (best == vars.size()) return;
-  const int searched = static_cast<int>(vars.size() * std::size(kKnotCounts));
-  for (int interior : kKnotCounts) {
+  const int searched = static_cast<int>(vars.size() * (std::size(kKnotCounts) + std::size(kPenaltyRatios)));
+  std::vector<int> fits(std::begin(kKnotCounts), std::end(kKnotCounts));
+  // A shape of time is not penalised: a rich basis of t, smoothed only by the penalty, reaches the
+  // cross-validation's blocks (0.5 s), and a function of t fitted on the neighbouring blocks then
+  // predicts each held-out one by interpolation, whatever the residual's cause.
+  const bool of_time = vars[best] == "t" || vars[best].find(")*t") != std::string::npos;
+  if (!of_time) fits.push_back(-kPenalisedKnots);  // penalised
+  for (const int fit : fits) {
+    const int interior = std::abs(fit);
     Candidate k;
     const MatrixXd series = shape_columns(c, i, vars[best], interior, tau, k.knots);
     if (series.cols() == 0) continue;
@@ -238,6 +249,14 @@ void shape(const CandidateContext& c, int i, int, std::vector<Candidate>& out) {
     k.variable = vars[best];
     k.searched = searched;
     k.detail = "a cubic spline of " + k.variable + " with " + std::to_string(k.knots.size() - 8) + " interior knots";
+    if (fit < 0) {
+      k.roughness = shape_roughness_rows(k.knots, shape_without_linear(k.variable));
+      double rows = 0;
+      for (Index s = 0; s < S; ++s) rows += d.fit_row[s * N + i] ? 1.0 : 0.0;
+      const double roughness = k.roughness.squaredNorm();  // tr(L^T L)
+      if (!(roughness > 0) || rows < 1) continue;
+      for (const double rho : kPenaltyRatios) k.penalty_grid.push_back(rho * series.squaredNorm() / (rows * roughness));
+    }
     k.columns = MatrixXd::Zero(S * N, series.cols());
     ModelEffect effect;
     effect.kind = EffectKind::shape;
@@ -286,27 +305,6 @@ std::pair<double, double> delay_interval(const StackedData& d, const MatrixXd& X
   *step_share = all > 0 ? from_steps / all : 0.0;
   half += *step_share * 0.5 * raw_period;
   return {delta - half, delta + half};
-}
-
-void shape_band(const std::vector<double>& knots, bool without_linear,
-                const std::vector<Eigen::VectorXd>& fold_coefficients, Index m, const std::vector<double>& y,
-                std::vector<double>& lo, std::vector<double>& hi) {
-  const size_t K = fold_coefficients.size(), P = y.size();
-  lo = hi = y;
-  if (K < 2) return;
-  std::vector<std::vector<double>> curves(K);
-  for (size_t k = 0; k < K; ++k) {
-    const VectorXd tail = fold_coefficients[k].tail(m);
-    std::vector<double> x;
-    shape_curve(knots, std::vector<double>(tail.data(), tail.data() + m), without_linear, static_cast<int>(P), x,
-                curves[k]);
-    if (curves[k].size() != P) return;
-  }
-  for (size_t p = 0; p < P; ++p) {
-    const double half = jackknife_half_width(K, [&](size_t k) { return curves[k][p]; });
-    lo[p] = y[p] - half;
-    hi[p] = y[p] + half;
-  }
 }
 
 }  // namespace dyncal::host::detail

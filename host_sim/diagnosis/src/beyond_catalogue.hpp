@@ -76,14 +76,4 @@ std::pair<double, double> delay_interval(const StackedData& d, const Eigen::Matr
                                          const std::vector<double>& fold_delays, const std::vector<char>& steps,
                                          double raw_period, double* step_share);
 
-/// A shape's pointwise 95 % band at its curve's points (shape_curve on `knots`, without_linear as
-/// its variable has it): the delete-a-group jackknife of the curve over the fits without each fold
-/// (`fold_coefficients`, K >= 2 of them, the shape's m coefficients last: variance (K - 1) / K times
-/// the sum of squared deviations at each point), times Student's t with K - 1 degrees of freedom,
-/// around the whole fit's curve y: lo = y - half, hi = y + half [Nm]. Like the delay's interval it
-/// holds the coefficients' correlation and what the model still lacks.
-void shape_band(const std::vector<double>& knots, bool without_linear,
-                const std::vector<Eigen::VectorXd>& fold_coefficients, Eigen::Index m, const std::vector<double>& y,
-                std::vector<double>& lo, std::vector<double>& hi);
-
 }  // namespace dyncal::host::detail

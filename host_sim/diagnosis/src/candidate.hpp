@@ -35,6 +35,13 @@ struct Candidate {
   bool inertia_held = false;
   std::string variable;       ///< shape: the variable its spline is of ("q3", "sgn(qd2) t", ...)
   std::vector<double> knots;  ///< shape: the spline's full knot vector (spline_basis.hpp)
+  /// A penalised shape: the rows L of its roughness (shape_roughness_rows) on its columns and the
+  /// penalties lambda its weighing chooses among by cross-validation (empty: not penalised); the
+  /// last weighing's choice (ModelEffect::penalty) and its effective parameters (CandidatePenalty).
+  Eigen::MatrixXd roughness;
+  std::vector<double> penalty_grid;
+  double penalty = 0;
+  double edf = 0;
   /// Beyond the catalogue: the effective samples of its joint's residual after its own local fit
   /// (0: not computed). BIC weighs its joint with at least this many: the noise's correlation, not
   /// that of the structured residual it explains (beyond_catalogue.hpp).
@@ -42,6 +49,8 @@ struct Candidate {
 
   /// Parameters it adds to the model: its columns less those it replaces.
   Eigen::Index added_parameters() const { return columns.cols() - static_cast<Eigen::Index>(replaces.size()); }
+  /// Parameters it adds as the evidence counts them: a penalised shape's effective ones (edf).
+  double weighed_parameters() const { return penalty_grid.empty() ? static_cast<double>(added_parameters()) : edf; }
 };
 
 }  // namespace dyncal::host::detail

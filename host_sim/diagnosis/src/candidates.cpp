@@ -545,7 +545,13 @@ std::string explain_delay(const Candidate&, const std::vector<double>& p) {
 }
 
 std::string explain_shape(const Candidate& c, const std::vector<double>&) {
-  return "structured residual left, explained by " + c.variable + " (" + c.detail +
+  std::string detail = c.detail;
+  if (c.penalty > 0) {
+    char edf[64];
+    std::snprintf(edf, sizeof edf, ", penalised to %.1f effective parameters", c.edf);
+    detail += edf;
+  }
+  return "structured residual left, explained by " + c.variable + " (" + detail +
          ") - a shape outside the catalogue: no kind of the table explains as much";
 }
 

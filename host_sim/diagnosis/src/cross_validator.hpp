@@ -4,8 +4,10 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <algorithm>
+#include <cmath>
 #include <vector>
 
+#include "dyncal_host/identification/methods/effect_model.hpp"
 #include "dyncal_host/model/stacked_data.hpp"
 
 namespace dyncal::host::detail {
@@ -14,10 +16,26 @@ using Eigen::Index;
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
+/// A candidate's roughness penalty in CrossValidator::evaluate: its ShapePenalty (column counted within
+/// the candidate's columns) and the penalties lambda to choose among (empty: shape.lambda alone). Out:
+/// the chosen lambda and its effective parameters m - lambda tr(G^-1 P) (G the penalised Gram of all
+/// rows, P the candidate's unit penalty in it: the part of the hat matrix's trace that is the
+/// candidate's).
+struct CandidatePenalty {
+  ShapePenalty shape;
+  std::vector<double> lambdas;
+  double chosen = 0;
+  double edf = 0;
+};
+
 /// Blocked cross-validation from per-fold, per-joint Gram matrices of the design [X C] and y. The
 /// base design X is fixed for a greedy step (set_base), so each candidate C only costs its cross
 /// products with X over the rows where C is not zero. The fit weighs joint j's rows by w_j
 /// (set_joint_weights; 1 by default: OLS); the RSS it reports are per joint and unweighted [Nm^2].
+/// A penalised shape (effect_model.hpp's ShapePenalty) adds w_j^2 n_j lambda |L c|^2 to the fit's
+/// criterion, n_j the joint's fitted rows in that fit (all rows, or every fold's but one): each fold
+/// carries its rows' share of it, so a fit without fold f has n_j less that fold's rows. The RSS
+/// stay the data's alone.
 class CrossValidator {
  public:
   CrossValidator(const StackedData& d, int N, const std::vector<int>& fold, int folds)
@@ -27,7 +45,8 @@ class CrossValidator {
   /// the next set_base.
   void set_joint_weights(const VectorXd& w) { w2_ = w.cwiseAbs2(); }
 
-  void set_base(const MatrixXd& X) {
+  /// The base design X ((S N) x p) and the penalties of its penalised shapes (columns of X).
+  void set_base(const MatrixXd& X, const std::vector<ShapePenalty>& penalties) {
     X_ = &X;
     const Index p = X.cols(), S = d_.t.size();
     sx_ = X.colwise().norm().transpose();
@@ -37,6 +56,7 @@ class CrossValidator {
     Gxx_all_.assign(folds_, std::vector<MatrixXd>(N_, MatrixXd::Zero(p, p)));
     gx_all_.assign(folds_, std::vector<VectorXd>(N_, VectorXd::Zero(p)));
     yy_.assign(folds_, VectorXd::Zero(N_));
+    rows_.assign(folds_, VectorXd::Zero(N_));
     for (Index s = 0; s < S; ++s) {
       const int f = fold_[s];
       for (int j = 0; j < N_; ++j) {
@@ -44,6 +64,7 @@ class CrossValidator {
         const VectorXd x = X.row(r).transpose().cwiseProduct(sx_);
         const double y = d_.y[r];
         if (!d_.fit_row[r]) continue;  // rows left out of the fit (stiction band) are not judged either
+        rows_[f][j] += 1;
         Gxx_all_[f][j].selfadjointView<Eigen::Lower>().rankUpdate(x);
         gx_all_[f][j] += x * y;
         yy_[f][j] += y * y;
@@ -54,6 +75,7 @@ class CrossValidator {
     for (auto& G : Gxx_fit_) G = MatrixXd(G.selfadjointView<Eigen::Lower>());
     for (auto& v : Gxx_all_)
       for (auto& G : v) G = MatrixXd(G.selfadjointView<Eigen::Lower>());
+    for (const ShapePenalty& pen : penalties) add_penalty(pen, sx_.segment(pen.column, pen.rows.cols()), 0, Gxx_fit_);
   }
 
   /// Out-of-fold predictions of the base design alone (each block predicted by the fit without its
@@ -84,8 +106,11 @@ class CrossValidator {
   /// *novelty: the smallest fraction of a (unit-scaled) candidate column not explained by X (1 if C
   /// is empty); near 0 means the candidate is collinear with the model and not identifiable.
   /// drop: columns of X left out of this fit (a candidate that replaces them); their coefficients 0.
+  /// penalty: the candidate's roughness penalty (CandidatePenalty), chosen among its grid by the
+  /// least validation RSS on its joint; the outputs are that fit's.
   void evaluate(const MatrixXd& C, VectorXd& val_rss, VectorXd& train_rss, VectorXd* phi_out = nullptr,
-                double* novelty = nullptr, const std::vector<Index>& drop = {}) const {
+                double* novelty = nullptr, const std::vector<Index>& drop = {},
+                CandidatePenalty* penalty = nullptr) const {
     const MatrixXd& X = *X_;
     const Index p = X.cols(), m = C.cols(), q = p + m, S = d_.t.size();
     VectorXd sc = C.colwise().norm().transpose();
@@ -149,9 +174,39 @@ class CrossValidator {
         for (int j = 0; j < N_; ++j) reduce(G_all[f][j], g_all[f][j]);
       }
     }
+    const Index kept = p - static_cast<Index>(drop.size());
     VectorXd beta;
-    solve_and_score(G_fit, g_fit, G_all, g_all, p - static_cast<Index>(drop.size()), m, val_rss, train_rss,
-                    phi_out ? &beta : nullptr, novelty);
+    if (!penalty) {
+      solve_and_score(G_fit, g_fit, G_all, g_all, kept, m, val_rss, train_rss, phi_out ? &beta : nullptr, novelty);
+    } else {
+      // Each penalty of the grid on the same Grams; the least validation RSS on its joint is kept.
+      const std::vector<double> grid =
+          penalty->lambdas.empty() ? std::vector<double>{penalty->shape.lambda} : penalty->lambdas;
+      const Index qk = kept + m;
+      std::vector<MatrixXd> P(folds_, MatrixXd::Zero(qk, qk));
+      ShapePenalty unit = penalty->shape;
+      unit.lambda = 1.0;
+      add_penalty(unit, sc.segment(unit.column, unit.rows.cols()), kept, P);
+      MatrixXd P_total = MatrixXd::Zero(qk, qk);
+      for (const auto& Pf : P) P_total += Pf;
+      double best = INFINITY;
+      std::vector<MatrixXd> G_pen(folds_);
+      for (const double lambda : grid) {
+        for (int f = 0; f < folds_; ++f) G_pen[f] = G_fit[f] + lambda * P[f];
+        VectorXd val, train, b;
+        double nov = 1;
+        solve_and_score(G_pen, g_fit, G_all, g_all, kept, m, val, train, &b, novelty ? &nov : nullptr);
+        if (!(val[penalty->shape.joint] < best)) continue;
+        best = val[penalty->shape.joint];
+        val_rss = val, train_rss = train, beta = b;
+        if (novelty) *novelty = nov;
+        penalty->chosen = lambda;
+        MatrixXd G_total = MatrixXd::Zero(qk, qk);
+        for (const auto& G : G_pen) G_total += G;
+        G_total.diagonal().array() += ridge_for(G_total);
+        penalty->edf = static_cast<double>(m) - lambda * G_total.ldlt().solve(P_total).trace();
+      }
+    }
     if (phi_out) {
       // X's columns then C's, unscaled; the dropped ones 0.
       VectorXd scale(q);
@@ -197,6 +252,16 @@ class CrossValidator {
     if (beta_out) *beta_out = beta;
   }
 
+  /// Adds penalty `pen` (its columns from offset + pen.column, scaled by `scale` as the Grams' are)
+  /// to each fold's fit Gram: w_j^2 lambda (the fold's fitted rows of joint j) L^T L.
+  void add_penalty(const ShapePenalty& pen, const VectorXd& scale, Index offset, std::vector<MatrixXd>& G) const {
+    const MatrixXd L = pen.rows * scale.asDiagonal();
+    const MatrixXd LtL = L.transpose() * L;
+    const Index m = pen.rows.cols(), at = offset + pen.column;
+    for (int f = 0; f < folds_; ++f)
+      G[f].block(at, at, m, m) += w2_[pen.joint] * pen.lambda * rows_[f][pen.joint] * LtL;
+  }
+
   static double ridge_for(const MatrixXd& G) { return 1e-12 * std::max(1.0, G.diagonal().maxCoeff()); }
 
   /// Least-squares coefficients from per-fold Gram matrices: fold_beta[f] from every fold but f,
@@ -231,6 +296,7 @@ class CrossValidator {
   std::vector<std::vector<MatrixXd>> Gxx_all_;
   std::vector<std::vector<VectorXd>> gx_all_;
   std::vector<VectorXd> yy_;
+  std::vector<VectorXd> rows_;  ///< fitted rows per fold and joint
 };
 
 }  // namespace dyncal::host::detail

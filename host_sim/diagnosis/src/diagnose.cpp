@@ -8,6 +8,8 @@
 #include <Eigen/QR>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <iomanip>
 #include <set>
 #include <sstream>
@@ -77,6 +79,7 @@ struct Model {
   MatrixXd X;
   std::vector<std::string> names;
   VectorXd phi, val, train;
+  std::vector<ShapePenalty> penalties;  ///< of its penalised shapes' columns
 };
 
 /// The model's columns a candidate replaces (Candidate::replaces), by name.
@@ -102,7 +105,12 @@ Evidence weigh(const CrossValidator& cv, Candidate& c, const Model& m, const Vec
                const VectorXd& val_before) {
   VectorXd val, train, phi_c;
   double novelty = 1;
-  cv.evaluate(c.columns, val, train, &phi_c, &novelty, replaced_columns(c, m));
+  detail::CandidatePenalty shape_penalty{{c.joints.empty() ? 0 : c.joints.front(), 0, 0.0, c.roughness},
+                                         c.penalty_grid};
+  detail::CandidatePenalty* penalty = c.penalty_grid.empty() ? nullptr : &shape_penalty;
+  cv.evaluate(c.columns, val, train, &phi_c, &novelty, replaced_columns(c, m), penalty);
+  c.penalty = shape_penalty.chosen;
+  c.edf = shape_penalty.edf;
   if (c.inertia >= 0 && phi_c[phi_c.size() - c.columns.cols() + c.inertia] < 0) {
     c = detail::drop_inertia(std::move(c));
     cv.evaluate(c.columns, val, train, &phi_c, &novelty, replaced_columns(c, m));
@@ -127,7 +135,7 @@ Evidence weigh(const CrossValidator& cv, Candidate& c, const Model& m, const Vec
       harm += std::max(0.0, after - before);  // another joint's validation made worse
     }
   }
-  e.delta_bic += static_cast<double>(c.added_parameters()) * std::log(n_all);
+  e.delta_bic += c.weighed_parameters() * std::log(n_all);
   // A candidate picked among several alternatives (the best frequency of a spectral search, ...)
   // pays for the look-elsewhere effect: 2 ln(alternatives), a Bonferroni factor in BIC units.
   e.delta_bic += 2.0 * std::log(static_cast<double>(c.searched));
@@ -153,11 +161,11 @@ int most_parsimonious(const std::vector<Candidate>& cands, const std::vector<Evi
   int pick = best;
   for (size_t k = 0; k < cands.size(); ++k) {
     const Candidate& c = cands[k];
-    if (!same_joints(c, b) || !qualifies(ev[k], o) || c.added_parameters() >= b.added_parameters()) continue;
+    if (!same_joints(c, b) || !qualifies(ev[k], o) || c.weighed_parameters() >= b.weighed_parameters()) continue;
     if (ev[static_cast<size_t>(best)].delta_bic < ev[k].delta_bic - o.bic_threshold) continue;  // the larger is needed
     const Candidate& p = cands[static_cast<size_t>(pick)];
-    if (c.added_parameters() < p.added_parameters() ||
-        (c.added_parameters() == p.added_parameters() && ev[k].delta_bic < ev[static_cast<size_t>(pick)].delta_bic))
+    if (c.weighed_parameters() < p.weighed_parameters() ||
+        (c.weighed_parameters() == p.weighed_parameters() && ev[k].delta_bic < ev[static_cast<size_t>(pick)].delta_bic))
       pick = static_cast<int>(k);
   }
   return pick;
@@ -413,6 +421,10 @@ void add_columns(const Candidate& c, Model& m) {
     names.push_back(m.names[static_cast<size_t>(k)]);
   }
   A.rightCols(c.columns.cols()) = c.columns;
+  for (ShapePenalty& pen : m.penalties)  // a penalised shape's columns move left past the replaced ones
+    pen.column -= std::count_if(replaced.begin(), replaced.end(), [&](Index k) { return k < pen.column; });
+  if (c.penalty > 0)
+    m.penalties.push_back({c.joints.front(), m.X.cols() - static_cast<Index>(replaced.size()), c.penalty, c.roughness});
   m.X = std::move(A);
   m.names = std::move(names);
   for (const auto& n : c.names) m.names.push_back(n);
@@ -436,6 +448,8 @@ DiagnosedEffect diagnosed_effect(const Candidate& c, const Model& m, const Evide
   e.alternatives = std::move(alternatives);
   e.variable = c.variable;
   e.knots = c.knots;
+  e.penalty = c.penalty;
+  e.effective_parameters = c.weighed_parameters();
   if (c.effect == Effect::shape)
     shape_curve(c.knots, e.params, shape_without_linear(c.variable), kShapeCurvePoints, e.curve_x, e.curve_y);
   return e;
@@ -456,14 +470,16 @@ void note_worse_joints(DiagnoseResult& res) {
 /// (identify's --model vocabulary) as [W E], load friction's rigid-body torque from the fit of W alone.
 Model declared_fit(const StackedData& d, const std::vector<ModelEffect>& effects, CrossValidator& cv) {
   const MatrixXd none(d.W.rows(), 0);
-  Model m{d.W, d.names, {}, {}, {}};
-  cv.set_base(m.X);
+  Model m{d.W, d.names, {}, {}, {}, {}};
+  cv.set_base(m.X, m.penalties);
   cv.evaluate(none, m.val, m.train, &m.phi);
   if (effects.empty()) return m;
   m.X = model_design(d, effects, m.phi);
+  m.penalties =
+      shape_penalties(effects, std::vector<bool>(static_cast<size_t>(effect_column_count(effects)), true), d.W.cols());
   for (const ModelEffect& e : effects)
     for (const std::string& n : effect_param_names(e)) m.names.push_back(n);
-  cv.set_base(m.X);
+  cv.set_base(m.X, m.penalties);
   cv.evaluate(none, m.val, m.train, &m.phi);
   return m;
 }
@@ -561,7 +577,7 @@ void refine_delay(const StackedData& d, const std::vector<std::pair<Index, Index
     for (Index s = 0; s < S; ++s) p[s] = m.X.row(s * N + j).head(last).dot(m.phi.head(last));
     const VectorXd column = detail::delay_column(d.t, segments, p, delta);
     for (Index s = 0; s < S; ++s) m.X(s * N + j, last) = column[s];
-    cv.set_base(m.X);
+    cv.set_base(m.X, m.penalties);
     cv.evaluate(none, m.val, m.train, &m.phi);
     if (std::abs(m.phi[last] - delta) < 1e-3 / d.rate_hz) break;
   }
@@ -598,7 +614,7 @@ bool delay_determined(const StackedData& d, const Candidate& c, const Model& bef
   notes.push_back(undetermined_delay_note(c, m.phi[m.phi.size() - 1], interval));
   library.refused.push_back(c.names.front());
   m = before;
-  cv.set_base(m.X);
+  cv.set_base(m.X, m.penalties);
   cv.evaluate(MatrixXd(d.W.rows(), 0), m.val, m.train, &m.phi);
   return false;
 }
@@ -691,7 +707,7 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
     if (io.method != "wls") return;
     weights = residual_std_per_joint(d, m.train, m.X.cols()).cwiseInverse();
     cv.set_joint_weights(weights);
-    cv.set_base(m.X);
+    cv.set_base(m.X, m.penalties);
     cv.evaluate(none, m.val, m.train, &m.phi);
   };
   reweigh();
@@ -726,7 +742,7 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
     std::vector<std::string> alternatives = indistinguishable(st.cands, st.ev, st.best, m.X, n_eff);
     const Model before = m;
     add_columns(c, m);
-    cv.set_base(m.X);
+    cv.set_base(m.X, m.penalties);
     cv.evaluate(none, m.val, m.train, &m.phi);
     std::pair<double, double> delay_95{0, 0};
     if (c.effect == Effect::torque_delay && !delay_determined(d, c, before, n_eff[c.joints.front()], weights,
@@ -740,8 +756,12 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
     }
     if (c.effect == Effect::shape) {
       DiagnosedEffect& e = res.effects.back();
-      detail::shape_band(c.knots, shape_without_linear(c.variable), cv.fold_coefficients(), c.columns.cols(), e.curve_y,
-                         e.curve_lo, e.curve_hi);
+      std::vector<std::vector<double>> folds;
+      for (const VectorXd& b : cv.fold_coefficients()) {
+        const VectorXd tail = b.tail(c.columns.cols());
+        folds.emplace_back(tail.data(), tail.data() + tail.size());
+      }
+      shape_band(c.knots, shape_without_linear(c.variable), folds, e.curve_y, e.curve_lo, e.curve_hi);
     }
     reweigh();
   }

@@ -68,6 +68,7 @@ std::optional<ModelEffect> model_effect(const DiagnosedEffect& e) {
   m.shape = e.shape;
   m.variable = e.variable;
   m.knots = e.knots;
+  m.penalty = e.penalty;
   if (m.kind == EffectKind::shape) m.shape = 0;
   if (m.kind == EffectKind::coupling) {
     m.joint2 = e.joints.back() - 1;
@@ -134,6 +135,8 @@ nlohmann::json diagnose_report_json(const DiagnoseResult& r) {
                              {"inertia_held_at_zero", e.inertia_held},
                              {"variable", e.variable},
                              {"knots", e.knots},
+                             {"penalty", e.penalty},
+                             {"effective_parameters", e.effective_parameters},
                              {"excess_share", e.excess_share},
                              {"explanation", e.explanation},
                              {"indistinguishable_from", e.alternatives}};

@@ -184,6 +184,22 @@ TermSetModel with_effect_parameters(const TermSetModel& model, const std::vector
   return out;
 }
 
+std::vector<ShapePenalty> shape_penalties(const std::vector<ModelEffect>& effects, const std::vector<bool>& use,
+                                          Index declared) {
+  std::vector<ShapePenalty> out;
+  Index column = declared;
+  size_t col = 0;
+  for (const ModelEffect& e : effects) {
+    const size_t m = effect_param_names(e).size();
+    const bool used = m > 0 && use[col];
+    if (used && e.kind == EffectKind::shape && e.penalty > 0)
+      out.push_back({e.joint, column, e.penalty, shape_roughness_rows(e.knots, shape_without_linear(e.variable))});
+    for (size_t k = 0; k < m; ++k)
+      if (use[col++]) ++column;
+  }
+  return out;
+}
+
 VectorXd effect_parameter_scales(const StackedData& d, Index declared, const TermSetModel& model,
                                  const RobotDescription& robot) {
   const Index N = d.q.cols(), S = d.t.size();

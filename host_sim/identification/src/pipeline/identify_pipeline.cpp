@@ -443,8 +443,11 @@ void IdentifyPipeline::fit(const StackedData& data, const std::vector<char>& tra
   std::unique_ptr<LeastSquaresFit> ls = make_least_squares(model_);
   Eigen::MatrixXd K;
   Eigen::VectorXd row(P);
-  // Every fitted row of the training samples, its weight from `weight` (joint).
+  // Every fitted row of the training samples, its weight from `weight` (joint); then the penalised
+  // shapes' roughness rows, sqrt(n_j lambda) L on the shape's columns, weighed as joint j's rows.
+  std::vector<double> fitted_rows(static_cast<size_t>(N), 0.0);
   auto add_rows = [&](auto weight) {
+    std::fill(fitted_rows.begin(), fitted_rows.end(), 0.0);
     for (Eigen::Index s = 0; s < S; ++s) {
       if (!train[static_cast<size_t>(s)]) continue;
       data.regressor(s, K);
@@ -452,6 +455,15 @@ void IdentifyPipeline::fit(const StackedData& data, const std::vector<char>& tra
         if (!data.fit_row[static_cast<size_t>(s * N + j)]) continue;
         row = K.row(j).transpose();
         check(ls->add_row(row.data(), data.y[s * N + j], weight(j)));
+        fitted_rows[static_cast<size_t>(j)] += 1;
+      }
+    }
+    for (const ShapePenalty& pen : penalties_) {
+      const double scale = std::sqrt(fitted_rows[static_cast<size_t>(pen.joint)] * pen.lambda);
+      for (Eigen::Index r = 0; r < pen.rows.rows(); ++r) {
+        row.setZero();
+        row.segment(pen.column, pen.rows.cols()) = scale * pen.rows.row(r).transpose();
+        check(ls->add_row(row.data(), 0.0, weight(pen.joint)));
       }
     }
   };
@@ -804,6 +816,7 @@ namespace {
 /// sample by sample: no stored prediction).
 struct Validated {
   Eigen::VectorXd phi, stdev;
+  std::vector<Eigen::VectorXd> fold_phi;  ///< the fits without each fold
   IdentifyPipeline::FitDetails details;
   std::vector<JointMetrics> joints;
   double seconds = 0;
@@ -820,7 +833,8 @@ Validated validated_fit(const IdentifyPipeline& pipe, const StackedData& data, c
   pipe.fit(data, all, v.phi, v.stdev, &v.details);
   progress.advance();
   v.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::vector<Eigen::VectorXd> fold_phi(static_cast<size_t>(folds));
+  std::vector<Eigen::VectorXd>& fold_phi = v.fold_phi;
+  fold_phi.resize(static_cast<size_t>(folds));
   for (int f = 0; f < folds; ++f) {
     std::vector<char> train(static_cast<size_t>(S));
     for (Eigen::Index s = 0; s < S; ++s) train[static_cast<size_t>(s)] = fold[static_cast<size_t>(s)] != f;
@@ -908,6 +922,8 @@ void fit_validated(const IdentifyPipeline& pipe, const StackedData& data, const 
   res.condition_number = final_fit.cond;
   res.joints = chosen.joints;
   for (int i = 0; i < P; ++i) res.params.push_back({model.names[static_cast<size_t>(i)], phi[i], stdev[i]});
+  if (folds >= 2)
+    for (const Eigen::VectorXd& f : chosen.fold_phi) res.fold_params.emplace_back(f.data(), f.data() + f.size());
   judge_parameters(pipe.scales(), final_fit, opt, pipe.prior(), model.names, res);
   res.notes.push_back(std_note(opt.method, final_fit));
   report_consistent(final_fit.consistent, opt, res);
@@ -966,7 +982,8 @@ void fit_with_effects(const RobotDescription& robot, const TermSetModel& model, 
   if (std::find(use.begin(), use.end(), false) != use.end()) {
     set_effect_columns(data, declared, opt.effects, use, tau_rb);
     const TermSetModel first_model = with_effect_parameters(model, opt.effects, use);  // first holds a reference
-    const IdentifyPipeline first(robot, opt, first_model);
+    IdentifyPipeline first(robot, opt, first_model);
+    first.set_shape_penalties(shape_penalties(opt.effects, use, declared));
     IdentifyPipeline::FitDetails details;
     Eigen::VectorXd phi, stdev;
     first.fit(data, std::vector<char>(static_cast<size_t>(S), 1), phi, stdev, &details);
@@ -990,8 +1007,8 @@ void fit_with_effects(const RobotDescription& robot, const TermSetModel& model, 
   use.assign(use.size(), true);
   set_effect_columns(data, declared, opt.effects, use, tau_rb, tau_model);
   const TermSetModel with_effects = with_effect_parameters(model, opt.effects, use);
-  const IdentifyPipeline effects_pipe(robot, opt, with_effects,
-                                      effect_parameter_scales(data, declared, with_effects, robot));
+  IdentifyPipeline effects_pipe(robot, opt, with_effects, effect_parameter_scales(data, declared, with_effects, robot));
+  effects_pipe.set_shape_penalties(shape_penalties(opt.effects, use, declared));
   fit_validated(effects_pipe, data, with_effects, fold, folds, robot, opt, res);
 }
 

@@ -15,7 +15,7 @@ namespace {
 /// arithmetic as at a fixed size.
 class RunTimeLeastSquares final : public LeastSquaresFit {
  public:
-  using Ls = StreamingLeastSquares<double, Eigen::Dynamic, max_model_params(kMaxRobotJoints)>;
+  using Ls = StreamingLeastSquares<double, Eigen::Dynamic, kMaxFitParams>;
   /// invalid_argument for a size beyond the capacity.
   UpdateStatus resize(int num_params) { return ls_.reset(num_params); }
   void reset() override { ls_.reset(); }
@@ -104,8 +104,7 @@ std::unique_ptr<LeastSquaresFit> make_least_squares(const TermSetModel& model) {
   auto ls = std::make_unique<RunTimeLeastSquares>();
   if (ls->resize(model.num_params) != UpdateStatus::ok)
     throw InputError("least squares: a model of " + std::to_string(model.num_params) +
-                     " parameters is beyond the compiled capacity of " +
-                     std::to_string(max_model_params(kMaxRobotJoints)));
+                     " parameters is beyond the compiled capacity of " + std::to_string(kMaxFitParams));
   return ls;
 }
 

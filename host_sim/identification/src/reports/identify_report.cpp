@@ -155,13 +155,21 @@ nlohmann::json fitted_shapes_json(const IdentifyResult& r) {
   }
   for (const ModelEffect& e : spec.effects) {
     if (e.kind != EffectKind::shape) continue;
-    std::vector<double> coefficients, x, y;
+    std::vector<double> coefficients, x, y, lo, hi;
+    std::vector<std::vector<double>> folds(r.fold_params.size());
     for (const std::string& name : effect_param_names(e))
-      for (const ParamEstimate& p : r.params)
-        if (p.name == name) coefficients.push_back(p.value);
-    shape_curve(e.knots, coefficients, shape_without_linear(e.variable), kShapeCurvePoints, x, y);
-    out.push_back(
-        {{"joint", e.joint + 1}, {"variable", e.variable}, {"item", effect_item(e)}, {"curve", {{"x", x}, {"y", y}}}});
+      for (size_t i = 0; i < r.params.size(); ++i)
+        if (r.params[i].name == name) {
+          coefficients.push_back(r.params[i].value);
+          for (size_t f = 0; f < folds.size(); ++f)
+            if (i < r.fold_params[f].size()) folds[f].push_back(r.fold_params[f][i]);
+        }
+    const bool without_linear = shape_without_linear(e.variable);
+    shape_curve(e.knots, coefficients, without_linear, kShapeCurvePoints, x, y);
+    nlohmann::json curve = {{"x", x}, {"y", y}};
+    shape_band(e.knots, without_linear, folds, y, lo, hi);
+    if (folds.size() >= 2 && !y.empty()) curve["y_lo"] = lo, curve["y_hi"] = hi;
+    out.push_back({{"joint", e.joint + 1}, {"variable", e.variable}, {"item", effect_item(e)}, {"curve", curve}});
   }
   return out;
 }

@@ -22,6 +22,10 @@ struct ModelEffect {
                               ///< coupling: the ratio |r| (0: 1)
   std::string variable;       ///< shape only: the spline's variable (ShapeVariable's names: "q3", "sgn(qd2)*t")
   std::vector<double> knots;  ///< shape only: the spline's full knot vector (spline_basis.hpp), boundaries 4 times
+  /// shape only: the roughness penalty lambda >= 0 [unit(x)^3] of a penalised regression spline (0:
+  /// none): a fit adds n_j lambda times the integral of the shape's f''(x)^2 (shape_roughness_rows) to
+  /// its joint j's residual sum of squares, n_j that joint's fitted rows, both weighed alike (WLS).
+  double penalty = 0;
 };
 
 /// The variable a shape effect's spline is of, on joint `joint` (0-based): its name as the diagnosis
@@ -114,7 +118,8 @@ const char* effect_kind_name(EffectKind k);
 /// The effect as a `--model` item (1-based joints): `stribeck:3:0.05`, `asymmetric_friction:2`,
 /// `velocity_power:1`, `load_friction:2`, `rotor_inertia:4`, `offset:1`, `position_periodic:3:2`,
 /// `coupling:5+6` (or `5-6`; `coupling:6+5:0.5` for a ratio other than 1), `shape:3:q3:K0/K1/.../Kn`
-/// (a shape's variable and its distinct knots, the boundaries K0 and Kn once). Numbers written with
+/// (a shape's variable and its distinct knots, the boundaries K0 and Kn once), then `:LAMBDA` for a
+/// penalised one (`shape:3:q3:K0/.../Kn:0.0021`). Numbers written with
 /// 17 significant digits (read back exactly).
 std::string effect_item(const ModelEffect& e);
 
@@ -150,7 +155,8 @@ std::string model_spec_name(const ModelSpec& spec);
 /// The effects and coupled motors of a `dyncal diagnose --report` file for an N-joint robot (its
 /// "effects" list: kind, joints, shape, sign, a shape's variable and knots; no terms). Drift has no
 /// model term: skipped, and a line saying so goes to *skipped; so does one for a shape of the same
-/// variable on the same joint found twice (one shape on the union of their knots). A torque delay
+/// variable on the same joint found twice (one shape on the union of their knots, the smaller of
+/// their penalties: the one that constrains neither). A shape's "penalty" is optional (0). A torque delay
 /// (its delay in "shape", seconds) goes to *delays (skipped and named when delays is null). Throws
 /// InputError naming the file and entry: unreadable, not JSON, not a diagnosis report, an unknown
 /// kind, joints out of range, a delay that is not finite, a shape whose variable or knots are

@@ -36,6 +36,13 @@ inline int shape_basis_columns(const std::vector<double>& knots, bool without_li
   return m > 0 ? m : 0;
 }
 
+/// A shape's roughness as rows L (2 (knots' distinct values - 1) x shape_basis_columns): for the
+/// shape f = shape_basis(., knots, without_linear) c, |L c|^2 is the integral of f''(x)^2 over the
+/// knots' span [Nm^2 / unit(x)^3], exactly (f'' is linear between knots: two Gauss-Legendre points
+/// per interval). The penalty of a penalised regression spline (O'Sullivan's, as smoothing splines
+/// have): its null space is f linear in x. Empty (0 x 0) when the shape has no columns.
+Eigen::MatrixXd shape_roughness_rows(const std::vector<double>& knots, bool without_linear);
+
 /// Points of a shape's curve in a report (diagnose's effects, identify's shapes).
 inline constexpr int kShapeCurvePoints = 101;
 
@@ -46,5 +53,15 @@ inline constexpr int kShapeCurvePoints = 101;
 /// with the model's other columns (a joint's gravity, a constant the basis nearly spans).
 void shape_curve(const std::vector<double>& knots, const std::vector<double>& coefficients, bool without_linear,
                  int points, std::vector<double>& x, std::vector<double>& y);
+
+/// A shape's pointwise 95 % band at shape_curve's points (`knots`, without_linear as its variable
+/// has it; y: that curve, centred): the delete-a-group jackknife of the curve over the fits without
+/// each fold (`fold_coefficients`: K >= 2 of them, the shape's shape_basis_columns coefficients
+/// each; jackknife.hpp), around y: lo = y - half, hi = y + half [Nm]. It holds the coefficients'
+/// correlation and what the model still lacks. lo = hi = y with fewer than two replicates or
+/// replicates of another size.
+void shape_band(const std::vector<double>& knots, bool without_linear,
+                const std::vector<std::vector<double>>& fold_coefficients, const std::vector<double>& y,
+                std::vector<double>& lo, std::vector<double>& hi);
 
 }  // namespace dyncal::host

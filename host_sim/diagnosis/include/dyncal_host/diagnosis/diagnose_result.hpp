@@ -60,6 +60,11 @@ struct DiagnosedEffect {
   bool inertia_held = false;
   std::string variable;       ///< shape: the variable its spline is of
   std::vector<double> knots;  ///< shape: the spline's full knot vector (boundaries repeated 4 times)
+  /// shape: its roughness penalty lambda (model_effects.hpp's ModelEffect::penalty; 0: none)
+  double penalty = 0;
+  /// The parameters it adds as its evidence counted them: a penalised shape's effective ones (the
+  /// trace of the hat matrix that is its), else its coefficients less the columns it replaces.
+  double effective_parameters = 0;
   /// shape: the function found at kShapeCurvePoints (spline_basis.hpp) points evenly over the knots' span (curve_x, in
   /// the variable's unit) and its torque there (curve_y [Nm]; times sgn(qd) where the variable
   /// carries the sign), for the reports' plots

@@ -93,7 +93,10 @@ struct IdentifyResult {
   std::vector<LogPrediction> other_logs;    ///< --validate-on: the final fit's prediction of each other log
   std::vector<LinkInertial> links;          ///< pcls: the final fit's consistent inertials per link
   std::vector<double> tau_model_reference;  ///< shapes of tau_model: the reference parameters (ParameterSet's)
-  bool friction_per_motor = false;          ///< a coupled motor's terms act on several joints (robot.json's coupling)
+  /// The blocked cross-validation's fits, each without one fold (params' order and count; none with
+  /// --validate-last): the delete-a-group jackknife's replicates of the shapes' bands.
+  std::vector<std::vector<double>> fold_params;
+  bool friction_per_motor = false;  ///< a coupled motor's terms act on several joints (robot.json's coupling)
   /// 1-based joints that are prismatic: their torques are forces [N], their Fc [N], Fv [N s/m], Ia [kg].
   std::vector<int> prismatic_joints;
 };

@@ -90,6 +90,23 @@ void set_effect_columns(StackedData& d, Eigen::Index declared, const std::vector
 TermSetModel with_effect_parameters(const TermSetModel& model, const std::vector<ModelEffect>& effects,
                                     const std::vector<bool>& use);
 
+/// A penalised shape's roughness penalty on a fit of [W E] (model_effects.hpp's ModelEffect::penalty):
+/// joint j's weighted RSS gains w_j^2 n_j lambda |L c|^2, with c the shape's coefficients (its m
+/// columns from `column` on), L its shape_roughness_rows (|L c|^2 the integral of f''^2) and n_j the
+/// joint's fitted rows in that fit. In least squares: the rows sqrt(n_j lambda) L on those columns,
+/// right-hand side 0, weighed as joint j's rows (O'Sullivan's penalised regression spline).
+struct ShapePenalty {
+  int joint = 0;            ///< 0-based
+  Eigen::Index column = 0;  ///< the shape's first column in [W E]
+  double lambda = 0;        ///< ModelEffect::penalty
+  Eigen::MatrixXd rows;     ///< L: r x m
+};
+
+/// The penalties of the penalised shapes among `effects` whose columns are appended (`use`, as
+/// set_effect_columns), their columns counted from `declared`.
+std::vector<ShapePenalty> shape_penalties(const std::vector<ModelEffect>& effects, const std::vector<bool>& use,
+                                          Eigen::Index declared);
+
 /// The physical scale of each appended effect parameter (identifiability.hpp's verdicts), entries
 /// declared .. P-1 of `model` (with_effect_parameters) over d (set_effect_columns): the value at which
 /// its column, at its largest on the effect's joint in this log, gives that joint's tau_max [Nm; N].

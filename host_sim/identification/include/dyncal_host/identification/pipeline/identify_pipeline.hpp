@@ -10,6 +10,7 @@
 
 #include "dyncal_host/identification/methods/butterworth.hpp"
 #include "dyncal_host/identification/methods/consistent_least_squares.hpp"
+#include "dyncal_host/identification/methods/effect_model.hpp"
 #include "dyncal_host/identification/methods/identifiability.hpp"
 #include "dyncal_host/identification/pipeline/identify.hpp"
 #include "dyncal_host/identification/pipeline/kept_samples.hpp"
@@ -96,6 +97,12 @@ class IdentifyPipeline {
 
   const TermSetModel& model() const { return model_; }
 
+  /// Penalised shapes among the model's effect columns (effect_model.hpp's shape_penalties): every
+  /// least-squares fit (ols, wls, iv's start, pcls, gd, ga, pf; not kf or rls, which take no
+  /// pseudo-rows) gains their rows, each scaled by sqrt(n_j lambda) with n_j the fit's rows of the
+  /// shape's joint and weighed as that joint's rows.
+  void set_shape_penalties(std::vector<ShapePenalty> penalties) { penalties_ = std::move(penalties); }
+
   /// A regressor column built from an unfiltered velocity's sign, and therefore low-passed in
   /// parallel at the log's rate (StackedData::filtered_terms): term t (Coulomb or power) of joint
   /// or motor m (0-based) in column col, on joint m's row, or, for a coupled motor, on every row j
@@ -145,12 +152,13 @@ class IdentifyPipeline {
   const IdentifyOptions& opt_;
   const TermSetModel& model_;
   int N, P;
-  Eigen::MatrixXd motor_;               ///< motor_velocity_map(robot_, ...): v = T qd (N x N)
-  bool robot_coupled_;                  ///< robot.json's coupling is in motor_
-  std::vector<int> coupled_;            ///< motors turning with more than their own joint (0-based)
-  std::vector<FilteredTerm> filtered_;  ///< StackedData::filtered_terms' columns
-  Eigen::VectorXd scale_;               ///< parameter_scales(robot_, model_)
-  ParameterPrior prior_;                ///< ols, wls: parameter_prior(robot_, model_, --prior-std)
+  Eigen::MatrixXd motor_;                ///< motor_velocity_map(robot_, ...): v = T qd (N x N)
+  bool robot_coupled_;                   ///< robot.json's coupling is in motor_
+  std::vector<int> coupled_;             ///< motors turning with more than their own joint (0-based)
+  std::vector<FilteredTerm> filtered_;   ///< StackedData::filtered_terms' columns
+  Eigen::VectorXd scale_;                ///< parameter_scales(robot_, model_)
+  ParameterPrior prior_;                 ///< ols, wls: parameter_prior(robot_, model_, --prior-std)
+  std::vector<ShapePenalty> penalties_;  ///< set_shape_penalties
 };
 
 /// Runs the whole `identify` job for one robot and term set; preparing the data consumes the log.

@@ -6,6 +6,7 @@
 
 #include <memory>
 
+#include "dyncal/parameter_table.hpp"
 #include "dyncal/status.hpp"
 #include "dyncal_host/model/term_set_model.hpp"
 
@@ -17,8 +18,15 @@ constexpr int max_model_params(int num_joints) {
   return (10 + kNumTerms) * num_joints;
 }
 
+/// The run-time least squares' capacity: a drive's parameter table's (lib/ parameter_table.hpp; a
+/// larger model could not be flashed), room beside a 7-joint model's declared parameters for the
+/// effect columns a diagnosis adds (a penalised shape has 27). Eigen's largest fixed-size matrix
+/// (128 KiB) holds its triangular factor.
+inline constexpr int kMaxFitParams = kTableMaxParams;
+static_assert(kMaxFitParams >= max_model_params(kMaxRobotJoints), "the least squares hold every declared model");
+
 /// lib/ StreamingLeastSquares<double, Eigen::Dynamic> (IDIM-OLS / WLS, survey Eq. 15) of `model`'s
-/// size P = model.num_params, capacity max_model_params(kMaxRobotJoints), with no rows. Throws
+/// size P = model.num_params, capacity kMaxFitParams, with no rows. Throws
 /// InputError for a model beyond that capacity.
 std::unique_ptr<LeastSquaresFit> make_least_squares(const TermSetModel& model);
 
