@@ -521,6 +521,55 @@ TEST(EffectModelCli, DiagnosedShapeCarriesABandThatHoldsTheTruth) {
   std::filesystem::remove_all(dir);
 }
 
+// The noise floor (docs/diagnose.md "How much is left") is what a model lacking nothing leaves: on a
+// log simulated with the declared model's own terms and white torque noise, the declared model's
+// validation RMS on every joint lies inside the floor's 95 % interval, and that interval is narrow
+// (within -+15 % of the floor; seeds 41-46 checked). With an offset the model lacks, the offset
+// added removes the whole excess: the interval of the share it removed holds 1.
+TEST(EffectModelCli, NoiseFloorHoldsACompleteModelsValidationError) {
+  const RobotDescription robot = test_robot("arm3");
+  const auto dir = temp_dir("dyncal_noise_floor");
+  const SimulatedLog s = simulate(robot, uniform_times(500.0, 40.0), MotionClock{}, 41, 6, {});
+  const std::string log = (dir / "l.csv").string(), report = (dir / "d.json").string();
+  write_csv_log(log, s.log);
+  ASSERT_EQ(run_dyncal(std::string("diagnose --robot arm3 --robots-dir ") + dyncal::test::source_dir() +
+                       "/tests/robots --model eq7 --data " + log + " --report " + report),
+            0);
+  const nlohmann::json d = read_json(report);
+  EXPECT_TRUE(d["effects"].empty()) << d["effects"].dump();
+  for (const auto& j : d["joints"]) {
+    const double rms = j["rms_validation_before"].get<double>(), floor = j["rms_noise_floor"].get<double>();
+    const auto interval = j["rms_noise_floor_interval"].get<std::vector<double>>();
+    std::printf("joint %d: validation RMS %.5g, noise floor %.5g (%.5g..%.5g)\n", j["joint"].get<int>(), rms, floor,
+                interval[0], interval[1]);
+    EXPECT_GE(rms, interval[0]) << j.dump();
+    EXPECT_LE(rms, interval[1]) << j.dump();
+    EXPECT_GT(interval[0], 0.85 * floor);
+    EXPECT_LT(interval[1], 1.15 * floor);
+  }
+  // An offset on joint 2 that the declared model lacks: the offset the diagnosis adds removes all of
+  // its excess, so the share's interval holds 1 and joint 2's share left holds 0.
+  const double offset = 0.03 * robot.tau_max[1];
+  const ExtraTorque shift = [offset](const Eigen::VectorXd&, const Eigen::VectorXd&, const Eigen::VectorXd&,
+                                     Eigen::VectorXd& tau) { tau[1] += offset; };
+  write_csv_log(log, simulate(robot, uniform_times(500.0, 40.0), MotionClock{}, 41, 6, shift).log);
+  ASSERT_EQ(run_dyncal(std::string("diagnose --robot arm3 --robots-dir ") + dyncal::test::source_dir() +
+                       "/tests/robots --model eq7 --data " + log + " --report " + report),
+            0);
+  const nlohmann::json e = read_json(report);
+  ASSERT_EQ(e["effects"].size(), 1u) << e["effects"].dump();
+  EXPECT_EQ(e["effects"][0]["kind"], "offset");
+  const auto share = e["effects"][0]["excess_share_interval"].get<std::vector<double>>();
+  const auto left = e["joints"][1]["excess_left_interval"].get<std::vector<double>>();
+  std::printf("offset: excess share %.4g (%.4g..%.4g), joint 2's left %.4g (%.4g..%.4g)\n",
+              e["effects"][0]["excess_share"].get<double>(), share[0], share[1],
+              e["joints"][1]["excess_left"].get<double>(), left[0], left[1]);
+  EXPECT_LE(share[0], e["effects"][0]["excess_share"].get<double>());
+  EXPECT_GE(share[1], 1.0);
+  EXPECT_LE(left[0], 0.0);
+  std::filesystem::remove_all(dir);
+}
+
 // A penalised shape in identify (the roughness rows in its least squares, model_effects.hpp's
 // penalty): on arm3 with cable drag a tanh(q1 / 0.3) on joint 2, a 20-knot spline of q1 fitted with
 // penalties rising by decades has a curve whose roughness (the integral of f''^2, from its second

@@ -107,10 +107,11 @@ class CrossValidator {
   /// is empty); near 0 means the candidate is collinear with the model and not identifiable.
   /// drop: columns of X left out of this fit (a candidate that replaces them); their coefficients 0.
   /// penalty: the candidate's roughness penalty (CandidatePenalty), chosen among its grid by the
-  /// least validation RSS on its joint; the outputs are that fit's.
+  /// least validation RSS on its joint; the outputs are that fit's. val_folds: the validation RSS
+  /// per fold (folds x N; val_rss its column sums), for a jackknife over the folds.
   void evaluate(const MatrixXd& C, VectorXd& val_rss, VectorXd& train_rss, VectorXd* phi_out = nullptr,
-                double* novelty = nullptr, const std::vector<Index>& drop = {},
-                CandidatePenalty* penalty = nullptr) const {
+                double* novelty = nullptr, const std::vector<Index>& drop = {}, CandidatePenalty* penalty = nullptr,
+                MatrixXd* val_folds = nullptr) const {
     const MatrixXd& X = *X_;
     const Index p = X.cols(), m = C.cols(), q = p + m, S = d_.t.size();
     VectorXd sc = C.colwise().norm().transpose();
@@ -177,35 +178,10 @@ class CrossValidator {
     const Index kept = p - static_cast<Index>(drop.size());
     VectorXd beta;
     if (!penalty) {
-      solve_and_score(G_fit, g_fit, G_all, g_all, kept, m, val_rss, train_rss, phi_out ? &beta : nullptr, novelty);
+      solve_and_score(G_fit, g_fit, G_all, g_all, kept, m, val_rss, train_rss, phi_out ? &beta : nullptr, novelty,
+                      val_folds);
     } else {
-      // Each penalty of the grid on the same Grams; the least validation RSS on its joint is kept.
-      const std::vector<double> grid =
-          penalty->lambdas.empty() ? std::vector<double>{penalty->shape.lambda} : penalty->lambdas;
-      const Index qk = kept + m;
-      std::vector<MatrixXd> P(folds_, MatrixXd::Zero(qk, qk));
-      ShapePenalty unit = penalty->shape;
-      unit.lambda = 1.0;
-      add_penalty(unit, sc.segment(unit.column, unit.rows.cols()), kept, P);
-      MatrixXd P_total = MatrixXd::Zero(qk, qk);
-      for (const auto& Pf : P) P_total += Pf;
-      double best = INFINITY;
-      std::vector<MatrixXd> G_pen(folds_);
-      for (const double lambda : grid) {
-        for (int f = 0; f < folds_; ++f) G_pen[f] = G_fit[f] + lambda * P[f];
-        VectorXd val, train, b;
-        double nov = 1;
-        solve_and_score(G_pen, g_fit, G_all, g_all, kept, m, val, train, &b, novelty ? &nov : nullptr);
-        if (!(val[penalty->shape.joint] < best)) continue;
-        best = val[penalty->shape.joint];
-        val_rss = val, train_rss = train, beta = b;
-        if (novelty) *novelty = nov;
-        penalty->chosen = lambda;
-        MatrixXd G_total = MatrixXd::Zero(qk, qk);
-        for (const auto& G : G_pen) G_total += G;
-        G_total.diagonal().array() += ridge_for(G_total);
-        penalty->edf = static_cast<double>(m) - lambda * G_total.ldlt().solve(P_total).trace();
-      }
+      solve_penalised(G_fit, g_fit, G_all, g_all, kept, m, sc, *penalty, val_rss, train_rss, beta, novelty, val_folds);
     }
     if (phi_out) {
       // X's columns then C's, unscaled; the dropped ones 0.
@@ -221,8 +197,8 @@ class CrossValidator {
   /// joint, the coefficients on the unit-scaled columns (*beta_out), the candidate's novelty.
   void solve_and_score(const std::vector<MatrixXd>& G_fit, const std::vector<VectorXd>& g_fit,
                        const std::vector<std::vector<MatrixXd>>& G_all, const std::vector<std::vector<VectorXd>>& g_all,
-                       Index p, Index m, VectorXd& val_rss, VectorXd& train_rss, VectorXd* beta_out,
-                       double* novelty) const {
+                       Index p, Index m, VectorXd& val_rss, VectorXd& train_rss, VectorXd* beta_out, double* novelty,
+                       MatrixXd* val_folds = nullptr) const {
     const Index q = p + m;
     std::vector<VectorXd> fold_beta;
     const VectorXd beta = fold_fits(G_fit, g_fit, fold_beta);
@@ -244,12 +220,55 @@ class CrossValidator {
       return std::max(0.0, yy_[f][j] - 2.0 * b.dot(g_all[f][j]) + b.dot(G_all[f][j] * b));
     };
     val_rss = VectorXd::Zero(N_);
+    if (val_folds) val_folds->setZero(folds_, N_);
     for (int f = 0; f < folds_; ++f)
-      for (int j = 0; j < N_; ++j) val_rss[j] += rss(fold_beta[f], f, j);
+      for (int j = 0; j < N_; ++j) {
+        const double v = rss(fold_beta[f], f, j);
+        val_rss[j] += v;
+        if (val_folds) (*val_folds)(f, j) = v;
+      }
     train_rss = VectorXd::Zero(N_);
     for (int f = 0; f < folds_; ++f)
       for (int j = 0; j < N_; ++j) train_rss[j] += rss(beta, f, j);
     if (beta_out) *beta_out = beta;
+  }
+
+  /// solve_and_score for each penalty lambda of the candidate's grid on the same Grams (its unit
+  /// penalty per fold added lambda times), the outputs those of the least validation RSS on its
+  /// joint; penalty.chosen and penalty.edf set from it.
+  void solve_penalised(const std::vector<MatrixXd>& G_fit, const std::vector<VectorXd>& g_fit,
+                       const std::vector<std::vector<MatrixXd>>& G_all, const std::vector<std::vector<VectorXd>>& g_all,
+                       Index kept, Index m, const VectorXd& sc, CandidatePenalty& penalty, VectorXd& val_rss,
+                       VectorXd& train_rss, VectorXd& beta, double* novelty, MatrixXd* val_folds) const {
+    // Each penalty of the grid on the same Grams; the least validation RSS on its joint is kept.
+    const std::vector<double> grid =
+        penalty.lambdas.empty() ? std::vector<double>{penalty.shape.lambda} : penalty.lambdas;
+    const Index qk = kept + m;
+    std::vector<MatrixXd> P(folds_, MatrixXd::Zero(qk, qk));
+    ShapePenalty unit = penalty.shape;
+    unit.lambda = 1.0;
+    add_penalty(unit, sc.segment(unit.column, unit.rows.cols()), kept, P);
+    MatrixXd P_total = MatrixXd::Zero(qk, qk);
+    for (const auto& Pf : P) P_total += Pf;
+    double best = INFINITY;
+    std::vector<MatrixXd> G_pen(folds_);
+    for (const double lambda : grid) {
+      for (int f = 0; f < folds_; ++f) G_pen[f] = G_fit[f] + lambda * P[f];
+      VectorXd val, train, b;
+      MatrixXd by_fold;
+      double nov = 1;
+      solve_and_score(G_pen, g_fit, G_all, g_all, kept, m, val, train, &b, novelty ? &nov : nullptr, &by_fold);
+      if (!(val[penalty.shape.joint] < best)) continue;
+      best = val[penalty.shape.joint];
+      val_rss = val, train_rss = train, beta = b;
+      if (val_folds) *val_folds = by_fold;
+      if (novelty) *novelty = nov;
+      penalty.chosen = lambda;
+      MatrixXd G_total = MatrixXd::Zero(qk, qk);
+      for (const auto& G : G_pen) G_total += G;
+      G_total.diagonal().array() += ridge_for(G_total);
+      penalty.edf = static_cast<double>(m) - lambda * G_total.ldlt().solve(P_total).trace();
+    }
   }
 
   /// Adds penalty `pen` (its columns from offset + pen.column, scaled by `scale` as the Grams' are)

@@ -80,7 +80,14 @@ struct Model {
   std::vector<std::string> names;
   VectorXd phi, val, train;
   std::vector<ShapePenalty> penalties;  ///< of its penalised shapes' columns
+  MatrixXd val_folds;                   ///< validation RSS per fold (folds x N)
 };
+
+/// The model's fit and validation after its design changed: the cross-validator's base set to it.
+void refit(CrossValidator& cv, Model& m) {
+  cv.set_base(m.X, m.penalties);
+  cv.evaluate(MatrixXd(m.X.rows(), 0), m.val, m.train, &m.phi, nullptr, {}, nullptr, &m.val_folds);
+}
 
 /// The model's columns a candidate replaces (Candidate::replaces), by name.
 std::vector<Index> replaced_columns(const Candidate& c, const Model& m) {
@@ -469,18 +476,15 @@ void note_worse_joints(DiagnoseResult& res) {
 /// The declared model's fit (unweighted): the compiled regressor W, then the declared effect terms
 /// (identify's --model vocabulary) as [W E], load friction's rigid-body torque from the fit of W alone.
 Model declared_fit(const StackedData& d, const std::vector<ModelEffect>& effects, CrossValidator& cv) {
-  const MatrixXd none(d.W.rows(), 0);
-  Model m{d.W, d.names, {}, {}, {}, {}};
-  cv.set_base(m.X, m.penalties);
-  cv.evaluate(none, m.val, m.train, &m.phi);
+  Model m{d.W, d.names, {}, {}, {}, {}, {}};
+  refit(cv, m);
   if (effects.empty()) return m;
   m.X = model_design(d, effects, m.phi);
   m.penalties =
       shape_penalties(effects, std::vector<bool>(static_cast<size_t>(effect_column_count(effects)), true), d.W.cols());
   for (const ModelEffect& e : effects)
     for (const std::string& n : effect_param_names(e)) m.names.push_back(n);
-  cv.set_base(m.X, m.penalties);
-  cv.evaluate(none, m.val, m.train, &m.phi);
+  refit(cv, m);
   return m;
 }
 
@@ -570,15 +574,13 @@ void refine_delay(const StackedData& d, const std::vector<std::pair<Index, Index
                   Model& m) {
   const int N = static_cast<int>(d.q.cols());
   const Index S = d.t.size(), last = m.X.cols() - 1;
-  const MatrixXd none(S * N, 0);
   for (int it = 0; it < 8; ++it) {
     const double delta = m.phi[last];
     VectorXd p(S);  // the prediction without the delay
     for (Index s = 0; s < S; ++s) p[s] = m.X.row(s * N + j).head(last).dot(m.phi.head(last));
     const VectorXd column = detail::delay_column(d.t, segments, p, delta);
     for (Index s = 0; s < S; ++s) m.X(s * N + j, last) = column[s];
-    cv.set_base(m.X, m.penalties);
-    cv.evaluate(none, m.val, m.train, &m.phi);
+    refit(cv, m);
     if (std::abs(m.phi[last] - delta) < 1e-3 / d.rate_hz) break;
   }
 }
@@ -614,46 +616,27 @@ bool delay_determined(const StackedData& d, const Candidate& c, const Model& bef
   notes.push_back(undetermined_delay_note(c, m.phi[m.phi.size() - 1], interval));
   library.refused.push_back(c.names.front());
   m = before;
-  cv.set_base(m.X, m.penalties);
-  cv.evaluate(MatrixXd(d.W.rows(), 0), m.val, m.train, &m.phi);
+  refit(cv, m);
   return false;
 }
 
-/// Per joint, the validation RSS a model lacking nothing would leave: the residual's broadband
-/// noise (noise_floor.hpp, from the declared model's residual) times the joint's fitted rows.
-VectorXd noise_floor_rss(const StackedData& d, const VectorXd& residual,
-                         const std::vector<std::pair<Index, Index>>& segments, const IdentifyOptions& io,
-                         double raw_rate_hz) {
-  const int N = static_cast<int>(d.q.cols());
-  VectorXd n = VectorXd::Zero(N);
-  for (Index r = 0; r < d.y.size(); ++r)
-    if (d.fit_row[r]) n[r % N] += 1;
-  return detail::noise_floor_per_row(d, residual, segments, io, raw_rate_hz).cwiseProduct(n);
-}
-
-/// Each joint's noise floor as an RMS (floor: RSS, over S samples as the joint metrics) and the share
-/// of the declared model's excess validation RSS above it that is left (0 where there was none).
-void set_noise_floors(DiagnoseResult& res, const VectorXd& floor, const VectorXd& declared_val, const VectorXd& val,
+/// Each joint's noise floor as an RMS (over S samples as the joint metrics) with its interval, and
+/// the share of the declared model's excess validation RSS above it that is left (0 where there was
+/// none: 1 - the share the effects removed) with its interval (noise_floor.hpp).
+void set_noise_floors(DiagnoseResult& res, const detail::NoiseFloor& floor, const Model& declared, const Model& m,
                       Index S) {
+  const VectorXd rss = floor.rss(floor.per_row), lo = floor.rss(floor.per_row_lo), hi = floor.rss(floor.per_row_hi);
+  const auto rms = [S](double v) { return std::sqrt(v / static_cast<double>(S)); };
   for (size_t j = 0; j < res.joints.size(); ++j) {
     DiagnoseJoint& jm = res.joints[j];
     const Index k = static_cast<Index>(j);
-    jm.rms_noise_floor = std::sqrt(floor[k] / static_cast<double>(S));
-    const double excess = declared_val[k] - floor[k];
-    jm.excess_left = excess > 0 ? std::clamp((val[k] - floor[k]) / excess, 0.0, 1.0) : 0.0;
+    jm.rms_noise_floor = rms(rss[k]);
+    jm.rms_noise_floor_interval = {rms(lo[k]), rms(hi[k])};
+    const double excess = declared.val[k] - rss[k];
+    jm.excess_left = excess > 0 ? std::clamp((m.val[k] - rss[k]) / excess, 0.0, 1.0) : 0.0;
+    const auto removed = detail::excess_share_interval({static_cast<int>(j)}, declared.val_folds, m.val_folds, floor);
+    jm.excess_left_interval = {1.0 - removed.second, 1.0 - removed.first};
   }
-}
-
-/// The share of the excess validation RSS (above floor) on `joints` (0-based) that went from
-/// `before` to `after`: the drop over the excess before, in [0, 1].
-double excess_share(const std::vector<int>& joints, const VectorXd& before, const VectorXd& after,
-                    const VectorXd& floor) {
-  double drop = 0, excess = 0;
-  for (int j : joints) {
-    drop += before[j] - after[j];
-    excess += std::max(0.0, before[j] - floor[j]);
-  }
-  return excess > 0 ? std::clamp(drop / excess, 0.0, 1.0) : 0.0;
 }
 
 /// A note for each joint where the last search beyond the catalogue found structure it did not
@@ -698,7 +681,6 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
   res.validation = "blocked " + std::to_string(io.folds) + "-fold cross-validation";
 
   CrossValidator cv(d, N, fold, io.folds);
-  const MatrixXd none(S * N, 0);
   Model m = declared_fit(d, io.effects, cv);
   // Gautier's weights (wls), as identify: 1 / sigma_j from the residual of the model so far,
   // re-estimated after every effect added (a joint whose error an effect removes weighs more).
@@ -707,8 +689,7 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
     if (io.method != "wls") return;
     weights = residual_std_per_joint(d, m.train, m.X.cols()).cwiseInverse();
     cv.set_joint_weights(weights);
-    cv.set_base(m.X, m.penalties);
-    cv.evaluate(none, m.val, m.train, &m.phi);
+    refit(cv, m);
   };
   reweigh();
   if (io.method == "wls") res.notes.push_back(wls_note(weights));
@@ -722,8 +703,8 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
   if (io.cutoff_hz < 0.5 * d.rate_hz) library.filter = &filter;
   library.segments = time_segments(d);
 
-  const VectorXd floor =
-      noise_floor_rss(d, d.y - declared.X * declared.phi, library.segments, io, 1.0 / log.sample_period());
+  const detail::NoiseFloor floor = detail::noise_floor(d, d.y - declared.X * declared.phi, library.segments, io,
+                                                       1.0 / log.sample_period(), fold, io.folds);
   std::set<std::string> unbounded_noted;  // one note per unbounded candidate (kind and joints)
   Stage beyond;                           // the last stage beyond the catalogue weighed
   VectorXd n_eff = VectorXd::Zero(N);
@@ -742,14 +723,15 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
     std::vector<std::string> alternatives = indistinguishable(st.cands, st.ev, st.best, m.X, n_eff);
     const Model before = m;
     add_columns(c, m);
-    cv.set_base(m.X, m.penalties);
-    cv.evaluate(none, m.val, m.train, &m.phi);
+    refit(cv, m);
     std::pair<double, double> delay_95{0, 0};
     if (c.effect == Effect::torque_delay && !delay_determined(d, c, before, n_eff[c.joints.front()], weights,
                                                               log.sample_period(), cv, m, library, delay_95, res.notes))
       continue;
     res.effects.push_back(diagnosed_effect(c, m, st.ev[static_cast<size_t>(st.best)], std::move(alternatives)));
-    res.effects.back().excess_share = excess_share(c.joints, before.val, m.val, floor);
+    res.effects.back().excess_share = detail::excess_share(c.joints, before.val, m.val, floor.rss(floor.per_row));
+    res.effects.back().excess_share_interval =
+        detail::excess_share_interval(c.joints, before.val_folds, m.val_folds, floor);
     if (c.effect == Effect::torque_delay) {
       res.effects.back().shape = m.phi[m.phi.size() - 1];
       res.effects.back().shape_interval = delay_95;
@@ -770,7 +752,7 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
   res.declared_params = declared_params(declared, m);
   res.traces = traces(d, declared.X * declared.phi, m.X * m.phi, o.max_cycles);
   res.joints = joint_metrics(d, robot, declared, m, oof_before, cv.predict_out_of_fold());
-  set_noise_floors(res, floor, declared.val, m.val, S);
+  set_noise_floors(res, floor, declared, m, S);
   note_structured_residual(res, beyond, o.min_gain);
   note_worse_joints(res);
   return res;

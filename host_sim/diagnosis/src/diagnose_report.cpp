@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <iomanip>
 #include <optional>
+#include <sstream>
 
 #include "candidates.hpp"
 #include "dyncal_host/diagnosis/diagnose.hpp"
@@ -20,8 +21,9 @@ void print_diagnose_report(std::ostream& out, const DiagnoseResult& r) {
   for (const auto& e : r.effects) {
     out << "  " << std::left << std::setw(20) << effect_name(e.kind) << std::right << " dBIC " << std::setw(8)
         << std::setprecision(4) << e.delta_bic << ", validation RSS -" << std::setprecision(3)
-        << 100 * e.validation_gain << " %, " << 100 * e.excess_share
-        << " % of the excess over the noise floor left before it\n    " << e.explanation << "\n";
+        << 100 * e.validation_gain << " %, " << 100 * e.excess_share << " % (95 % "
+        << 100 * e.excess_share_interval.first << ".." << 100 * e.excess_share_interval.second
+        << ") of the excess over the noise floor left before it\n    " << e.explanation << "\n";
     if (e.kind == Effect::torque_delay)
       out << "    delay " << 1e3 * e.shape << " ms, 95 % " << 1e3 * e.shape_interval.first << " .. "
           << 1e3 * e.shape_interval.second << " ms\n";
@@ -52,10 +54,17 @@ void print_diagnose_report(std::ostream& out, const DiagnoseResult& r) {
         << j.rms_train_after << std::setw(24) << j.rms_train_before / j.rms_tau << std::setw(8)
         << j.rms_train_after / j.rms_tau << "\n";
   }
-  out << "\njoint   noise floor [Nm]   excess left (share of the declared model's validation RSS above the floor)\n";
-  for (const auto& j : r.joints)
-    out << std::setw(5) << j.joint << std::setprecision(4) << std::setw(19) << j.rms_noise_floor << std::setw(12)
-        << std::setprecision(1) << 100 * j.excess_left << " %\n";
+  out << "\njoint   noise floor [Nm] (95 %)            excess left (95 %; share of the declared model's validation "
+         "RSS above the floor)\n";
+  for (const auto& j : r.joints) {
+    std::ostringstream band;
+    band << std::fixed << std::setprecision(4) << "(" << j.rms_noise_floor_interval.first << ".."
+         << j.rms_noise_floor_interval.second << ")";
+    out << std::fixed << std::setw(5) << j.joint << std::setprecision(4) << std::setw(13) << j.rms_noise_floor << " "
+        << std::left << std::setw(20) << band.str() << std::right << std::setprecision(1) << std::setw(9)
+        << 100 * j.excess_left << " % (" << 100 * j.excess_left_interval.first << ".."
+        << 100 * j.excess_left_interval.second << " %)\n";
+  }
   out << std::defaultfloat;
 }
 
@@ -138,6 +147,7 @@ nlohmann::json diagnose_report_json(const DiagnoseResult& r) {
                              {"penalty", e.penalty},
                              {"effective_parameters", e.effective_parameters},
                              {"excess_share", e.excess_share},
+                             {"excess_share_interval", {e.excess_share_interval.first, e.excess_share_interval.second}},
                              {"explanation", e.explanation},
                              {"indistinguishable_from", e.alternatives}};
     if (!e.curve_x.empty())
@@ -150,21 +160,24 @@ nlohmann::json diagnose_report_json(const DiagnoseResult& r) {
         {{"kind", effect_name(c.kind)}, {"joints", c.joints}, {"delta_bic", c.delta_bic}, {"reason", c.reason}});
   j["joints"] = nlohmann::json::array();
   for (const auto& m : r.joints) {
-    j["joints"].push_back({{"joint", m.joint},
-                           {"rms_train_before", m.rms_train_before},
-                           {"rms_train_after", m.rms_train_after},
-                           {"rms_validation_before", m.rms_validation_before},
-                           {"rms_validation_after", m.rms_validation_after},
-                           {"relative_rms_validation_before", m.rms_validation_before / m.rms_tau},
-                           {"relative_rms_validation_after", m.rms_validation_after / m.rms_tau},
-                           {"r2_validation_before", m.r2_validation_before},
-                           {"r2_validation_after", m.r2_validation_after},
-                           {"e_T_abs_before", m.e_T_abs_before},
-                           {"e_T_abs_after", m.e_T_abs_after},
-                           {"e_T_abs_std_before", m.e_T_abs_std_before},
-                           {"e_T_abs_std_after", m.e_T_abs_std_after},
-                           {"rms_noise_floor", m.rms_noise_floor},
-                           {"excess_left", m.excess_left}});
+    j["joints"].push_back(
+        {{"joint", m.joint},
+         {"rms_train_before", m.rms_train_before},
+         {"rms_train_after", m.rms_train_after},
+         {"rms_validation_before", m.rms_validation_before},
+         {"rms_validation_after", m.rms_validation_after},
+         {"relative_rms_validation_before", m.rms_validation_before / m.rms_tau},
+         {"relative_rms_validation_after", m.rms_validation_after / m.rms_tau},
+         {"r2_validation_before", m.r2_validation_before},
+         {"r2_validation_after", m.r2_validation_after},
+         {"e_T_abs_before", m.e_T_abs_before},
+         {"e_T_abs_after", m.e_T_abs_after},
+         {"e_T_abs_std_before", m.e_T_abs_std_before},
+         {"e_T_abs_std_after", m.e_T_abs_std_after},
+         {"rms_noise_floor", m.rms_noise_floor},
+         {"rms_noise_floor_interval", {m.rms_noise_floor_interval.first, m.rms_noise_floor_interval.second}},
+         {"excess_left", m.excess_left},
+         {"excess_left_interval", {m.excess_left_interval.first, m.excess_left_interval.second}}});
   }
   return j;
 }

@@ -75,6 +75,8 @@ struct DiagnosedEffect {
   /// The share of the affected joints' excess validation RSS this effect removed: the drop it made
   /// over what was left above the noise floor before it (DiagnoseJoint::rms_noise_floor).
   double excess_share = 0;
+  /// Its 95 % interval, as DiagnoseJoint::excess_left_interval's
+  std::pair<double, double> excess_share_interval{0, 0};
 };
 
 struct RejectedCandidate {
@@ -95,8 +97,11 @@ struct DiagnoseJoint {
   /// The validation RMS a perfect model would leave [Nm]: the log's white torque noise through the
   /// identification's low-pass (noise_floor.hpp), on the same rows
   double rms_noise_floor = 0;
+  std::pair<double, double> rms_noise_floor_interval{0, 0};  ///< its 95 % interval [Nm] (noise_floor.hpp)
   /// The share of the declared model's excess validation RSS (above the floor) still left after the effects
   double excess_left = 1;
+  /// Its 95 % interval: the folds' jackknife around the shares the floor's interval gives (diagnose.cpp)
+  std::pair<double, double> excess_left_interval{1, 1};
 };
 
 /// What the plots show, per joint (kept samples, decimated rate).
