@@ -97,10 +97,11 @@ class IdentifyPipeline {
 
   const TermSetModel& model() const { return model_; }
 
-  /// Penalised shapes among the model's effect columns (effect_model.hpp's shape_penalties): every
-  /// least-squares fit (ols, wls, iv's start, pcls, gd, ga, pf; not kf or rls, which take no
-  /// pseudo-rows) gains their rows, each scaled by sqrt(n_j lambda) with n_j the fit's rows of the
-  /// shape's joint and weighed as that joint's rows.
+  /// Penalised shapes among the model's effect columns (effect_model.hpp's shape_penalties): the
+  /// least squares of every method that fits effect terms (wls, ols; pcls, gd, ga and pf build
+  /// their problem from its triangular factor; identify refuses effects with kf and rls, and iv fits
+  /// eq7) gains their rows, each scaled by sqrt(n_j lambda) with n_j the fit's rows of the shape's
+  /// joint and weighed as that joint's rows.
   void set_shape_penalties(std::vector<ShapePenalty> penalties) { penalties_ = std::move(penalties); }
 
   /// A regressor column built from an unfiltered velocity's sign, and therefore low-passed in
