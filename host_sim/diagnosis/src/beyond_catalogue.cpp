@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "dyncal_host/common/jackknife.hpp"
+#include "dyncal_host/common/model_effects.hpp"
 #include "dyncal_host/common/normal_quantile.hpp"
 #include "dyncal_host/common/spline_basis.hpp"
 #include "dyncal_host/identification/methods/effect_model.hpp"
@@ -236,8 +237,7 @@ void shape(const CandidateContext& c, int i, int, std::vector<Candidate>& out) {
   // A shape of time is not penalised: a rich basis of t, smoothed only by the penalty, reaches the
   // cross-validation's blocks (0.5 s), and a function of t fitted on the neighbouring blocks then
   // predicts each held-out one by interpolation, whatever the residual's cause.
-  const bool of_time = vars[best] == "t" || vars[best].find(")*t") != std::string::npos;
-  if (!of_time) fits.push_back(-kPenalisedKnots);  // penalised
+  if (!shape_of_time(vars[best])) fits.push_back(-kPenalisedKnots);  // penalised
   for (const int fit : fits) {
     const int interior = std::abs(fit);
     Candidate k;

@@ -53,11 +53,16 @@ inline bool shape_without_linear(const std::string& variable) {
   return variable.rfind("tau_model", 0) == 0;
 }
 
-/// Whether e is a shape of time (variable t or sgn(qdJ)*t): a change over its log, not a property of
-/// the arm.
+/// Whether the shape variable named `variable` is time (t or sgn(qdJ)*t): a change over its log, not
+/// a property of the arm. sgn(qdJ)*tau_modelJ is not: only a name ending in ")*t" is.
+inline bool shape_of_time(const std::string& variable) {
+  const std::string& v = variable;
+  return v == "t" || (v.size() > 3 && v.compare(v.size() - 3, 3, ")*t") == 0);
+}
+
+/// Whether e is a shape of time (shape_of_time of its variable).
 inline bool shape_of_time(const ModelEffect& e) {
-  const std::string& v = e.variable;
-  return e.kind == EffectKind::shape && (v == "t" || (v.size() > 3 && v.compare(v.size() - 3, 3, ")*t") == 0));
+  return e.kind == EffectKind::shape && shape_of_time(e.variable);
 }
 
 /// Whether e is a shape of tau_model or its sign product (its variable reads the model's own torque).
