@@ -567,9 +567,10 @@ Stage choose(const detail::CandidateContext& library, const CrossValidator& cv, 
 
 /// Refines a delay just added (the last column of m.X, on joint j's rows): the column rebuilt as the
 /// secant at the current estimate (delay_column) and refitted with the whole model, until the
-/// estimate moves by less than 1e-3 of a sample (at most 8 times).
+/// estimate moves by less than 1e-3 of a sample (at most 8 times). `away` (S flags, or empty): the
+/// samples where the column is 0, so that the delay is read from the others alone.
 void refine_delay(const StackedData& d, const std::vector<std::pair<Index, Index>>& segments, int j, CrossValidator& cv,
-                  Model& m) {
+                  Model& m, const std::vector<char>& away = {}) {
   const int N = static_cast<int>(d.q.cols());
   const Index S = d.t.size(), last = m.X.cols() - 1;
   for (int it = 0; it < 8; ++it) {
@@ -577,16 +578,29 @@ void refine_delay(const StackedData& d, const std::vector<std::pair<Index, Index
     VectorXd p(S);  // the prediction without the delay
     for (Index s = 0; s < S; ++s) p[s] = m.X.row(s * N + j).head(last).dot(m.phi.head(last));
     const VectorXd column = detail::delay_column(d.t, segments, p, delta);
-    for (Index s = 0; s < S; ++s) m.X(s * N + j, last) = column[s];
+    for (Index s = 0; s < S; ++s)
+      m.X(s * N + j, last) = away.empty() || !away[static_cast<size_t>(s)] ? column[s] : 0.0;
     refit(cv, m);
     if (std::abs(m.phi[last] - delta) < 1e-3 / d.rate_hz) break;
   }
 }
 
+/// The delay's 95 % interval (detail::delay_interval) with the model m as refined.
+std::pair<double, double> interval_of(const StackedData& d, const Model& m, const VectorXd& weights, int j,
+                                      double n_eff_j, const CrossValidator& cv, const std::vector<char>& steps,
+                                      double raw_period, double* step_share) {
+  std::vector<double> fold_delays;
+  for (const VectorXd& b : cv.fold_coefficients()) fold_delays.push_back(b[b.size() - 1]);
+  return detail::delay_interval(d, m.X, m.phi, weights, j, n_eff_j, fold_delays, steps, raw_period, step_share);
+}
+
 /// A delay just added (m: the model with its column, before: without it), refined (refine_delay)
-/// with its 95 % interval (*interval). When the interval holds 0 its sign is not determined: it
-/// stands in for something else; it is named in a note, refused (not proposed again) and m goes
-/// back to `before`. Returns whether it stays.
+/// with its 95 % interval (*interval). Where the torque's steps carry some of its information, the
+/// interval is widened for them (delay_interval), and the delay is also read away from them (its
+/// column 0 on their samples: a smaller share of the information, but no sampled step's phase in
+/// it); the narrower of the two intervals is kept, with its estimate. When the interval holds 0 its
+/// sign is not determined: it stands in for something else; it is named in a note, refused (not
+/// proposed again) and m goes back to `before`. Returns whether it stays.
 bool delay_determined(const StackedData& d, const Candidate& c, const Model& before, double n_eff_j,
                       const VectorXd& weights, double raw_period, CrossValidator& cv, Model& m,
                       detail::CandidateContext& library, std::pair<double, double>& interval,
@@ -598,16 +612,31 @@ bool delay_determined(const StackedData& d, const Candidate& c, const Model& bef
   for (Index s = 0; s < S; ++s) p[s] = before.X.row(s * N + j).dot(before.phi);
   const std::vector<char> steps = detail::torque_step_samples(d, library.segments, j, p);
   refine_delay(d, library.segments, j, cv, m);
-  std::vector<double> fold_delays;
-  for (const VectorXd& b : cv.fold_coefficients()) fold_delays.push_back(b[b.size() - 1]);
   double step_share = 0;
-  interval = detail::delay_interval(d, m.X, m.phi, weights, j, n_eff_j, fold_delays, steps, raw_period, &step_share);
+  interval = interval_of(d, m, weights, j, n_eff_j, cv, steps, raw_period, &step_share);
   if (step_share >= 0.01) {
+    Model away = m;  // the delay read away from the steps
+    refine_delay(d, library.segments, j, cv, away, steps);
+    double none = 0;
+    const std::pair<double, double> away_interval =
+        interval_of(d, away, weights, j, n_eff_j, cv, std::vector<char>(steps.size(), 0), raw_period, &none);
+    const bool read_away = away_interval.second - away_interval.first < interval.second - interval.first;
     std::ostringstream note;
     note << std::setprecision(3) << "joint " << j + 1 << "'s delay: " << 100 * step_share
          << " % of what determines it comes from the torque's steps, each placed by its samples only to within a "
-            "sample; its interval is widened by that share of half a sample ("
-         << 1e3 * step_share * 0.5 * raw_period << " ms)";
+            "sample; ";
+    if (read_away) {
+      note << "read away from them (95 % " << 1e3 * away_interval.first << " .. " << 1e3 * away_interval.second
+           << " ms), narrower than with them and widened by that share of half a sample (" << 1e3 * interval.first
+           << " .. " << 1e3 * interval.second << " ms)";
+      m = std::move(away);
+      interval = away_interval;
+    } else {
+      note << "its interval is widened by that share of half a sample (" << 1e3 * step_share * 0.5 * raw_period
+           << " ms), narrower than read away from them (95 % " << 1e3 * away_interval.first << " .. "
+           << 1e3 * away_interval.second << " ms)";
+      refit(cv, m);  // the cross-validator back on m's design
+    }
     notes.push_back(note.str());
   }
   if (interval.first > 0 || interval.second < 0) return true;
