@@ -133,28 +133,31 @@ class CrossValidator {
       }
     }
     if (m > 0) {
-      VectorXd c(m), x(p);  // one row's, allocated once
-      MatrixXd xc(p, m), cc(m, m);
-      for (Index s = 0; s < S; ++s) {
-        const int f = fold_[s];
+      // The fitted rows where C is not zero, by fold and joint; each group's cross products at once.
+      std::vector<char> nonzero(static_cast<size_t>(C.rows()), 0);  // read column by column: C is column-major
+      for (Index k = 0; k < m; ++k)
+        for (Index r = 0; r < C.rows(); ++r) nonzero[static_cast<size_t>(r)] |= C(r, k) != 0.0;
+      std::vector<std::vector<std::vector<Index>>> rows(folds_, std::vector<std::vector<Index>>(N_));
+      for (Index s = 0; s < S; ++s)
         for (int j = 0; j < N_; ++j) {
           const Index r = s * N_ + j;
-          if (!d_.fit_row[r]) continue;
-          c = C.row(r).transpose().cwiseProduct(sc);
-          if (c.isZero(0.0)) continue;
-          x = X.row(r).transpose().cwiseProduct(sx_);
-          const double y = d_.y[r];
-          xc.noalias() = x * c.transpose();
-          cc.noalias() = c * c.transpose();
+          if (d_.fit_row[r] && nonzero[static_cast<size_t>(r)]) rows[fold_[s]][j].push_back(r);
+        }
+      for (int f = 0; f < folds_; ++f)
+        for (int j = 0; j < N_; ++j) {
+          const std::vector<Index>& at = rows[f][j];
+          if (at.empty()) continue;
+          const MatrixXd Xb = X(at, Eigen::all) * sx_.asDiagonal(), Cb = C(at, Eigen::all) * sc.asDiagonal();
+          const MatrixXd xc = Xb.transpose() * Cb, cc = Cb.transpose() * Cb;
+          const VectorXd cy = Cb.transpose() * d_.y(at);
           auto add = [&](MatrixXd& G, VectorXd& g, double w2) {  // the lower-left block: at the end
             G.topRightCorner(p, m) += w2 * xc;
             G.bottomRightCorner(m, m) += w2 * cc;
-            g.tail(m) += w2 * y * c;
+            g.tail(m) += w2 * cy;
           };
           add(G_all[f][j], g_all[f][j], 1.0);
           add(G_fit[f], g_fit[f], w2_[j]);
         }
-      }
       auto mirror = [&](MatrixXd& G) { G.bottomLeftCorner(m, p) = G.topRightCorner(p, m).transpose(); };
       for (int f = 0; f < folds_; ++f) {
         mirror(G_fit[f]);

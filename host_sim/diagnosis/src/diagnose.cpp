@@ -221,18 +221,18 @@ std::vector<std::string> indistinguishable(const std::vector<Candidate>& cands, 
   return out;
 }
 
-/// The strongest rejected candidate of each kind (smallest BIC change) and why it was rejected.
-std::vector<RejectedCandidate> strongest_rejected(const std::vector<Candidate>& cands, const std::vector<Evidence>& ev,
-                                                  double bic_threshold) {
+/// The strongest rejected candidate of each kind (smallest BIC change) and why it was rejected, among
+/// `weighed` (each candidate with its evidence: the catalogue's and those beyond it, not copied).
+std::vector<RejectedCandidate> strongest_rejected(
+    const std::vector<std::pair<const Candidate*, const Evidence*>>& weighed, double bic_threshold) {
   std::vector<RejectedCandidate> out;
   for (const detail::EffectSpec& spec : detail::effect_specs()) {
-    int top = -1;
-    for (size_t c = 0; c < cands.size(); ++c)
-      if (cands[c].effect == spec.effect && (top < 0 || ev[c].delta_bic < ev[static_cast<size_t>(top)].delta_bic))
-        top = static_cast<int>(c);
-    if (top < 0) continue;
-    const Candidate& c = cands[static_cast<size_t>(top)];
-    const Evidence& e = ev[static_cast<size_t>(top)];
+    const std::pair<const Candidate*, const Evidence*>* top = nullptr;
+    for (const auto& w : weighed)
+      if (w.first->effect == spec.effect && (!top || w.second->delta_bic < top->second->delta_bic)) top = &w;
+    if (!top) continue;
+    const Candidate& c = *top->first;
+    const Evidence& e = *top->second;
     RejectedCandidate rc{c.effect, {}, e.delta_bic, e.gain, ""};
     for (int j : c.joints) rc.joints.push_back(j + 1);
     std::ostringstream why;
@@ -517,20 +517,36 @@ Stage weigh_stage(const detail::CandidateContext& library, bool catalogue, const
   return st;
 }
 
+/// A copy of `stage` that takes its candidates' columns ((S N) x m each, the bulk of a stage); `stage`
+/// keeps the rest (for note_structured_residual), its candidates without columns.
+Stage columns_moved(Stage& stage) {
+  Stage out;
+  out.ev = stage.ev;
+  out.best = stage.best;
+  for (Candidate& c : stage.cands) {
+    MatrixXd columns = std::move(c.columns);
+    out.cands.push_back(c);
+    out.cands.back().columns = std::move(columns);
+  }
+  return out;
+}
+
 /// Whether the best candidate beyond the catalogue is taken instead of the catalogue's: when no
 /// kind of the table qualifies, or when it acts on a joint of the table's choice and its BIC change
 /// is lower by more than the evidence threshold, taken with the same n_eff as the table's (the
 /// residual's; the parsimony rule's yardstick). Where a kind of the table explains as much, the
 /// table's kind wins: it is smaller and has physics.
-bool beyond_wins(const CrossValidator& cv, const Stage& table, const Stage& beyond, const Model& m,
-                 const VectorXd& n_eff, const VectorXd& declared_val, const DiagnoseOptions& o) {
+bool beyond_wins(const CrossValidator& cv, const Stage& table, Stage& beyond, const Model& m, const VectorXd& n_eff,
+                 const VectorXd& declared_val, const DiagnoseOptions& o) {
   if (beyond.best < 0) return false;
   if (table.best < 0) return true;
   const Candidate& t = table.cands[static_cast<size_t>(table.best)];
-  Candidate b = beyond.cands[static_cast<size_t>(beyond.best)];
+  Candidate& b = beyond.cands[static_cast<size_t>(beyond.best)];  // weighed again as it is, n_eff_after aside
   if (std::find(t.joints.begin(), t.joints.end(), b.joints.front()) == t.joints.end()) return false;
+  const double n_eff_after = b.n_eff_after;
   b.n_eff_after = 0;
   const Evidence e = weigh(cv, b, m, n_eff, declared_val);
+  b.n_eff_after = n_eff_after;
   return e.delta_bic < table.ev[static_cast<size_t>(table.best)].delta_bic - o.bic_threshold;
 }
 
@@ -554,13 +570,12 @@ Stage choose(const detail::CandidateContext& library, const CrossValidator& cv, 
   Stage st = weigh_stage(library, true, cv, m, n_eff, declared_val, step, o, unbounded_noted, res.notes);
   const std::vector<int> on = st.best >= 0 ? st.cands[static_cast<size_t>(st.best)].joints : std::vector<int>{};
   beyond = weigh_stage(library, false, cv, m, n_eff, declared_val, step, o, unbounded_noted, res.notes, on);
-  if (beyond_wins(cv, st, beyond, m, n_eff, declared_val, o)) return beyond;
+  if (beyond_wins(cv, st, beyond, m, n_eff, declared_val, o)) return columns_moved(beyond);
   if (st.best < 0) {
-    for (size_t c = 0; c < beyond.cands.size(); ++c) {
-      st.cands.push_back(beyond.cands[c]);
-      st.ev.push_back(beyond.ev[c]);
-    }
-    res.rejected = strongest_rejected(st.cands, st.ev, o.bic_threshold);
+    std::vector<std::pair<const Candidate*, const Evidence*>> weighed;
+    for (const Stage* stage : {&st, &beyond})
+      for (size_t c = 0; c < stage->cands.size(); ++c) weighed.emplace_back(&stage->cands[c], &stage->ev[c]);
+    res.rejected = strongest_rejected(weighed, o.bic_threshold);
   }
   return st;
 }
