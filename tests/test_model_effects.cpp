@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -648,6 +649,36 @@ TEST(EffectModelCli, Tx40DiagnosisReportFedBackToIdentify) {
   EXPECT_LT(d["joints"][4]["r2_validation_before"].get<double>(), 0.7);
   EXPECT_GE(r["joints"][4]["r2_validation"].get<double>(), 0.9);
   EXPECT_GE(r["joints"][5]["r2_validation"].get<double>(), 0.9);
+  // Before and after: the note's "without" is what identify gives without the effect terms (its own
+  // run, with the coupled motor the diagnosis found), its "with" the report's; a joint they make
+  // worse is named.
+  std::string motors;
+  for (const auto& e : d["effects"])
+    if (e["kind"] == "coupled_motor") motors += "," + e["item"].get<std::string>();
+  ASSERT_EQ(run_dyncal("identify" + data + " --model eq7" + motors + " --report " + (dir / "plain.json").string()), 0);
+  const nlohmann::json plain = read_json(dir / "plain.json");
+  std::string note;
+  for (const auto& n : r["notes"])
+    if (n.get<std::string>().rfind("effects: validation RMS per joint without -> with them", 0) == 0) note = n;
+  ASSERT_FALSE(note.empty());
+  for (int j = 0; j < 6; ++j) {
+    const std::string key = " " + std::to_string(j + 1) + ": ";
+    const size_t at = note.find(key);
+    ASSERT_NE(at, std::string::npos) << note;
+    double without = 0, with = 0;
+    ASSERT_EQ(std::sscanf(note.c_str() + at + key.size(), "%lf -> %lf", &without, &with), 2) << note;
+    const double plain_rms = plain["joints"][j]["rms_validation"].get<double>();
+    const double effects_rms = r["joints"][j]["rms_validation"].get<double>();
+    EXPECT_NEAR(without, plain_rms, 1e-3 * plain_rms) << "joint " << j + 1;
+    EXPECT_NEAR(with, effects_rms, 1e-3 * effects_rms) << "joint " << j + 1;
+    bool named = false;
+    for (const auto& n : r["notes"]) {
+      const std::string text = n.get<std::string>();
+      named = named || (text.rfind("effects: the validation RMS rises", 0) == 0 &&
+                        text.find(" " + std::to_string(j + 1) + " (") != std::string::npos);
+    }
+    EXPECT_EQ(named, effects_rms > plain_rms) << "joint " << j + 1;
+  }
   std::filesystem::remove_all(dir);
 }
 

@@ -880,9 +880,11 @@ std::string std_note(const std::string& method, const IdentifyPipeline::FitDetai
   return line;
 }
 
-void fit_validated(const IdentifyPipeline& pipe, const StackedData& data, const TermSetModel& model,
-                   const std::vector<int>& fold, int folds, const RobotDescription& robot, const IdentifyOptions& opt,
-                   IdentifyResult& res) {
+/// The validated fit of `pipe` (the final fit on all rows, the folds' fits sharing its decision; under a
+/// prior, the data's weight chosen by the cross-validation) into res. Returns that data weight.
+double fit_validated(const IdentifyPipeline& pipe, const StackedData& data, const TermSetModel& model,
+                     const std::vector<int>& fold, int folds, const RobotDescription& robot, const IdentifyOptions& opt,
+                     IdentifyResult& res) {
   const int N = model.num_joints, P = model.num_params;
   const Eigen::Index S = data.t.size();
 
@@ -933,6 +935,7 @@ void fit_validated(const IdentifyPipeline& pipe, const StackedData& data, const 
     res.notes.push_back("sign constraints: " + names +
                         " held at 0 (negative without the constraint: friction and rotor inertia cannot be)");
   }
+  return final_fit.data_weight;
 }
 
 }  // namespace
@@ -964,6 +967,41 @@ int assign_folds(const IdentifyOptions& opt, Eigen::Index S, double rate_hz, std
                      std::to_string(opt.block_seconds).substr(0, 4) + " s blocks";
   }
   return folds;
+}
+
+/// Before and after the effects: `model` (the declared terms and coupled motors) without the effect
+/// terms, fitted and validated on the same rows and folds with the data weight the effects' fit
+/// took, its validation RMS beside theirs per joint in a note, each joint the effects make worse
+/// named with its rise (any rise, as diagnose names one: the report never hides a joint they harm).
+/// data's effect columns are dropped (its W back to model's).
+void note_before_after_effects(const RobotDescription& robot, const TermSetModel& model, const IdentifyOptions& opt,
+                               StackedData& data, Eigen::Index declared, const std::vector<int>& fold, int folds,
+                               double data_weight, IdentifyResult& res) {
+  data.W.conservativeResize(Eigen::NoChange, declared);
+  data.names.resize(static_cast<size_t>(declared));
+  const IdentifyPipeline pipe(robot, opt, model);
+  Progress progress("identify: the declared model alone, for before and after", folds + 1.0, "fits");
+  const Validated alone = validated_fit(pipe, data, fold, folds, robot.tau_max, data_weight, progress);
+  std::string line =
+      "effects: validation RMS per joint without -> with them [Nm] (the model without its effect terms, its coupled "
+      "motors kept, on the same folds):";
+  std::string worse;
+  for (size_t j = 0; j < alone.joints.size() && j < res.joints.size(); ++j) {
+    char v[96];
+    std::snprintf(v, sizeof v, "%s %d: %.4g -> %.4g", j ? "," : "", res.joints[j].joint, alone.joints[j].rms,
+                  res.joints[j].rms);
+    line += v;
+    if (res.joints[j].rms > alone.joints[j].rms) {
+      std::snprintf(v, sizeof v, "%s%d (%+.2g %%)", worse.empty() ? "" : ", ", res.joints[j].joint,
+                    100.0 * (res.joints[j].rms / alone.joints[j].rms - 1.0));
+      worse += v;
+    }
+  }
+  res.notes.push_back(line);
+  if (!worse.empty())
+    res.notes.push_back("effects: the validation RMS rises with them on joint " + worse +
+                        ": there they do not improve the model out of sample (fitted together, effects found one at "
+                        "a time can trade with each other or with the model)");
 }
 
 /// Effect terms (model_effects.hpp): their columns appended to the regressor and fitted by this
@@ -1009,7 +1047,8 @@ void fit_with_effects(const RobotDescription& robot, const TermSetModel& model, 
   const TermSetModel with_effects = with_effect_parameters(model, opt.effects, use);
   IdentifyPipeline effects_pipe(robot, opt, with_effects, effect_parameter_scales(data, declared, with_effects, robot));
   effects_pipe.set_shape_penalties(shape_penalties(opt.effects, use, declared));
-  fit_validated(effects_pipe, data, with_effects, fold, folds, robot, opt, res);
+  const double data_weight = fit_validated(effects_pipe, data, with_effects, fold, folds, robot, opt, res);
+  note_before_after_effects(robot, model, opt, data, declared, fold, folds, data_weight, res);
 }
 
 /// The notes of the model's rotor inertia (not modelled, or included in a base parameter) and of
