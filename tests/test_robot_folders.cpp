@@ -202,11 +202,9 @@ TEST_P(RobotFolderFits, PhysicallyConsistentLeastSquares) {
 // consistent, the report's note saying how far above least squares' minimum the search ended and
 // that the range did not limit it, and the cross-validated RMS within 5 % of WLS's on every joint
 // for gd and ga (measured: within 3.3 %; on cobot7 the consistency constraint binds, 1.8 and 1.9
-// chi-square units above least squares, and there is no pcls prior), 20 % for the particle filter,
-// whose posterior mean from 120 particles and 1500 evaluations each is a sampler's estimate: on
-// cobot7 its worst joint lands 6 to 17 % above WLS across seeds 1 to 5 (93 to 800 chi-square units
-// above least squares; measured with and without identify's iterated weights alike); its note says
-// how far.
+// chi-square units above least squares, and there is no pcls prior), 10 % for the particle filter,
+// whose posterior mean from 120 particles and 1500 evaluations each is a sampler's estimate
+// (cobot7: 165 chi-square units above least squares, joint 1 8.5 % above WLS; its note says so).
 TEST_P(RobotFolderFits, OptimisersFitAsWellAsLeastSquares) {
   const RobotDescription robot = test_robot(GetParam());
   const SimulatedLog s = simulate(robot, 3);
@@ -227,7 +225,7 @@ TEST_P(RobotFolderFits, OptimisersFitAsWellAsLeastSquares) {
       std::printf("%s\n", n.c_str());
     }
     EXPECT_EQ(notes, 1);
-    const double factor = std::string(m) == "pf" ? 1.20 : 1.05;
+    const double factor = std::string(m) == "pf" ? 1.10 : 1.05;
     for (int j = 0; j < robot.num_joints; ++j) {
       SCOPED_TRACE("joint " + std::to_string(j + 1));
       EXPECT_LE(r.joints[static_cast<size_t>(j)].rms, factor * w.joints[static_cast<size_t>(j)].rms);

@@ -22,7 +22,6 @@
 #include "dyncal_host/identification/methods/butterworth.hpp"
 #include "dyncal_host/identification/methods/effect_model.hpp"
 #include "dyncal_host/identification/methods/signal.hpp"
-#include "dyncal_host/identification/pipeline/recursive_fit.hpp"
 #include "dyncal_host/model/stacked_data.hpp"
 #include "harmonic_fit.hpp"
 #include "noise_floor.hpp"
@@ -503,15 +502,6 @@ Stage weigh_stage(const detail::CandidateContext& library, bool catalogue, const
   const std::string what = catalogue ? "" : " beyond the catalogue";
   st.cands = detail::candidate_library(
       library, catalogue, "diagnose: step " + std::to_string(step + 1) + ", building candidates" + what, joints);
-  // identify fits at most kMaxFitParams parameters (the drive table's capacity): a candidate that would
-  // take the model beyond it is not weighed, since identify could not fit the model it would report.
-  const auto too_large = [&](const Candidate& c) { return m.X.cols() + c.columns.cols() > kMaxFitParams; };
-  const size_t before = st.cands.size();
-  st.cands.erase(std::remove_if(st.cands.begin(), st.cands.end(), too_large), st.cands.end());
-  if (st.cands.size() < before && unbounded_noted.insert("capacity").second)
-    notes.push_back("candidates that would take the model (" + std::to_string(m.X.cols()) +
-                    " parameters) beyond identify's " + std::to_string(kMaxFitParams) +
-                    " (the drive table's capacity) are not weighed, from step " + std::to_string(step + 1) + " on");
   // Selection on validation error only: the largest relative validation gain among candidates
   // whose BIC evidence is very strong and whose parameters are physical.
   st.ev = weigh_all(cv, st.cands, m, n_eff, declared_val, step);
@@ -734,12 +724,8 @@ DiagnoseResult diagnose(const RobotDescription& robot, const JointLog& log, cons
 
   CrossValidator cv(d, N, fold, io.folds);
   Model m = declared_fit(d, io.effects, cv);
-  // Gautier's weights (wls): 1 / sigma_j from the residual of the model so far (first the declared
-  // model's OLS fit), re-estimated after every effect added (a joint whose error an effect removes
-  // weighs more). One re-estimate a step, not identify's fixed point (joint_weights.hpp): iterated to
-  // it here, a joint with an effect not yet found weighs ever less against the others before the
-  // search has looked at it, and the search then finds less (tried: 2 of seed 5's 18 outside cases
-  // lost, docs/diagnose.md).
+  // Gautier's weights (wls), as identify: 1 / sigma_j from the residual of the model so far,
+  // re-estimated after every effect added (a joint whose error an effect removes weighs more).
   VectorXd weights = VectorXd::Ones(N);
   auto reweigh = [&] {
     if (io.method != "wls") return;

@@ -165,36 +165,26 @@ bool is_consistent_method(const std::string& m) {
 
 namespace {
 
-/// Eigen-decomposition of a symmetric positive semi-definite matrix H, with what it leaves unseen.
-/// Decomposed as S H S with S = diag(1 / sqrt(H_ii)) (Jacobi's scaling; 1 where H_ii = 0): the
-/// parameters' scales span many decades (an inertia of a small link against a prismatic joint's
-/// force), and a relative rank tolerance applies to a matrix of unit diagonal, not to the raw one,
-/// where a direction the prior fixes can fall below it for its units alone. g lies in H's range iff
-/// S g lies in S H S's, and g^T H^+ g = (S g)^T (S H S)^+ (S g) there.
+/// Eigen-decomposition of a symmetric positive semi-definite matrix, with what it leaves unseen.
 struct Spectrum {
-  explicit Spectrum(const Eigen::MatrixXd& H) : scale(H.rows()) {
-    for (Eigen::Index i = 0; i < H.rows(); ++i) scale[i] = H(i, i) > 0 ? 1.0 / std::sqrt(H(i, i)) : 1.0;
-    es.compute(scale.asDiagonal() * H * scale.asDiagonal());
+  explicit Spectrum(const Eigen::MatrixXd& H) : es(H) {
     // Numerical rank: a prior's information can be 1e-12 of the data's and is still information.
     tolerance = 1e-14 * std::max(es.eigenvalues().cwiseAbs().maxCoeff(), 1e-300);
   }
   /// Whether g lies in the matrix's range (no component along an eigenvalue below the tolerance).
   bool sees(const Eigen::VectorXd& g) const {
-    const Eigen::VectorXd h = scale.cwiseProduct(g);
     double unseen = 0;
-    for (Eigen::Index i = 0; i < h.size(); ++i)
-      if (es.eigenvalues()[i] < tolerance) unseen += std::pow(es.eigenvectors().col(i).dot(h), 2);
-    return unseen <= 1e-12 * h.squaredNorm();
+    for (Eigen::Index i = 0; i < g.size(); ++i)
+      if (es.eigenvalues()[i] < tolerance) unseen += std::pow(es.eigenvectors().col(i).dot(g), 2);
+    return unseen <= 1e-12 * g.squaredNorm();
   }
   /// g^T H^+ g.
   double quadratic(const Eigen::VectorXd& g) const {
-    const Eigen::VectorXd h = scale.cwiseProduct(g);
     double q = 0;
-    for (Eigen::Index i = 0; i < h.size(); ++i)
-      if (es.eigenvalues()[i] >= tolerance) q += std::pow(es.eigenvectors().col(i).dot(h), 2) / es.eigenvalues()[i];
+    for (Eigen::Index i = 0; i < g.size(); ++i)
+      if (es.eigenvalues()[i] >= tolerance) q += std::pow(es.eigenvectors().col(i).dot(g), 2) / es.eigenvalues()[i];
     return q;
   }
-  Eigen::VectorXd scale;
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es;
   double tolerance = 0;
 };

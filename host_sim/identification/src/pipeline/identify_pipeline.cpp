@@ -13,7 +13,6 @@
 #include "dyncal_host/identification/methods/autocorrelation.hpp"
 #include "dyncal_host/identification/methods/effect_model.hpp"
 #include "dyncal_host/identification/methods/instrumental_variables.hpp"
-#include "dyncal_host/identification/methods/joint_weights.hpp"
 #include "dyncal_host/identification/methods/sign_constrained.hpp"
 #include "dyncal_host/identification/methods/signal.hpp"
 #include "dyncal_host/identification/pipeline/parameter_prior.hpp"
@@ -447,7 +446,7 @@ void IdentifyPipeline::fit(const StackedData& data, const std::vector<char>& tra
   // Every fitted row of the training samples, its weight from `weight` (joint); then the penalised
   // shapes' roughness rows, sqrt(n_j lambda) L on the shape's columns, weighed as joint j's rows.
   std::vector<double> fitted_rows(static_cast<size_t>(N), 0.0);
-  auto add_rows = [&](auto weight, JointGrams* grams) {
+  auto add_rows = [&](auto weight) {
     std::fill(fitted_rows.begin(), fitted_rows.end(), 0.0);
     for (Eigen::Index s = 0; s < S; ++s) {
       if (!train[static_cast<size_t>(s)]) continue;
@@ -456,11 +455,9 @@ void IdentifyPipeline::fit(const StackedData& data, const std::vector<char>& tra
         if (!data.fit_row[static_cast<size_t>(s * N + j)]) continue;
         row = K.row(j).transpose();
         check(ls->add_row(row.data(), data.y[s * N + j], weight(j)));
-        if (grams) grams->add(j, row.data(), data.y[s * N + j]);
         fitted_rows[static_cast<size_t>(j)] += 1;
       }
     }
-    if (grams) grams->finish();
     for (const ShapePenalty& pen : penalties_) {
       const double scale = std::sqrt(fitted_rows[static_cast<size_t>(pen.joint)] * pen.lambda);
       for (Eigen::Index r = 0; r < pen.rows.rows(); ++r) {
@@ -470,17 +467,12 @@ void IdentifyPipeline::fit(const StackedData& data, const std::vector<char>& tra
       }
     }
   };
-  // Every method but ols weighs joint j's rows by 1 / sigma_j (Gautier's WLS weights; KF/RLS noise):
-  // the per-joint Grams of this first pass iterate them from the OLS residual's (joint_weights.hpp).
-  const bool weighted = opt_.method != "ols";
-  std::unique_ptr<JointGrams> grams = weighted ? std::make_unique<JointGrams>(N, P) : nullptr;
-  add_rows([](int) { return 1.0; }, grams.get());
+  add_rows([](int) { return 1.0; });
   // OLS of the parameters the data determine (white noise: the weights need only a fit).
   Eigen::VectorXd ols_std;
   least_squares(*ls, dropped, 1.0, false, phi, ols_std, nullptr, nullptr, nullptr);
-  Eigen::VectorXd sigma = ols_joint_noise(data, train, phi, P);
-  if (weighted) sigma = iterated_joint_noise(*grams, penalties_, sigma);
-  grams.reset();
+  // Per-joint residual std of the OLS fit (Gautier's WLS weights; KF/RLS noise).
+  const Eigen::VectorXd sigma = ols_joint_noise(data, train, phi, P);
   // The final fit decides with the residual's autocorrelation (the std it reports are inflated so).
   const double decision_inflation = decided   ? decided->decision_inflation
                                     : details ? streamed_autocorrelation_inflation(data, train, phi)
@@ -499,7 +491,7 @@ void IdentifyPipeline::fit(const StackedData& data, const std::vector<char>& tra
     fit_least_squares_with_prior(*ls, dropped, decision_inflation, data_weight, phi, stdev, details, map_data);
   } else if (m == "wls" || m == "iv" || m == "pcls" || is_search_method(m)) {
     ls->reset();
-    add_rows([&](int j) { return 1.0 / sigma[j]; }, nullptr);
+    add_rows([&](int j) { return 1.0 / sigma[j]; });
     if (m == "wls" || m == "iv") {
       fit_least_squares_with_prior(*ls, dropped, decision_inflation, data_weight, phi, stdev, details, map_data);
     } else {  // the WLS solution starts the consistent fit of the same weighted data
